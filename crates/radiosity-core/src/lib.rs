@@ -1,0 +1,28 @@
+//! Core types shared by every radiosity crate: math aliases, spectra, patches, the scene
+//! description, the discrete radiosity system and the [`ColumnSource`] trait.
+//!
+//! This crate knows nothing about how geometry is built or how form factors are computed.
+//! It fixes the vocabulary the other crates agree on:
+//!
+//! - [`Patch`]: a planar convex triangle or quad with its area, centroid and normal, and the
+//!   object and material it came from;
+//! - [`Scene`]: patches plus the materials and objects they reference;
+//! - [`LinearSystem`]: areas, reflectivities and emissions per channel, the data of
+//!   `B_i = E_i + ρ_i Σ_j F_ij B_j`;
+//! - [`ColumnSource`]: "fill column j of F", the only thing a solver knows about form factors.
+
+pub mod column;
+pub mod error;
+pub mod math;
+pub mod patch;
+pub mod scene;
+pub mod spectrum;
+pub mod system;
+
+pub use column::{ColumnSource, ColumnStats, CountingColumns, DenseColumns};
+pub use error::CoreError;
+pub use math::{Real, Vec3};
+pub use patch::{Patch, PatchShape};
+pub use scene::{Material, MaterialId, ObjectId, Scene};
+pub use spectrum::{Channels, Spectrum};
+pub use system::LinearSystem;

@@ -1,0 +1,91 @@
+//! Typed errors of the geometry crate: scene names and parameters, meshing, and file input.
+
+use radiosity_core::CoreError;
+use std::path::PathBuf;
+use thiserror::Error;
+
+/// What can go wrong when building or loading a scene. Messages are single sentences.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum GeomError {
+    /// Invalid core data (a material, a patch), with where it came from.
+    #[error("{context}: {source}")]
+    Core {
+        /// Which object, material or file the data belongs to.
+        context: String,
+        /// The underlying problem.
+        source: CoreError,
+    },
+    /// A scene name that is neither built in nor a supported file.
+    #[error("unknown scene '{name}'; built-in scenes are {valid}, or give a path to a .gltf, .glb or .mgf file")]
+    UnknownScene {
+        /// The name given.
+        name: String,
+        /// The valid names, comma-separated.
+        valid: String,
+    },
+    /// A `key=value` parameter the scene does not take.
+    #[error("scene '{scene}' has no parameter '{key}'; its parameters are {valid}")]
+    UnknownParameter {
+        /// The scene.
+        scene: String,
+        /// The key given.
+        key: String,
+        /// The valid keys, comma-separated.
+        valid: String,
+    },
+    /// A parameter value that does not parse or is out of range.
+    #[error("scene '{scene}': parameter {key}={value} is invalid; expected {expected}")]
+    BadParameter {
+        /// The scene.
+        scene: String,
+        /// The key.
+        key: String,
+        /// The value given.
+        value: String,
+        /// What was expected.
+        expected: String,
+    },
+    /// A parameter written without `=`.
+    #[error("scene parameter '{0}' is not of the form key=value")]
+    MalformedParameter(String),
+    /// A file that cannot be read.
+    #[error("cannot read {path}: {message}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's message.
+        message: String,
+    },
+    /// A glTF file that is not valid glTF or uses something we cannot load.
+    #[error("{path} is not a usable glTF file: {message}")]
+    Gltf {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// A file with no usable surface.
+    #[error("{path} contains no usable triangles{detail}")]
+    EmptyFile {
+        /// The file.
+        path: PathBuf,
+        /// Why nothing was usable, starting with "; " or empty.
+        detail: String,
+    },
+    /// A file format this build does not read yet.
+    #[error("{path}: {format} input is not supported yet")]
+    UnsupportedFormat {
+        /// The file.
+        path: PathBuf,
+        /// The format's name.
+        format: &'static str,
+    },
+}
+
+impl GeomError {
+    /// Wraps a core error with context.
+    pub fn core(context: impl Into<String>, source: CoreError) -> GeomError {
+        GeomError::Core { context: context.into(), source }
+    }
+}

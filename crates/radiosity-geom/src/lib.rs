@@ -1,0 +1,53 @@
+//! Geometry for radiosity: meshing, built-in scenes, glTF input, BVH visibility and scene
+//! analysis.
+//!
+//! The entry point is [`load_scene`], which takes a scene argument as users write it on the
+//! command line (`multi-cubes`, `cornell:res=8`, `room.glb:size=0.05`) and returns the patches
+//! ready for form factors, with any warnings met on the way. [`Visibility`] answers occlusion
+//! queries over the patches; [`SceneAnalysis`] decides what later stages may leave out.
+
+pub mod analysis;
+pub mod error;
+pub mod gltf_input;
+pub mod mesh;
+pub mod scenes;
+pub mod spec;
+pub mod visibility;
+
+pub use error::GeomError;
+pub use mesh::SceneBuilder;
+pub use scenes::{BuiltinScene, builtin_scenes};
+pub use spec::{ParamDoc, SceneParams};
+
+use radiosity_core::Scene;
+use spec::{FileFormat, split_file_argument};
+
+/// A scene with the warnings met while building or loading it (dropped triangles, ignored
+/// attributes). Warnings are facts a user should see, not errors.
+#[derive(Clone, Debug)]
+pub struct LoadedScene {
+    /// The scene.
+    pub scene: Scene,
+    /// One sentence per warning.
+    pub warnings: Vec<String>,
+}
+
+/// Loads a scene from a command-line argument: a built-in name or a file path, each with
+/// optional `:key=value` parameters.
+pub fn load_scene(arg: &str) -> Result<LoadedScene, GeomError> {
+    if let Some((path, format, params)) = split_file_argument(arg) {
+        let params = SceneParams::parse(&path.display().to_string(), params, gltf_input::PARAMS)?;
+        return match format {
+            FileFormat::Gltf => gltf_input::load(&path, &params),
+            FileFormat::Mgf => Err(GeomError::UnsupportedFormat { path, format: "MGF" }),
+        };
+    }
+    let mut parts = arg.split(':');
+    let name = parts.next().unwrap_or_default();
+    let Some(builtin) = builtin_scenes().iter().find(|s| s.name == name) else {
+        let valid = builtin_scenes().iter().map(|s| s.name).collect::<Vec<_>>().join(", ");
+        return Err(GeomError::UnknownScene { name: arg.to_string(), valid });
+    };
+    let params = SceneParams::parse(name, parts.filter(|s| !s.is_empty()), builtin.params)?;
+    builtin.build(arg, &params)
+}

@@ -1,0 +1,46 @@
+//! `furnace`: a closed box with one uniform material, whose exact radiosity is known.
+//!
+//! Layout: the unit cube `[0, 1]³`, every face facing inwards and cut into `res × res`
+//! patches; with `block=true`, a solid cube `[0.3, 0.7]³` facing outwards sits in the middle,
+//! cut to the same patch size. Every patch has reflectivity `rho` and emission `emission`.
+//!
+//! Because the box is closed, every row of `F` sums to 1, so the uniform vector
+//! `B = E / (1 − ρ)` (per channel) solves `B = E + ρ F B` exactly, with or without the block
+//! and whatever the form factors are: the furnace identity. It tests solvers and, through
+//! closure, form-factor backends.
+
+use crate::LoadedScene;
+use crate::error::GeomError;
+use crate::mesh::{BoxFace, Facing, SceneBuilder};
+use crate::spec::{ParamDoc, SceneParams};
+use radiosity_core::{Material, Spectrum, Vec3};
+
+/// One line for scene listings.
+pub const SUMMARY: &str = "closed box of one material, optional inner block; exact answer E/(1-rho)";
+
+/// Parameters.
+pub const PARAMS: &[ParamDoc] = &[
+    ParamDoc { key: "res", default: "4", doc: "patches along each edge of a box face" },
+    ParamDoc { key: "rho", default: "0.5", doc: "reflectivity of every patch, grey or r/g/b, each in [0, 1)" },
+    ParamDoc { key: "emission", default: "1", doc: "emission of every patch, grey or r/g/b, each >= 0" },
+    ParamDoc { key: "block", default: "false", doc: "add a solid cube in the middle of the box" },
+];
+
+/// Builds the scene.
+pub fn build(name: &str, params: &SceneParams) -> Result<LoadedScene, GeomError> {
+    let res = params.count("res", 4, 1, 1000)?;
+    let rho = params.spectrum("rho", Spectrum::grey(0.5), |v| (0.0..1.0).contains(&v), "a reflectivity in [0, 1)")?;
+    let emission = params.spectrum("emission", Spectrum::grey(1.0), |v| v >= 0.0, "an emission >= 0")?;
+    let block = params.flag("block", false)?;
+
+    let mut b = SceneBuilder::new(name);
+    let material = b.material(Material::new("furnace", rho, emission))?;
+    let target = 1.0 / res as f64;
+    let walls = b.object("box");
+    b.axis_box(Vec3::ZERO, Vec3::ONE, &BoxFace::ALL, Facing::Inward, target, material, walls)?;
+    if block {
+        let inner = b.object("block");
+        b.axis_box(Vec3::splat(0.3), Vec3::splat(0.7), &BoxFace::ALL, Facing::Outward, target, material, inner)?;
+    }
+    Ok(LoadedScene { scene: b.build()?, warnings: Vec::new() })
+}

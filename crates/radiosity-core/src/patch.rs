@@ -60,10 +60,11 @@ impl Patch {
         }
         let k = v.len();
         let longest_edge2 = (0..k).map(|i| (v[(i + 1) % k] - v[i]).length_squared()).fold(0.0, Real::max);
-        // Newell's normal: twice the vector area, exact for planar polygons.
+        // Newell's normal: twice the vector area, exact for planar polygons. Computed relative
+        // to the first vertex, so far from the origin the products do not cancel.
         let mut twice_area = Vec3::ZERO;
-        for i in 0..k {
-            twice_area += v[i].cross(v[(i + 1) % k]);
+        for i in 1..k - 1 {
+            twice_area += (v[i] - v[0]).cross(v[i + 1] - v[0]);
         }
         let area = 0.5 * twice_area.length();
         if !(area > DEGENERATE_AREA * longest_edge2) {

@@ -11,11 +11,11 @@ use crate::patch::Patch;
 use crate::spectrum::{Channels, Spectrum};
 
 /// Index of a material in [`Scene::materials`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct MaterialId(pub u32);
 
 /// Index of an object name in [`Scene::objects`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct ObjectId(pub u32);
 
 /// A diffuse material: what fraction of incident light a surface reflects, and what it emits.

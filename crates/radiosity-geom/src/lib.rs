@@ -14,10 +14,12 @@ pub mod scenes;
 pub mod spec;
 pub mod visibility;
 
+pub use analysis::{Closure, Decision, SceneAnalysis};
 pub use error::GeomError;
 pub use mesh::SceneBuilder;
 pub use scenes::{BuiltinScene, builtin_scenes};
 pub use spec::{ParamDoc, SceneParams};
+pub use visibility::{RayHit, Visibility};
 
 use radiosity_core::Scene;
 use spec::{FileFormat, split_file_argument};

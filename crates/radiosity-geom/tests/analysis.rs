@@ -1,0 +1,73 @@
+//! Tests of the scene-analysis decisions: convex and occluded rooms, open and closed scenes,
+//! grey and coloured scenes, emitters, and what is left out.
+
+use radiosity_core::{Channels, Material, Spectrum, Vec3};
+use radiosity_geom::mesh::{BoxFace, Facing};
+use radiosity_geom::{Closure, SceneAnalysis, SceneBuilder, Visibility, load_scene};
+
+fn analyse(arg: &str) -> SceneAnalysis {
+    let scene = load_scene(arg).unwrap().scene;
+    SceneAnalysis::new(&scene, &Visibility::new(&scene))
+}
+
+#[test]
+fn convex_room_needs_no_shadow_rays() {
+    let a = analyse("furnace");
+    assert!(!a.occlusion.value, "{}", a.occlusion.reason);
+    assert!(a.occlusion.reason.contains("6 distinct planes"), "{}", a.occlusion.reason);
+    assert!(a.closure.value.is_closed(), "{}", a.closure.reason);
+    assert_eq!(a.channels.value, Channels::Grey);
+    assert_eq!(a.emitters.value.len(), 96);
+    assert_eq!(
+        a.left_out(),
+        vec!["shadow rays (nothing can occlude)".to_string(), "two of three colour channels (grey scene)".to_string()]
+    );
+}
+
+#[test]
+fn occluded_room_needs_shadow_rays() {
+    let a = analyse("furnace:block=true");
+    assert!(a.occlusion.value);
+    assert!(a.occlusion.reason.contains("'block'") || a.occlusion.reason.contains("'box'"), "{}", a.occlusion.reason);
+    assert!(a.closure.value.is_closed());
+    let m = analyse("multi-cubes");
+    assert!(m.occlusion.value);
+    assert!(m.closure.value.is_closed(), "{}", m.closure.reason);
+    assert_eq!(m.channels.value, Channels::Rgb);
+    assert_eq!(m.emitters.value.len(), 4);
+    assert!(m.left_out().is_empty());
+}
+
+#[test]
+fn open_and_closed_cornell_boxes() {
+    let open = analyse("cornell");
+    assert!(open.occlusion.value, "the blocks hide parts of the room");
+    let Closure::Open { escaped, sampled } = open.closure.value else { panic!("{}", open.closure.reason) };
+    // The open front is one of six sides: a sizeable but minor share of rays leave.
+    let share = escaped as f64 / sampled as f64;
+    assert!((0.02..0.5).contains(&share), "{share}");
+    assert_eq!(open.left_out(), vec!["closure checks (open scene: rows of F sum to less than 1)".to_string()]);
+    let closed = analyse("cornell:front=true");
+    assert!(closed.closure.value.is_closed(), "{}", closed.closure.reason);
+}
+
+#[test]
+fn open_convex_box_and_coloured_materials() {
+    // A box without its top: convex (no occlusion), open, coloured.
+    let mut b = SceneBuilder::new("tray");
+    let red = b.material(Material::new("red", Spectrum::rgb(0.8, 0.1, 0.1), Spectrum::ZERO)).unwrap();
+    let lamp = b.material(Material::new("lamp", Spectrum::ZERO, Spectrum::grey(1.0))).unwrap();
+    let o = b.object("tray");
+    let faces = [BoxFace::MinX, BoxFace::MaxX, BoxFace::MinZ, BoxFace::MaxZ];
+    b.axis_box(Vec3::ZERO, Vec3::ONE, &faces, Facing::Inward, 0.5, red, o).unwrap();
+    b.axis_box(Vec3::ZERO, Vec3::ONE, &[BoxFace::MinY], Facing::Inward, 1.0, lamp, o).unwrap();
+    let scene = b.build().unwrap();
+    let a = SceneAnalysis::new(&scene, &Visibility::new(&scene));
+    assert!(!a.occlusion.value, "{}", a.occlusion.reason);
+    assert!(!a.closure.value.is_closed());
+    assert_eq!(a.channels.value, Channels::Rgb);
+    assert!(a.channels.reason.contains("'red'"));
+    assert_eq!(a.emitters.value, vec![16]);
+    assert_eq!(a.patches, 17);
+    assert!((a.mean_reflectivity - (4.0 * 1.0 / 3.0) / 5.0).abs() < 1e-12);
+}

@@ -1,0 +1,1 @@
+//! Tests: builtin_large.

@@ -1,0 +1,1 @@
+//! Tests: gltf_input.

@@ -9,12 +9,15 @@ use thiserror::Error;
 #[non_exhaustive]
 pub enum GeomError {
     /// Invalid core data (a material, a patch), with where it came from.
-    #[error("{context}: {source}")]
+    ///
+    /// The core error is part of the message rather than a `source`, so error chains
+    /// (`anyhow`'s `{:#}`) do not print it twice.
+    #[error("{context}: {cause}")]
     Core {
         /// Which object, material or file the data belongs to.
         context: String,
         /// The underlying problem.
-        source: CoreError,
+        cause: CoreError,
     },
     /// A scene name that is neither built in nor a supported file.
     #[error("unknown scene '{name}'; built-in scenes are {valid}, or give a path to a .gltf, .glb or .mgf file")]
@@ -86,6 +89,6 @@ pub enum GeomError {
 impl GeomError {
     /// Wraps a core error with context.
     pub fn core(context: impl Into<String>, source: CoreError) -> GeomError {
-        GeomError::Core { context: context.into(), source }
+        GeomError::Core { context: context.into(), cause: source }
     }
 }

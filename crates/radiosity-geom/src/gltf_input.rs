@@ -1,14 +1,606 @@
-//! glTF 2.0 input: placeholder until the loader lands.
+//! glTF 2.0 input: the triangles of a `.gltf` or `.glb` file as patches, with diffuse
+//! materials read from the PBR factors.
+//!
+//! What is read, and how it maps to a [`Scene`](radiosity_core::Scene):
+//!
+//! - **Geometry.** The meshes reached from the default scene (the `scene` property, else the
+//!   first scene; a file without scenes uses all its root nodes), through the whole node
+//!   hierarchy. Node transforms (`matrix` or translation, rotation, scale) are composed
+//!   parent × child in `f64`; a rotation quaternion is renormalised in `f64` first, so a 90°
+//!   turn written in `f32` gives coordinates exact to `f64` rounding rather than to `1e-7`.
+//!   Meshes that no node of that scene reaches are ignored, as are cameras, lights, skins and
+//!   morph targets.
+//! - **Primitives.** `TRIANGLES` with or without indices, and `TRIANGLE_STRIP` and
+//!   `TRIANGLE_FAN`, which are converted to triangles in the winding the glTF specification
+//!   gives them. Points and lines have no area and are refused with an error naming the mesh.
+//! - **Orientation.** Patches are one-sided, and their front is glTF's front face: the side
+//!   from which the vertices run counter-clockwise. A node whose world transform mirrors
+//!   space (negative determinant) has its triangles' winding reversed, as glTF requires, so
+//!   the front stays on the same side of the surface.
+//! - **Materials.** `baseColorFactor` (red, green, blue) is the diffuse reflectivity and
+//!   `emissiveFactor` times `KHR_materials_emissive_strength` (default 1) the emission. Each
+//!   glTF material actually used becomes one scene material with its name (or `material N`).
+//!   A primitive without a material gets glTF's default material, whose base colour is white:
+//!   reflectivity 1 makes the radiosity system singular, so that is an error saying so, as is
+//!   any material with a reflectivity of 1 or more in a channel. Textures are ignored (one
+//!   warning counts the materials whose base colour texture is dropped): radiosity needs one
+//!   reflectivity per patch, and averaging a texture is a choice the user should make.
+//! - **Objects.** One object per node with a mesh, named after the node, else the mesh, else
+//!   `node N`.
+//! - **Meshing.** Each triangle is one patch, unless the parameter `size` is positive: then
+//!   triangles are cut into similar triangles whose edges are at most `size` times the scene's
+//!   bounding-box diagonal. A fraction of the diagonal rather than a length makes the same
+//!   argument mean the same refinement in a file modelled in millimetres or in metres.
+//! - **Degenerate triangles** (zero area, collinear vertices) are common in real exports and
+//!   carry no light; they are dropped and counted in one warning.
+//!
+//! Everything that cannot be loaded is an error of one sentence naming the file and, where it
+//! applies, the mesh, node or material: a missing or unreadable file, truncated or corrupt
+//! data, extensions the file requires that we do not support, NaN or infinite positions,
+//! missing `POSITION` data, indices past the vertices, and a scene without any usable
+//! triangle. The gltf crate's reader indexes slices and asserts sizes as it goes, so accessor
+//! layouts and byte ranges are checked here before anything is read: a malformed file must
+//! not panic.
 
 use crate::LoadedScene;
 use crate::error::GeomError;
+use crate::mesh::SceneBuilder;
 use crate::spec::{ParamDoc, SceneParams};
+use glam::{DMat4, DQuat};
+use gltf::accessor::{DataType, Dimensions};
+use gltf::mesh::Mode;
+use gltf::{Accessor, Document, Gltf, Node, Primitive, Semantic};
+use radiosity_core::math::bounding_diagonal;
+use radiosity_core::{CoreError, Material, MaterialId, ObjectId, Patch, Real, Spectrum, Vec3};
+use std::collections::HashMap;
 use std::path::Path;
 
 /// Parameters a glTF file takes after its path.
-pub const PARAMS: &[ParamDoc] = &[];
+pub const PARAMS: &[ParamDoc] = &[ParamDoc {
+    key: "size",
+    default: "0",
+    doc: "largest patch edge as a fraction of the scene's bounding-box diagonal; 0 keeps each triangle as one patch",
+}];
 
-/// Loads a glTF file.
-pub fn load(path: &Path, _params: &SceneParams) -> Result<LoadedScene, GeomError> {
-    Err(GeomError::UnsupportedFormat { path: path.to_path_buf(), format: "glTF" })
+/// Extensions a file may list in `extensionsRequired` and still be loaded.
+const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &["KHR_materials_emissive_strength"];
+
+/// Loads the triangles of a glTF 2.0 file (`.gltf` with embedded or external buffers, or
+/// binary `.glb`) as a scene; see the module documentation for the mapping.
+pub fn load(path: &Path, params: &SceneParams) -> Result<LoadedScene, GeomError> {
+    let size = params.real("size", 0.0, |v| v >= 0.0, "a fraction of the bounding-box diagonal, at least 0")?;
+    let (document, buffers) = open(path)?;
+    let name = std::iter::once(path.display().to_string())
+        .chain(params.given().map(|(k, v)| format!(":{k}={v}")))
+        .collect::<String>();
+    let mut loader = Loader {
+        path,
+        buffers: &buffers,
+        builder: SceneBuilder::new(name),
+        materials: HashMap::new(),
+        textured: 0,
+        triangles: Vec::new(),
+        read: 0,
+        degenerate: 0,
+        meshes: 0,
+    };
+    for node in Loader::roots(&document) {
+        loader.visit(node, DMat4::IDENTITY, &mut Vec::new())?;
+    }
+    loader.finish(size)
+}
+
+/// Reads, parses and validates the file and loads its buffers (images are never read).
+fn open(path: &Path) -> Result<(Document, Vec<Vec<u8>>), GeomError> {
+    let bytes = std::fs::read(path).map_err(|e| GeomError::Io { path: path.to_path_buf(), message: e.to_string() })?;
+    let fail = |message: String| GeomError::Gltf { path: path.to_path_buf(), message };
+    if bytes.is_empty() {
+        return Err(GeomError::EmptyFile { path: path.to_path_buf(), detail: "; the file is empty".into() });
+    }
+    check_glb_header(&bytes).map_err(fail)?;
+    let Gltf { document, blob } =
+        Gltf::from_slice_without_validation(&bytes).map_err(|e| fail(describe_gltf_error(&e, &bytes)))?;
+    let unsupported: Vec<&str> =
+        document.extensions_required().filter(|e| !SUPPORTED_REQUIRED_EXTENSIONS.contains(e)).collect();
+    if !unsupported.is_empty() {
+        let (noun, pronoun) = if unsupported.len() == 1 { ("extension", "it") } else { ("extensions", "them") };
+        return Err(fail(format!(
+            "it requires the {noun} {}, and this loader does not support {pronoun} (it supports {})",
+            unsupported.join(", "),
+            SUPPORTED_REQUIRED_EXTENSIONS.join(", ")
+        )));
+    }
+    let document = validate(document).map_err(fail)?;
+    let buffers = read_buffers(&document, path, blob).map_err(fail)?;
+    Ok((document, buffers))
+}
+
+/// Checks the fixed-size header of binary glTF, whose length field the gltf crate would
+/// otherwise underflow on.
+fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
+    if !bytes.starts_with(b"glTF") {
+        return Ok(());
+    }
+    if bytes.len() < 12 {
+        return Err(format!(
+            "it is truncated: binary glTF needs a 12-byte header, but the file has {} bytes",
+            bytes.len()
+        ));
+    }
+    let length = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize;
+    if length < 12 {
+        return Err(format!("its binary glTF header declares a total length of {length} bytes, less than the header"));
+    }
+    if length > bytes.len() {
+        return Err(format!(
+            "it is truncated: its binary glTF header declares {length} bytes, but the file has {}",
+            bytes.len()
+        ));
+    }
+    Ok(())
+}
+
+/// A readable sentence for an error of the gltf crate met while parsing.
+fn describe_gltf_error(error: &gltf::Error, bytes: &[u8]) -> String {
+    use gltf::binary::Error as Glb;
+    match error {
+        gltf::Error::Deserialize(e) if bytes.starts_with(b"glTF") => format!("its JSON chunk is invalid: {e}"),
+        gltf::Error::Deserialize(e) => format!("it is not glTF JSON, or its JSON is truncated or invalid: {e}"),
+        gltf::Error::Binary(Glb::Version(v)) => format!("it is binary glTF version {v}; only version 2 is supported"),
+        gltf::Error::Binary(Glb::ChunkLength { length, length_read, .. }) => {
+            format!("it is truncated: a binary glTF chunk declares {length} bytes, but only {length_read} follow")
+        }
+        gltf::Error::Binary(Glb::Length { length, length_read }) => {
+            format!("it is truncated: its binary glTF header declares {length} bytes, but only {length_read} follow")
+        }
+        gltf::Error::Binary(e) => format!("its binary glTF container is corrupt ({e})"),
+        e => e.to_string(),
+    }
+}
+
+/// Validates the document with the gltf crate, tolerating only missing `POSITION` min/max:
+/// the specification requires them, but hand-written files often leave them out and nothing
+/// here reads them.
+fn validate(document: Document) -> Result<Document, String> {
+    use gltf::json::validation::Error as Invalid;
+    let json = document.into_json();
+    // The gltf crate's own validation indexes the POSITION accessor without a bounds check.
+    let position = gltf::json::validation::Checked::Valid(Semantic::Positions);
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let accessor = primitive.attributes.get(&position).map_or(0, |a| a.value());
+            if accessor >= json.accessors.len() {
+                let label = mesh.name.as_deref().map_or_else(|| format!("mesh {m}"), |n| format!("mesh '{n}'"));
+                return Err(format!(
+                    "{label} primitive {p} reads POSITION from accessor {accessor}, but there are only {} accessors",
+                    json.accessors.len()
+                ));
+            }
+        }
+    }
+    match Document::from_json(json.clone()) {
+        Ok(document) => Ok(document),
+        Err(gltf::Error::Validation(errors)) => {
+            let mut fatal = Vec::new();
+            for (path, error) in &errors {
+                let path = path.as_str();
+                if *error == Invalid::Missing
+                    && (path.ends_with("[\"POSITION\"].min") || path.ends_with("[\"POSITION\"].max"))
+                {
+                    continue;
+                }
+                if let Some((mesh, primitive)) = missing_positions(path).filter(|_| *error == Invalid::Missing) {
+                    let name = json.meshes.get(mesh).and_then(|m| m.name.as_deref());
+                    let label = name.map_or_else(|| format!("mesh {mesh}"), |n| format!("mesh '{n}'"));
+                    return Err(format!("{label} primitive {primitive} has no POSITION attribute"));
+                }
+                fatal.push(format!("{path}: {}", error.to_string().to_lowercase()));
+            }
+            if fatal.is_empty() {
+                Ok(Document::from_json_without_validation(json))
+            } else {
+                Err(format!("it fails glTF validation ({})", fatal.join("; ")))
+            }
+        }
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// The mesh and primitive indices of a validation path `meshes[M].primitives[P].attributes["POSITION"]`.
+fn missing_positions(path: &str) -> Option<(usize, usize)> {
+    let rest = path.strip_prefix("meshes[")?;
+    let (mesh, rest) = rest.split_once(']')?;
+    let rest = rest.strip_prefix(".primitives[")?;
+    let (primitive, rest) = rest.split_once(']')?;
+    (rest == ".attributes[\"POSITION\"]").then_some((mesh.parse().ok()?, primitive.parse().ok()?))
+}
+
+/// Loads every buffer (data URI, external file beside the glTF file, or the `.glb` binary
+/// chunk), checking each holds the bytes it declares.
+fn read_buffers(document: &Document, path: &Path, mut blob: Option<Vec<u8>>) -> Result<Vec<Vec<u8>>, String> {
+    let base = path.parent().unwrap_or(Path::new(""));
+    let mut buffers = Vec::new();
+    for buffer in document.buffers() {
+        let i = buffer.index();
+        let source = match buffer.source() {
+            gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => "its data URI".to_string(),
+            gltf::buffer::Source::Uri(uri) => format!("'{uri}'"),
+            gltf::buffer::Source::Bin => "the binary chunk".to_string(),
+        };
+        let data =
+            gltf::buffer::Data::from_source_and_blob(buffer.source(), Some(base), &mut blob).map_err(|e| match e {
+                gltf::Error::Base64(e) => format!("buffer {i} has an invalid base64 data URI ({e})"),
+                gltf::Error::MissingBlob => format!("buffer {i} refers to the binary chunk, but there is none"),
+                gltf::Error::UnsupportedScheme => format!("buffer {i} has a URI scheme that is not supported"),
+                e => format!("buffer {i} cannot be read from {source}: {e}"),
+            })?;
+        if data.0.len() < buffer.length() {
+            return Err(format!(
+                "buffer {i} is truncated: it declares {} bytes, but {source} holds {}",
+                buffer.length(),
+                data.0.len()
+            ));
+        }
+        buffers.push(data.0);
+    }
+    Ok(buffers)
+}
+
+/// A triangle ready to become patches, in world space and front-side counter-clockwise.
+struct Triangle {
+    v: [Vec3; 3],
+    material: MaterialId,
+    object: ObjectId,
+}
+
+/// The state of one load: materials and objects so far, the triangles kept and counters for
+/// warnings and for explaining an empty result.
+struct Loader<'a> {
+    path: &'a Path,
+    buffers: &'a [Vec<u8>],
+    builder: SceneBuilder,
+    /// Scene material of each glTF material used (`None`: the default material).
+    materials: HashMap<Option<usize>, MaterialId>,
+    /// Materials used whose base colour texture is ignored.
+    textured: usize,
+    triangles: Vec<Triangle>,
+    /// Triangles read, degenerate or not.
+    read: usize,
+    degenerate: usize,
+    /// Mesh instances reached from the scene.
+    meshes: usize,
+}
+
+impl<'a> Loader<'a> {
+    fn error(&self, message: String) -> GeomError {
+        GeomError::Gltf { path: self.path.to_path_buf(), message }
+    }
+
+    /// The nodes to start from: those of the default scene (or the first), else every root.
+    fn roots(document: &Document) -> Vec<Node<'_>> {
+        if let Some(scene) = document.default_scene().or_else(|| document.scenes().next()) {
+            return scene.nodes().collect();
+        }
+        let mut is_child = vec![false; document.nodes().len()];
+        for node in document.nodes() {
+            for child in node.children() {
+                is_child[child.index()] = true;
+            }
+        }
+        document.nodes().filter(|n| !is_child[n.index()]).collect()
+    }
+
+    /// Adds the meshes of `node` and its descendants; `parent` is the parent's world matrix
+    /// and `ancestors` the indices of the nodes above, to refuse cycles.
+    fn visit(&mut self, node: Node<'_>, parent: DMat4, ancestors: &mut Vec<usize>) -> Result<(), GeomError> {
+        if ancestors.contains(&node.index()) {
+            return Err(
+                self.error(format!("{} is its own ancestor (the node hierarchy has a cycle)", node_label(&node)))
+            );
+        }
+        let world = parent * self.local_transform(&node)?;
+        if let Some(mesh) = node.mesh() {
+            self.mesh(&node, &mesh, &world)?;
+        }
+        ancestors.push(node.index());
+        for child in node.children() {
+            self.visit(child, world, ancestors)?;
+        }
+        ancestors.pop();
+        Ok(())
+    }
+
+    /// The node's own transform in `f64`.
+    fn local_transform(&self, node: &Node<'_>) -> Result<DMat4, GeomError> {
+        Ok(match node.transform() {
+            gltf::scene::Transform::Matrix { matrix } => DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from))),
+            gltf::scene::Transform::Decomposed { translation, rotation, scale } => {
+                let [x, y, z, w] = rotation.map(f64::from);
+                let q = DQuat::from_xyzw(x, y, z, w);
+                let length = q.length();
+                if !(length > 0.0 && length.is_finite()) {
+                    return Err(self.error(format!("{} has a zero rotation quaternion", node_label(node))));
+                }
+                DMat4::from_scale_rotation_translation(
+                    Vec3::from_array(scale.map(f64::from)),
+                    q / length,
+                    Vec3::from_array(translation.map(f64::from)),
+                )
+            }
+        })
+    }
+
+    /// Adds the triangles of one mesh instance.
+    fn mesh(&mut self, node: &Node<'_>, mesh: &gltf::Mesh<'_>, world: &DMat4) -> Result<(), GeomError> {
+        self.meshes += 1;
+        let object_name = node.name().or(mesh.name()).map_or_else(|| format!("node {}", node.index()), str::to_string);
+        let object = self.builder.object(object_name);
+        let mesh_label = match mesh.name() {
+            Some(name) => format!("mesh '{name}'"),
+            None => format!("mesh {}", mesh.index()),
+        };
+        let mirrored = world.determinant() < 0.0;
+        for primitive in mesh.primitives() {
+            let context = format!("{mesh_label} primitive {}", primitive.index());
+            let corners = self.primitive_triangles(&primitive, &context)?;
+            let material = self.material(&primitive, &context)?;
+            for [a, b, c] in corners {
+                self.read += 1;
+                let [a, b, c] = [a, b, c].map(|p| world.transform_point3(p));
+                let v = if mirrored { [a, c, b] } else { [a, b, c] };
+                match Patch::triangle(v, material, object) {
+                    Ok(_) => self.triangles.push(Triangle { v, material, object }),
+                    Err(CoreError::DegeneratePatch { .. }) => self.degenerate += 1,
+                    Err(CoreError::NonFiniteVertex) => {
+                        return Err(self.error(format!(
+                            "{} maps {context} to non-finite coordinates (its transform overflows)",
+                            node_label(node)
+                        )));
+                    }
+                    Err(e) => return Err(GeomError::core(format!("{}: {context}", self.path.display()), e)),
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The scene material of a primitive's glTF material, created and checked on first use.
+    fn material(&mut self, primitive: &Primitive<'_>, context: &str) -> Result<MaterialId, GeomError> {
+        let gltf_material = primitive.material();
+        let key = gltf_material.index();
+        if let Some(&id) = self.materials.get(&key) {
+            return Ok(id);
+        }
+        let name = match (key, gltf_material.name()) {
+            (None, _) => "default material".to_string(),
+            (Some(_), Some(name)) => name.to_string(),
+            (Some(i), None) => format!("material {i}"),
+        };
+        let pbr = gltf_material.pbr_metallic_roughness();
+        let [r, g, b, _alpha] = pbr.base_color_factor().map(f64::from);
+        let strength = f64::from(gltf_material.emissive_strength().unwrap_or(1.0));
+        let [er, eg, eb] = gltf_material.emissive_factor().map(|e| f64::from(e) * strength);
+        let material = Material::new(name, Spectrum::rgb(r, g, b), Spectrum::rgb(er, eg, eb));
+        if let Err(e) = material.validate() {
+            let context = match key {
+                None => format!(
+                    "{}: {context} has no material, and glTF's default material is white (base colour 1, 1, 1)",
+                    self.path.display()
+                ),
+                Some(_) => self.path.display().to_string(),
+            };
+            return Err(GeomError::core(context, e));
+        }
+        if pbr.base_color_texture().is_some() {
+            self.textured += 1;
+        }
+        let id = self.builder.material(material)?;
+        self.materials.insert(key, id);
+        Ok(id)
+    }
+
+    /// The triangles of a primitive as vertex positions in the mesh's own space, in the
+    /// primitive's winding.
+    fn primitive_triangles(&self, primitive: &Primitive<'_>, context: &str) -> Result<Vec<[Vec3; 3]>, GeomError> {
+        let mode = primitive.mode();
+        if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+            return Err(self.error(format!(
+                "{context} has mode {}; only surfaces (TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN) can be loaded",
+                mode_name(mode)
+            )));
+        }
+        let Some(position_accessor) = primitive.get(&Semantic::Positions) else {
+            return Err(self.error(format!("{context} has no POSITION attribute")));
+        };
+        self.check_accessor(&position_accessor, "POSITION", context, |t, d| {
+            (t == DataType::F32 && d == Dimensions::Vec3).then_some(()).ok_or("3-component floats")
+        })?;
+        if let Some(indices) = primitive.indices() {
+            self.check_accessor(&indices, "index", context, |t, d| {
+                (matches!(t, DataType::U8 | DataType::U16 | DataType::U32) && d == Dimensions::Scalar)
+                    .then_some(())
+                    .ok_or("unsigned integer scalars")
+            })?;
+        }
+        let reader = primitive.reader(|b| self.buffers.get(b.index()).map(Vec::as_slice));
+        let short = || self.error(format!("{context}: its data reaches past the end of its buffer"));
+        let positions: Vec<Vec3> =
+            reader.read_positions().ok_or_else(short)?.map(|p| Vec3::from_array(p.map(f64::from))).collect();
+        if positions.len() != position_accessor.count() {
+            return Err(short());
+        }
+        if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+            return Err(self.error(format!("{context} has a NaN or infinite coordinate in its POSITION vertex {i}")));
+        }
+        let indices: Vec<u32> = match reader.read_indices() {
+            Some(indices) => indices.into_u32().collect(),
+            None if primitive.indices().is_some() => return Err(short()),
+            None => (0..positions.len() as u32).collect(),
+        };
+        if let Some(&i) = indices.iter().find(|&&i| i as usize >= positions.len()) {
+            return Err(self.error(format!(
+                "{context} refers to vertex {i}, but its POSITION accessor has only {} vertices",
+                positions.len()
+            )));
+        }
+        let n = indices.len();
+        let corners: Vec<[u32; 3]> = match mode {
+            Mode::Triangles => {
+                if n % 3 != 0 {
+                    return Err(self
+                        .error(format!("{context} is a triangle list of {n} vertices, which is not a multiple of 3")));
+                }
+                indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect()
+            }
+            // Triangle i of a strip is (v_i, v_{i+1+i%2}, v_{i+2-i%2}): the specification's
+            // order, which keeps every triangle of the strip facing the same way.
+            Mode::TriangleStrip => {
+                (0..n.saturating_sub(2)).map(|i| [indices[i], indices[i + 1 + i % 2], indices[i + 2 - i % 2]]).collect()
+            }
+            // Triangle i of a fan is (v_{i+1}, v_{i+2}, v_0).
+            _ => (0..n.saturating_sub(2)).map(|i| [indices[i + 1], indices[i + 2], indices[0]]).collect(),
+        };
+        Ok(corners.into_iter().map(|t| t.map(|i| positions[i as usize])).collect())
+    }
+
+    /// Checks an accessor's element type and that every byte it reads lies inside its buffer
+    /// view and buffer, so the gltf crate's reader can neither panic nor come back short.
+    fn check_accessor(
+        &self,
+        accessor: &Accessor<'_>,
+        role: &str,
+        context: &str,
+        expected: impl Fn(DataType, Dimensions) -> Result<(), &'static str>,
+    ) -> Result<(), GeomError> {
+        let fail = |what: String| self.error(format!("{context}: its {role} accessor {} {what}", accessor.index()));
+        if let Err(want) = expected(accessor.data_type(), accessor.dimensions()) {
+            return Err(fail(format!(
+                "holds {:?} {:?} elements, but {role} data must be {want}",
+                accessor.dimensions(),
+                accessor.data_type()
+            )));
+        }
+        if accessor.count() == 0 {
+            return Err(fail("is empty".to_string()));
+        }
+        let item = accessor.size();
+        if let Some(view) = accessor.view() {
+            self.check_range(&view, accessor.offset(), accessor.count(), item).map_err(fail)?;
+        }
+        if let Some(sparse) = accessor.sparse() {
+            if sparse.count() == 0 {
+                return Err(fail("has an empty sparse section".to_string()));
+            }
+            let indices = sparse.indices();
+            self.check_range(&indices.view(), indices.offset(), sparse.count(), indices.index_type().size())
+                .map_err(&fail)?;
+            let values = sparse.values();
+            self.check_range(&values.view(), values.offset(), sparse.count(), item).map_err(fail)?;
+        }
+        Ok(())
+    }
+
+    /// Checks that `count` elements of `item` bytes from `offset` in `view` (at its stride)
+    /// lie inside the view, and the view inside its buffer.
+    fn check_range(
+        &self,
+        view: &gltf::buffer::View<'_>,
+        offset: usize,
+        count: usize,
+        item: usize,
+    ) -> Result<(), String> {
+        let stride = view.stride().unwrap_or(item);
+        if stride < item {
+            return Err(format!("has a byte stride of {stride}, smaller than its {item}-byte elements"));
+        }
+        let end = stride
+            .checked_mul(count.saturating_sub(1))
+            .and_then(|b| b.checked_add(item))
+            .and_then(|b| b.checked_add(offset));
+        if end.is_none_or(|end| end > view.length()) {
+            return Err(format!("reads past the end of buffer view {}", view.index()));
+        }
+        let buffer = view.buffer().index();
+        let view_end = view.offset().checked_add(view.length());
+        if view_end.is_none_or(|end| end > self.buffers.get(buffer).map_or(0, Vec::len)) {
+            return Err(format!(
+                "reads through buffer view {}, which reaches past the end of buffer {buffer}",
+                view.index()
+            ));
+        }
+        Ok(())
+    }
+
+    /// Meshes the triangles kept and builds the scene, with the warnings.
+    fn finish(mut self, size: Real) -> Result<LoadedScene, GeomError> {
+        if self.triangles.is_empty() {
+            let detail = if self.degenerate > 0 {
+                format!("; all {} of its triangles are degenerate", self.degenerate)
+            } else if self.meshes == 0 {
+                "; no node of its scene has a mesh".to_string()
+            } else {
+                "; its meshes have no triangles".to_string()
+            };
+            return Err(GeomError::EmptyFile { path: self.path.to_path_buf(), detail });
+        }
+        let diagonal = bounding_diagonal(self.triangles.iter().flat_map(|t| t.v));
+        let target = size * diagonal;
+        for t in std::mem::take(&mut self.triangles) {
+            let added = if size > 0.0 {
+                self.builder.triangle_sized(t.v, target, t.material, t.object)
+            } else {
+                self.builder.polygon(&t.v, t.material, t.object)
+            };
+            added.map_err(|e| with_file(self.path, e))?;
+        }
+        let mut warnings = Vec::new();
+        if self.degenerate > 0 {
+            let s = if self.degenerate == 1 { "" } else { "s" };
+            warnings.push(format!(
+                "{}: dropped {} degenerate triangle{s} (zero area) of {} read",
+                self.path.display(),
+                self.degenerate,
+                self.read
+            ));
+        }
+        if self.textured > 0 {
+            let (s, have) = if self.textured == 1 { ("", "has") } else { ("s", "have") };
+            warnings.push(format!(
+                "{}: {} material{s} used {have} a base colour texture, which is ignored: reflectivity comes from baseColorFactor only",
+                self.path.display(),
+                self.textured
+            ));
+        }
+        let scene = self.builder.build().map_err(|e| with_file(self.path, e))?;
+        Ok(LoadedScene { scene, warnings })
+    }
+}
+
+/// Adds the file to the context of a core error from the builder.
+fn with_file(path: &Path, error: GeomError) -> GeomError {
+    match error {
+        GeomError::Core { context, cause } => GeomError::core(format!("{}: {context}", path.display()), cause),
+        e => e,
+    }
+}
+
+/// `node 'name'`, or `node N` when it has no name.
+fn node_label(node: &Node<'_>) -> String {
+    match node.name() {
+        Some(name) => format!("node '{name}'"),
+        None => format!("node {}", node.index()),
+    }
+}
+
+/// The specification's name of a primitive mode.
+fn mode_name(mode: Mode) -> &'static str {
+    match mode {
+        Mode::Points => "POINTS",
+        Mode::Lines => "LINES",
+        Mode::LineLoop => "LINE_LOOP",
+        Mode::LineStrip => "LINE_STRIP",
+        Mode::Triangles => "TRIANGLES",
+        Mode::TriangleStrip => "TRIANGLE_STRIP",
+        Mode::TriangleFan => "TRIANGLE_FAN",
+    }
 }

@@ -1,1 +1,420 @@
-//! Tests: gltf_input.
+//! Tests: glTF input. Hand-made fixtures in `test_data/` check the mapping (transforms,
+//! winding, materials, primitive modes, subdivision) against coordinates worked out by hand,
+//! and one fixture per bad input checks the error says what is wrong; the real Cornell box
+//! export in `shared/scenes/` checks a file written by someone else loads upright.
+
+use radiosity_core::{Patch, Real, Spectrum, Vec3};
+use radiosity_geom::gltf_input::{self, PARAMS};
+use radiosity_geom::{GeomError, LoadedScene, SceneParams, load_scene};
+use std::path::Path;
+
+const CORNELL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/scenes/cornell-box-toy-ray-tracer.gltf");
+
+/// Triangles in the Cornell export: its 8 primitives are indexed triangle lists whose index
+/// accessors have counts 6 (accessor 2, shared by floor, ceiling, back, right and left walls
+/// and the light: 6 primitives), 30 (accessor 13, short box) and 30 (accessor 16, tall box),
+/// so 6 × 6/3 + 30/3 + 30/3 = 32; none is degenerate (checked with a Python script that
+/// decodes the embedded buffer).
+const CORNELL_TRIANGLES: usize = 32;
+
+fn fixture(name: &str) -> String {
+    format!("{}/test_data/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn load(arg: &str) -> LoadedScene {
+    load_scene(arg).unwrap_or_else(|e| panic!("{arg} should load: {e}"))
+}
+
+fn load_err(arg: &str) -> (GeomError, String) {
+    match load_scene(arg) {
+        Ok(_) => panic!("{arg} should fail to load"),
+        Err(e) => {
+            let message = e.to_string();
+            (e, message)
+        }
+    }
+}
+
+fn close(a: Vec3, b: Vec3, tol: Real) -> bool {
+    (a - b).length() <= tol
+}
+
+/// Whether the patch is the triangle `expected`, up to a cyclic shift of its vertices (same
+/// winding).
+fn is_triangle(patch: &Patch, expected: [Vec3; 3]) -> bool {
+    let v = patch.vertices();
+    v.len() == 3 && (0..3).any(|s| (0..3).all(|i| close(v[(i + s) % 3], expected[i], 1e-12)))
+}
+
+fn v(x: Real, y: Real, z: Real) -> Vec3 {
+    Vec3::new(x, y, z)
+}
+
+/// The patches of the object called `name`.
+fn object_patches<'a>(loaded: &'a LoadedScene, name: &str) -> Vec<&'a Patch> {
+    let scene = &loaded.scene;
+    let id = scene.objects().iter().position(|o| o == name).unwrap_or_else(|| panic!("no object {name}"));
+    scene.patches().iter().filter(|p| p.object.0 as usize == id).collect()
+}
+
+/// The unit quad of `quad.gltf`: two triangles, front side +z.
+fn check_unit_quad(loaded: &LoadedScene) {
+    let scene = &loaded.scene;
+    assert_eq!(scene.len(), 2);
+    let expected = [[v(0., 0., 0.), v(1., 0., 0.), v(1., 1., 0.)], [v(0., 0., 0.), v(1., 1., 0.), v(0., 1., 0.)]];
+    for (patch, tri) in scene.patches().iter().zip(expected) {
+        assert!(is_triangle(patch, tri), "{:?} is not {tri:?}", patch.vertices());
+        assert!(close(patch.normal(), Vec3::Z, 1e-15));
+    }
+    assert!((scene.total_area() - 1.0).abs() < 1e-15);
+    assert!(scene.emitters().is_empty());
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+}
+
+#[test]
+fn indexed_quad_is_two_patches_facing_its_counter_clockwise_side() {
+    let loaded = load(&fixture("quad.gltf"));
+    check_unit_quad(&loaded);
+    assert_eq!(loaded.scene.objects(), ["quad"]);
+    assert_eq!(loaded.scene.materials().len(), 1);
+    assert_eq!(loaded.scene.materials()[0].name, "grey");
+    assert_eq!(loaded.scene.materials()[0].reflectivity, Spectrum::grey(0.5));
+}
+
+#[test]
+fn unindexed_quad_gives_the_same_triangles_and_its_base_colour() {
+    let loaded = load(&fixture("quad_unindexed.gltf"));
+    check_unit_quad(&loaded);
+    // The node has no name, so the object takes the mesh's.
+    assert_eq!(loaded.scene.objects(), ["unindexed"]);
+    assert_eq!(loaded.scene.materials()[0].reflectivity, Spectrum::rgb(0.25, 0.5, 0.75));
+    assert_eq!(loaded.scene.materials()[0].emission, Spectrum::ZERO);
+}
+
+#[test]
+fn position_bounds_may_be_missing() {
+    check_unit_quad(&load(&fixture("no_minmax.gltf")));
+}
+
+#[test]
+fn node_transforms_compose_through_the_hierarchy_of_the_default_scene_only() {
+    let loaded = load(&fixture("hierarchy.gltf"));
+    // Scene 1's node "elsewhere" is not loaded.
+    assert_eq!(loaded.scene.len(), 3);
+    assert_eq!(loaded.scene.objects(), ["child", "tri", "node 3"]);
+    // Triangle a = (1,0,0), b = (0,1,0), c = (0,0,0). "child": rotate 90° about z
+    // ((x,y,z) -> (-y,x,z)), add (0,0,1); then its parent: scale 2, add (1,2,3).
+    // a -> (0,1,1) -> (1,4,5); b -> (-1,0,1) -> (-1,2,5); c -> (0,0,1) -> (1,2,5).
+    let child = object_patches(&loaded, "child");
+    assert!(is_triangle(child[0], [v(1., 4., 5.), v(-1., 2., 5.), v(1., 2., 5.)]), "{:?}", child[0].vertices());
+    assert!((child[0].area() - 2.0).abs() < 1e-12);
+    // Node 2: column-major matrix scaling by (1,2,3) then translating by (10,0,0).
+    let matrix = object_patches(&loaded, "tri");
+    assert!(is_triangle(matrix[0], [v(11., 0., 0.), v(10., 2., 0.), v(10., 0., 0.)]), "{:?}", matrix[0].vertices());
+    assert!((matrix[0].area() - 1.0).abs() < 1e-12);
+    // Node 3: neither node nor mesh has a name; translated by (0,0,-5).
+    let plain = object_patches(&loaded, "node 3");
+    assert!(is_triangle(plain[0], [v(1., 0., -5.), v(0., 1., -5.), v(0., 0., -5.)]), "{:?}", plain[0].vertices());
+    for p in loaded.scene.patches() {
+        assert!(close(p.normal(), Vec3::Z, 1e-12), "{:?}", p.normal());
+    }
+}
+
+#[test]
+fn file_without_scenes_loads_its_root_nodes_once() {
+    let loaded = load(&fixture("no_scene.gltf"));
+    assert_eq!(loaded.scene.len(), 2);
+    assert_eq!(loaded.scene.objects(), ["leaf"]);
+    for p in loaded.scene.patches() {
+        assert!(p.vertices().iter().all(|q| q.z == 5.0), "{:?}", p.vertices());
+    }
+}
+
+#[test]
+fn mirroring_transforms_flip_the_winding_so_fronts_stay_on_the_same_side() {
+    let loaded = load(&fixture("mirror.gltf"));
+    assert_eq!(loaded.scene.len(), 6);
+    // The mesh is the unit quad in z = 1, facing +z, away from the origin.
+    for (object, z, normal) in [("plain", 1.0, Vec3::Z), ("mirrored", -1.0, -Vec3::Z), ("turned", 1.0, Vec3::Z)] {
+        let patches = object_patches(&loaded, object);
+        assert_eq!(patches.len(), 2);
+        let area: Real = patches.iter().map(|p| p.area()).sum();
+        assert!((area - 1.0).abs() < 1e-15, "{object}");
+        for p in patches {
+            assert!(p.vertices().iter().all(|q| q.z == z), "{object}: {:?}", p.vertices());
+            assert!(close(p.normal(), normal, 1e-15), "{object}: normal {:?}", p.normal());
+        }
+    }
+    // The half turn maps x to -x and y to -y.
+    for p in object_patches(&loaded, "turned") {
+        assert!(p.vertices().iter().all(|q| (-1.0..=0.0).contains(&q.x) && (-1.0..=0.0).contains(&q.y)));
+    }
+}
+
+/// `emissive.gltf` and `emissive.glb`: three quads in z = 0, 1, 2 with materials lamp, glow,
+/// lamp; "unused" is never referenced.
+fn check_emissive(loaded: &LoadedScene) {
+    let scene = &loaded.scene;
+    assert_eq!(scene.len(), 6);
+    let names: Vec<&str> = scene.materials().iter().map(|m| m.name.as_str()).collect();
+    assert_eq!(names, ["lamp", "glow"]);
+    // emissiveFactor (1, 0.5, 0.25) times emissiveStrength 4.
+    assert_eq!(scene.materials()[0].emission, Spectrum::rgb(4.0, 2.0, 1.0));
+    assert_eq!(scene.materials()[0].reflectivity, Spectrum::grey(0.5));
+    // No strength extension: the factor as it is.
+    assert_eq!(scene.materials()[1].emission, Spectrum::grey(0.5));
+    assert_eq!(scene.materials()[1].reflectivity, Spectrum::grey(0.25));
+    assert_eq!(scene.emitters().len(), 6);
+    for (i, p) in scene.patches().iter().enumerate() {
+        let expected = if (p.centroid().z - 1.0).abs() < 1e-12 { "glow" } else { "lamp" };
+        assert_eq!(scene.material_of(i).name, expected, "patch {i} at {:?}", p.centroid());
+    }
+}
+
+#[test]
+fn emission_is_the_emissive_factor_times_the_emissive_strength() {
+    check_emissive(&load(&fixture("emissive.gltf")));
+}
+
+#[test]
+fn binary_gltf_loads_like_text_gltf() {
+    check_emissive(&load(&fixture("emissive.glb")));
+    let direct = gltf_input::load(Path::new(&fixture("emissive.glb")), &SceneParams::default()).unwrap();
+    check_emissive(&direct);
+}
+
+#[test]
+fn triangle_strips_and_fans_are_converted_with_their_winding() {
+    let loaded = load(&fixture("strip_fan.gltf"));
+    assert_eq!(loaded.scene.len(), 4);
+    for z in [0.0, 1.0] {
+        let level: Vec<&Patch> = loaded.scene.patches().iter().filter(|p| (p.centroid().z - z).abs() < 1e-12).collect();
+        assert_eq!(level.len(), 2, "z = {z}");
+        let area: Real = level.iter().map(|p| p.area()).sum();
+        assert!((area - 1.0).abs() < 1e-15, "z = {z}: area {area}");
+        assert!(level.iter().all(|p| close(p.normal(), Vec3::Z, 1e-15)));
+    }
+}
+
+#[test]
+fn degenerate_triangles_are_dropped_with_one_warning() {
+    let loaded = load(&fixture("degenerate.gltf"));
+    check_unit_quad(&LoadedScene { scene: loaded.scene.clone(), warnings: Vec::new() });
+    assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
+    assert!(loaded.warnings[0].contains("dropped 2 degenerate triangles"), "{}", loaded.warnings[0]);
+}
+
+#[test]
+fn base_colour_textures_are_ignored_with_one_warning_counting_the_materials() {
+    // The image file does not exist: it must not be read.
+    let loaded = load(&fixture("textured.gltf"));
+    assert_eq!(loaded.scene.len(), 6);
+    assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
+    // "moss" is textured but unused, so 2 materials of the 3 used, not 3 of 4.
+    assert!(loaded.warnings[0].contains("2 materials"), "{}", loaded.warnings[0]);
+    assert!(loaded.warnings[0].contains("texture"), "{}", loaded.warnings[0]);
+    assert_eq!(loaded.scene.materials()[0].reflectivity, Spectrum::rgb(0.5, 0.25, 0.25));
+}
+
+#[test]
+fn size_cuts_triangles_relative_to_the_bounding_box_diagonal() {
+    // Diagonal √2, so size=0.25 asks for edges ≤ √2/4: each triangle's longest edge is √2,
+    // so it is cut 4-fold into 16 triangles.
+    let loaded = load(&format!("{}:size=0.25", fixture("quad.gltf")));
+    assert_eq!(loaded.scene.len(), 32);
+    assert!((loaded.scene.total_area() - 1.0).abs() < 1e-12);
+    let target = 0.25 * 2.0_f64.sqrt();
+    for p in loaded.scene.patches() {
+        assert!(close(p.normal(), Vec3::Z, 1e-12));
+        let vs = p.vertices();
+        let longest = (0..3).map(|i| (vs[(i + 1) % 3] - vs[i]).length()).fold(0.0, Real::max);
+        assert!(longest <= target * (1.0 + 1e-12), "edge {longest} > {target}");
+    }
+    // size=0 is the default: one patch per triangle.
+    assert_eq!(load(&format!("{}:size=0", fixture("quad.gltf"))).scene.len(), 2);
+}
+
+#[test]
+fn size_must_be_a_finite_non_negative_number() {
+    for bad in ["-0.1", "abc", "nan", "inf"] {
+        let (e, message) = load_err(&format!("{}:size={bad}", fixture("quad.gltf")));
+        assert!(matches!(e, GeomError::BadParameter { .. }), "size={bad}: {message}");
+        assert!(message.contains("size"), "{message}");
+    }
+}
+
+#[test]
+fn unknown_parameters_are_errors_listing_the_valid_keys() {
+    assert!(PARAMS.iter().any(|p| p.key == "size"));
+    let (e, message) = load_err(&format!("{}:foo=1", fixture("quad.gltf")));
+    assert!(matches!(e, GeomError::UnknownParameter { .. }), "{message}");
+    assert!(message.contains("'foo'") && message.contains("size"), "{message}");
+}
+
+#[test]
+fn a_missing_file_is_an_io_error() {
+    let (e, message) = load_err(&fixture("no-such-file.gltf"));
+    assert!(matches!(e, GeomError::Io { .. }), "{message}");
+    assert!(message.contains("no-such-file.gltf"), "{message}");
+}
+
+/// Loads a bad fixture and checks the error is a `Gltf` error whose message contains every
+/// one of `needles`.
+fn check_gltf_error(name: &str, needles: &[&str]) {
+    let (e, message) = load_err(&fixture(name));
+    assert!(matches!(e, GeomError::Gltf { .. }), "{name}: {message}");
+    assert!(message.contains(name), "{message}");
+    for needle in needles {
+        assert!(message.contains(needle), "{name}: '{needle}' not in: {message}");
+    }
+}
+
+#[test]
+fn garbage_and_truncated_files_are_clear_errors() {
+    check_gltf_error("garbage.gltf", &["not glTF JSON"]);
+    check_gltf_error("truncated.gltf", &["truncated"]);
+    check_gltf_error("truncated.glb", &["truncated"]);
+    check_gltf_error("short_buffer.gltf", &["buffer 0 is truncated", "76 bytes"]);
+}
+
+#[test]
+fn unsupported_required_extensions_are_named() {
+    check_gltf_error("required_ext.gltf", &["requires the extension KHR_draco_mesh_compression"]);
+}
+
+#[test]
+fn reflectivity_of_one_is_an_error_naming_the_material_and_file() {
+    let (e, message) = load_err(&fixture("white.gltf"));
+    assert!(matches!(e, GeomError::Core { .. }), "{message}");
+    assert!(message.contains("white.gltf") && message.contains("'snow'"), "{message}");
+    assert!(message.contains("reflectivity 1"), "{message}");
+}
+
+#[test]
+fn primitives_without_material_get_the_white_default_material_which_is_refused() {
+    let (e, message) = load_err(&fixture("no_material.gltf"));
+    assert!(matches!(e, GeomError::Core { .. }), "{message}");
+    assert!(message.contains("no_material.gltf"), "{message}");
+    assert!(message.contains("mesh 'bare' primitive 0 has no material"), "{message}");
+    assert!(message.contains("'default material'"), "{message}");
+}
+
+#[test]
+fn bad_geometry_is_an_error_naming_the_mesh() {
+    check_gltf_error("nan.gltf", &["mesh 'broken'", "NaN or infinite", "vertex 2"]);
+    check_gltf_error("no_position.gltf", &["mesh 'normals only'", "no POSITION"]);
+    check_gltf_error("lines.gltf", &["mesh 'wire'", "LINES"]);
+    check_gltf_error("bad_index.gltf", &["mesh 'holey'", "vertex 7", "only 4"]);
+    check_gltf_error("cycle.gltf", &["cycle"]);
+}
+
+#[test]
+fn scenes_without_usable_triangles_are_empty_file_errors() {
+    for (name, why) in [("empty_scene.gltf", "no node of its scene has a mesh"), ("all_degenerate.gltf", "degenerate")]
+    {
+        let (e, message) = load_err(&fixture(name));
+        assert!(matches!(e, GeomError::EmptyFile { .. }), "{name}: {message}");
+        assert!(message.contains(name) && message.contains(why), "{message}");
+    }
+}
+
+#[test]
+fn cornell_export_loads_upright_with_its_light_on_the_ceiling() {
+    let loaded = load(CORNELL);
+    let scene = &loaded.scene;
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    assert_eq!(scene.len(), CORNELL_TRIANGLES);
+    assert_eq!(scene.materials().len(), 8);
+    // The mesh is Z-up with the floor at z = 0 and the ceiling at z = -1.99 (accessor 0 and 3
+    // min/max); the node's +90° turn about x maps z to y, so y runs from 0 to 1.99 and the
+    // other extents stay about 2.
+    let (lo, hi) = scene.bounds();
+    assert!(lo.y.abs() < 1e-6 && (hi.y - 1.99).abs() < 1e-6, "y from {} to {}", lo.y, hi.y);
+    assert!(hi.x - lo.x > 1.9 && hi.z - lo.z > 1.9, "{lo:?} {hi:?}");
+    let by_material = |name: &str| -> Vec<&Patch> {
+        (0..scene.len()).filter(|&i| scene.material_of(i).name == name).map(|i| &scene.patches()[i]).collect()
+    };
+    for floor in by_material("floor") {
+        assert!(floor.vertices().iter().all(|q| (q.y - lo.y).abs() < 1e-6));
+        assert!(floor.normal().y > 0.999, "floor normal {:?}", floor.normal());
+    }
+    for ceiling in by_material("ceiling") {
+        assert!(ceiling.vertices().iter().all(|q| (q.y - hi.y).abs() < 1e-6));
+        assert!(ceiling.normal().y < -0.999, "ceiling normal {:?}", ceiling.normal());
+    }
+    let emitters = scene.emitters();
+    assert_eq!(emitters.len(), 2);
+    for i in emitters {
+        let p = &scene.patches()[i];
+        assert_eq!(scene.material_of(i).name, "light");
+        assert!(p.normal().y < -0.999, "light normal {:?}", p.normal());
+        assert!(hi.y - p.centroid().y < 0.02, "light at y = {}", p.centroid().y);
+    }
+    // The tall box is the near-black "mirror" variant.
+    let tall = scene.materials().iter().find(|m| m.name == "tallBox").unwrap();
+    assert!(tall.reflectivity.max() < 0.011);
+}
+
+#[test]
+fn cornell_export_refines_with_size_and_keeps_its_area() {
+    let coarse = load(CORNELL).scene;
+    let fine = load(&format!("{CORNELL}:size=0.1")).scene;
+    assert!(fine.len() > 4 * coarse.len(), "{} patches from {}", fine.len(), coarse.len());
+    // 25.4677842428 is the total area of the 32 triangles, computed with a Python script from
+    // the decoded buffer.
+    for total in [coarse.total_area(), fine.total_area()] {
+        assert!((total - 25.4677842428).abs() < 1e-9 * 25.47, "total area {total}");
+    }
+    assert!((fine.total_area() - coarse.total_area()).abs() <= 1e-9 * coarse.total_area());
+    // The light is the rectangle x in [-0.24, 0.23], y in [-0.22, 0.16] of accessor 17's
+    // min/max, before the turn.
+    for scene in [&coarse, &fine] {
+        let light: Real = scene.emitters().iter().map(|&i| scene.patches()[i].area()).sum();
+        assert!((light - 0.47 * 0.38).abs() < 1e-6, "light area {light}");
+    }
+}
+
+/// Loads `bytes` written to a scratch file named `name`, returning whether it loaded, and
+/// failing the test (with `what`) if the loader panicked.
+fn load_bytes(dir: &Path, name: &str, bytes: &[u8], what: &str) -> bool {
+    let path = dir.join(name);
+    std::fs::write(&path, bytes).unwrap();
+    let result = std::panic::catch_unwind(|| gltf_input::load(&path, &SceneParams::default()).is_ok());
+    result.unwrap_or_else(|_| panic!("the loader panicked on {what}"))
+}
+
+#[test]
+fn damaged_files_give_errors_not_panics() {
+    let dir = std::env::temp_dir().join(format!("radiosity-geom-gltf-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // Truncations of a binary file, as cut (the header's length is then too long) and with
+    // the header's length patched to match, so that the chunk lengths are too long instead.
+    let glb = std::fs::read(fixture("emissive.glb")).unwrap();
+    for len in (0..glb.len()).filter(|&len| len < 64 || len % 16 == 0) {
+        let mut cut = glb[..len].to_vec();
+        assert!(!load_bytes(&dir, "cut.glb", &cut, &format!("emissive.glb cut to {len} bytes")));
+        if len >= 12 {
+            cut[8..12].copy_from_slice(&(len as u32).to_le_bytes());
+            assert!(!load_bytes(&dir, "cut.glb", &cut, &format!("emissive.glb cut to {len} bytes, length patched")));
+        }
+    }
+    // Every digit of a text file (indices, counts, offsets, strides, base64 data) set to 9
+    // and to 0: out-of-range references and lengths must be caught before reading.
+    let mut loaded = 0;
+    let text = std::fs::read(fixture("emissive.gltf")).unwrap();
+    for i in (0..text.len()).filter(|&i| text[i].is_ascii_digit()) {
+        for digit in [b'9', b'0'] {
+            let mut damaged = text.clone();
+            damaged[i] = digit;
+            loaded += usize::from(load_bytes(
+                &dir,
+                "damaged.gltf",
+                &damaged,
+                &format!("emissive.gltf byte {i} set to '{}'", digit as char),
+            ));
+        }
+    }
+    // Some changes are harmless (a vertex coordinate in the base64 data, say).
+    assert!(loaded > 0);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -224,12 +224,11 @@ impl SceneBuilder {
         self.triangle_grid(v, divisions(longest, target), material, object)
     }
 
-    /// Adds the given faces of the axis-aligned box `[lo, hi]`, each cut to patches of at most
-    /// `target` edge length, facing out of the box or into it.
+    /// Adds the given faces of the axis-aligned box with corners `[lo, hi]`, each cut to patches
+    /// of at most `target` edge length, facing out of the box or into it.
     pub fn axis_box(
         &mut self,
-        lo: Vec3,
-        hi: Vec3,
+        [lo, hi]: [Vec3; 2],
         faces: &[BoxFace],
         facing: Facing,
         target: Real,

@@ -59,8 +59,8 @@ fn open_convex_box_and_coloured_materials() {
     let lamp = b.material(Material::new("lamp", Spectrum::ZERO, Spectrum::grey(1.0))).unwrap();
     let o = b.object("tray");
     let faces = [BoxFace::MinX, BoxFace::MaxX, BoxFace::MinZ, BoxFace::MaxZ];
-    b.axis_box(Vec3::ZERO, Vec3::ONE, &faces, Facing::Inward, 0.5, red, o).unwrap();
-    b.axis_box(Vec3::ZERO, Vec3::ONE, &[BoxFace::MinY], Facing::Inward, 1.0, lamp, o).unwrap();
+    b.axis_box([Vec3::ZERO, Vec3::ONE], &faces, Facing::Inward, 0.5, red, o).unwrap();
+    b.axis_box([Vec3::ZERO, Vec3::ONE], &[BoxFace::MinY], Facing::Inward, 1.0, lamp, o).unwrap();
     let scene = b.build().unwrap();
     let a = SceneAnalysis::new(&scene, &Visibility::new(&scene));
     assert!(!a.occlusion.value, "{}", a.occlusion.reason);

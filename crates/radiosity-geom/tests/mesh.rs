@@ -100,7 +100,7 @@ fn box_faces_point_the_right_way() {
     let centre = (lo + hi) * 0.5;
     for (facing, sign) in [(Facing::Outward, 1.0), (Facing::Inward, -1.0)] {
         let (mut b, m, o) = builder();
-        b.axis_box(lo, hi, &BoxFace::ALL, facing, 0.7, m, o).unwrap();
+        b.axis_box([lo, hi], &BoxFace::ALL, facing, 0.7, m, o).unwrap();
         let scene = b.build().unwrap();
         for p in scene.patches() {
             assert!(sign * p.normal().dot(p.centroid() - centre) > 0.0);
@@ -114,7 +114,7 @@ fn box_faces_point_the_right_way() {
 fn meshing_is_reproducible_to_the_patch() {
     let build = || {
         let (mut b, m, o) = builder();
-        b.axis_box(v(0., 0., 0.), v(1., 2., 3.), &BoxFace::ALL, Facing::Inward, 0.35, m, o).unwrap();
+        b.axis_box([v(0., 0., 0.), v(1., 2., 3.)], &BoxFace::ALL, Facing::Inward, 0.35, m, o).unwrap();
         b.triangle_sized([v(0., 0., 0.), v(2., 0., 0.), v(0., 2., 1.)], 0.3, m, o).unwrap();
         b.build().unwrap()
     };

@@ -37,10 +37,10 @@ pub fn build(name: &str, params: &SceneParams) -> Result<LoadedScene, GeomError>
     let material = b.material(Material::new("furnace", rho, emission))?;
     let target = 1.0 / res as f64;
     let walls = b.object("box");
-    b.axis_box(Vec3::ZERO, Vec3::ONE, &BoxFace::ALL, Facing::Inward, target, material, walls)?;
+    b.axis_box([Vec3::ZERO, Vec3::ONE], &BoxFace::ALL, Facing::Inward, target, material, walls)?;
     if block {
         let inner = b.object("block");
-        b.axis_box(Vec3::splat(0.3), Vec3::splat(0.7), &BoxFace::ALL, Facing::Outward, target, material, inner)?;
+        b.axis_box([Vec3::splat(0.3), Vec3::splat(0.7)], &BoxFace::ALL, Facing::Outward, target, material, inner)?;
     }
     Ok(LoadedScene { scene: b.build()?, warnings: Vec::new() })
 }

@@ -75,7 +75,7 @@ pub fn build(name: &str, params: &SceneParams) -> Result<LoadedScene, GeomError>
                 let material = colours[(ix + iy + iz) % 4];
                 let lo = centre - Vec3::splat(half);
                 let hi = centre + Vec3::splat(half);
-                b.axis_box(lo, hi, &BoxFace::ALL, Facing::Outward, f64::INFINITY, material, object)?;
+                b.axis_box([lo, hi], &BoxFace::ALL, Facing::Outward, f64::INFINITY, material, object)?;
             }
         }
     }

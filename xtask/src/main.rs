@@ -1,1 +1,42 @@
-fn main() {}
+//! `cargo xtask`: the command line that drives radiosity experiments (DESIGN §7).
+//!
+//! Each subcommand lives in its own module. Errors reach the user as one sentence on stderr
+//! with a non-zero exit code; nothing here panics on bad input.
+
+mod compare;
+mod scene_report;
+mod scenes;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// Radiosity experiments: scenes, form factors, solvers and comparisons.
+#[derive(Debug, Parser)]
+#[command(name = "cargo xtask", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// List the built-in scenes, or explain what the pipeline does with one scene or file.
+    Scenes(scenes::Args),
+    /// Compare solvers on a scene (for now: prepares the scene and reports its analysis).
+    Compare(compare::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Scenes(args) => scenes::run(&args),
+        Command::Compare(args) => compare::run(&args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -67,7 +67,7 @@ impl Patch {
             twice_area += (v[i] - v[0]).cross(v[i + 1] - v[0]);
         }
         let area = 0.5 * twice_area.length();
-        if !(area > DEGENERATE_AREA * longest_edge2) {
+        if area.is_nan() || area <= DEGENERATE_AREA * longest_edge2 {
             return Err(CoreError::DegeneratePatch { area, scale: longest_edge2 });
         }
         let normal = twice_area / (2.0 * area);

@@ -55,6 +55,11 @@ const BVH_BACKOFF: Real = 2e-4;
 /// than the scene's extent. The exact `f64` test decides the hit, so nothing else changes.
 const BVH_INFLATE: Real = 1e-6;
 
+/// True for a finite, non-zero vector: one that can be a ray direction.
+fn is_nonzero(d: Vec3) -> bool {
+    d.is_finite() && d != Vec3::ZERO
+}
+
 /// Maps a true ray parameter to the parameter along the BVH ray.
 #[derive(Clone, Copy)]
 struct BvhParam {
@@ -183,7 +188,7 @@ impl Visibility {
 
     fn segment_clear(&self, p: Vec3, q: Vec3, skip_a: u32, skip_b: u32) -> bool {
         let d = q - p;
-        if !(d.length_squared() > 0.0) {
+        if !is_nonzero(d) {
             return true;
         }
         let (ray, _) = self.bvh_ray(p, d, 1.0);
@@ -209,7 +214,7 @@ impl Visibility {
     /// patch the ray leaves from, if any) and hits closer than `1e-9` scene diagonals.
     pub fn first_hit(&self, origin: Vec3, direction: Vec3, skip: Option<usize>) -> Option<RayHit> {
         let skip = skip.map_or(u32::MAX, |s| s as u32);
-        if !(direction.length_squared() > 0.0) {
+        if !is_nonzero(direction) {
             return None;
         }
         let margin = self.ray_margin(direction);
@@ -237,7 +242,7 @@ impl Visibility {
     /// hits closer than `1e-9` scene diagonals.
     pub fn escapes(&self, origin: Vec3, direction: Vec3, skip: Option<usize>) -> bool {
         let skip = skip.map_or(u32::MAX, |s| s as u32);
-        if !(direction.length_squared() > 0.0) {
+        if !is_nonzero(direction) {
             return true;
         }
         let margin = self.ray_margin(direction);

@@ -1,0 +1,110 @@
+//! `cargo xtask scenes [--json] [--explain SCENE]`: the built-in scenes, or one scene in detail.
+
+use crate::scene_report::{SceneReport, prepare, print_warnings};
+use anyhow::Result;
+use radiosity_geom::builtin_scenes;
+
+/// Arguments of `scenes`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Explain one scene (a built-in name with `:key=value` parameters, or a .gltf/.glb path):
+    /// its figures, every pipeline decision and the reason for it.
+    #[arg(long, value_name = "SCENE")]
+    explain: Option<String>,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Runs `scenes`.
+pub fn run(args: &Args) -> Result<()> {
+    match &args.explain {
+        Some(arg) => {
+            let report = prepare(arg)?.report();
+            print_warnings(&report);
+            if args.json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                print!("{}", explain_text(&report, arg));
+            }
+        }
+        None => {
+            let reports =
+                builtin_scenes().iter().map(|s| prepare(s.name).map(|p| p.report())).collect::<Result<Vec<_>>>()?;
+            if args.json {
+                println!("{}", serde_json::to_string_pretty(&reports)?);
+            } else {
+                print!("{}", list_text(&reports));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn list_text(reports: &[SceneReport]) -> String {
+    let mut out = format!(
+        "{:<12} {:>7} {:>7} {:>9} {:>8} {:<7} {}\n",
+        "scene", "patches", "mean ρ", "emitters", "channels", "closed", "left out"
+    );
+    for (r, builtin) in reports.iter().zip(builtin_scenes()) {
+        out += &format!(
+            "{:<12} {:>7} {:>7.3} {:>9} {:>8} {:<7} {}\n",
+            r.scene,
+            r.patches,
+            r.mean_reflectivity,
+            r.emitters,
+            r.channels,
+            if r.closure.value == "closed" { "yes" } else { "no" },
+            if r.left_out.is_empty() { "nothing".to_string() } else { r.left_out.join("; ") }
+        );
+        debug_assert_eq!(r.scene, builtin.name);
+    }
+    out += "\nParameters (NAME:key=value:...):\n";
+    for b in builtin_scenes() {
+        out += &format!("  {:<12} {}\n", b.name, b.summary);
+        for p in b.params {
+            out += &format!("  {:<12}   {:<16} {}\n", "", format!("{}={}", p.key, p.default), p.doc);
+        }
+    }
+    out += "\nFiles: PATH.gltf or PATH.glb, with :size=F to cut triangles to F times the scene diagonal.\n";
+    out += "Run `cargo xtask scenes --explain SCENE` for the reasons behind each decision.\n";
+    out
+}
+
+fn explain_text(r: &SceneReport, arg: &str) -> String {
+    let [lo, hi] = r.bounds;
+    let mut out = format!("scene       {arg}\n");
+    out += &format!("patches     {} ({} quads, {} triangles)\n", r.patches, r.quads, r.triangles);
+    out += &format!("area        {:.6e}\n", r.total_area);
+    out += &format!(
+        "bounds      [{:.4}, {:.4}, {:.4}] .. [{:.4}, {:.4}, {:.4}]\n",
+        lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]
+    );
+    out += &format!("reflectivity mean {:.4} (area-weighted), max {:.4}\n\n", r.mean_reflectivity, r.max_reflectivity);
+    out += "decisions\n";
+    for (what, d) in
+        [("occlusion", &r.occlusion), ("channels", &r.colour), ("emitters", &r.emission), ("closure", &r.closure)]
+    {
+        out += &format!("  {what:<10} {}\n  {:<10} because {}\n", d.value, "", d.reason);
+    }
+    out += "\nleft out\n";
+    if r.left_out.is_empty() {
+        out += "  nothing: this scene needs every stage\n";
+    }
+    for l in &r.left_out {
+        out += &format!("  {l}\n");
+    }
+    if !r.warnings.is_empty() {
+        out += "\nwarnings\n";
+        for w in &r.warnings {
+            out += &format!("  {w}\n");
+        }
+    }
+    out += &format!(
+        "\ntime        load {:.1} ms, BVH {:.1} ms, analysis {:.1} ms\n",
+        1e3 * r.seconds.load,
+        1e3 * r.seconds.bvh,
+        1e3 * r.seconds.analysis
+    );
+    out
+}

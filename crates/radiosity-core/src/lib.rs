@@ -10,6 +10,18 @@
 //! - [`LinearSystem`]: areas, reflectivities and emissions per channel, the data of
 //!   `B_i = E_i + ρ_i Σ_j F_ij B_j`;
 //! - [`ColumnSource`]: "fill column j of F", the only thing a solver knows about form factors.
+//!
+//! ```
+//! use radiosity_core::{ColumnSource, CountingColumns, DenseColumns};
+//!
+//! // Two facing patches: row i holds F_ij, the fraction of i's power that reaches j.
+//! let f = DenseColumns::from_rows(2, &[0.0, 0.2, 0.2, 0.0]).unwrap();
+//! let counted = CountingColumns::new(&f);
+//! let mut column = vec![0.0; counted.patch_count()];
+//! counted.fill_column(1, &mut column);
+//! assert_eq!(column, [0.2, 0.0]);
+//! assert_eq!(counted.stats().columns, 1);
+//! ```
 
 pub mod column;
 pub mod error;

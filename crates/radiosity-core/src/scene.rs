@@ -74,22 +74,12 @@ impl Scene {
         for m in &materials {
             m.validate()?;
         }
-        for (i, p) in patches.iter().enumerate() {
-            if p.material.0 as usize >= materials.len() {
-                return Err(CoreError::DanglingReference {
-                    patch: i,
-                    what: "material",
-                    index: p.material.0 as usize,
-                    count: materials.len(),
-                });
-            }
-            if p.object.0 as usize >= objects.len() {
-                return Err(CoreError::DanglingReference {
-                    patch: i,
-                    what: "object",
-                    index: p.object.0 as usize,
-                    count: objects.len(),
-                });
+        for (patch, p) in patches.iter().enumerate() {
+            let references = [("material", p.material.0, materials.len()), ("object", p.object.0, objects.len())];
+            for (what, index, count) in references {
+                if index as usize >= count {
+                    return Err(CoreError::DanglingReference { patch, what, index: index as usize, count });
+                }
             }
         }
         Ok(Scene { name: name.into(), patches, materials, objects })

@@ -5,6 +5,18 @@
 //! command line (`multi-cubes`, `cornell:res=8`, `room.glb:size=0.05`) and returns the patches
 //! ready for form factors, with any warnings met on the way. [`Visibility`] answers occlusion
 //! queries over the patches; [`SceneAnalysis`] decides what later stages may leave out.
+//!
+//! ```
+//! use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
+//!
+//! let scene = load_scene("furnace:res=2:block=true").unwrap().scene;
+//! assert_eq!(scene.len(), 6 * 4 + 6);
+//! let visibility = Visibility::new(&scene);
+//! let analysis = SceneAnalysis::new(&scene, &visibility);
+//! assert!(analysis.occlusion.value, "the block hides parts of the box");
+//! assert!(analysis.closure.value.is_closed());
+//! println!("left out: {:?}", analysis.left_out());
+//! ```
 
 pub mod analysis;
 pub mod error;

@@ -27,21 +27,21 @@ pub enum GeomError {
         /// The valid names, comma-separated.
         valid: String,
     },
-    /// A `key=value` parameter the scene does not take.
-    #[error("scene '{scene}' has no parameter '{key}'; its parameters are {valid}")]
+    /// A `key=value` parameter the scene or backend does not take.
+    #[error("{owner} has no parameter '{key}'; its parameters are {valid}")]
     UnknownParameter {
-        /// The scene.
-        scene: String,
+        /// What the parameters belong to: `scene 'furnace'`.
+        owner: String,
         /// The key given.
         key: String,
         /// The valid keys, comma-separated.
         valid: String,
     },
     /// A parameter value that does not parse or is out of range.
-    #[error("scene '{scene}': parameter {key}={value} is invalid; expected {expected}")]
+    #[error("{owner}: parameter {key}={value} is invalid; expected {expected}")]
     BadParameter {
-        /// The scene.
-        scene: String,
+        /// What the parameters belong to: `scene 'furnace'`.
+        owner: String,
         /// The key.
         key: String,
         /// The value given.

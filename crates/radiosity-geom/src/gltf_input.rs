@@ -45,7 +45,7 @@
 use crate::LoadedScene;
 use crate::error::GeomError;
 use crate::mesh::SceneBuilder;
-use crate::spec::{ParamDoc, SceneParams};
+use crate::spec::{KeyValueParams, ParamDoc};
 use glam::{DMat4, DQuat};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
@@ -67,7 +67,7 @@ const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &["KHR_materials_emissive_strengt
 
 /// Loads the triangles of a glTF 2.0 file (`.gltf` with embedded or external buffers, or
 /// binary `.glb`) as a scene; see the module documentation for the mapping.
-pub fn load(path: &Path, params: &SceneParams) -> Result<LoadedScene, GeomError> {
+pub fn load(path: &Path, params: &KeyValueParams) -> Result<LoadedScene, GeomError> {
     let size = params.real("size", 0.0, |v| v >= 0.0, "a fraction of the bounding-box diagonal, at least 0")?;
     let (document, buffers) = open(path)?;
     let name = std::iter::once(path.display().to_string())

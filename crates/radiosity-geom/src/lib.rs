@@ -30,7 +30,7 @@ pub use analysis::{Closure, Decision, SceneAnalysis};
 pub use error::GeomError;
 pub use mesh::SceneBuilder;
 pub use scenes::{BuiltinScene, builtin_scenes};
-pub use spec::{ParamDoc, SceneParams};
+pub use spec::{KeyValueParams, ParamDoc};
 pub use visibility::{RayHit, Visibility};
 
 use radiosity_core::Scene;
@@ -50,7 +50,7 @@ pub struct LoadedScene {
 /// optional `:key=value` parameters.
 pub fn load_scene(arg: &str) -> Result<LoadedScene, GeomError> {
     if let Some((path, format, params)) = split_file_argument(arg) {
-        let params = SceneParams::parse(&path.display().to_string(), params, gltf_input::PARAMS)?;
+        let params = KeyValueParams::parse(&format!("scene '{}'", path.display()), params, gltf_input::PARAMS)?;
         return match format {
             FileFormat::Gltf => gltf_input::load(&path, &params),
             FileFormat::Mgf => Err(GeomError::UnsupportedFormat { path, format: "MGF" }),
@@ -62,6 +62,6 @@ pub fn load_scene(arg: &str) -> Result<LoadedScene, GeomError> {
         let valid = builtin_scenes().iter().map(|s| s.name).collect::<Vec<_>>().join(", ");
         return Err(GeomError::UnknownScene { name: arg.to_string(), valid });
     };
-    let params = SceneParams::parse(name, parts.filter(|s| !s.is_empty()), builtin.params)?;
+    let params = KeyValueParams::parse(&format!("scene '{name}'"), parts.filter(|s| !s.is_empty()), builtin.params)?;
     builtin.build(arg, &params)
 }

@@ -1,4 +1,5 @@
-//! Scene arguments: `NAME[:key=value…]` for built-in scenes, `PATH[:key=value…]` for files.
+//! Scene arguments: `NAME[:key=value…]` for built-in scenes, `PATH[:key=value…]` for files,
+//! and the `key=value` parameters they (and form-factor backends) take.
 //!
 //! A path is recognised by its extension (`.gltf`, `.glb`, `.mgf`, any case); parameters after
 //! it follow the same `:key=value` form. Every key is checked against the scene's declared
@@ -21,20 +22,22 @@ pub struct ParamDoc {
     pub doc: &'static str,
 }
 
-/// Parsed `key=value` parameters of one scene, with typed, range-checked getters.
+/// Parsed `key=value` parameters of one scene or backend, with typed, range-checked getters.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct SceneParams {
-    scene: String,
+pub struct KeyValueParams {
+    /// What the parameters belong to, as errors name it: `scene 'furnace'`.
+    owner: String,
     values: Vec<(String, String)>,
 }
 
-impl SceneParams {
-    /// Parses `key=value` items and checks every key against `docs`.
+impl KeyValueParams {
+    /// Parses `key=value` items and checks every key against `docs`. `owner` names what the
+    /// parameters belong to in error messages, e.g. `scene 'furnace'`.
     pub fn parse<'a>(
-        scene: &str,
+        owner: &str,
         items: impl IntoIterator<Item = &'a str>,
         docs: &[ParamDoc],
-    ) -> Result<SceneParams, GeomError> {
+    ) -> Result<KeyValueParams, GeomError> {
         let mut values: Vec<(String, String)> = Vec::new();
         for item in items {
             let (key, value) = item.split_once('=').ok_or_else(|| GeomError::MalformedParameter(item.to_string()))?;
@@ -45,12 +48,12 @@ impl SceneParams {
                 } else {
                     docs.iter().map(|d| d.key).collect::<Vec<_>>().join(", ")
                 };
-                return Err(GeomError::UnknownParameter { scene: scene.to_string(), key: key.to_string(), valid });
+                return Err(GeomError::UnknownParameter { owner: owner.to_string(), key: key.to_string(), valid });
             }
             values.retain(|(k, _)| k != key);
             values.push((key.to_string(), value.to_string()));
         }
-        Ok(SceneParams { scene: scene.to_string(), values })
+        Ok(KeyValueParams { owner: owner.to_string(), values })
     }
 
     /// The parameters given, in order, as `key=value`.
@@ -62,9 +65,15 @@ impl SceneParams {
         self.values.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str())
     }
 
+    /// The error for a given parameter whose value is unacceptable for a reason the typed
+    /// getters do not check; `expected` says what would be acceptable.
+    pub fn reject(&self, key: &str, expected: &str) -> GeomError {
+        self.bad(key, self.raw(key).unwrap_or_default(), expected)
+    }
+
     fn bad(&self, key: &str, value: &str, expected: &str) -> GeomError {
         GeomError::BadParameter {
-            scene: self.scene.clone(),
+            owner: self.owner.clone(),
             key: key.to_string(),
             value: value.to_string(),
             expected: expected.to_string(),

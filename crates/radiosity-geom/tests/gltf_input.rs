@@ -5,7 +5,7 @@
 
 use radiosity_core::{Patch, Real, Spectrum, Vec3};
 use radiosity_geom::gltf_input::{self, PARAMS};
-use radiosity_geom::{GeomError, LoadedScene, SceneParams, load_scene};
+use radiosity_geom::{GeomError, KeyValueParams, LoadedScene, load_scene};
 use std::path::Path;
 
 const CORNELL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/scenes/cornell-box-toy-ray-tracer.gltf");
@@ -179,7 +179,7 @@ fn emission_is_the_emissive_factor_times_the_emissive_strength() {
 #[test]
 fn binary_gltf_loads_like_text_gltf() {
     check_emissive(&load(&fixture("emissive.glb")));
-    let direct = gltf_input::load(Path::new(&fixture("emissive.glb")), &SceneParams::default()).unwrap();
+    let direct = gltf_input::load(Path::new(&fixture("emissive.glb")), &KeyValueParams::default()).unwrap();
     check_emissive(&direct);
 }
 
@@ -379,7 +379,7 @@ fn cornell_export_refines_with_size_and_keeps_its_area() {
 fn load_bytes(dir: &Path, name: &str, bytes: &[u8], what: &str) -> bool {
     let path = dir.join(name);
     std::fs::write(&path, bytes).unwrap();
-    let result = std::panic::catch_unwind(|| gltf_input::load(&path, &SceneParams::default()).is_ok());
+    let result = std::panic::catch_unwind(|| gltf_input::load(&path, &KeyValueParams::default()).is_ok());
     result.unwrap_or_else(|_| panic!("the loader panicked on {what}"))
 }
 

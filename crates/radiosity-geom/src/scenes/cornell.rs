@@ -25,7 +25,7 @@
 use crate::LoadedScene;
 use crate::error::GeomError;
 use crate::mesh::SceneBuilder;
-use crate::spec::{ParamDoc, SceneParams};
+use crate::spec::{KeyValueParams, ParamDoc};
 use radiosity_core::{Material, MaterialId, ObjectId, Spectrum, Vec3};
 
 /// One line for scene listings.
@@ -92,7 +92,7 @@ fn block_centre(faces: &[Quad; 5]) -> Vec3 {
 }
 
 /// Builds the scene.
-pub fn build(name: &str, params: &SceneParams) -> Result<LoadedScene, GeomError> {
+pub fn build(name: &str, params: &KeyValueParams) -> Result<LoadedScene, GeomError> {
     let res = params.count("res", 8, 1, 1000)?;
     let front = params.flag("front", false)?;
     let target = LONGEST_EDGE / res as f64;

@@ -12,7 +12,7 @@
 use crate::LoadedScene;
 use crate::error::GeomError;
 use crate::mesh::{BoxFace, Facing, SceneBuilder};
-use crate::spec::{ParamDoc, SceneParams};
+use crate::spec::{KeyValueParams, ParamDoc};
 use radiosity_core::{Material, Spectrum, Vec3};
 
 /// One line for scene listings.
@@ -27,7 +27,7 @@ pub const PARAMS: &[ParamDoc] = &[
 ];
 
 /// Builds the scene.
-pub fn build(name: &str, params: &SceneParams) -> Result<LoadedScene, GeomError> {
+pub fn build(name: &str, params: &KeyValueParams) -> Result<LoadedScene, GeomError> {
     let res = params.count("res", 4, 1, 1000)?;
     let rho = params.spectrum("rho", Spectrum::grey(0.5), |v| (0.0..1.0).contains(&v), "a reflectivity in [0, 1)")?;
     let emission = params.spectrum("emission", Spectrum::grey(1.0), |v| v >= 0.0, "an emission >= 0")?;

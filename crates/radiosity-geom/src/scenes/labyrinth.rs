@@ -33,7 +33,7 @@
 use crate::LoadedScene;
 use crate::error::GeomError;
 use crate::mesh::{BoxFace, Facing, SceneBuilder};
-use crate::spec::{ParamDoc, SceneParams};
+use crate::spec::{KeyValueParams, ParamDoc};
 use radiosity_core::{Material, Real, Spectrum, Vec3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -150,7 +150,7 @@ fn line(i: usize) -> Real {
 }
 
 /// Builds the scene.
-pub fn build(name: &str, params: &SceneParams) -> Result<LoadedScene, GeomError> {
+pub fn build(name: &str, params: &KeyValueParams) -> Result<LoadedScene, GeomError> {
     let n = params.count("cells", 11, 1, 100)?;
     let seed = params.seed("seed", SEED)?;
     let size = params.real("size", 1.0, |v| (0.02..=10.0).contains(&v), "a patch size in metres from 0.02 to 10")?;

@@ -13,7 +13,7 @@ pub mod office;
 
 use crate::LoadedScene;
 use crate::error::GeomError;
-use crate::spec::{ParamDoc, SceneParams};
+use crate::spec::{KeyValueParams, ParamDoc};
 
 /// A built-in scene: its name, a one-line summary, its parameters and its generator.
 #[derive(Clone, Copy, Debug)]
@@ -24,12 +24,12 @@ pub struct BuiltinScene {
     pub summary: &'static str,
     /// The `key=value` parameters it takes.
     pub params: &'static [ParamDoc],
-    generator: fn(&str, &SceneParams) -> Result<LoadedScene, GeomError>,
+    generator: fn(&str, &KeyValueParams) -> Result<LoadedScene, GeomError>,
 }
 
 impl BuiltinScene {
     /// Builds the scene; `full_name` (with parameters) becomes the scene's name.
-    pub fn build(&self, full_name: &str, params: &SceneParams) -> Result<LoadedScene, GeomError> {
+    pub fn build(&self, full_name: &str, params: &KeyValueParams) -> Result<LoadedScene, GeomError> {
         (self.generator)(full_name, params)
     }
 }

@@ -18,7 +18,7 @@
 use crate::LoadedScene;
 use crate::error::GeomError;
 use crate::mesh::{BoxFace, Facing, SceneBuilder};
-use crate::spec::{ParamDoc, SceneParams};
+use crate::spec::{KeyValueParams, ParamDoc};
 use radiosity_core::{Material, Spectrum, Vec3};
 
 /// One line for scene listings.
@@ -40,7 +40,7 @@ const PALETTE: [(&str, Spectrum); 4] = [
 ];
 
 /// Builds the scene.
-pub fn build(name: &str, params: &SceneParams) -> Result<LoadedScene, GeomError> {
+pub fn build(name: &str, params: &KeyValueParams) -> Result<LoadedScene, GeomError> {
     let d = params.count("divisions", 4, 1, 200)?;
     let cube = params.real("cube", 0.5, |v| v > 0.0 && v < 1.0, "a relative size in (0, 1)")?;
     let light = params.spectrum("light", Spectrum::grey(1.0), |v| v >= 0.0, "an emission >= 0")?;

@@ -37,7 +37,7 @@
 use crate::LoadedScene;
 use crate::error::GeomError;
 use crate::mesh::{SceneBuilder, divisions};
-use crate::spec::{ParamDoc, SceneParams};
+use crate::spec::{KeyValueParams, ParamDoc};
 use radiosity_core::{Material, MaterialId, ObjectId, Real, Spectrum, Vec3};
 
 /// One line for scene listings.
@@ -335,7 +335,7 @@ impl Furniture<'_> {
 }
 
 /// Builds the scene.
-pub fn build(name: &str, params: &SceneParams) -> Result<LoadedScene, GeomError> {
+pub fn build(name: &str, params: &KeyValueParams) -> Result<LoadedScene, GeomError> {
     let size = params.real("size", 0.186, |v| (0.02..=10.0).contains(&v), "a patch size in metres from 0.02 to 10")?;
     let desks = params.count("desks", 9, 0, 9)?;
     let light = params.spectrum("light", Spectrum::grey(1.0), |v| v >= 0.0, "an emission >= 0")?;

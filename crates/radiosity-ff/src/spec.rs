@@ -1,0 +1,170 @@
+//! Backend arguments: `analytic`, `hemicube`, `montecarlo` or `matrix`, each with its own
+//! `:key=value` parameters, parsed into typed, validated parameter sets.
+//!
+//! `matrix` stores the full matrix of another backend, named by `of` (default `analytic`);
+//! parameters it does not take itself go to that backend:
+//! `matrix:of=hemicube:res=64:rebalance=true`.
+
+use crate::error::FfError;
+use radiosity_geom::{KeyValueParams, ParamDoc};
+
+/// Parameters of the analytic backend.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AnalyticParams {
+    /// Gauss–Legendre points per direction on the receiving patch (1 = centroid).
+    pub order: usize,
+    /// Shadow rays per pair, when the scene needs visibility.
+    pub rays: usize,
+    /// Seed of the jittered shadow rays.
+    pub seed: u64,
+}
+
+/// Parameters of the hemicube backend.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HemicubeParams {
+    /// Pixels along each edge of the hemicube's top face.
+    pub resolution: usize,
+    /// Seed of the random rotation about the normal.
+    pub seed: u64,
+}
+
+/// Parameters of the Monte Carlo backend.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MonteCarloParams {
+    /// Cosine-weighted rays shot from each patch.
+    pub rays: usize,
+    /// Seed of the rays.
+    pub seed: u64,
+}
+
+/// A parsed backend argument.
+#[derive(Clone, Debug, PartialEq)]
+pub enum BackendSpec {
+    /// Lambert's point-to-polygon formula integrated over the receiver.
+    Analytic(AnalyticParams),
+    /// A ray-cast hemicube at the shooter.
+    Hemicube(HemicubeParams),
+    /// Cosine-weighted rays from the shooter.
+    MonteCarlo(MonteCarloParams),
+    /// The full matrix of another backend, assembled once.
+    Matrix {
+        /// The backend whose matrix is stored.
+        of: Box<BackendSpec>,
+        /// Symmetrise `A·F` and rescale rows to closure after assembly.
+        rebalance: bool,
+    },
+}
+
+/// Parameters of `analytic`.
+pub const ANALYTIC_PARAMS: &[ParamDoc] = &[
+    ParamDoc {
+        key: "order",
+        default: "3",
+        doc: "Gauss-Legendre points per direction on the receiver, 1 to 32 (1 = centroid)",
+    },
+    ParamDoc { key: "rays", default: "1", doc: "shadow rays per pair, 1 to 4096 (none when nothing can occlude)" },
+    ParamDoc { key: "seed", default: "0", doc: "seed of the jittered shadow rays" },
+];
+
+/// Parameters of `hemicube`.
+pub const HEMICUBE_PARAMS: &[ParamDoc] = &[
+    ParamDoc { key: "res", default: "128", doc: "pixels along an edge of the top face, 2 to 4096 (even)" },
+    ParamDoc { key: "seed", default: "0", doc: "seed of the random rotation about the normal" },
+];
+
+/// Parameters of `montecarlo`.
+pub const MONTECARLO_PARAMS: &[ParamDoc] = &[
+    ParamDoc { key: "rays", default: "10000", doc: "cosine-weighted rays per shooting patch, 1 to 10^9" },
+    ParamDoc { key: "seed", default: "0", doc: "seed of the rays" },
+];
+
+/// Parameters of `matrix` (others go to the backend named by `of`).
+pub const MATRIX_PARAMS: &[ParamDoc] = &[
+    ParamDoc { key: "of", default: "analytic", doc: "the backend whose matrix is assembled and stored" },
+    ParamDoc {
+        key: "rebalance",
+        default: "false",
+        doc: "symmetrise A·F, then rescale rows to closure (closed scenes)",
+    },
+];
+
+/// The backend names, in the order listed to users.
+pub const BACKENDS: &[&str] = &["analytic", "hemicube", "montecarlo", "matrix"];
+
+impl Default for AnalyticParams {
+    fn default() -> Self {
+        AnalyticParams { order: 3, rays: 1, seed: 0 }
+    }
+}
+
+impl BackendSpec {
+    /// Parses `NAME[:key=value…]`.
+    pub fn parse(arg: &str) -> Result<BackendSpec, FfError> {
+        let mut parts = arg.split(':').filter(|s| !s.is_empty());
+        let name = parts.next().unwrap_or_default();
+        let items: Vec<&str> = parts.collect();
+        Self::parse_named(name, &items)
+    }
+
+    fn parse_named(name: &str, items: &[&str]) -> Result<BackendSpec, FfError> {
+        let owner = format!("form-factor backend '{name}'");
+        Ok(match name {
+            "analytic" => {
+                let p = KeyValueParams::parse(&owner, items.iter().copied(), ANALYTIC_PARAMS)?;
+                BackendSpec::Analytic(AnalyticParams {
+                    order: p.count("order", 3, 1, 32)?,
+                    rays: p.count("rays", 1, 1, 4096)?,
+                    seed: p.seed("seed", 0)?,
+                })
+            }
+            "hemicube" => {
+                let p = KeyValueParams::parse(&owner, items.iter().copied(), HEMICUBE_PARAMS)?;
+                let resolution = p.count("res", 128, 2, 4096)?;
+                if resolution % 2 == 1 {
+                    // The side faces are res × res/2 pixels.
+                    return Err(p.reject("res", "an even number of pixels from 2 to 4096").into());
+                }
+                BackendSpec::Hemicube(HemicubeParams { resolution, seed: p.seed("seed", 0)? })
+            }
+            "montecarlo" => {
+                let p = KeyValueParams::parse(&owner, items.iter().copied(), MONTECARLO_PARAMS)?;
+                BackendSpec::MonteCarlo(MonteCarloParams {
+                    rays: p.count("rays", 10_000, 1, 1_000_000_000)?,
+                    seed: p.seed("seed", 0)?,
+                })
+            }
+            "matrix" => {
+                let (own, inner): (Vec<&str>, Vec<&str>) =
+                    items.iter().partition(|item| MATRIX_PARAMS.iter().any(|d| item.split('=').next() == Some(d.key)));
+                let p = KeyValueParams::parse(&owner, own.iter().copied(), MATRIX_PARAMS)?;
+                let of = own.iter().find_map(|i| i.strip_prefix("of=")).unwrap_or("analytic");
+                if of == "matrix" {
+                    return Err(FfError::UnknownBackend {
+                        name: "matrix of matrix".into(),
+                        valid: "analytic, hemicube, montecarlo for of=".into(),
+                    });
+                }
+                BackendSpec::Matrix {
+                    of: Box::new(Self::parse_named(of, &inner)?),
+                    rebalance: p.flag("rebalance", false)?,
+                }
+            }
+            _ => return Err(FfError::UnknownBackend { name: name.to_string(), valid: BACKENDS.join(", ") }),
+        })
+    }
+
+    /// The canonical argument, with every parameter spelled out: equal specs give equal
+    /// strings, so it keys caches and labels results.
+    pub fn canonical(&self) -> String {
+        match self {
+            BackendSpec::Analytic(p) => format!("analytic:order={}:rays={}:seed={}", p.order, p.rays, p.seed),
+            BackendSpec::Hemicube(p) => format!("hemicube:res={}:seed={}", p.resolution, p.seed),
+            BackendSpec::MonteCarlo(p) => format!("montecarlo:rays={}:seed={}", p.rays, p.seed),
+            BackendSpec::Matrix { of, rebalance } => {
+                let inner = of.canonical();
+                let (name, rest) = inner.split_once(':').unwrap_or((&inner, ""));
+                format!("matrix:of={name}:rebalance={rebalance}:{rest}")
+            }
+        }
+    }
+}

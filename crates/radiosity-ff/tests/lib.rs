@@ -1,0 +1,8 @@
+//! Integration tests of radiosity-ff: backends against closed forms, closure, reciprocity,
+//! determinism and the guard rails.
+
+mod analytic;
+mod closed_forms;
+mod hemicube;
+mod matrix;
+mod montecarlo;

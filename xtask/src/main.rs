@@ -4,6 +4,7 @@
 //! with a non-zero exit code; nothing here panics on bad input.
 
 mod compare;
+mod ff;
 mod scene_report;
 mod scenes;
 
@@ -22,6 +23,8 @@ struct Cli {
 enum Command {
     /// List the built-in scenes, or explain what the pipeline does with one scene or file.
     Scenes(scenes::Args),
+    /// Assemble the full form-factor matrix of a scene and report its closure and reciprocity.
+    Ff(ff::Args),
     /// Compare solvers on a scene (for now: prepares the scene and reports its analysis).
     Compare(compare::Args),
 }
@@ -30,6 +33,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Scenes(args) => scenes::run(&args),
+        Command::Ff(args) => ff::run(&args),
         Command::Compare(args) => compare::run(&args),
     };
     match result {

@@ -142,3 +142,123 @@ fn real_cornell_export_loads_upright() {
     let degenerate = stdout_json(&["scenes", "--explain", &fixture("degenerate.gltf"), "--json"]);
     assert_eq!(degenerate["warnings"].as_array().unwrap().len(), 1);
 }
+
+fn ff_json(args: &[&str]) -> Value {
+    let mut all = vec!["ff"];
+    all.extend_from_slice(args);
+    all.push("--json");
+    stdout_json(&all)
+}
+
+fn numbers(v: &Value) -> Vec<f64> {
+    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+}
+
+#[test]
+fn ff_json_has_the_promised_keys_and_a_closed_furnace_sums_to_one() {
+    let r = ff_json(&["--scene", "furnace:res=2"]);
+    for key in ["patches", "F", "row_sums", "max_reciprocity_error"] {
+        assert!(r.get(key).is_some(), "missing {key}");
+    }
+    assert!(r["backend"].as_str().unwrap().starts_with("analytic:"), "{}", r["backend"]);
+    let patches = r["patches"].as_array().unwrap();
+    assert_eq!(patches.len(), 24);
+    for (i, p) in patches.iter().enumerate() {
+        assert_eq!(p["id"], i);
+        assert!((p["area"].as_f64().unwrap() - 0.25).abs() < 1e-12);
+        assert_eq!(p["centroid"].as_array().unwrap().len(), 3);
+    }
+    let f: Vec<Vec<f64>> = r["F"].as_array().unwrap().iter().map(numbers).collect();
+    assert_eq!(f.len(), 24);
+    let sums = numbers(&r["row_sums"]);
+    for (i, row) in f.iter().enumerate() {
+        assert_eq!(row.len(), 24);
+        assert_eq!(row[i], 0.0, "a flat patch does not see itself");
+        let sum: f64 = row.iter().sum();
+        assert!((sum - sums[i]).abs() < 1e-6, "row {i}: {sum} against {}", sums[i]);
+        // The furnace is a closed, convex cube: nothing occludes, every row sums to 1.
+        assert!((sums[i] - 1.0).abs() < 1e-3, "row {i} sums to {}", sums[i]);
+    }
+    // The reported reciprocity error is that of the printed matrix (equal areas here), up to
+    // the f32 rounding of the printed entries; the default analytic backend keeps it small.
+    let mut worst: f64 = 0.0;
+    for (i, row) in f.iter().enumerate() {
+        for (j, &fij) in row.iter().enumerate() {
+            let scale = fij.max(f[j][i]);
+            if scale > 0.0 {
+                worst = worst.max((fij - f[j][i]).abs() / scale);
+            }
+        }
+    }
+    let reported = r["max_reciprocity_error"].as_f64().unwrap();
+    assert!((worst - reported).abs() <= 1e-6, "{worst} against {reported}");
+    assert!(reported < 1e-3, "{reported}");
+    assert_eq!(r["clamped"], 0);
+}
+
+#[test]
+fn ff_text_summarises_the_matrix() {
+    let out = xtask(&["ff", "--scene", "furnace:res=2"]).success().get_output().stdout.clone();
+    let text = String::from_utf8(out).unwrap();
+    for words in ["24 patches", "closed: every row should sum to 1", "analytic:order=", "row sums", "non-zeros"] {
+        assert!(text.contains(words), "missing '{words}' in\n{text}");
+    }
+    assert!(text.contains("dense f32") || text.contains("sparse f32"), "{text}");
+}
+
+#[test]
+fn ff_refuses_bad_backends_and_large_scenes() {
+    let e = failure(&["ff", "--scene", "furnace:res=2", "--ff", "nonsense"]);
+    assert!(e.contains("'nonsense'") && e.contains("analytic, hemicube, montecarlo, matrix"), "{e}");
+    let e = failure(&["ff", "--scene", "furnace:res=2", "--ff", "analytic:order=0"]);
+    assert!(e.contains("order=0"), "{e}");
+    let e = failure(&["ff", "--scene", "office"]);
+    assert!(e.contains("patches") && e.contains("--force"), "{e}");
+    let e = failure(&["ff", "--scene", "nowhere"]);
+    assert!(e.contains("unknown scene 'nowhere'"), "{e}");
+}
+
+/// Runs `ff` with `RADIOSITY_CACHE_DIR` set; returns (stdout, stderr).
+fn ff_cached(cache: &std::path::Path, args: &[&str]) -> (String, String) {
+    let out = Command::cargo_bin("xtask")
+        .unwrap()
+        .arg("ff")
+        .args(args)
+        .env("RADIOSITY_CACHE_DIR", cache)
+        .assert()
+        .success()
+        .get_output()
+        .clone();
+    (String::from_utf8(out.stdout).unwrap(), String::from_utf8(out.stderr).unwrap())
+}
+
+#[test]
+fn ff_matrix_is_cached_and_loaded_the_second_time() {
+    let cache = std::env::temp_dir().join(format!("radiosity-ff-cache-test-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&cache);
+    let args = ["--scene", "furnace:res=2", "--ff", "matrix"];
+    let (first, _) = ff_cached(&cache, &args);
+    assert!(first.contains("assembled in") && first.contains("written to"), "{first}");
+    let (second, _) = ff_cached(&cache, &args);
+    assert!(second.contains("loaded from cache"), "{second}");
+    let files: Vec<_> = std::fs::read_dir(&cache).unwrap().map(|e| e.unwrap().path()).collect();
+    assert_eq!(files.len(), 1, "{files:?}");
+    assert!(second.contains(&files[0].display().to_string()), "{second}");
+
+    // The stored matrix is the analytic one, entry for entry.
+    let (json, _) = ff_cached(&cache, &[&args[..], &["--json"]].concat());
+    let stored: Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(stored["cache"]["loaded"], true);
+    assert_eq!(stored["F"], ff_json(&["--scene", "furnace:res=2"])["F"]);
+
+    // Another backend parameter is another file; a damaged file is replaced, with a warning.
+    let (other, _) = ff_cached(&cache, &["--scene", "furnace:res=2", "--ff", "matrix:rebalance=true"]);
+    assert!(other.contains("written to") && other.contains("rebalance"), "{other}");
+    std::fs::write(&files[0], b"not a matrix").unwrap();
+    let (again, warning) = ff_cached(&cache, &args);
+    assert!(again.contains("written to"), "{again}");
+    assert!(warning.contains("warning: replacing cache file") && warning.contains("not a stored"), "{warning}");
+    let (last, _) = ff_cached(&cache, &args);
+    assert!(last.contains("loaded from cache"), "{last}");
+    std::fs::remove_dir_all(&cache).unwrap();
+}

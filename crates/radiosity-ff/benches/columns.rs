@@ -1,2 +1,51 @@
-//! Placeholder bench.
-fn main() {}
+//! Throughput of every form-factor backend on `office`: columns per second, computed in
+//! parallel over rayon's threads (`RAYON_NUM_THREADS` sets how many).
+//!
+//! `cargo bench -p radiosity-ff --bench columns`; criterion reports the median time per batch
+//! of columns and the columns per second.
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_main};
+use radiosity_core::ColumnSource;
+use radiosity_ff::{Backend, BackendSpec, FormFactorInput};
+use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
+use rayon::prelude::*;
+use std::time::Duration;
+
+/// Columns per measured batch, spread over the scene.
+const BATCH: usize = 64;
+
+fn columns(c: &mut Criterion) {
+    let scene = load_scene("office").expect("office builds").scene;
+    let visibility = Visibility::new(&scene);
+    let analysis = SceneAnalysis::new(&scene, &visibility);
+    let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
+    let n = scene.len();
+    let shooters: Vec<usize> = (0..BATCH).map(|k| k * n / BATCH).collect();
+    let mut group = c.benchmark_group("office columns");
+    group.throughput(Throughput::Elements(BATCH as u64)).sample_size(10).measurement_time(Duration::from_secs(8));
+    let specs = std::env::var("FF_BENCH_BACKENDS")
+        .unwrap_or_else(|_| "analytic,analytic:order=1,hemicube:res=64,montecarlo:rays=10000".to_string());
+    for arg in specs.split(',') {
+        let spec = BackendSpec::parse(arg).expect("valid backend");
+        let backend = Backend::columns(&spec, input);
+        group.bench_function(BenchmarkId::from_parameter(arg), |b| {
+            b.iter(|| {
+                shooters.par_iter().for_each_init(
+                    || vec![0.0; n],
+                    |column, &j| {
+                        backend.fill_column(j, column);
+                        std::hint::black_box(&column);
+                    },
+                )
+            })
+        });
+    }
+    group.finish();
+}
+
+// criterion's macros generate undocumented items.
+#[allow(missing_docs)]
+mod harness {
+    criterion::criterion_group!(benches, super::columns);
+}
+criterion_main!(harness::benches);

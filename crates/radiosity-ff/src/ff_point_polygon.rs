@@ -19,7 +19,7 @@
 use radiosity_core::{Real, Vec3};
 
 /// At most this many vertices after clipping a quad by one plane.
-const MAX_CLIPPED: usize = 5;
+pub const MAX_CLIPPED: usize = 5;
 
 /// The unoccluded form factor from the differential area at `x` with unit normal `n` to the
 /// convex polygon `polygon` (3 or 4 vertices, either orientation).
@@ -36,16 +36,33 @@ pub fn point_to_polygon(x: Vec3, n: Vec3, polygon: &[Vec3]) -> Real {
         let cross = a.cross(b);
         let sin = cross.length();
         if sin > 0.0 {
-            let beta = sin.atan2(a.dot(b));
-            sum += beta * n.dot(cross) / sin;
+            sum += angle(sin, a.dot(b)) * n.dot(cross) / sin;
         }
     }
     (sum / (2.0 * std::f64::consts::PI)).abs()
 }
 
+/// The angle `atan2(sin, cos)` for `sin ≥ 0`. Seen from a distant point every edge subtends a
+/// small angle; there the Taylor series of `atan(sin / cos)` to the 15th power, whose next
+/// term is below `2^-52` relative for `sin / cos ≤ 1/8`, is several times cheaper than the
+/// library's `atan2` (which took a fifth of the analytic backend's time).
+fn angle(sin: Real, cos: Real) -> Real {
+    if cos > 0.0 && sin <= 0.125 * cos {
+        let x = sin / cos;
+        let x2 = x * x;
+        let series = 1.0
+            - x2 * (1.0 / 3.0
+                - x2 * (1.0 / 5.0
+                    - x2 * (1.0 / 7.0 - x2 * (1.0 / 9.0 - x2 * (1.0 / 11.0 - x2 * (1.0 / 13.0 - x2 / 15.0))))));
+        x * series
+    } else {
+        sin.atan2(cos)
+    }
+}
+
 /// Clips `polygon` to the closed half-space `n · (y − x) ≥ 0`, writing the result into `out`;
 /// returns the vertex count.
-fn clip_above(x: Vec3, n: Vec3, polygon: &[Vec3], out: &mut [Vec3; MAX_CLIPPED]) -> usize {
+pub fn clip_above(x: Vec3, n: Vec3, polygon: &[Vec3], out: &mut [Vec3; MAX_CLIPPED]) -> usize {
     let height = |p: Vec3| n.dot(p - x);
     let k = polygon.len();
     if polygon.iter().all(|p| height(*p) >= 0.0) {
@@ -66,4 +83,24 @@ fn clip_above(x: Vec3, n: Vec3, polygon: &[Vec3], out: &mut [Vec3; MAX_CLIPPED])
         }
     }
     count
+}
+
+/// The distance from `x` to the planar convex polygon `polygon` (its interior included), whose
+/// unit normal is `normal` (either orientation).
+pub fn distance_to_polygon(x: Vec3, polygon: &[Vec3], normal: Vec3) -> Real {
+    let k = polygon.len();
+    let height = normal.dot(x - polygon[0]);
+    let foot = x - normal * height;
+    let inside = (0..k).all(|i| (polygon[(i + 1) % k] - polygon[i]).cross(foot - polygon[i]).dot(normal) >= 0.0);
+    if inside {
+        return height.abs();
+    }
+    (0..k)
+        .map(|i| {
+            let (a, b) = (polygon[i], polygon[(i + 1) % k]);
+            let ab = b - a;
+            let t = (ab.dot(x - a) / ab.length_squared()).clamp(0.0, 1.0);
+            (a + ab * t - x).length()
+        })
+        .fold(Real::INFINITY, Real::min)
 }

@@ -10,6 +10,23 @@
 //! - `matrix` ([`matrix`]): the full matrix of another backend, assembled once and stored.
 //!
 //! Every backend clamps its entries into `[0, 1]` and counts what it clamped ([`guard`]).
+//!
+//! ```
+//! use radiosity_core::ColumnSource;
+//! use radiosity_ff::{Backend, BackendSpec, FormFactorInput};
+//! use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
+//!
+//! let scene = load_scene("furnace:res=2").unwrap().scene;
+//! let visibility = Visibility::new(&scene);
+//! let analysis = SceneAnalysis::new(&scene, &visibility);
+//! let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
+//! let backend = Backend::columns(&BackendSpec::parse("analytic").unwrap(), input);
+//! let mut column = vec![0.0; backend.patch_count()];
+//! backend.fill_column(0, &mut column);
+//! // Every patch of the closed box sees the whole box: Σ_j F_0j = 1, and by reciprocity
+//! // (equal areas) column 0 holds row 0.
+//! assert!((column.iter().sum::<f64>() - 1.0).abs() < 1e-3);
+//! ```
 
 pub mod analytic;
 pub mod backend;
@@ -27,5 +44,5 @@ pub use backend::{Backend, FormFactorInput};
 pub use error::FfError;
 pub use hemicube::HemicubeColumns;
 pub use matrix::StoredMatrix;
-pub use montecarlo::MonteCarloColumns;
+pub use montecarlo::{MonteCarloColumns, RayTally};
 pub use spec::{AnalyticParams, BackendSpec, HemicubeParams, MonteCarloParams};

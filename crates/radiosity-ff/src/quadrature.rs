@@ -1,23 +1,36 @@
-//! Quadrature rules on patches: Gauss–Legendre points with weights summing to the area.
+//! Quadrature on patches: Gauss–Legendre points with weights summing to the area, and the
+//! per-pair choice of order used by the analytic backend.
 //!
 //! Order `q` uses the `q`-point Gauss–Legendre rule in each of the two parameters of the
-//! patch (Golub & Welsch 1969; nodes by Newton's iteration on the Legendre recurrence, as in
-//! Press et al., *Numerical Recipes*, `gauleg`):
+//! patch (nodes by Newton's iteration on the Legendre recurrence, as in Press et al.,
+//! *Numerical Recipes*, `gauleg`; Golub & Welsch 1969 for the theory):
 //!
 //! - a quad is parametrised bilinearly, `P(s, t)`, with area element `|P_s × P_t| ds dt`, exact
 //!   for planar convex quads of any shape;
 //! - a triangle by the collapsed square (Duffy 1982), `P(s, t) = v0 + s((v1 − v0) + t(v2 − v1))`,
 //!   with area element `2A s ds dt`.
 //!
-//! For `q ≥ 2` each parameter is first mapped through `u = 3ξ² − 2ξ³`, whose derivative
-//! vanishes at both ends. The form-factor integrand of two patches that touch along an edge
-//! has a logarithmic singularity in its derivative at that edge; the map moves points away
-//! from edges and flattens the singularity, so the touching cases converge like the smooth
-//! ones (measured in the tests against Howell's closed forms). Order 1 is the centroid rule.
+//! Order 1 is the centroid rule.
+//!
+//! ## Choosing the order per pair
+//!
+//! The analytic backend integrates `F(dA_x → P_j)` over the receiver `i`. That integrand
+//! varies on the length scale of the distance `d` between the patches, so the error of the
+//! `q`-point rule falls like `(h/d)^{2q}`, `h` the receiver's longest edge. Fitted to the
+//! measured errors on opposed unit squares at distances 0.5 to 8 (plain Gauss–Legendre,
+//! orders 1 to 4):
+//!
+//! `error(q, r) ≈ 0.33 · 0.08^{q−1} · r^{−2q}`, `r = d / h`.
+//!
+//! [`order_for`] picks the smallest order whose predicted error is below a tolerance. A
+//! smoothing substitution that clusters points away from the edges (`u = 3ξ² − 2ξ³`) was
+//! measured as well, and was worse everywhere, even for patches touching along an edge (where
+//! the integrand's derivative has a logarithmic singularity): at order 3 on perpendicular unit
+//! squares sharing an edge, plain 2.4e-5 against smoothed 8.0e-3.
 
 use radiosity_core::{Patch, PatchShape, Real, Vec3};
 
-/// Gauss–Legendre nodes and weights on `[0, 1]` (weights sum to 1).
+/// Gauss–Legendre nodes and weights on `[0, 1]` (weights sum to 1), nodes ascending.
 pub fn gauss_legendre(order: usize) -> Vec<(Real, Real)> {
     let n = order.max(1);
     let mut rule = Vec::with_capacity(n);
@@ -33,8 +46,7 @@ pub fn gauss_legendre(order: usize) -> Vec<(Real, Real)> {
                 p0 = p1;
                 p1 = p2;
             }
-            let pn = if n == 1 { x } else { p1 };
-            let pn_1 = if n == 1 { 1.0 } else { p0 };
+            let (pn, pn_1) = if n == 1 { (x, 1.0) } else { (p1, p0) };
             derivative = n as Real * (x * pn - pn_1) / (x * x - 1.0);
             let dx = pn / derivative;
             x -= dx;
@@ -49,51 +61,91 @@ pub fn gauss_legendre(order: usize) -> Vec<(Real, Real)> {
     rule
 }
 
-/// The edge-smoothing map `u = 3ξ² − 2ξ³` and its derivative.
-fn smooth(xi: Real) -> (Real, Real) {
-    (xi * xi * (3.0 - 2.0 * xi), 6.0 * xi * (1.0 - xi))
+/// A rectangle `[s0, s1] × [t0, t1]` of a patch's parameter square.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Panel {
+    /// Lower corner `(s0, t0)`.
+    pub lo: (Real, Real),
+    /// Upper corner `(s1, t1)`.
+    pub hi: (Real, Real),
 }
 
-/// A one-dimensional rule on `[0, 1]` for order `q`: Gauss–Legendre composed with the
-/// smoothing map for `q ≥ 2`.
-pub fn interval_rule(order: usize) -> Vec<(Real, Real)> {
-    if order <= 1 {
-        return vec![(0.5, 1.0)];
+impl Panel {
+    /// The whole parameter square.
+    pub const WHOLE: Panel = Panel { lo: (0.0, 0.0), hi: (1.0, 1.0) };
+
+    /// The four quarters.
+    pub fn quarters(&self) -> [Panel; 4] {
+        let mid = (0.5 * (self.lo.0 + self.hi.0), 0.5 * (self.lo.1 + self.hi.1));
+        [
+            Panel { lo: self.lo, hi: mid },
+            Panel { lo: (mid.0, self.lo.1), hi: (self.hi.0, mid.1) },
+            Panel { lo: (self.lo.0, mid.1), hi: (mid.0, self.hi.1) },
+            Panel { lo: mid, hi: self.hi },
+        ]
     }
-    gauss_legendre(order)
-        .into_iter()
-        .map(|(xi, w)| {
-            let (u, du) = smooth(xi);
-            (u, w * du)
-        })
-        .collect()
+
+    /// The larger side, as a fraction of the parameter square.
+    pub fn extent(&self) -> Real {
+        (self.hi.0 - self.lo.0).max(self.hi.1 - self.lo.1)
+    }
 }
 
-/// Points on `patch` with weights summing to its area: `order²` points, or the centroid for
-/// order 1.
-pub fn patch_rule(patch: &Patch, order: usize) -> Vec<(Vec3, Real)> {
-    if order <= 1 {
-        return vec![(patch.centroid(), patch.area())];
-    }
-    let rule = interval_rule(order);
+/// The point of `patch` at parameters `(s, t)` and the area element there (see the module
+/// documentation for the two parametrisations).
+pub fn parametrisation(patch: &Patch, s: Real, t: Real) -> (Vec3, Real) {
     let v = patch.vertices();
-    let mut points = Vec::with_capacity(rule.len() * rule.len());
-    for &(s, ws) in &rule {
-        for &(t, wt) in &rule {
-            let (p, jacobian) = match patch.shape() {
-                PatchShape::Quad => {
-                    let p = v[0].lerp(v[1], s).lerp(v[3].lerp(v[2], s), t);
-                    let ps = (v[1] - v[0]) * (1.0 - t) + (v[2] - v[3]) * t;
-                    let pt = (v[3] - v[0]) * (1.0 - s) + (v[2] - v[1]) * s;
-                    (p, ps.cross(pt).length())
-                }
-                PatchShape::Triangle => {
-                    let p = v[0] + ((v[1] - v[0]) + (v[2] - v[1]) * t) * s;
-                    (p, 2.0 * patch.area() * s)
-                }
-            };
-            points.push((p, ws * wt * jacobian));
+    match patch.shape() {
+        PatchShape::Quad => {
+            let p = v[0].lerp(v[1], s).lerp(v[3].lerp(v[2], s), t);
+            let ps = (v[1] - v[0]) * (1.0 - t) + (v[2] - v[3]) * t;
+            let pt = (v[3] - v[0]) * (1.0 - s) + (v[2] - v[1]) * s;
+            (p, ps.cross(pt).length())
+        }
+        PatchShape::Triangle => (v[0] + ((v[1] - v[0]) + (v[2] - v[1]) * t) * s, 2.0 * patch.area() * s),
+    }
+}
+
+/// Calls `f(point, weight)` for the points of the tensor rule built from the 1-D rule `nodes`
+/// on `panel` of `patch`; over the whole square the weights sum to the patch's area. A single
+/// node on the whole square means the centroid rule.
+pub fn for_each_point_in(patch: &Patch, panel: Panel, nodes: &[(Real, Real)], mut f: impl FnMut(Vec3, Real)) {
+    if nodes.len() <= 1 && panel == Panel::WHOLE {
+        f(patch.centroid(), patch.area());
+        return;
+    }
+    let (ds, dt) = (panel.hi.0 - panel.lo.0, panel.hi.1 - panel.lo.1);
+    for &(a, wa) in nodes {
+        for &(b, wb) in nodes {
+            let (p, jacobian) = parametrisation(patch, panel.lo.0 + a * ds, panel.lo.1 + b * dt);
+            f(p, wa * wb * ds * dt * jacobian);
         }
     }
+}
+
+/// [`for_each_point_in`] over the whole patch.
+pub fn for_each_point(patch: &Patch, nodes: &[(Real, Real)], f: impl FnMut(Vec3, Real)) {
+    for_each_point_in(patch, Panel::WHOLE, nodes, f)
+}
+
+/// The points and weights of the order-`order` rule on `patch` (see [`for_each_point`]).
+pub fn patch_rule(patch: &Patch, order: usize) -> Vec<(Vec3, Real)> {
+    let mut points = Vec::with_capacity(order * order);
+    for_each_point(patch, &gauss_legendre(order), |p, w| points.push((p, w)));
     points
+}
+
+/// The smallest order up to `max_order` whose predicted relative error for a receiver of
+/// size `h` at distance `d` from the shooter is at most `tolerance` (see the module
+/// documentation), or `None` when even `max_order` is not predicted to reach it.
+pub fn order_for(d: Real, h: Real, tolerance: Real, max_order: usize) -> Option<usize> {
+    let r = d / h;
+    let mut predicted = 0.33 / (r * r);
+    for q in 1..=max_order {
+        if predicted <= tolerance {
+            return Some(q);
+        }
+        predicted *= 0.08 / (r * r);
+    }
+    None
 }

@@ -11,8 +11,10 @@ use radiosity_geom::{KeyValueParams, ParamDoc};
 /// Parameters of the analytic backend.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AnalyticParams {
-    /// Gauss–Legendre points per direction on the receiving patch (1 = centroid).
+    /// The largest number of Gauss–Legendre points per direction on the receiving patch.
     pub order: usize,
+    /// The relative quadrature error each pair's order is chosen to meet (1 = centroid).
+    pub tolerance: f64,
     /// Shadow rays per pair, when the scene needs visibility.
     pub rays: usize,
     /// Seed of the jittered shadow rays.
@@ -59,10 +61,11 @@ pub enum BackendSpec {
 pub const ANALYTIC_PARAMS: &[ParamDoc] = &[
     ParamDoc {
         key: "order",
-        default: "3",
-        doc: "Gauss-Legendre points per direction on the receiver, 1 to 32 (1 = centroid)",
+        default: "8",
+        doc: "largest Gauss-Legendre order on the receiver, 1 to 32 (1 = centroid only)",
     },
-    ParamDoc { key: "rays", default: "1", doc: "shadow rays per pair, 1 to 4096 (none when nothing can occlude)" },
+    ParamDoc { key: "tol", default: "1e-3", doc: "relative quadrature error each pair's order aims at, in (0, 1]" },
+    ParamDoc { key: "rays", default: "1", doc: "shadow rays per pair, 1 to 2^20 (none when nothing can occlude)" },
     ParamDoc { key: "seed", default: "0", doc: "seed of the jittered shadow rays" },
 ];
 
@@ -93,7 +96,7 @@ pub const BACKENDS: &[&str] = &["analytic", "hemicube", "montecarlo", "matrix"];
 
 impl Default for AnalyticParams {
     fn default() -> Self {
-        AnalyticParams { order: 3, rays: 1, seed: 0 }
+        AnalyticParams { order: 8, tolerance: 1e-3, rays: 1, seed: 0 }
     }
 }
 
@@ -111,15 +114,17 @@ impl BackendSpec {
         Ok(match name {
             "analytic" => {
                 let p = KeyValueParams::parse(&owner, items.iter().copied(), ANALYTIC_PARAMS)?;
+                let defaults = AnalyticParams::default();
                 BackendSpec::Analytic(AnalyticParams {
-                    order: p.count("order", 3, 1, 32)?,
-                    rays: p.count("rays", 1, 1, 4096)?,
+                    order: p.count("order", defaults.order, 1, 32)?,
+                    tolerance: p.real("tol", defaults.tolerance, |t| t > 0.0 && t <= 1.0, "a tolerance in (0, 1]")?,
+                    rays: p.count("rays", 1, 1, 1 << 20)?,
                     seed: p.seed("seed", 0)?,
                 })
             }
             "hemicube" => {
                 let p = KeyValueParams::parse(&owner, items.iter().copied(), HEMICUBE_PARAMS)?;
-                let resolution = p.count("res", 128, 2, 4096)?;
+                let resolution = p.count("res", 128, 2, crate::hemicube::MAX_RESOLUTION)?;
                 if resolution % 2 == 1 {
                     // The side faces are res × res/2 pixels.
                     return Err(p.reject("res", "an even number of pixels from 2 to 4096").into());
@@ -157,7 +162,9 @@ impl BackendSpec {
     /// strings, so it keys caches and labels results.
     pub fn canonical(&self) -> String {
         match self {
-            BackendSpec::Analytic(p) => format!("analytic:order={}:rays={}:seed={}", p.order, p.rays, p.seed),
+            BackendSpec::Analytic(p) => {
+                format!("analytic:order={}:tol={:e}:rays={}:seed={}", p.order, p.tolerance, p.rays, p.seed)
+            }
             BackendSpec::Hemicube(p) => format!("hemicube:res={}:seed={}", p.resolution, p.seed),
             BackendSpec::MonteCarlo(p) => format!("montecarlo:rays={}:seed={}", p.rays, p.seed),
             BackendSpec::Matrix { of, rebalance } => {

@@ -83,3 +83,48 @@ fn the_closed_forms_give_the_published_values() {
     assert!((parallel(1.0, 1.0, 1.0) - 0.1998249).abs() < 5e-8);
     assert!((perpendicular(1.0, 1.0, 1.0) - 0.2000438).abs() < 5e-8);
 }
+
+#[test]
+fn documented_defaults_are_the_defaults() {
+    use radiosity_ff::BackendSpec;
+    use radiosity_ff::spec::{ANALYTIC_PARAMS, HEMICUBE_PARAMS, MATRIX_PARAMS, MONTECARLO_PARAMS};
+    for (name, docs) in [
+        ("analytic", ANALYTIC_PARAMS),
+        ("hemicube", HEMICUBE_PARAMS),
+        ("montecarlo", MONTECARLO_PARAMS),
+        ("matrix", MATRIX_PARAMS),
+    ] {
+        let bare = BackendSpec::parse(name).unwrap();
+        for d in docs {
+            let explicit = BackendSpec::parse(&format!("{name}:{}={}", d.key, d.default)).unwrap();
+            assert_eq!(explicit, bare, "{name}:{}={}", d.key, d.default);
+        }
+    }
+}
+
+#[test]
+fn bad_backend_arguments_are_clear_errors() {
+    use radiosity_ff::BackendSpec;
+    let err = |arg: &str| BackendSpec::parse(arg).unwrap_err().to_string();
+    let e = err("radiance");
+    assert!(
+        e.contains("unknown form-factor backend 'radiance'") && e.contains("analytic, hemicube, montecarlo, matrix"),
+        "{e}"
+    );
+    let e = err("analytic:order=0");
+    assert!(e.contains("form-factor backend 'analytic'") && e.contains("order=0"), "{e}");
+    let e = err("analytic:tol=0");
+    assert!(e.contains("tol=0"), "{e}");
+    let e = err("hemicube:res=33");
+    assert!(e.contains("res=33") && e.contains("even"), "{e}");
+    let e = err("montecarlo:samples=5");
+    assert!(e.contains("no parameter 'samples'") && e.contains("rays, seed"), "{e}");
+    let e = err("matrix:of=matrix");
+    assert!(e.contains("matrix"), "{e}");
+    let e = err("matrix:of=hemicube:order=3");
+    assert!(e.contains("form-factor backend 'hemicube'") && e.contains("no parameter 'order'"), "{e}");
+    assert_eq!(
+        BackendSpec::parse("matrix:of=hemicube:res=64").unwrap().canonical(),
+        "matrix:of=hemicube:rebalance=false:res=64:seed=0"
+    );
+}

@@ -90,6 +90,8 @@ pub struct AnalyticColumns<'a> {
     nodes: Vec<Vec<(Real, Real)>>,
     /// The longest edge of each patch, the scale of its quadrature error.
     longest_edge: Vec<Real>,
+    /// The largest distance from each patch's centroid to its vertices.
+    reach: Vec<Real>,
     params: AnalyticParams,
     tolerance: Real,
     clamped: ClampCounter,
@@ -109,6 +111,7 @@ impl<'a> AnalyticColumns<'a> {
             visibility: analysis.occlusion.value.then_some(visibility),
             nodes: (1..=params.order.max(1)).map(gauss_legendre).collect(),
             longest_edge: scene.patches().iter().map(longest_edge).collect(),
+            reach: scene.patches().iter().map(reach).collect(),
             params,
             tolerance: PLANE_TOLERANCE * scene.diagonal(),
             clamped: ClampCounter::default(),
@@ -134,7 +137,7 @@ impl<'a> AnalyticColumns<'a> {
         if behind(pj, pi, self.tolerance) || behind(pi, pj, self.tolerance) {
             return 0.0;
         }
-        let unoccluded = self.unoccluded(i, pi, pj);
+        let unoccluded = self.unoccluded(i, j, pi, pj);
         if unoccluded == 0.0 {
             return 0.0;
         }
@@ -144,30 +147,18 @@ impl<'a> AnalyticColumns<'a> {
         }
     }
 
-    /// The largest distance from `p`'s centroid to its vertices.
-    fn reach(&self, p: &Patch) -> Real {
-        p.vertices().iter().map(|v| (*v - p.centroid()).length_squared()).fold(0.0, Real::max).sqrt()
-    }
-
-    /// The quadrature order used on the whole receiver `i` towards `j`, or `None` when the
-    /// receiver is split into panels first.
-    pub fn pair_order(&self, i: usize, j: usize) -> Option<usize> {
-        let (pi, pj) = (&self.scene.patches()[i], &self.scene.patches()[j]);
-        let d = distance_to_polygon(pi.centroid(), pj.vertices(), pj.normal());
-        order_for(d, self.longest_edge[i], self.params.tolerance, self.params.order)
-    }
-
     /// `(1/A_i) ∫_{A_i} F(dA_x → P_j) dA_x`.
     ///
     /// Points of `P_i` behind `P_j`'s plane contribute nothing. When that plane cuts `P_i`,
     /// the integrand has a kink along the cut, where Gauss–Legendre converges slowly; so the
     /// part of `P_i` in front is cut out exactly, fanned into triangles, and each integrated
     /// on its own.
-    fn unoccluded(&self, i: usize, pi: &Patch, pj: &Patch) -> Real {
+    fn unoccluded(&self, i: usize, j: usize, pi: &Patch, pj: &Patch) -> Real {
         let (nj, oj) = (pj.normal(), pj.vertices()[0]);
+        let shooter = Shooter { patch: pj, reach: self.reach[j] };
         // Distant pairs: the centroid rule meets the tolerance, and no cut is needed (a kink
         // far from the shooter costs little, since it is seen nearly edge-on there).
-        let bound = (pi.centroid() - pj.centroid()).length() - self.reach(pj);
+        let bound = (pi.centroid() - pj.centroid()).length() - self.reach[j];
         if order_for(bound, self.longest_edge[i], self.params.tolerance, 1).is_some() {
             let c = pi.centroid();
             return if nj.dot(c - oj) > 0.0 { point_to_polygon(c, pi.normal(), pj.vertices()) } else { 0.0 };
@@ -176,7 +167,7 @@ impl<'a> AnalyticColumns<'a> {
         // Clip against the plane moved a hair forward, so points on it count as behind.
         let count = clip_above(oj + nj * self.tolerance, nj, pi.vertices(), &mut front);
         if count == pi.vertices().len() && front[..count] == *pi.vertices() {
-            return self.integrate(pi, self.longest_edge[i], pj, Panel::WHOLE, 0, &mut PANEL_BUDGET.clone())
+            return self.integrate(pi, self.longest_edge[i], shooter, Panel::WHOLE, 0, &mut PANEL_BUDGET.clone())
                 / pi.area();
         }
         let mut sum = 0.0;
@@ -184,7 +175,7 @@ impl<'a> AnalyticColumns<'a> {
         for k in 1..count.saturating_sub(1) {
             // A sliver too thin to be a patch carries no measurable flux.
             if let Ok(piece) = Patch::triangle([front[0], front[k], front[k + 1]], pi.material, pi.object) {
-                sum += self.integrate(&piece, longest_edge(&piece), pj, Panel::WHOLE, 0, &mut budget);
+                sum += self.integrate(&piece, longest_edge(&piece), shooter, Panel::WHOLE, 0, &mut budget);
             }
         }
         sum / pi.area()
@@ -194,12 +185,21 @@ impl<'a> AnalyticColumns<'a> {
     /// the tolerance at the panel's distance from `P_j`, or, if none is, the sum over the
     /// panel's quarters, while depth and the pair's panel `budget` last. Near a shared edge
     /// this grades panels geometrically towards it.
-    fn integrate(&self, pi: &Patch, edge: Real, pj: &Patch, panel: Panel, depth: u32, budget: &mut usize) -> Real {
+    fn integrate(
+        &self,
+        pi: &Patch,
+        edge: Real,
+        shooter: Shooter<'_>,
+        panel: Panel,
+        depth: u32,
+        budget: &mut usize,
+    ) -> Real {
+        let pj = shooter.patch;
         let centre = parametrisation(pi, 0.5 * (panel.lo.0 + panel.hi.0), 0.5 * (panel.lo.1 + panel.hi.1)).0;
         let h = edge * panel.extent();
         // The distance to P_j's centroid less its reach is a cheap lower bound on the distance
         // to P_j; when it already allows the centroid rule, the exact distance is not needed.
-        let bound = (centre - pj.centroid()).length() - self.reach(pj);
+        let bound = (centre - pj.centroid()).length() - shooter.reach;
         let d = if order_for(bound, h, self.params.tolerance, 1).is_some() {
             bound
         } else {
@@ -212,7 +212,7 @@ impl<'a> AnalyticColumns<'a> {
                 return panel
                     .quarters()
                     .iter()
-                    .map(|&quarter| self.integrate(pi, edge, pj, quarter, depth + 1, budget))
+                    .map(|&quarter| self.integrate(pi, edge, shooter, quarter, depth + 1, budget))
                     .sum();
             }
             None => self.params.order,
@@ -288,6 +288,18 @@ impl<'a> AnalyticColumns<'a> {
 fn pair_rng(seed: u64, lo: usize, hi: usize) -> Xoshiro256PlusPlus {
     let pair = ((lo as u64) << 32) | hi as u64;
     Xoshiro256PlusPlus::seed_from_u64(pair ^ seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).rotate_left(29))
+}
+
+/// The shooting patch of a pair, with its reach (centroid to farthest vertex).
+#[derive(Clone, Copy)]
+struct Shooter<'p> {
+    patch: &'p Patch,
+    reach: Real,
+}
+
+/// The largest distance from a patch's centroid to its vertices.
+fn reach(p: &Patch) -> Real {
+    p.vertices().iter().map(|v| (*v - p.centroid()).length_squared()).fold(0.0, Real::max).sqrt()
 }
 
 /// The longest edge of a patch.

@@ -24,15 +24,24 @@ pub const MAX_CLIPPED: usize = 5;
 /// The unoccluded form factor from the differential area at `x` with unit normal `n` to the
 /// convex polygon `polygon` (3 or 4 vertices, either orientation).
 pub fn point_to_polygon(x: Vec3, n: Vec3, polygon: &[Vec3]) -> Real {
+    if polygon.iter().all(|p| n.dot(*p - x) >= 0.0) {
+        return lambert(x, n, polygon);
+    }
     let mut clipped = [Vec3::ZERO; MAX_CLIPPED];
     let count = clip_above(x, n, polygon, &mut clipped);
     if count < 3 {
         return 0.0;
     }
+    lambert(x, n, &clipped[..count])
+}
+
+/// Lambert's sum for a polygon wholly above the tangent plane of `x`.
+fn lambert(x: Vec3, n: Vec3, polygon: &[Vec3]) -> Real {
+    let count = polygon.len();
     let mut sum = 0.0;
     for k in 0..count {
-        let a = clipped[k] - x;
-        let b = clipped[(k + 1) % count] - x;
+        let a = polygon[k] - x;
+        let b = polygon[(k + 1) % count] - x;
         let cross = a.cross(b);
         let sin = cross.length();
         if sin > 0.0 {

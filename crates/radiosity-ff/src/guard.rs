@@ -72,11 +72,18 @@ pub fn matrix_figures(area: &[Real], f: impl Fn(usize, usize) -> Real) -> Matrix
             }
         }
     }
-    MatrixFigures {
-        row_sum_min: sums.iter().copied().fold(Real::INFINITY, Real::min),
-        row_sum_mean: sums.iter().sum::<Real>() / n as Real,
-        row_sum_max: sums.iter().copied().fold(Real::NEG_INFINITY, Real::max),
-        max_reciprocity_error: reciprocity,
-        nonzeros,
+    MatrixFigures::from_row_sums(&sums, reciprocity, nonzeros)
+}
+
+impl MatrixFigures {
+    /// The figures from the row sums, the largest reciprocity error and the non-zero count.
+    pub fn from_row_sums(sums: &[Real], max_reciprocity_error: Real, nonzeros: usize) -> MatrixFigures {
+        MatrixFigures {
+            row_sum_min: sums.iter().copied().fold(Real::INFINITY, Real::min),
+            row_sum_mean: sums.iter().sum::<Real>() / sums.len() as Real,
+            row_sum_max: sums.iter().copied().fold(Real::NEG_INFINITY, Real::max),
+            max_reciprocity_error,
+            nonzeros,
+        }
     }
 }

@@ -468,13 +468,7 @@ impl StoredMatrix {
                 }
             }
         }
-        MatrixFigures {
-            row_sum_min: sums.iter().copied().fold(Real::INFINITY, Real::min),
-            row_sum_mean: sums.iter().sum::<Real>() / n as Real,
-            row_sum_max: sums.iter().copied().fold(Real::NEG_INFINITY, Real::max),
-            max_reciprocity_error: reciprocity,
-            nonzeros,
-        }
+        MatrixFigures::from_row_sums(&sums, reciprocity, nonzeros)
     }
 
     /// Symmetrises `A·F`, then, if `closed`, rescales each row to sum to 1 (see the module

@@ -2,6 +2,7 @@
 //! Configuration Factors*, cases C-11 and C-14), and test scenes made of meshed rectangles.
 
 use radiosity_core::{ColumnSource, Material, Real, Scene, Spectrum, Vec3};
+
 use radiosity_geom::SceneBuilder;
 use std::f64::consts::PI;
 
@@ -76,6 +77,41 @@ pub fn corner(l: Real, w: Real, h: Real, m: usize) -> Scene {
         [Vec3::ZERO, Vec3::new(l, 0.0, 0.0), Vec3::new(0.0, h, 0.0)],
         m,
     )
+}
+
+/// Every column of `source`, computed inside a rayon pool of `threads` threads (backends that
+/// parallelise inside a column use that pool).
+pub fn all_columns(source: &impl ColumnSource, threads: usize) -> Vec<Vec<Real>> {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    let n = source.patch_count();
+    pool.install(|| {
+        (0..n)
+            .map(|j| {
+                let mut column = vec![0.0; n];
+                source.fill_column(j, &mut column);
+                column
+            })
+            .collect()
+    })
+}
+
+/// Checks that `source` gives the same columns on 1 and 2 rayon threads and from plain
+/// threads computing them concurrently in reverse order; returns the columns.
+pub fn assert_thread_independent(source: &impl ColumnSource) -> Vec<Vec<Real>> {
+    let one = all_columns(source, 1);
+    assert_eq!(one, all_columns(source, 2));
+    let n = source.patch_count();
+    let mut reversed = vec![Vec::new(); n];
+    std::thread::scope(|s| {
+        for (j, slot) in reversed.iter_mut().enumerate().rev() {
+            s.spawn(move || {
+                *slot = vec![0.0; n];
+                source.fill_column(j, slot);
+            });
+        }
+    });
+    assert_eq!(one, reversed);
+    one
 }
 
 #[test]

@@ -23,20 +23,6 @@ fn column(source: &MonteCarloColumns<'_>, j: usize) -> (Vec<Real>, Vec<Real>) {
 }
 
 /// All columns of `source`, computed on a rayon pool of `threads` threads.
-fn all_columns(source: &impl ColumnSource, threads: usize) -> Vec<Vec<Real>> {
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-    let n = source.patch_count();
-    pool.install(|| {
-        (0..n)
-            .map(|j| {
-                let mut column = vec![0.0; n];
-                source.fill_column(j, &mut column);
-                column
-            })
-            .collect()
-    })
-}
-
 fn mean_and_sample_variance(values: &[Real]) -> (Real, Real) {
     let k = values.len() as Real;
     let mean = values.iter().sum::<Real>() / k;
@@ -230,20 +216,8 @@ fn columns_are_deterministic_whatever_the_threads() {
     let vis = Visibility::new(&scene);
     let a = MonteCarloColumns::new(&scene, &vis, params(rays, 5));
     let b = MonteCarloColumns::new(&scene, &vis, params(rays, 5));
-    let one = all_columns(&a, 1);
+    let one = assert_thread_independent(&a);
     assert_eq!(one, all_columns(&b, 1));
-    assert_eq!(one, all_columns(&a, 2));
-    let mut reversed = vec![Vec::new(); scene.len()];
-    std::thread::scope(|s| {
-        for (j, slot) in reversed.iter_mut().enumerate().rev() {
-            let a = &a;
-            s.spawn(move || {
-                *slot = vec![0.0; 18];
-                a.fill_column(j, slot);
-            });
-        }
-    });
-    assert_eq!(one, reversed);
     // fill_column and column_with_variance agree.
     for (j, expected) in one.iter().enumerate() {
         assert_eq!(&column(&a, j).0, expected);

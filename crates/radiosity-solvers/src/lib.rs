@@ -1,3 +1,64 @@
-//! Radiosity solvers (gathering, shooting, overshooting, group and group-accelerated), generic
-//! over [`radiosity_core::ColumnSource`]. Not implemented yet; this crate depends on
-//! `radiosity-core` only and is tested on small in-memory matrices.
+//! Radiosity solvers, generic over the form factors: they see only
+//! [`radiosity_core::ColumnSource`], through a [`Problem`] that counts every column.
+//!
+//! Built after argmin: a [`Solver`] defines one step, the [`Executor`] loops until a stop
+//! rule ([`StopRules`]) holds and calls [`Observer`]s between steps, outside the timed
+//! region. Each solver lives in its own module, whose documentation gives its update rule
+//! and references. This crate depends on `radiosity-core` only and is tested on small
+//! in-memory matrices.
+//!
+//! Solvers so far: `jacobi`, `gauss-seidel`, `sor-ω`, `southwell`, `pr`.
+//!
+//! ```
+//! use radiosity_core::{Channels, DenseColumns, LinearSystem};
+//! use radiosity_solvers::{Executor, NoObserver, Problem, StopRules, TerminationReason, solver_by_name};
+//!
+//! // Two unit patches facing each other, each seeing a fifth of the other.
+//! let system = LinearSystem::new(Channels::Grey, vec![1.0, 1.0], vec![0.5, 0.5], vec![1.0, 0.0]).unwrap();
+//! let f = DenseColumns::from_rows(2, &[0.0, 0.2, 0.2, 0.0]).unwrap();
+//! let problem = Problem::new(&system, &f).unwrap();
+//! let mut pr = solver_by_name("pr").unwrap();
+//! let run = Executor::new(pr.as_mut(), StopRules::parse("residual=1e-12").unwrap())
+//!     .run(&problem, &mut NoObserver)
+//!     .unwrap();
+//! assert!(matches!(run.termination, TerminationReason::Residual(_)));
+//! // B1 = E1 / (1 − ρ² F12 F21).
+//! assert!((run.state.radiosity[0] - 1.0 / (1.0 - 0.25 * 0.04)).abs() < 1e-12);
+//! ```
+
+pub mod error;
+pub mod executor;
+pub mod gathering;
+pub mod gauss_seidel;
+pub mod jacobi;
+pub mod problem;
+pub mod progressive;
+pub mod shooting;
+pub mod southwell;
+pub mod state;
+pub mod stop;
+
+pub use error::SolverError;
+pub use executor::{Executor, NoObserver, Observer, Run, Solver};
+pub use problem::Problem;
+pub use state::State;
+pub use stop::{Count, StopRule, StopRules, TerminationReason};
+
+/// The solver names accepted by [`solver_by_name`], as listed to users.
+pub const SOLVER_NAMES: &str = "jacobi, gauss-seidel, sor-ω (e.g. sor-1.2), southwell, pr";
+
+/// The solver a command-line name designates.
+pub fn solver_by_name(name: &str) -> Result<Box<dyn Solver>, SolverError> {
+    Ok(match name {
+        "jacobi" => Box::new(jacobi::Jacobi::default()),
+        "gauss-seidel" => Box::new(gauss_seidel::GaussSeidel::new(1.0)?),
+        "southwell" => Box::new(southwell::Southwell::default()),
+        "pr" => Box::new(progressive::ProgressiveRefinement::default()),
+        _ => {
+            if let Some(omega) = name.strip_prefix("sor-").and_then(|w| w.parse::<f64>().ok()) {
+                return Ok(Box::new(gauss_seidel::GaussSeidel::new(omega)?));
+            }
+            return Err(SolverError::BadParams(format!("unknown solver '{name}'; solvers are {SOLVER_NAMES}")));
+        }
+    })
+}

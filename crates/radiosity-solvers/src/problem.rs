@@ -1,0 +1,73 @@
+//! The problem a solver works on: the linear system and the form-factor columns, with the
+//! accounting of every column fetched.
+//!
+//! Solvers never call a `ColumnSource` directly. They ask the [`Problem`] for a column or a
+//! row; the problem counts the columns computed and the seconds spent in them, which is the
+//! unit of cost of every method (DESIGN §3). A row follows from the same column by
+//! reciprocity, `F_ji = F_ij A_i / A_j`, so it costs one column too.
+
+use crate::error::SolverError;
+use radiosity_core::{ColumnSource, LinearSystem, Real};
+use std::cell::Cell;
+use std::time::Instant;
+
+/// A system and its form factors.
+pub struct Problem<'a> {
+    system: &'a LinearSystem,
+    columns: &'a dyn ColumnSource,
+    fetched: Cell<u64>,
+    ff_seconds: Cell<f64>,
+}
+
+impl<'a> Problem<'a> {
+    /// A problem over `system` with form factors from `columns`.
+    pub fn new(system: &'a LinearSystem, columns: &'a dyn ColumnSource) -> Result<Problem<'a>, SolverError> {
+        if columns.patch_count() != system.len() {
+            return Err(SolverError::SizeMismatch { columns: columns.patch_count(), system: system.len() });
+        }
+        Ok(Problem { system, columns, fetched: Cell::new(0), ff_seconds: Cell::new(0.0) })
+    }
+
+    /// The system.
+    pub fn system(&self) -> &LinearSystem {
+        self.system
+    }
+
+    /// The number of patches.
+    pub fn n(&self) -> usize {
+        self.system.len()
+    }
+
+    /// The number of solved channels.
+    pub fn channels(&self) -> usize {
+        self.system.channels().count()
+    }
+
+    /// Column `j` of F (`F_ij` for every `i`) into `out`: one column computed.
+    pub fn column(&self, j: usize, out: &mut [Real]) {
+        let start = Instant::now();
+        self.columns.fill_column(j, out);
+        self.ff_seconds.set(self.ff_seconds.get() + start.elapsed().as_secs_f64());
+        self.fetched.set(self.fetched.get() + 1);
+    }
+
+    /// Row `i` of F (`F_ij` for every `j`) into `out`, from column `i` by reciprocity: one
+    /// column computed.
+    pub fn row(&self, i: usize, out: &mut [Real]) {
+        self.column(i, out);
+        let area = self.system.areas();
+        for (j, f) in out.iter_mut().enumerate() {
+            *f *= area[j] / area[i];
+        }
+    }
+
+    /// Columns computed so far.
+    pub fn columns_fetched(&self) -> u64 {
+        self.fetched.get()
+    }
+
+    /// Seconds spent computing columns so far.
+    pub fn ff_seconds(&self) -> f64 {
+        self.ff_seconds.get()
+    }
+}

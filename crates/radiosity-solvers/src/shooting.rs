@@ -1,0 +1,57 @@
+//! The shooting update shared by the point shooting methods (Southwell, progressive
+//! refinement): shoot an amount `s` from patch `j` to every patch.
+//!
+//! For every patch `i` and channel `c`: `δ_ic = ρ_ic F_ij s_c`, `B_ic += δ_ic`,
+//! `ΔB_ic += δ_ic` (Cohen, Chen, Wallace & Greenberg 1988, "A progressive refinement
+//! approach to fast radiosity image generation"). `F_jj = 0` for planar patches, so the
+//! shooter's own values are set by the caller.
+
+use crate::error::SolverError;
+use crate::problem::Problem;
+use crate::state::State;
+use radiosity_core::Real;
+
+/// Shoots `amount` (one value per channel) from patch `j`, using `column` as scratch space.
+pub fn shoot(
+    problem: &Problem<'_>,
+    state: &mut State,
+    j: usize,
+    amount: &[Real],
+    column: &mut [Real],
+) -> Result<(), SolverError> {
+    problem.column(j, column);
+    let k = state.channels;
+    let rho = problem.system().reflectivities();
+    for (i, &f) in column.iter().enumerate() {
+        if f == 0.0 {
+            continue;
+        }
+        for c in 0..k {
+            let delta = rho[i * k + c] * f * amount[c];
+            state.radiosity[i * k + c] += delta;
+            state.unshot[i * k + c] += delta;
+            if !state.radiosity[i * k + c].is_finite() {
+                return Err(SolverError::NonFinite {
+                    step: state.step + 1,
+                    patch: i,
+                    value: state.radiosity[i * k + c],
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The residual power of the shot radiosity: `Σ_c Σ_i A_i |ΔB_ic| / Σ_c Σ_i A_i E_ic`.
+pub fn unshot_power(problem: &Problem<'_>, state: &State) -> Real {
+    let (area, emission, k) = (problem.system().areas(), problem.system().emissions(), state.channels);
+    let mut unshot = 0.0;
+    let mut emitted = 0.0;
+    for i in 0..area.len() {
+        for c in 0..k {
+            unshot += area[i] * state.unshot[i * k + c].abs();
+            emitted += area[i] * emission[i * k + c].abs();
+        }
+    }
+    if emitted > 0.0 { unshot / emitted } else { 0.0 }
+}

@@ -1,0 +1,39 @@
+//! `southwell`: Southwell iteration, shooting from the patch with the largest residual.
+//!
+//! Rule: pick `j = argmax_j Σ_c |ΔB_jc|` (the residual of the shot radiosity, not weighted
+//! by area; the lowest index on ties), shoot `s = ΔB_j`, then `ΔB_j = 0`. One column a step.
+//!
+//! ## References
+//!
+//! - Southwell 1946, *Relaxation Methods in Theoretical Physics*.
+//! - Gortler, Cohen & Slusallek 1993, "Radiosity and relaxation methods", IEEE CG&A.
+
+use crate::error::SolverError;
+use crate::executor::Solver;
+use crate::problem::Problem;
+use crate::progressive::{select, shoot_all};
+use crate::shooting::unshot_power;
+use crate::state::State;
+use radiosity_core::Real;
+
+/// Southwell iteration.
+#[derive(Debug, Default)]
+pub struct Southwell {
+    column: Vec<Real>,
+    amount: Vec<Real>,
+}
+
+impl Solver for Southwell {
+    fn name(&self) -> String {
+        "southwell".into()
+    }
+
+    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
+        let j = select(state, |_| 1.0);
+        shoot_all(problem, state, j, &mut self.amount, &mut self.column)
+    }
+
+    fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real> {
+        Some(unshot_power(problem, state))
+    }
+}

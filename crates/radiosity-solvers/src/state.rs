@@ -1,0 +1,47 @@
+//! The iterate of a solver and its accounting.
+//!
+//! `radiosity` is the displayed radiosity `B` and `unshot` the unshot radiosity `ΔB`, both
+//! patch-major (`[i * channels + c]`); for shooting methods the shot radiosity is
+//! `x = B − ΔB`, and the residual of `x` is exactly `ΔB` (DESIGN §5). Gathering methods keep
+//! `unshot` as the last change of each patch.
+
+use radiosity_core::Real;
+
+/// A solver's iterate and what it cost.
+#[derive(Clone, Debug, PartialEq)]
+pub struct State {
+    /// Channels per patch.
+    pub channels: usize,
+    /// The displayed radiosity `B`, patch-major.
+    pub radiosity: Vec<Real>,
+    /// The unshot radiosity `ΔB` (shooting), or the last update of each patch (gathering).
+    pub unshot: Vec<Real>,
+    /// Steps taken: one shot, or one patch gathered.
+    pub step: u64,
+    /// Columns computed so far.
+    pub columns: u64,
+    /// Seconds spent computing columns.
+    pub ff_seconds: f64,
+    /// Seconds spent in the solver outside column computations.
+    pub solve_seconds: f64,
+}
+
+impl State {
+    /// The initial state `B = ΔB = E`.
+    pub fn from_emission(emission: &[Real], channels: usize) -> State {
+        State {
+            channels,
+            radiosity: emission.to_vec(),
+            unshot: emission.to_vec(),
+            step: 0,
+            columns: 0,
+            ff_seconds: 0.0,
+            solve_seconds: 0.0,
+        }
+    }
+
+    /// The channels of patch `i` in `values`.
+    pub fn of(values: &[Real], channels: usize, i: usize) -> &[Real] {
+        &values[i * channels..(i + 1) * channels]
+    }
+}

@@ -1,0 +1,157 @@
+//! Stop rules (DESIGN §7) and why a run ended.
+//!
+//! Rules are a comma list, and the first that holds stops the run: `columns=N`, `columns=2n`
+//! (a multiple of the patch count), `steps=N` (also `steps=3n`), `rms=1e-3`, `residual=1e-4`,
+//! `time=30s` (`ms`, `s` or `min`). Every run ends even if no rule can hold any more: at
+//! round-off convergence (nothing left to shoot or gather), or at a step cap of `20n` steps.
+
+use crate::error::SolverError;
+use radiosity_core::Real;
+use std::time::Duration;
+
+/// A count that may be given in multiples of the number of patches `n`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Count {
+    /// An absolute number.
+    Absolute(u64),
+    /// A multiple of `n`.
+    PerPatch(f64),
+}
+
+impl Count {
+    /// The count for a system of `n` patches.
+    pub fn resolve(self, n: usize) -> u64 {
+        match self {
+            Count::Absolute(k) => k,
+            Count::PerPatch(m) => (m * n as f64).round() as u64,
+        }
+    }
+}
+
+/// One stop rule.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum StopRule {
+    /// Stop once this many columns were computed.
+    Columns(Count),
+    /// Stop after this many steps.
+    Steps(Count),
+    /// Stop once the observed `e_rms` is at most this.
+    Rms(Real),
+    /// Stop once the solver's residual power is at most this.
+    Residual(Real),
+    /// Stop once the run's time (form factors and solving) reaches this.
+    Time(Duration),
+}
+
+/// A list of stop rules; the first that holds stops the run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StopRules {
+    /// The rules, in the order given.
+    pub rules: Vec<StopRule>,
+    /// The step cap, in multiples of `n` (default 20).
+    pub step_cap: f64,
+}
+
+impl Default for StopRules {
+    fn default() -> Self {
+        StopRules { rules: Vec::new(), step_cap: 20.0 }
+    }
+}
+
+fn bad(rule: &str, reason: &str) -> SolverError {
+    SolverError::BadRule { rule: rule.to_string(), reason: reason.to_string() }
+}
+
+fn parse_count(rule: &str, value: &str) -> Result<Count, SolverError> {
+    if let Some(m) = value.strip_suffix('n') {
+        let m =
+            if m.is_empty() { 1.0 } else { m.parse::<f64>().map_err(|_| bad(rule, "expected a number before n"))? };
+        if !(m.is_finite() && m > 0.0) {
+            return Err(bad(rule, "the multiple of n must be positive"));
+        }
+        return Ok(Count::PerPatch(m));
+    }
+    match value.parse::<u64>() {
+        Ok(k) if k > 0 => Ok(Count::Absolute(k)),
+        _ => Err(bad(rule, "expected a positive integer or a multiple of n such as 2n")),
+    }
+}
+
+fn parse_positive(rule: &str, value: &str) -> Result<Real, SolverError> {
+    match value.parse::<Real>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(bad(rule, "expected a positive number")),
+    }
+}
+
+fn parse_duration(rule: &str, value: &str) -> Result<Duration, SolverError> {
+    let (number, scale) = if let Some(v) = value.strip_suffix("ms") {
+        (v, 1e-3)
+    } else if let Some(v) = value.strip_suffix("min") {
+        (v, 60.0)
+    } else if let Some(v) = value.strip_suffix('s') {
+        (v, 1.0)
+    } else {
+        return Err(bad(rule, "expected a duration with a unit: ms, s or min"));
+    };
+    let seconds = parse_positive(rule, number)? * scale;
+    Ok(Duration::from_secs_f64(seconds))
+}
+
+impl StopRules {
+    /// Parses a comma list of rules (an empty string gives no rule: only round-off and the
+    /// step cap stop the run).
+    pub fn parse(list: &str) -> Result<StopRules, SolverError> {
+        let mut rules = Vec::new();
+        for rule in list.split(',').map(str::trim).filter(|r| !r.is_empty()) {
+            let (key, value) = rule.split_once('=').ok_or_else(|| bad(rule, "expected key=value"))?;
+            rules.push(match key.trim() {
+                "columns" => StopRule::Columns(parse_count(rule, value.trim())?),
+                "steps" => StopRule::Steps(parse_count(rule, value.trim())?),
+                "rms" => StopRule::Rms(parse_positive(rule, value.trim())?),
+                "residual" => StopRule::Residual(parse_positive(rule, value.trim())?),
+                "time" => StopRule::Time(parse_duration(rule, value.trim())?),
+                _ => return Err(bad(rule, "unknown rule")),
+            });
+        }
+        Ok(StopRules { rules, ..StopRules::default() })
+    }
+
+    /// Whether any rule needs the error against a reference (`rms=`).
+    pub fn needs_error(&self) -> bool {
+        self.rules.iter().any(|r| matches!(r, StopRule::Rms(_)))
+    }
+}
+
+/// Why a run ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TerminationReason {
+    /// `columns=` reached.
+    Columns(u64),
+    /// `steps=` reached.
+    Steps(u64),
+    /// `rms=` reached.
+    Rms(Real),
+    /// `residual=` reached.
+    Residual(Real),
+    /// `time=` reached.
+    Time(Duration),
+    /// Nothing left to do: the residual is zero or at round-off.
+    RoundOff,
+    /// The step cap was reached before any rule held.
+    StepCap(u64),
+}
+
+impl std::fmt::Display for TerminationReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            TerminationReason::Columns(k) => write!(f, "{k} columns computed"),
+            TerminationReason::Steps(k) => write!(f, "{k} steps taken"),
+            TerminationReason::Rms(e) => write!(f, "e_rms reached {e:e}"),
+            TerminationReason::Residual(r) => write!(f, "residual power reached {r:e}"),
+            TerminationReason::Time(t) => write!(f, "time limit of {:.3} s reached", t.as_secs_f64()),
+            TerminationReason::RoundOff => write!(f, "converged to round-off"),
+            TerminationReason::StepCap(k) => write!(f, "step cap of {k} steps reached before any rule held"),
+        }
+    }
+}

@@ -57,8 +57,8 @@ pub struct Args {
 }
 
 /// Where the matrix came from.
-struct Obtained {
-    matrix: StoredMatrix,
+pub(crate) struct Obtained {
+    pub(crate) matrix: StoredMatrix,
     /// Seconds to assemble (and rebalance) or load it.
     seconds: f64,
     /// Entries clamped while assembling; unknown when loaded from the cache.
@@ -109,7 +109,7 @@ fn areas(prepared: &PreparedScene) -> Vec<f64> {
 }
 
 /// Assembles the matrix, or for `matrix` loads it from the cache.
-fn obtain(prepared: &PreparedScene, spec: &BackendSpec) -> Result<Obtained> {
+pub(crate) fn obtain(prepared: &PreparedScene, spec: &BackendSpec) -> Result<Obtained> {
     let input = FormFactorInput {
         scene: &prepared.loaded.scene,
         visibility: &prepared.visibility,

@@ -7,6 +7,7 @@ mod compare;
 mod ff;
 mod scene_report;
 mod scenes;
+mod solve;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -25,6 +26,8 @@ enum Command {
     Scenes(scenes::Args),
     /// Assemble the full form-factor matrix of a scene and report its closure and reciprocity.
     Ff(ff::Args),
+    /// Run one solver on a scene and report its error against the reference solution.
+    Solve(solve::Args),
     /// Compare solvers on a scene (for now: prepares the scene and reports its analysis).
     Compare(compare::Args),
 }
@@ -34,6 +37,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Scenes(args) => scenes::run(&args),
         Command::Ff(args) => ff::run(&args),
+        Command::Solve(args) => solve::run(&args),
         Command::Compare(args) => compare::run(&args),
     };
     match result {

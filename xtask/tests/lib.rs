@@ -262,3 +262,44 @@ fn ff_matrix_is_cached_and_loaded_the_second_time() {
     assert!(last.contains("loaded from cache"), "{last}");
     std::fs::remove_dir_all(&cache).unwrap();
 }
+
+#[test]
+fn solve_reports_error_against_the_reference() {
+    let r = stdout_json(&["solve", "--scene", "multi-cubes", "--solver", "pr", "--until", "columns=480", "--json"]);
+    let stats = &r["stats"];
+    assert_eq!(stats["columns"], 480);
+    assert_eq!(stats["steps"], 480);
+    let e_rms = stats["e_rms"].as_f64().unwrap();
+    // Half-way-ish convergence: clearly better than nothing, clearly not converged.
+    assert!(e_rms > 1e-5 && e_rms < 1e-1, "{e_rms}");
+    assert!(stats["termination"].as_str().unwrap().contains("480 columns"));
+    assert!(stats["reference"].as_str().unwrap().contains("dense LU"));
+    assert_eq!(r["patches"].as_array().unwrap().len(), 480);
+    for key in ["id", "area", "centroid", "normal", "reflectivity", "emission", "radiosity"] {
+        assert!(r["patches"][0].get(key).is_some(), "patch key {key}");
+    }
+    // Run long enough, a shooting solver reaches the reference of the same columns.
+    let r = stdout_json(&[
+        "solve",
+        "--scene",
+        "furnace:res=2",
+        "--solver",
+        "pr",
+        "--until",
+        "residual=1e-13,steps=100n",
+        "--json",
+    ]);
+    assert!(r["stats"]["e_rms"].as_f64().unwrap() < 1e-10, "{}", r["stats"]);
+}
+
+#[test]
+fn solve_refuses_bad_arguments_before_any_work() {
+    let e = failure(&["solve", "--scene", "multi-cubes", "--solver", "xu-g30"]);
+    assert!(e.contains("unknown solver 'xu-g30'") && e.contains("pr"), "{e}");
+    let e = failure(&["solve", "--scene", "multi-cubes", "--solver", "pr", "--until", "columns=abc"]);
+    assert!(e.contains("invalid stop rule 'columns=abc'"), "{e}");
+    let e = failure(&["solve", "--scene", "multi-cubes", "--solver", "pr", "--ff", "radiance"]);
+    assert!(e.contains("unknown form-factor backend 'radiance'"), "{e}");
+    let e = failure(&["solve", "--scene", "multicubes", "--solver", "pr"]);
+    assert!(e.contains("unknown scene"), "{e}");
+}

@@ -1,2 +1,47 @@
-//! Reference solutions, error metrics, convergence tables, plots and experiment output. Not
-//! implemented yet; with `xtask`, the only crate that will write files.
+//! Reference solutions, error metrics and convergence tables for radiosity solvers.
+//!
+//! Solvers are compared on one thing: how close they get to the exact solution `B*` of the
+//! **same** discrete system `(I − diag(ρ) F) B = E` (DESIGN §3 and §5), for the work they
+//! did. This crate provides:
+//!
+//! - [`ReferenceSolution`] ([`reference`](mod@reference)): `B*` by dense LU or by certified Gauss–Seidel,
+//!   with the method used and a [`Certificate`] of its own error;
+//! - [`metrics`]: `e_rms`, `e_max`, the residual power `R` and the certified bound on the
+//!   area-weighted L1 error of any vector, set beside the true error;
+//! - [`ConvergenceTable`] ([`table`]): rows of measured points written as CSV or Markdown
+//!   with floats rounded to fixed significant digits;
+//! - [`FormFactors`] ([`matrix`]): the form-factor matrix fetched once from any
+//!   [`ColumnSource`](radiosity_core::ColumnSource) and held in memory.
+//!
+//! With `xtask`, it is the only crate that will write files; it writes to any
+//! [`std::io::Write`] and leaves opening files to its callers.
+//!
+//! ```
+//! use radiosity_core::{Channels, DenseColumns, LinearSystem};
+//! use radiosity_eval::{ReferenceParams, ReferenceSolution, metrics};
+//!
+//! // Two facing patches, each seeing half of its hemisphere covered by the other.
+//! let f = DenseColumns::from_rows(2, &[0.0, 0.5, 0.5, 0.0]).unwrap();
+//! let system = LinearSystem::new(Channels::Grey, vec![1.0, 1.0], vec![0.5, 0.5], vec![1.0, 0.0]).unwrap();
+//! let reference = ReferenceSolution::solve(&system, &f, ReferenceParams::default()).unwrap();
+//! // B1 = (E1 + ρ1 F12 E2) / (1 − ρ1 ρ2 F12 F21) = 1 / (1 − 1/16).
+//! assert!((reference.get(0, 0) - 16.0 / 15.0).abs() < 1e-14);
+//! assert!(reference.certificate().certified);
+//!
+//! // Emission alone (B = E) is 25% off in e_rms, and the certified bound covers its error.
+//! let m = metrics::evaluate(&system, &f, &reference, &[1.0, 0.0]).unwrap();
+//! assert!(m.bound.certified && m.l1_error <= m.bound.bound);
+//! assert!((m.e_rms - 0.25).abs() < 1e-12);
+//! ```
+
+pub mod error;
+pub mod matrix;
+pub mod metrics;
+pub mod reference;
+pub mod table;
+
+pub use error::EvalError;
+pub use matrix::FormFactors;
+pub use metrics::{Contraction, ErrorBound, Errors, Evaluator, Metrics, Residual};
+pub use reference::{Certificate, Method, ReferenceParams, ReferenceSolution};
+pub use table::{ConvergenceTable, TableRow};

@@ -83,7 +83,13 @@ impl<'s> Executor<'s> {
         self.solver.init(problem, &mut state)?;
         self.account(problem, &mut state, start.elapsed().as_secs_f64(), start_ff);
         let mut error = observer.observe(&state);
-        let cap = (self.rules.step_cap * n as f64).ceil() as u64;
+        // The cap guards runs whose rules cannot be met; an explicit `steps=` or `columns=`
+        // beyond it raises it (one step costs at least one column or none).
+        let explicit = self.rules.rules.iter().filter_map(|r| match *r {
+            StopRule::Steps(c) | StopRule::Columns(c) => Some(c.resolve(n)),
+            _ => None,
+        });
+        let cap = explicit.fold((self.rules.step_cap * n as f64).ceil() as u64, u64::max);
         let termination = loop {
             if let Some(reason) = self.check(problem, &state, error, n) {
                 break reason;

@@ -3,7 +3,8 @@
 //! Rules are a comma list, and the first that holds stops the run: `columns=N`, `columns=2n`
 //! (a multiple of the patch count), `steps=N` (also `steps=3n`), `rms=1e-3`, `residual=1e-4`,
 //! `time=30s` (`ms`, `s` or `min`). Every run ends even if no rule can hold any more: at
-//! round-off convergence (nothing left to shoot or gather), or at a step cap of `20n` steps.
+//! round-off convergence (nothing left to shoot or gather), or at a step cap of `20n` steps,
+//! raised to the largest `steps=` or `columns=` rule given.
 
 use crate::error::SolverError;
 use radiosity_core::Real;

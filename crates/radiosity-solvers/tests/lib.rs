@@ -140,6 +140,9 @@ fn runs_end_at_round_off_or_at_the_step_cap() {
     let run = solve_capped("jacobi", &slow, &f, "", StopRules::default().step_cap);
     assert_eq!(run.termination, TerminationReason::StepCap(120));
     assert_eq!(run.state.step, 120);
+    // An explicit rule beyond the cap raises it.
+    let run = solve_capped("jacobi", &slow, &f, "steps=50n", StopRules::default().step_cap);
+    assert_eq!(run.termination, TerminationReason::Steps(300));
     // Nothing emitted: nothing to do.
     let dark = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![0.0; 6]).unwrap();
     assert_eq!(solve("southwell", &dark, &f, "").termination, TerminationReason::RoundOff);

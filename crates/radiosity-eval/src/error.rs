@@ -1,0 +1,81 @@
+//! Typed errors of the evaluation crate: mismatched sizes, invalid form factors, matrices too
+//! large to hold, and reference solves that fail.
+
+use radiosity_core::Real;
+use thiserror::Error;
+
+/// What can go wrong while solving a reference or measuring a vector against it. Messages
+/// are single sentences meant for end users.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum EvalError {
+    /// Two things that must have the same size do not.
+    #[error("{what} has length {found}, expected {expected}")]
+    SizeMismatch {
+        /// What was measured.
+        what: &'static str,
+        /// The expected length.
+        expected: usize,
+        /// The length found.
+        found: usize,
+    },
+    /// A form factor that is negative, NaN or infinite.
+    #[error("form factor F[{i}][{j}] is {value}; form factors must be finite and at least 0")]
+    InvalidFormFactor {
+        /// The receiving patch (row).
+        i: usize,
+        /// The shooting patch (column).
+        j: usize,
+        /// The offending value.
+        value: Real,
+    },
+    /// The dense form-factor matrix would not fit in the memory allowed for it.
+    #[error("a dense form-factor matrix of {n} patches needs {bytes} bytes, more than the {limit} allowed")]
+    MatrixTooLarge {
+        /// The number of patches.
+        n: usize,
+        /// The bytes the matrix would need (saturated at `usize::MAX`).
+        bytes: usize,
+        /// The limit ([`crate::ReferenceParams::max_matrix_bytes`]).
+        limit: usize,
+    },
+    /// The LU factorisation met a zero or non-finite pivot.
+    #[error("the system of channel {channel} is singular (LU pivot {pivot} is {value})")]
+    Singular {
+        /// The channel whose system is singular.
+        channel: usize,
+        /// The index of the pivot.
+        pivot: usize,
+        /// The pivot's value.
+        value: Real,
+    },
+    /// Gauss–Seidel did not reach the requested bound within the allowed sweeps.
+    #[error("Gauss-Seidel reached a relative bound of {reached:e} after {sweeps} sweeps, not the {target:e} asked for")]
+    NotConverged {
+        /// Sweeps done.
+        sweeps: usize,
+        /// The relative bound (or relative residual, if uncertified) reached.
+        reached: Real,
+        /// The relative bound asked for.
+        target: Real,
+    },
+    /// Gauss–Seidel produced a NaN or an infinity.
+    #[error("Gauss-Seidel diverged after {sweeps} sweeps")]
+    Diverged {
+        /// Sweeps done.
+        sweeps: usize,
+    },
+    /// A relative error was asked against a reference that is zero everywhere.
+    #[error("the reference solution is zero everywhere (nothing emits), so relative errors are undefined")]
+    ZeroReference,
+    /// Parameters that make no sense.
+    #[error("invalid parameter {name} = {value}: {reason}")]
+    InvalidParameter {
+        /// The parameter's name.
+        name: &'static str,
+        /// Its value, as given.
+        value: String,
+        /// What is required of it.
+        reason: &'static str,
+    },
+}

@@ -1,0 +1,359 @@
+//! The reference solution `B*`: the exact solution of the same discrete system, with a
+//! certificate of how exact it is.
+//!
+//! Convergence curves measure a solver, not the form factors, so `B*` solves the **same**
+//! system the solvers see, `(I − diag(ρ_c) F) B_c = E_c` for each channel `c`, with the same
+//! columns of `F` ([`ColumnSource`]). `F` is fetched once into a [`FormFactors`] (every
+//! column, in parallel, in a fixed order) and then solved one of two ways:
+//!
+//! - **Dense LU** for `n ≤ dense_limit` (default 4000): per channel, `I − diag(ρ_c) F` is
+//!   factored by LU with partial pivoting and solved for `E_c`; channels run in parallel,
+//!   each factorisation sequentially, so the answer does not depend on the thread count.
+//! - **Gauss–Seidel** above it, on all channels at once, from `B = E`, until the certified
+//!   relative bound `Σ_c ‖r_c‖_A / (1 − q_c) / Σ_c ‖B_c‖_A` falls below
+//!   `certified` (default `1e-10`; see [`crate::metrics`] for the bound). The stop test
+//!   uses the rigorous estimate `‖r_c‖_A ≤ κ_c ‖ΔB_c‖_A` of the last sweep's change and is
+//!   confirmed by the exact residual. The dense `f64` matrix needs `8 n²` bytes, refused
+//!   above `max_matrix_bytes` (default 8 GiB, n ≈ 32 000); a later stored-matrix backend
+//!   can serve rows instead.
+//!
+//! Either way [`ReferenceSolution::certificate`] reports the bound evaluated for `B*` itself,
+//! from its own residual, and says whether it is certified.
+//!
+//! # Why faer
+//!
+//! Dense LU with partial pivoting and one right-hand side, on `I − 0.7 F` with a random
+//! non-negative `F` (rows summing to 0.99), medians of criterion's samples on this project's
+//! 2-core machine (`cargo bench -p radiosity-eval --bench lu`):
+//!
+//! | n | nalgebra 0.33 | faer 0.24, sequential | faer 0.24, rayon (2 threads) |
+//! |---|---|---|---|
+//! | 480 | 8.57 ms | 2.02 ms | 2.39 ms |
+//! | 3400 | 11.43 s | 0.649 s | 0.401 s |
+//!
+//! faer is 4× faster at 480 and 18× at 3400, so it is kept. Each factorisation runs
+//! sequentially and the channels run in parallel instead: results then cannot depend on the
+//! thread count, and an RGB system keeps both cores busy (a grey one loses at most the
+//! 1.6× that faer's own threads give at n = 3400).
+//!
+//! [`ColumnSource`]: radiosity_core::ColumnSource
+
+use crate::error::EvalError;
+use crate::matrix::{FormFactors, check_sizes};
+use crate::metrics::{Contraction, Residual};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::lu::partial_pivoting::{factor, solve};
+use faer::{Conj, Mat, Par};
+use radiosity_core::{Channels, ColumnSource, LinearSystem, Real};
+use rayon::prelude::*;
+use std::fmt;
+
+/// How a reference is computed.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct ReferenceParams {
+    /// Largest `n` solved by dense LU; larger systems use Gauss–Seidel. Default 4000.
+    pub dense_limit: usize,
+    /// The certified relative bound Gauss–Seidel must reach. Default `1e-10`.
+    pub certified: Real,
+    /// Gauss–Seidel sweeps allowed before giving up. Default 20 000.
+    pub max_sweeps: usize,
+    /// Largest dense form-factor matrix held in memory, in bytes. Default 8 GiB.
+    pub max_matrix_bytes: usize,
+}
+
+impl Default for ReferenceParams {
+    fn default() -> Self {
+        ReferenceParams { dense_limit: 4000, certified: 1e-10, max_sweeps: 20_000, max_matrix_bytes: 8 << 30 }
+    }
+}
+
+impl ReferenceParams {
+    /// Sets [`ReferenceParams::dense_limit`].
+    pub fn with_dense_limit(mut self, dense_limit: usize) -> Self {
+        self.dense_limit = dense_limit;
+        self
+    }
+
+    /// Sets [`ReferenceParams::certified`].
+    pub fn with_certified(mut self, certified: Real) -> Self {
+        self.certified = certified;
+        self
+    }
+
+    /// Sets [`ReferenceParams::max_sweeps`].
+    pub fn with_max_sweeps(mut self, max_sweeps: usize) -> Self {
+        self.max_sweeps = max_sweeps;
+        self
+    }
+
+    /// Sets [`ReferenceParams::max_matrix_bytes`].
+    pub fn with_max_matrix_bytes(mut self, max_matrix_bytes: usize) -> Self {
+        self.max_matrix_bytes = max_matrix_bytes;
+        self
+    }
+
+    fn validate(&self) -> Result<(), EvalError> {
+        if !(self.certified.is_finite() && self.certified > 0.0) {
+            let value = self.certified.to_string();
+            return Err(EvalError::InvalidParameter {
+                name: "certified",
+                value,
+                reason: "it must be finite and positive",
+            });
+        }
+        if self.max_sweeps == 0 {
+            let value = "0".to_string();
+            return Err(EvalError::InvalidParameter { name: "max_sweeps", value, reason: "it must be at least 1" });
+        }
+        Ok(())
+    }
+}
+
+/// How a reference was computed.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum Method {
+    /// Dense LU with partial pivoting (faer), one factorisation per channel.
+    DenseLu,
+    /// Gauss–Seidel on the full system.
+    GaussSeidel {
+        /// Sweeps done (each reads all of `F` once).
+        sweeps: usize,
+    },
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Method::DenseLu => write!(f, "dense LU with partial pivoting (faer)"),
+            Method::GaussSeidel { sweeps } => write!(f, "Gauss-Seidel, {sweeps} sweeps"),
+        }
+    }
+}
+
+/// The bound on `B*`'s own error, from its own residual.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct Certificate {
+    /// `Σ_c Σ_i A_i |r_ic|` for `r = E + ρ F B* − B*`.
+    pub residual_norm: Real,
+    /// The bound on `Σ_c Σ_i A_i |B*_ic − B_ic|` against the exact solution (infinite when
+    /// not certified).
+    pub bound: Real,
+    /// `bound / Σ_c Σ_i A_i |B*_ic|` (0 when both are 0).
+    pub relative_bound: Real,
+    /// Whether the bound is proven; see [`Contraction`].
+    pub certified: bool,
+    /// The contraction the bound rests on, with the maximum row sum.
+    pub contraction: Contraction,
+}
+
+impl fmt::Display for Certificate {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.certified {
+            write!(f, "certified relative L1 error ≤ {:.3e}", self.relative_bound)?;
+        } else {
+            write!(f, "not certified (contraction {:.6} ≥ 1)", self.contraction.max_factor())?;
+        }
+        let rows = self.contraction.max_row_sum;
+        if self.contraction.rows_at_most_one() {
+            write!(f, "; rows of F sum to at most {rows:.6}")
+        } else {
+            write!(f, "; some row of F sums to {rows:.6} > 1")
+        }
+    }
+}
+
+/// The exact solution `B*` of the discrete system, patch-major like [`LinearSystem`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReferenceSolution {
+    channels: Channels,
+    n: usize,
+    values: Vec<Real>,
+    method: Method,
+    certificate: Certificate,
+}
+
+impl ReferenceSolution {
+    /// Fetches every column of `f` once and solves `system` exactly (dense LU or certified
+    /// Gauss–Seidel, by `params.dense_limit`).
+    pub fn solve(
+        system: &LinearSystem,
+        f: &(impl ColumnSource + ?Sized),
+        params: ReferenceParams,
+    ) -> Result<ReferenceSolution, EvalError> {
+        solve_dyn(system, &f, &params)
+    }
+
+    /// Solves `system` with a matrix already stored (which can then serve an
+    /// [`Evaluator`](crate::Evaluator) too).
+    pub fn solve_matrix(
+        system: &LinearSystem,
+        m: &FormFactors,
+        params: ReferenceParams,
+    ) -> Result<ReferenceSolution, EvalError> {
+        params.validate()?;
+        check_sizes(system, m.patch_count(), None)?;
+        let contraction = Contraction::from_matrix(system, m)?;
+        let (values, method) = if system.len() <= params.dense_limit {
+            (dense_lu(system, m)?, Method::DenseLu)
+        } else {
+            let (values, sweeps) = gauss_seidel(system, m, &contraction, &params)?;
+            (values, Method::GaussSeidel { sweeps })
+        };
+        let residual = Residual::with_contraction(system, m, contraction, &values)?;
+        let bound = residual.bound();
+        let norm: Real = values.iter().enumerate().map(|(idx, v)| system.areas()[idx / k(system)] * v.abs()).sum();
+        let relative_bound = if bound.bound == 0.0 { 0.0 } else { bound.bound / norm };
+        let certificate = Certificate {
+            residual_norm: residual.norm(),
+            bound: bound.bound,
+            relative_bound,
+            certified: bound.certified,
+            contraction: residual.contraction().clone(),
+        };
+        Ok(ReferenceSolution { channels: system.channels(), n: system.len(), values, method, certificate })
+    }
+
+    /// `B*_ic` at `i * channels + c`.
+    pub fn values(&self) -> &[Real] {
+        &self.values
+    }
+
+    /// `B*_ic`.
+    pub fn get(&self, i: usize, c: usize) -> Real {
+        self.values[i * self.channels.count() + c]
+    }
+
+    /// The number of patches.
+    pub fn len(&self) -> usize {
+        self.n
+    }
+
+    /// Always false: a system has at least one patch.
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// The solved channels.
+    pub fn channels(&self) -> Channels {
+        self.channels
+    }
+
+    /// How `B*` was computed.
+    pub fn method(&self) -> &Method {
+        &self.method
+    }
+
+    /// The bound on `B*`'s own error.
+    pub fn certificate(&self) -> &Certificate {
+        &self.certificate
+    }
+}
+
+fn k(system: &LinearSystem) -> usize {
+    system.channels().count()
+}
+
+fn solve_dyn(
+    system: &LinearSystem,
+    f: &dyn ColumnSource,
+    params: &ReferenceParams,
+) -> Result<ReferenceSolution, EvalError> {
+    params.validate()?;
+    check_sizes(system, f.patch_count(), None)?;
+    let m = FormFactors::assemble(f, params.max_matrix_bytes)?;
+    ReferenceSolution::solve_matrix(system, &m, params.clone())
+}
+
+/// Per channel, LU of `I − diag(ρ_c) F` and one solve; channels in parallel.
+fn dense_lu(system: &LinearSystem, m: &FormFactors) -> Result<Vec<Real>, EvalError> {
+    let (n, k) = (system.len(), k(system));
+    let per_channel: Vec<Vec<Real>> =
+        (0..k).into_par_iter().map(|c| lu_channel(system, m, c)).collect::<Result<_, _>>()?;
+    let mut values = vec![0.0; n * k];
+    for (c, x) in per_channel.iter().enumerate() {
+        for (i, v) in x.iter().enumerate() {
+            values[i * k + c] = *v;
+        }
+    }
+    Ok(values)
+}
+
+fn lu_channel(system: &LinearSystem, m: &FormFactors, c: usize) -> Result<Vec<Real>, EvalError> {
+    let n = system.len();
+    let par = Par::Seq;
+    let mut a = Mat::from_fn(n, n, |i, j| Real::from(i == j) - system.rho(i, c) * m.get(i, j));
+    let mut fwd = vec![0usize; n];
+    let mut bwd = vec![0usize; n];
+    let mut mem = MemBuffer::new(
+        factor::lu_in_place_scratch::<usize, Real>(n, n, par, Default::default())
+            .or(solve::solve_in_place_scratch::<usize, Real>(n, 1, par)),
+    );
+    let (_, perm) =
+        factor::lu_in_place(a.as_mut(), &mut fwd, &mut bwd, par, MemStack::new(&mut mem), Default::default());
+    if let Some(pivot) = (0..n).find(|&p| !(a[(p, p)].is_finite() && a[(p, p)] != 0.0)) {
+        return Err(EvalError::Singular { channel: c, pivot, value: a[(pivot, pivot)] });
+    }
+    let mut rhs = Mat::from_fn(n, 1, |i, _| system.e(i, c));
+    solve::solve_in_place_with_conj(a.as_ref(), a.as_ref(), perm, Conj::No, rhs.as_mut(), par, MemStack::new(&mut mem));
+    Ok((0..n).map(|i| rhs[(i, 0)]).collect())
+}
+
+/// Gauss–Seidel on all channels at once, rows in order, until the certified relative bound
+/// is below `params.certified`. Returns the solution and the sweeps done.
+fn gauss_seidel(
+    system: &LinearSystem,
+    m: &FormFactors,
+    contraction: &Contraction,
+    params: &ReferenceParams,
+) -> Result<(Vec<Real>, usize), EvalError> {
+    let (n, k) = (system.len(), k(system));
+    let (area, rho, e) = (system.areas(), system.reflectivities(), system.emissions());
+    let certified = contraction.certified();
+    // Weight of each channel's residual in the stop measure: the bound's factor when it is
+    // certified, 1 (the plain residual) when it is not.
+    let weight: Vec<Real> = (0..k).map(|c| if certified { 1.0 / (1.0 - contraction.factor(c)) } else { 1.0 }).collect();
+    let measure = |norms: &[Real]| -> Real { norms.iter().zip(&weight).map(|(r, w)| r * w).sum() };
+    let mut b = e.to_vec();
+    let mut sums = vec![0.0; k];
+    let mut delta = vec![0.0; k];
+    let mut reached = Real::INFINITY;
+    for sweep in 1..=params.max_sweeps {
+        delta.fill(0.0);
+        for i in 0..n {
+            let row = m.row(i);
+            sums.fill(0.0);
+            for (j, fij) in row.iter().enumerate() {
+                for c in 0..k {
+                    sums[c] += fij * b[j * k + c];
+                }
+            }
+            let fii = row[i];
+            for c in 0..k {
+                let idx = i * k + c;
+                let old = b[idx];
+                let new = (e[idx] + rho[idx] * (sums[c] - fii * old)) / (1.0 - rho[idx] * fii);
+                delta[c] += area[i] * (new - old).abs();
+                b[idx] = new;
+            }
+        }
+        if !b.iter().all(|v| v.is_finite()) {
+            return Err(EvalError::Diverged { sweeps: sweep });
+        }
+        let norm_b: Real = b.iter().enumerate().map(|(idx, v)| area[idx / k] * v.abs()).sum();
+        // After a sweep r_i = ρ_i Σ_{j>i} F_ij ΔB_j, so ‖r_c‖_A ≤ κ_c ‖ΔB_c‖_A (F ≥ 0).
+        let estimate: Vec<Real> = delta.iter().zip(&contraction.kappa).map(|(d, kc)| d * kc).collect();
+        let relative = |x: Real| if x == 0.0 { 0.0 } else { x / norm_b };
+        reached = relative(measure(&estimate));
+        if reached <= params.certified {
+            let residual = Residual::with_contraction(system, m, contraction.clone(), &b)?;
+            reached = relative(measure(residual.channel_norms()));
+            if reached <= params.certified {
+                return Ok((b, sweep));
+            }
+        }
+    }
+    Err(EvalError::NotConverged { sweeps: params.max_sweeps, reached, target: params.certified })
+}

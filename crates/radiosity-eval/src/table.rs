@@ -1,0 +1,129 @@
+//! Convergence tables: one row per measured step of a run, written as CSV or Markdown.
+//!
+//! A row records where a solver stood (step, columns computed, wall and form-factor seconds)
+//! and its metrics ([`crate::metrics`]). Floats are rounded to a fixed number of significant
+//! digits (default 4), so tables under snapshot tests stay stable across platforms and
+//! round-off. Tables write to any [`std::io::Write`]; opening files is the caller's business.
+
+use radiosity_core::Real;
+use std::io::{self, Write};
+
+/// The columns of a table, in order.
+pub const HEADER: [&str; 8] = ["solver", "step", "columns", "seconds", "ff_seconds", "e_rms", "e_max", "residual"];
+
+/// One measured point of a run. Fields are plain data, so rows are written as literals.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TableRow {
+    /// The solver's name (as on the command line, e.g. `pr-g30`).
+    pub solver: String,
+    /// Steps done (shooting steps, or sweeps for gathering methods).
+    pub step: u64,
+    /// Form-factor columns computed.
+    pub columns: u64,
+    /// Wall-clock seconds of the run so far (metrics excluded).
+    pub seconds: Real,
+    /// Seconds spent computing form factors.
+    pub ff_seconds: Real,
+    /// Area-weighted relative RMS error.
+    pub e_rms: Real,
+    /// Largest error relative to the largest reference value.
+    pub e_max: Real,
+    /// Residual power `R`.
+    pub residual: Real,
+}
+
+/// Rows of convergence data and the precision they are written with.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConvergenceTable {
+    rows: Vec<TableRow>,
+    digits: usize,
+}
+
+impl Default for ConvergenceTable {
+    fn default() -> Self {
+        ConvergenceTable { rows: Vec::new(), digits: 4 }
+    }
+}
+
+impl ConvergenceTable {
+    /// An empty table writing floats with 4 significant digits.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Writes floats with `digits` significant digits (at least 1).
+    pub fn with_significant_digits(mut self, digits: usize) -> Self {
+        self.digits = digits.max(1);
+        self
+    }
+
+    /// Appends a row.
+    pub fn push(&mut self, row: TableRow) {
+        self.rows.push(row);
+    }
+
+    /// The rows so far.
+    pub fn rows(&self) -> &[TableRow] {
+        &self.rows
+    }
+
+    fn cells(&self, row: &TableRow) -> [String; 8] {
+        let d = self.digits;
+        [
+            row.solver.clone(),
+            row.step.to_string(),
+            row.columns.to_string(),
+            round_significant(row.seconds, d),
+            round_significant(row.ff_seconds, d),
+            round_significant(row.e_rms, d),
+            round_significant(row.e_max, d),
+            round_significant(row.residual, d),
+        ]
+    }
+
+    /// Writes the table as CSV (RFC 4180, with a header line).
+    pub fn write_csv(&self, out: impl Write) -> io::Result<()> {
+        let mut w = csv::Writer::from_writer(out);
+        w.write_record(HEADER)?;
+        for row in &self.rows {
+            w.write_record(self.cells(row))?;
+        }
+        w.flush()
+    }
+
+    /// Writes the table as a GitHub-flavoured Markdown table, numbers right-aligned.
+    pub fn write_markdown(&self, mut out: impl Write) -> io::Result<()> {
+        writeln!(out, "| {} |", HEADER.join(" | "))?;
+        writeln!(out, "|---|{}", "--:|".repeat(HEADER.len() - 1))?;
+        for row in &self.rows {
+            let mut cells = self.cells(row);
+            cells[0] = cells[0].replace('|', "\\|");
+            writeln!(out, "| {} |", cells.join(" | "))?;
+        }
+        Ok(())
+    }
+}
+
+/// `x` rounded to `digits` significant digits (at least 1): plain notation for magnitudes in
+/// `[1e-4, 1e6)`, scientific (`1.235e-7`) outside; `0`, `NaN`, `inf` and `-inf` as such.
+/// Trailing zeros are kept, so every value shows its precision.
+pub fn round_significant(x: Real, digits: usize) -> String {
+    let digits = digits.max(1);
+    if x == 0.0 {
+        return "0".to_string();
+    }
+    if !x.is_finite() {
+        return x.to_string();
+    }
+    // Round once, in scientific notation, and read the exponent after rounding (9.9996
+    // becomes 1.000e1).
+    let sci = format!("{:.*e}", digits - 1, x);
+    let exponent: i32 = sci.split_once('e').and_then(|(_, e)| e.parse().ok()).unwrap_or(0);
+    if (-4..6).contains(&exponent) {
+        let decimals = (digits as i32 - 1 - exponent).max(0) as usize;
+        let rounded: Real = sci.parse().unwrap_or(x);
+        format!("{rounded:.decimals$}")
+    } else {
+        sci
+    }
+}

@@ -1,0 +1,66 @@
+//! Convergence tables as CSV and Markdown, under snapshot tests, and significant-digit
+//! rounding.
+
+use radiosity_eval::table::round_significant;
+use radiosity_eval::{ConvergenceTable, TableRow};
+
+fn table() -> ConvergenceTable {
+    let mut t = ConvergenceTable::new();
+    let row = |solver: &str, step, columns, seconds, ff_seconds, e_rms, e_max, residual| TableRow {
+        solver: solver.to_string(),
+        step,
+        columns,
+        seconds,
+        ff_seconds,
+        e_rms,
+        e_max,
+        residual,
+    };
+    t.push(row("pr", 0, 0, 0.0, 0.0, 1.0, 1.0, 0.6123456));
+    t.push(row("pr", 480, 480, 1.23456789, 1.19876543, 4.7123456e-3, 2.0987654e-2, 1.5e-3));
+    t.push(row("xu-g30-m480", 960, 512, 2.71846, 2.5, 4.2e-5, 9.99996e-5, 3.14159e-9));
+    t.push(row("odd, \"name\" | here", 1, 1, 123456.7, f64::NAN, f64::INFINITY, 0.000123449, 1e-300));
+    t
+}
+
+#[test]
+fn csv_snapshot() {
+    let mut out = Vec::new();
+    table().write_csv(&mut out).unwrap();
+    insta::assert_snapshot!(String::from_utf8(out).unwrap());
+}
+
+#[test]
+fn markdown_snapshot() {
+    let mut out = Vec::new();
+    table().write_markdown(&mut out).unwrap();
+    insta::assert_snapshot!(String::from_utf8(out).unwrap());
+}
+
+#[test]
+fn fewer_digits() {
+    let mut out = Vec::new();
+    table().with_significant_digits(2).write_markdown(&mut out).unwrap();
+    insta::assert_snapshot!(String::from_utf8(out).unwrap());
+}
+
+fn check(x: f64, digits: usize, expect: &str) {
+    assert_eq!(round_significant(x, digits), expect, "{x} to {digits} digits");
+}
+
+#[test]
+fn significant_digits() {
+    check(0.0, 4, "0");
+    check(1.0, 4, "1.000");
+    check(-1.23456, 4, "-1.235");
+    check(9.99996, 4, "10.00");
+    check(0.00012345, 3, "0.000123");
+    check(0.000099996, 4, "0.0001000");
+    check(0.0000999949, 4, "9.999e-5");
+    check(123456.0, 4, "123500");
+    check(999999.7, 4, "1.000e6");
+    check(1.5e-12, 4, "1.500e-12");
+    check(42.0, 0, "40");
+    check(f64::NAN, 4, "NaN");
+    check(f64::NEG_INFINITY, 4, "-inf");
+}

@@ -1,0 +1,168 @@
+//! `cargo xtask solve --scene SCENE --solver SOLVER [--ff BACKEND] [--until RULES]
+//! [--json | --out FILE]`: runs one solver and reports its error against the reference
+//! solution of the same discrete system (DESIGN §7).
+//!
+//! Order of work: every argument is parsed before any geometry is built, so a typo fails at
+//! once. Then the scene is prepared, the reference solved (it fetches every column once,
+//! outside the run's accounting), the solver run under the stop rules, and the final
+//! metrics evaluated (the residual costs `n` more columns, also outside the run). The run's
+//! columns, steps and seconds are the solver's alone.
+
+use crate::ff::obtain;
+use crate::scene_report::{prepare, print_warnings};
+use anyhow::{Context, Result};
+use radiosity_core::{LinearSystem, Real};
+use radiosity_eval::metrics::{errors, evaluate};
+use radiosity_eval::{ReferenceParams, ReferenceSolution};
+use radiosity_ff::{Backend, BackendSpec, FormFactorInput};
+use radiosity_solvers::{Executor, Observer, Problem, State, StopRules, solver_by_name};
+use serde::Serialize;
+use std::path::PathBuf;
+
+/// Arguments of `solve`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The scene: a built-in name with `:key=value` parameters, or a .gltf/.glb path.
+    #[arg(long, value_name = "SCENE")]
+    scene: String,
+    /// The solver: jacobi, gauss-seidel, sor-ω, southwell or pr.
+    #[arg(long, value_name = "SOLVER")]
+    solver: String,
+    /// The form-factor backend, with `:key=value` parameters.
+    #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic")]
+    ff: String,
+    /// Stop rules, the first to hold stops the run: columns=N, columns=2n, steps=N, rms=1e-3,
+    /// residual=1e-4, time=30s.
+    #[arg(long, value_name = "RULES", default_value = "columns=2n")]
+    until: String,
+    /// Print the patches and the run's figures as JSON.
+    #[arg(long, conflicts_with = "out")]
+    json: bool,
+    /// Write the JSON to this file instead of printing a summary.
+    #[arg(long, value_name = "FILE")]
+    out: Option<PathBuf>,
+}
+
+/// Computes `e_rms` against the reference between steps, when a rule needs it.
+struct RmsObserver<'a> {
+    system: &'a LinearSystem,
+    reference: &'a ReferenceSolution,
+    needed: bool,
+}
+
+impl Observer for RmsObserver<'_> {
+    fn observe(&mut self, state: &State) -> Option<Real> {
+        if !self.needed {
+            return None;
+        }
+        errors(self.system, self.reference, &state.radiosity).ok().map(|e| e.e_rms)
+    }
+}
+
+#[derive(Serialize)]
+struct PatchJson {
+    id: usize,
+    area: Real,
+    centroid: [Real; 3],
+    normal: [Real; 3],
+    reflectivity: [Real; 3],
+    emission: [Real; 3],
+    radiosity: [Real; 3],
+}
+
+#[derive(Serialize)]
+struct StatsJson {
+    columns: u64,
+    steps: u64,
+    seconds: Real,
+    ff_seconds: Real,
+    e_rms: Real,
+    e_max: Real,
+    residual: Real,
+    termination: String,
+    reference: String,
+    certificate: String,
+}
+
+#[derive(Serialize)]
+struct SolveJson<'a> {
+    scene: &'a str,
+    solver: String,
+    ff: String,
+    patches: Vec<PatchJson>,
+    stats: StatsJson,
+}
+
+/// Runs `solve`.
+pub fn run(args: &Args) -> Result<()> {
+    let spec = BackendSpec::parse(&args.ff)?;
+    let mut solver = solver_by_name(&args.solver)?;
+    let rules = StopRules::parse(&args.until)?;
+    let prepared = prepare(&args.scene)?;
+    print_warnings(&prepared.report());
+    let scene = &prepared.loaded.scene;
+    let system = LinearSystem::from_scene(scene);
+    let input = FormFactorInput { scene, visibility: &prepared.visibility, analysis: &prepared.analysis };
+    let backend = match spec {
+        BackendSpec::Matrix { .. } => Backend::Matrix(obtain(&prepared, &spec)?.matrix),
+        _ => Backend::columns(&spec, input),
+    };
+    let reference = ReferenceSolution::solve(&system, &backend, ReferenceParams::default())
+        .context("the reference solution failed")?;
+    let problem = Problem::new(&system, &backend)?;
+    let mut observer = RmsObserver { system: &system, reference: &reference, needed: rules.needs_error() };
+    let run = Executor::new(solver.as_mut(), rules).run(&problem, &mut observer)?;
+    let metrics = evaluate(&system, &backend, &reference, &run.state.radiosity)?;
+    let stats = StatsJson {
+        columns: run.state.columns,
+        steps: run.state.step,
+        seconds: run.state.ff_seconds + run.state.solve_seconds,
+        ff_seconds: run.state.ff_seconds,
+        e_rms: metrics.e_rms,
+        e_max: metrics.e_max,
+        residual: metrics.residual,
+        termination: run.termination.to_string(),
+        reference: reference.method().to_string(),
+        certificate: reference.certificate().to_string(),
+    };
+    if !args.json && args.out.is_none() {
+        println!("scene        {}: {} patches", args.scene, scene.len());
+        println!("solver       {} with {}", run.solver, spec.canonical());
+        println!("stopped      {}", stats.termination);
+        println!(
+            "work         {} steps, {} columns, {:.3} s ({:.3} s in form factors)",
+            stats.steps, stats.columns, stats.seconds, stats.ff_seconds
+        );
+        println!(
+            "error        e_rms {:.4e}, e_max {:.4e}, residual power {:.4e}",
+            stats.e_rms, stats.e_max, stats.residual
+        );
+        println!("reference    {}; {}", stats.reference, stats.certificate);
+        return Ok(());
+    }
+    let k = system.channels().count();
+    let patches = scene
+        .patches()
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let b = &run.state.radiosity[i * k..(i + 1) * k];
+            PatchJson {
+                id: i,
+                area: p.area(),
+                centroid: p.centroid().to_array(),
+                normal: p.normal().to_array(),
+                reflectivity: scene.reflectivity(i).0,
+                emission: scene.emission(i).0,
+                radiosity: if k == 1 { [b[0]; 3] } else { [b[0], b[1], b[2]] },
+            }
+        })
+        .collect();
+    let json = SolveJson { scene: &args.scene, solver: run.solver.clone(), ff: spec.canonical(), patches, stats };
+    let text = serde_json::to_string(&json)?;
+    match &args.out {
+        Some(path) => std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))?,
+        None => println!("{text}"),
+    }
+    Ok(())
+}

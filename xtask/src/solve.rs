@@ -3,17 +3,17 @@
 //! solution of the same discrete system (DESIGN §7).
 //!
 //! Order of work: every argument is parsed before any geometry is built, so a typo fails at
-//! once. Then the scene is prepared, the reference solved (it fetches every column once,
-//! outside the run's accounting), the solver run under the stop rules, and the final
-//! metrics evaluated (the residual costs `n` more columns, also outside the run). The run's
-//! columns, steps and seconds are the solver's alone.
+//! once. Then the scene is prepared, F fetched once (every column, outside the run's
+//! accounting) to solve the reference and later to measure the final residual, and the
+//! solver run under the stop rules. The run's columns, steps and seconds are the solver's
+//! alone.
 
 use crate::ff::obtain;
 use crate::scene_report::{prepare, print_warnings};
 use anyhow::{Context, Result};
 use radiosity_core::{LinearSystem, Real};
-use radiosity_eval::metrics::{errors, evaluate};
-use radiosity_eval::{ReferenceParams, ReferenceSolution};
+use radiosity_eval::metrics::errors;
+use radiosity_eval::{Evaluator, FormFactors, ReferenceParams, ReferenceSolution};
 use radiosity_ff::{Backend, BackendSpec, FormFactorInput};
 use radiosity_solvers::{Executor, Observer, Problem, State, StopRules, solver_by_name};
 use serde::Serialize;
@@ -107,12 +107,16 @@ pub fn run(args: &Args) -> Result<()> {
         BackendSpec::Matrix { .. } => Backend::Matrix(obtain(&prepared, &spec)?.matrix),
         _ => Backend::columns(&spec, input),
     };
-    let reference = ReferenceSolution::solve(&system, &backend, ReferenceParams::default())
-        .context("the reference solution failed")?;
+    // F is fetched once, outside the run, and serves both the reference and the final
+    // metrics (the residual would otherwise cost another n columns).
+    let params = ReferenceParams::default();
+    let matrix = FormFactors::assemble(&backend, params.max_matrix_bytes).context("the reference solution failed")?;
+    let reference =
+        ReferenceSolution::solve_matrix(&system, &matrix, params).context("the reference solution failed")?;
     let problem = Problem::new(&system, &backend)?;
     let mut observer = RmsObserver { system: &system, reference: &reference, needed: rules.needs_error() };
     let run = Executor::new(solver.as_mut(), rules).run(&problem, &mut observer)?;
-    let metrics = evaluate(&system, &backend, &reference, &run.state.radiosity)?;
+    let metrics = Evaluator::new(&system, &matrix, &reference)?.evaluate(&run.state.radiosity)?;
     let stats = StatsJson {
         columns: run.state.columns,
         steps: run.state.step,

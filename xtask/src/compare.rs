@@ -1,8 +1,9 @@
 //! `cargo xtask compare`: compare solvers on a scene.
 //!
-//! Solvers and form factors are not implemented yet. Until they are, this command runs the
-//! stage that exists, preparing the scene (meshing, BVH, analysis), and says so plainly,
-//! rather than printing numbers it could not have computed.
+//! The comparison is not implemented yet: the paper's solvers (overshooting, group and
+//! group-accelerated) are still to come. Until then this command prepares the scene
+//! (meshing, BVH, analysis), says so plainly rather than printing numbers it could not have
+//! computed, and points to `cargo xtask solve`, which runs one point solver.
 
 use crate::scene_report::{prepare, print_warnings};
 use anyhow::Result;
@@ -34,8 +35,9 @@ pub fn run(args: &Args) -> Result<()> {
     );
     println!("left out: {}", if r.left_out.is_empty() { "nothing".to_string() } else { r.left_out.join("; ") });
     println!();
-    println!("Form factors and solvers are not implemented yet, so nothing was compared.");
-    println!("This command will run PR, Xu and their group-accelerated variants here and write");
-    println!("convergence tables and plots under results/.");
+    println!("The comparison is not implemented yet, so nothing was compared. This command will run");
+    println!("PR, Xu and their group-accelerated variants here and write convergence tables and plots");
+    println!("under results/. Until then one point solver runs at a time, against a reference:");
+    println!("  cargo xtask solve --scene {} --solver pr --until columns=2n", args.scene);
     Ok(())
 }

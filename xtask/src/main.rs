@@ -28,7 +28,7 @@ enum Command {
     Ff(ff::Args),
     /// Run one solver on a scene and report its error against the reference solution.
     Solve(solve::Args),
-    /// Compare solvers on a scene (for now: prepares the scene and reports its analysis).
+    /// Compare solvers on a scene (not implemented yet: prepares the scene and reports its analysis).
     Compare(compare::Args),
 }
 

@@ -28,3 +28,12 @@ pub fn bounding_diagonal(points: impl IntoIterator<Item = Vec3>) -> Real {
     }
     if any { (hi - lo).length() } else { 0.0 }
 }
+
+/// A direction about the unit `normal`, cosine-distributed when `(u1, u2)` is uniform on the
+/// unit square (Malley's method: a uniform point of the unit disc lifted to the hemisphere).
+pub fn cosine_direction(normal: Vec3, u1: Real, u2: Real) -> Vec3 {
+    let (tangent, bitangent) = normal.any_orthonormal_pair();
+    let r = u1.sqrt();
+    let (sin, cos) = (std::f64::consts::TAU * u2).sin_cos();
+    tangent * (r * cos) + bitangent * (r * sin) + normal * (1.0 - u1).max(0.0).sqrt()
+}

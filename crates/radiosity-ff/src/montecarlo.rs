@@ -72,13 +72,13 @@
 
 use crate::guard::ClampCounter;
 use crate::spec::MonteCarloParams;
+use radiosity_core::math::cosine_direction;
 use radiosity_core::{ColumnSource, Patch, Real, Scene, Vec3};
 use radiosity_geom::Visibility;
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use std::f64::consts::TAU;
 
 /// The largest Latin hypercube batch, in rays.
 pub const MAX_BATCH: usize = 4096;
@@ -212,16 +212,13 @@ impl<'a> MonteCarloColumns<'a> {
             s.shuffle(&mut rng);
         }
         let n = patch.normal();
-        let (tangent, bitangent) = n.any_orthonormal_pair();
         let sampler = AreaSampler::new(patch);
         let jitter = |stratum: u32, rng: &mut ChaCha8Rng| (stratum as Real + rng.random::<Real>()) / size as Real;
         (0..size)
             .map(|r| {
                 let origin = sampler.point(jitter(strata[0][r], &mut rng), jitter(strata[1][r], &mut rng));
                 let (u1, u2) = (jitter(strata[2][r], &mut rng), jitter(strata[3][r], &mut rng));
-                let radius = u1.sqrt();
-                let (sin, cos) = (TAU * u2).sin_cos();
-                let direction = tangent * (radius * cos) + bitangent * (radius * sin) + n * (1.0 - u1).sqrt();
+                let direction = cosine_direction(n, u1, u2);
                 match self.visibility.first_hit(origin, direction, Some(j)) {
                     Some(hit) if hit.front => Outcome::Front(hit.patch),
                     Some(_) => Outcome::Back,

@@ -19,7 +19,8 @@
 //!   checks (rows summing to 1) apply only to closed scenes.
 
 use crate::visibility::Visibility;
-use radiosity_core::{Channels, Real, Scene, Vec3};
+use radiosity_core::math::cosine_direction;
+use radiosity_core::{Channels, Real, Scene};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::collections::HashSet;
@@ -188,14 +189,6 @@ fn emitters(scene: &Scene) -> Decision<Vec<usize>> {
         )
     };
     Decision { value: list, reason }
-}
-
-/// A cosine-distributed direction about `normal` from two uniform numbers (Malley's method).
-fn cosine_direction(normal: Vec3, u1: Real, u2: Real) -> Vec3 {
-    let (tangent, bitangent) = normal.any_orthonormal_pair();
-    let r = u1.sqrt();
-    let phi = std::f64::consts::TAU * u2;
-    tangent * (r * phi.cos()) + bitangent * (r * phi.sin()) + normal * (1.0 - u1).max(0.0).sqrt()
 }
 
 fn closure(scene: &Scene, visibility: &Visibility) -> Decision<Closure> {

@@ -230,8 +230,28 @@ fn counting_wrapper_counts_columns_across_threads() {
     });
     let stats = counting.stats();
     assert_eq!(stats.columns, 20);
-    assert!(stats.seconds >= 0.0);
+    // Time is counted: a source that takes at least 1 ms a column adds at least 1 ms each.
+    let slow = CountingColumns::new(Sleepy(&f));
+    let mut col = vec![0.0; 8];
+    for j in 0..5 {
+        slow.fill_column(j, &mut col);
+    }
+    assert!(slow.stats().seconds >= 0.005, "{:?}", slow.stats());
     assert_eq!(counting.patch_count(), 8);
     counting.reset();
     assert_eq!(counting.stats(), ColumnStats::default());
+}
+
+/// A column source that sleeps 1 ms before each column.
+struct Sleepy<'a>(&'a DenseColumns);
+
+impl ColumnSource for Sleepy<'_> {
+    fn patch_count(&self) -> usize {
+        self.0.patch_count()
+    }
+
+    fn fill_column(&self, j: usize, column: &mut [f64]) {
+        std::thread::sleep(std::time::Duration::from_millis(1));
+        self.0.fill_column(j, column);
+    }
 }

@@ -5,6 +5,14 @@
 //! computation is therefore the unit of cost of every solver, as in Rousselle & Renaud, where
 //! form factors take 95–99% of the time.
 //!
+//! Reciprocity holds for the exact form factors, not for every estimate of them: a hemicube or
+//! a Monte Carlo column is reciprocal only on average, and an analytic one up to its quadrature
+//! error. The matrix a backend defines is the one its columns assemble. A source that can give
+//! a row of *that* matrix at the cost of a column (the analytic backend computes every pair on
+//! its own; a stored matrix reads it) says so through [`ColumnSource::fill_row`], and gathering
+//! solvers then solve exactly the system the reference solves. Others leave the default, and
+//! callers fall back on reciprocity.
+//!
 //! Implementations must be `Sync`, so columns can be computed in parallel. A blanket
 //! `impl ColumnSource for &T` lets wrappers borrow a backend (the ripgrep `Matcher` pattern).
 //!
@@ -24,6 +32,13 @@ pub trait ColumnSource: Sync {
 
     /// Writes `F_ij` for every patch `i` into `column[i]`. `column.len()` is `patch_count()`.
     fn fill_column(&self, j: usize, column: &mut [Real]);
+
+    /// Writes `F_ij` for every patch `j` into `row[j]`, exactly the entries the columns hold,
+    /// and returns `true`; or returns `false`, leaving `row` unspecified, when the source
+    /// cannot do that at the cost of one column (the default). `row.len()` is `patch_count()`.
+    fn fill_row(&self, _i: usize, _row: &mut [Real]) -> bool {
+        false
+    }
 }
 
 impl<T: ColumnSource + ?Sized> ColumnSource for &T {
@@ -33,6 +48,10 @@ impl<T: ColumnSource + ?Sized> ColumnSource for &T {
 
     fn fill_column(&self, j: usize, column: &mut [Real]) {
         (**self).fill_column(j, column)
+    }
+
+    fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
+        (**self).fill_row(i, row)
     }
 }
 
@@ -87,6 +106,13 @@ impl ColumnSource for DenseColumns {
 
     fn fill_column(&self, j: usize, column: &mut [Real]) {
         column.copy_from_slice(self.column(j));
+    }
+
+    fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
+        for (j, f) in row.iter_mut().enumerate() {
+            *f = self.get(i, j);
+        }
+        true
     }
 }
 
@@ -151,5 +177,17 @@ impl<S: ColumnSource> ColumnSource for CountingColumns<S> {
         let nanos = start.elapsed().as_nanos().min(u64::MAX as u128) as u64;
         self.columns.fetch_add(1, Ordering::Relaxed);
         self.nanos.fetch_add(nanos, Ordering::Relaxed);
+    }
+
+    /// Counts a row as one column, and counts nothing when the inner source has no rows.
+    fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
+        let start = Instant::now();
+        if !self.inner.fill_row(i, row) {
+            return false;
+        }
+        let nanos = start.elapsed().as_nanos().min(u64::MAX as u128) as u64;
+        self.columns.fetch_add(1, Ordering::Relaxed);
+        self.nanos.fetch_add(nanos, Ordering::Relaxed);
+        true
     }
 }

@@ -206,6 +206,8 @@ fn dense_columns_serve_columns_of_the_row_major_matrix() {
     assert_eq!(col, vec![0.25, 0.0, 0.875]);
     assert_eq!(f.get(2, 0), 0.125);
     assert_eq!(f, DenseColumns::from_fn(3, |i, j| rows[i * 3 + j]));
+    assert!(f.fill_row(2, &mut col));
+    assert_eq!(col, rows[6..9]);
     assert_eq!(
         DenseColumns::from_rows(2, &rows).unwrap_err(),
         CoreError::SizeMismatch { what: "form-factor matrix", expected: 4, found: 9 }
@@ -237,6 +239,14 @@ fn counting_wrapper_counts_columns_across_threads() {
         slow.fill_column(j, &mut col);
     }
     assert!(slow.stats().seconds >= 0.005, "{:?}", slow.stats());
+    // A row counts as a column when the source serves rows, and not at all when it cannot.
+    let before = slow.stats().columns;
+    assert!(!slow.fill_row(0, &mut col), "Sleepy serves no rows");
+    assert_eq!(slow.stats().columns, before);
+    counting.reset();
+    assert!(counting.fill_row(3, &mut col));
+    assert_eq!(col, (24..32).map(|v| v as f64).collect::<Vec<_>>());
+    assert_eq!(counting.stats().columns, 1);
     assert_eq!(counting.patch_count(), 8);
     counting.reset();
     assert_eq!(counting.stats(), ColumnStats::default());

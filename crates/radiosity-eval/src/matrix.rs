@@ -68,6 +68,11 @@ impl ColumnSource for FormFactors {
             *v = self.rows[i * self.n + j];
         }
     }
+
+    fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
+        row.copy_from_slice(self.row(i));
+        true
+    }
 }
 
 fn assemble_dyn(f: &dyn ColumnSource, max_bytes: usize) -> Result<FormFactors, EvalError> {

@@ -83,4 +83,8 @@ impl ColumnSource for Backend<'_> {
     fn fill_column(&self, j: usize, column: &mut [Real]) {
         self.source().fill_column(j, column)
     }
+
+    fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
+        self.source().fill_row(i, row)
+    }
 }

@@ -747,4 +747,24 @@ impl ColumnSource for StoredMatrix {
             }
         }
     }
+
+    /// Reads row `i` from the stored columns (a binary search per column when sparse: CSC
+    /// keeps each column's row indices sorted).
+    fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
+        match &self.entries {
+            Entries::Dense(e) => {
+                for (j, f) in row.iter_mut().enumerate() {
+                    *f = Real::from(e[j * self.n + i]);
+                }
+            }
+            Entries::Sparse(m) => {
+                for (j, f) in row.iter_mut().enumerate() {
+                    let range = m.indptr().outer_inds_sz(j);
+                    let (indices, data) = (&m.indices()[range.clone()], &m.data()[range]);
+                    *f = indices.binary_search(&(i as u32)).map_or(0.0, |k| Real::from(data[k]));
+                }
+            }
+        }
+        true
+    }
 }

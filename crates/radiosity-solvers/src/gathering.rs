@@ -2,15 +2,17 @@
 //! radiosity vector, and track each sweep's residual.
 //!
 //! Gathering patch `i` from `B` gives `G_ic = E_ic + ρ_ic Σ_j F_ij B_jc`, whose difference
-//! from `B_ic` is the residual `r_ic` of `B` at `i`. Row `i` comes from column `i` by
-//! reciprocity: one column per patch, `n` per sweep.
+//! from `B_ic` is the residual `r_ic` of `B` at `i`. Row `i` costs one column, so a sweep
+//! costs `n` columns.
 //!
-//! That row is row `i` of F only if F is exactly reciprocal. A backend that is not (the
-//! analytic backend is reciprocal to its quadrature error, hemicube and Monte Carlo not at
-//! all; `cargo xtask ff` reports it) defines, through its rows, a slightly different system
-//! from the one its columns define, and the reference solves the column system. Measured:
-//! Gauss–Seidel on `furnace:res=2` with `analytic` converges to its own residual 3e-14 but
-//! stays 3.7e-6 (e_rms) from the reference, while PR reaches it to 1e-10.
+//! The row must be row `i` of the matrix the columns assemble, which the reference solves.
+//! The analytic backend and a stored matrix give it exactly
+//! ([`radiosity_core::ColumnSource::fill_row`]). Hemicube and Monte Carlo columns are not
+//! reciprocal, and their rows are taken from column `i` by reciprocity: gathering then solves
+//! a slightly different system from the one shooting solves, by as much as the backend's
+//! reciprocity error (`cargo xtask ff` reports it). Measured before analytic rows were exact:
+//! Gauss–Seidel on `furnace:res=2` with rows by reciprocity converged to its own residual
+//! 3e-14 but stayed 3.7e-6 (e_rms) from the reference.
 
 use crate::error::SolverError;
 use crate::problem::Problem;

@@ -7,7 +7,8 @@
 //! and references. This crate depends on `radiosity-core` only and is tested on small
 //! in-memory matrices.
 //!
-//! Solvers so far: `jacobi`, `gauss-seidel`, `sor-ω`, `southwell`, `pr`.
+//! Point solvers: `jacobi`, `gauss-seidel`, `sor-ω` (gathering); `southwell`, `pr` (shooting);
+//! `feda`, `shao`, `xu` (with its parts `xu-direct`, `xu-ambient`) and `relax-ω` (overshooting).
 //!
 //! ```
 //! use radiosity_core::{Channels, DenseColumns, LinearSystem};
@@ -28,15 +29,20 @@
 
 pub mod error;
 pub mod executor;
+pub mod feda;
 pub mod gathering;
 pub mod gauss_seidel;
 pub mod jacobi;
+pub mod overshooting;
 pub mod problem;
 pub mod progressive;
+pub mod relax;
+pub mod shao;
 pub mod shooting;
 pub mod southwell;
 pub mod state;
 pub mod stop;
+pub mod xu;
 
 pub use error::SolverError;
 pub use executor::{Executor, NoObserver, Observer, Run, Solver};
@@ -44,8 +50,24 @@ pub use problem::Problem;
 pub use state::State;
 pub use stop::{Count, StopRule, StopRules, TerminationReason};
 
+/// The point solvers, by canonical name: every one of them is run by the scene-level tests
+/// and snapshots.
+pub const POINT_SOLVERS: [&str; 11] = [
+    "jacobi",
+    "gauss-seidel",
+    "sor-1.2",
+    "southwell",
+    "pr",
+    "feda",
+    "shao",
+    "xu",
+    "xu-direct",
+    "xu-ambient",
+    "relax-1.5",
+];
+
 /// The solver names accepted by [`solver_by_name`], as listed to users.
-pub const SOLVER_NAMES: &str = "jacobi, gauss-seidel, sor-ω (e.g. sor-1.2), southwell, pr";
+pub const SOLVER_NAMES: &str = "jacobi, gauss-seidel, sor-ω (e.g. sor-1.2), southwell, pr, feda, shao, xu, xu-direct, xu-ambient, relax-ω (e.g. relax-1.5)";
 
 /// The solver a command-line name designates.
 pub fn solver_by_name(name: &str) -> Result<Box<dyn Solver>, SolverError> {
@@ -54,9 +76,17 @@ pub fn solver_by_name(name: &str) -> Result<Box<dyn Solver>, SolverError> {
         "gauss-seidel" => Box::new(gauss_seidel::GaussSeidel::new(1.0)?),
         "southwell" => Box::new(southwell::Southwell::default()),
         "pr" => Box::new(progressive::ProgressiveRefinement::default()),
+        "feda" => Box::new(feda::feda()),
+        "shao" => Box::new(shao::shao()),
+        "xu" => Box::new(xu::xu(xu::XuParts::BOTH)),
+        "xu-direct" => Box::new(xu::xu(xu::XuParts { direct: true, ambient: false })),
+        "xu-ambient" => Box::new(xu::xu(xu::XuParts { direct: false, ambient: true })),
         _ => {
             if let Some(omega) = name.strip_prefix("sor-").and_then(|w| w.parse::<f64>().ok()) {
                 return Ok(Box::new(gauss_seidel::GaussSeidel::new(omega)?));
+            }
+            if let Some(omega) = name.strip_prefix("relax-").and_then(|w| w.parse::<f64>().ok()) {
+                return Ok(Box::new(relax::relax(omega)?));
             }
             return Err(SolverError::BadParams(format!("unknown solver '{name}'; solvers are {SOLVER_NAMES}")));
         }

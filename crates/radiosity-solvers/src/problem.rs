@@ -3,8 +3,9 @@
 //!
 //! Solvers never call a `ColumnSource` directly. They ask the [`Problem`] for a column or a
 //! row; the problem counts the columns computed and the seconds spent in them, which is the
-//! unit of cost of every method (DESIGN §3). A row follows from the same column by
-//! reciprocity, `F_ji = F_ij A_i / A_j`, so it costs one column too.
+//! unit of cost of every method (DESIGN §3). A row costs one column too: the source gives it
+//! when it can ([`radiosity_core::ColumnSource::fill_row`]), and otherwise it follows from the
+//! same column by reciprocity, `F_ji = F_ij A_i / A_j`.
 
 use crate::error::SolverError;
 use radiosity_core::{ColumnSource, LinearSystem, Real};
@@ -51,12 +52,24 @@ impl<'a> Problem<'a> {
         self.fetched.set(self.fetched.get() + 1);
     }
 
-    /// Row `i` of F (`F_ij` for every `j`) into `out`, from column `i` by reciprocity: one
-    /// column computed.
+    /// Row `i` of F (`F_ij` for every `j`) into `out`: one column computed. The row is exact
+    /// when the source can give it ([`ColumnSource::fill_row`]); otherwise it follows from
+    /// column `i` by reciprocity, which is exact only as far as the source is reciprocal.
     pub fn row(&self, i: usize, out: &mut [Real]) {
+        let start = Instant::now();
+        let exact = self.columns.fill_row(i, out);
+        if exact {
+            self.ff_seconds.set(self.ff_seconds.get() + start.elapsed().as_secs_f64());
+            self.fetched.set(self.fetched.get() + 1);
+            return;
+        }
         self.column(i, out);
-        let area = self.system.areas();
-        for (j, f) in out.iter_mut().enumerate() {
+        Self::reciprocal_row(self.system.areas(), i, out);
+    }
+
+    /// Turns column `i`, in place, into row `i` by reciprocity: `F_ij = F_ji A_j / A_i`.
+    pub fn reciprocal_row(area: &[Real], i: usize, column: &mut [Real]) {
+        for (j, f) in column.iter_mut().enumerate() {
             *f *= area[j] / area[i];
         }
     }

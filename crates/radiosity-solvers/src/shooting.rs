@@ -20,6 +20,16 @@ pub fn shoot(
     column: &mut [Real],
 ) -> Result<(), SolverError> {
     problem.column(j, column);
+    shoot_column(problem, state, amount, column)
+}
+
+/// Shoots `amount` through a column already fetched (`column[i] = F_ij`).
+pub fn shoot_column(
+    problem: &Problem<'_>,
+    state: &mut State,
+    amount: &[Real],
+    column: &[Real],
+) -> Result<(), SolverError> {
     let k = state.channels;
     let rho = problem.system().reflectivities();
     for (i, &f) in column.iter().enumerate() {

@@ -31,7 +31,10 @@ fn cube() -> DenseColumns {
     })
 }
 
-const SOLVERS: [&str; 6] = ["jacobi", "gauss-seidel", "sor-1.2", "southwell", "pr", "sor-0.8"];
+/// Every point solver, and under-relaxed SOR and relaxation.
+fn solvers() -> impl Iterator<Item = &'static str> {
+    POINT_SOLVERS.into_iter().chain(["sor-0.8", "relax-0.8"])
+}
 
 /// Runs `name` under `rules`, with a step cap of 2000n: these systems are tiny, and the
 /// default cap of 20n steps is too short for reflectivities near 1.
@@ -61,7 +64,7 @@ fn furnace_identity_per_channel() {
     let e = [1.0, 2.0, 3.0];
     let system = LinearSystem::new(Channels::Rgb, vec![1.0; 6], rho.repeat(6), e.repeat(6)).unwrap();
     let f = cube();
-    for name in SOLVERS {
+    for name in solvers() {
         let run = solve(name, &system, &f, "residual=1e-13");
         assert!(
             matches!(run.termination, TerminationReason::Residual(_) | TerminationReason::RoundOff),
@@ -87,7 +90,7 @@ fn two_patches_match_their_closed_form() {
     let f = DenseColumns::from_rows(2, &[0.0, a, b, 0.0]).unwrap();
     let d = 1.0 - r1 * r2 * a * b;
     let exact = [(e1 + r1 * a * e2) / d, (e2 + r2 * b * e1) / d];
-    for name in SOLVERS {
+    for name in solvers() {
         let run = solve(name, &system, &f, "residual=1e-14");
         for (i, exact) in exact.iter().enumerate() {
             assert!((run.state.radiosity[i] / exact - 1.0).abs() < 1e-12, "{name}: patch {i}");
@@ -103,7 +106,7 @@ fn the_unit_cube_with_an_emitting_top() {
         e[1] = 1.0;
         let system = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![rho; 6], e).unwrap();
         let f = cube();
-        for name in SOLVERS {
+        for name in solvers() {
             let b = solve(name, &system, &f, "residual=1e-14").state.radiosity;
             for (i, expected) in [(1, top), (0, bottom), (2, side), (5, side)] {
                 assert!((b[i] - expected).abs() < 5e-7, "{name}, ρ = {rho}: patch {i} is {} not {expected}", b[i]);
@@ -117,7 +120,7 @@ fn accounting_counts_one_column_a_step() {
     let system =
         LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![1.0, 0.0, 0.0, 0.0, 0.0, 0.0]).unwrap();
     let f = cube();
-    for name in SOLVERS {
+    for name in solvers() {
         let run = solve(name, &system, &f, "steps=2n");
         assert_eq!(run.termination, TerminationReason::Steps(12), "{name}");
         assert_eq!(run.state.columns, 12, "{name}");
@@ -148,7 +151,7 @@ fn column_time_is_form_factor_time() {
     let system = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![1.0; 6]).unwrap();
     let f = cube();
     let slow = Sleepy(&f);
-    for name in SOLVERS {
+    for name in solvers() {
         let mut solver = solver_by_name(name).unwrap();
         let problem = Problem::new(&system, &slow).unwrap();
         let run = Executor::new(solver.as_mut(), StopRules::parse("steps=12").unwrap())
@@ -248,13 +251,14 @@ fn errors_are_reported_not_panicked() {
     let system = LinearSystem::new(Channels::Grey, vec![1.0; 2], vec![0.5; 2], vec![1.0; 2]).unwrap();
     let f = cube();
     assert!(matches!(Problem::new(&system, &f), Err(SolverError::SizeMismatch { columns: 6, system: 2 })));
-    // A form factor that is not finite stops the run at its first step, naming a patch.
+    // A form factor that is not finite stops the run at the first step that uses it (within
+    // the first sweep or the first two shots), naming a patch.
     let broken = DenseColumns::from_rows(2, &[0.0, 0.5, f64::INFINITY, 0.0]).unwrap();
-    for name in SOLVERS {
+    for name in solvers() {
         let mut solver = solver_by_name(name).unwrap();
         let problem = Problem::new(&system, &broken).unwrap();
         let err = Executor::new(solver.as_mut(), StopRules::default()).run(&problem, &mut NoObserver).unwrap_err();
-        assert!(matches!(err, SolverError::NonFinite { step: 1, .. }), "{name}: {err:?}");
-        assert!(err.to_string().starts_with("step 1: the radiosity of patch"), "{err}");
+        assert!(matches!(err, SolverError::NonFinite { step: 1 | 2, .. }), "{name}: {err:?}");
+        assert!(err.to_string().contains(": the radiosity of patch"), "{err}");
     }
 }

@@ -25,7 +25,8 @@ pub struct Args {
     /// The scene: a built-in name with `:key=value` parameters, or a .gltf/.glb path.
     #[arg(long, value_name = "SCENE")]
     scene: String,
-    /// The solver: jacobi, gauss-seidel, sor-ω, southwell or pr.
+    /// The solver: jacobi, gauss-seidel, sor-ω, southwell, pr, feda, shao, xu, xu-direct,
+    /// xu-ambient or relax-ω.
     #[arg(long, value_name = "SOLVER")]
     solver: String,
     /// The form-factor backend, with `:key=value` parameters.
@@ -113,6 +114,16 @@ pub fn run(args: &Args) -> Result<()> {
     let matrix = FormFactors::assemble(&backend, params.max_matrix_bytes).context("the reference solution failed")?;
     let reference =
         ReferenceSolution::solve_matrix(&system, &matrix, params).context("the reference solution failed")?;
+    if solver.gathers_rows() && !backend.serves_rows() {
+        eprintln!(
+            "warning: {} gathers along rows of F, which {} cannot give exactly; they are taken from its \
+             columns by reciprocity, which these form factors do not satisfy, so the run converges to another \
+             system's solution, off the reference by as much as their reciprocity error (`cargo xtask ff` \
+             reports it)",
+            solver.name(),
+            spec.canonical()
+        );
+    }
     let problem = Problem::new(&system, &backend)?;
     let mut observer = RmsObserver { system: &system, reference: &reference, needed: rules.needs_error() };
     let run = Executor::new(solver.as_mut(), rules).run(&problem, &mut observer)?;

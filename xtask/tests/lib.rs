@@ -293,6 +293,26 @@ fn solve_reports_error_against_the_reference() {
 }
 
 #[test]
+fn solve_gathers_exact_rows_or_says_it_cannot() {
+    // Analytic rows are exact: Gauss–Seidel reaches the reference of the same columns.
+    let args = ["solve", "--scene", "furnace:res=2:block=true", "--solver", "gauss-seidel", "--until", "steps=40n"];
+    let out = xtask(&[&args[..], &["--json"]].concat()).success().get_output().clone();
+    assert!(out.stderr.is_empty(), "{}", String::from_utf8_lossy(&out.stderr));
+    let r: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(r["stats"]["e_rms"].as_f64().unwrap() < 1e-10, "{}", r["stats"]);
+    // Hemicube rows come by reciprocity, which hemicube columns do not satisfy: a warning.
+    let out = xtask(&[&args[..], &["--ff", "hemicube:res=16"]].concat()).success().get_output().clone();
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(stderr.contains("warning: gauss-seidel gathers along rows") && stderr.contains("reciprocity"), "{stderr}");
+    // Shooting needs only columns: no warning.
+    let out = xtask(&["solve", "--scene", "furnace:res=2", "--solver", "xu", "--ff", "hemicube:res=16"])
+        .success()
+        .get_output()
+        .clone();
+    assert!(out.stderr.is_empty(), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
+#[test]
 fn solve_refuses_bad_arguments_before_any_work() {
     let e = failure(&["solve", "--scene", "multi-cubes", "--solver", "xu-g30"]);
     assert!(e.contains("unknown solver 'xu-g30'") && e.contains("pr"), "{e}");

@@ -4,12 +4,17 @@
 //! and its metrics ([`crate::metrics`]). Floats are rounded to a fixed number of significant
 //! digits (default 4), so tables under snapshot tests stay stable across platforms and
 //! round-off. Tables write to any [`std::io::Write`]; opening files is the caller's business.
+//! Timings vary from run to run, so a table can leave them out
+//! ([`ConvergenceTable::without_timings`]) and stay deterministic.
 
 use radiosity_core::Real;
 use std::io::{self, Write};
 
 /// The columns of a table, in order.
 pub const HEADER: [&str; 8] = ["solver", "step", "columns", "seconds", "ff_seconds", "e_rms", "e_max", "residual"];
+
+/// The positions in [`HEADER`] of the timing columns, `seconds` and `ff_seconds`.
+const TIMING_COLUMNS: [usize; 2] = [3, 4];
 
 /// One measured point of a run. Fields are plain data, so rows are written as literals.
 #[derive(Clone, Debug, PartialEq)]
@@ -32,16 +37,18 @@ pub struct TableRow {
     pub residual: Real,
 }
 
-/// Rows of convergence data and the precision they are written with.
+/// Rows of convergence data, the precision they are written with, and whether their timings
+/// are written.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ConvergenceTable {
     rows: Vec<TableRow>,
     digits: usize,
+    timings: bool,
 }
 
 impl Default for ConvergenceTable {
     fn default() -> Self {
-        ConvergenceTable { rows: Vec::new(), digits: 4 }
+        ConvergenceTable { rows: Vec::new(), digits: 4, timings: true }
     }
 }
 
@@ -57,6 +64,13 @@ impl ConvergenceTable {
         self
     }
 
+    /// Leaves the `seconds` and `ff_seconds` columns out of CSV and Markdown: a table
+    /// without them is deterministic, so it can sit under a snapshot test.
+    pub fn without_timings(mut self) -> Self {
+        self.timings = false;
+        self
+    }
+
     /// Appends a row.
     pub fn push(&mut self, row: TableRow) {
         self.rows.push(row);
@@ -67,9 +81,20 @@ impl ConvergenceTable {
         &self.rows
     }
 
-    fn cells(&self, row: &TableRow) -> [String; 8] {
+    /// The columns written, in order: [`HEADER`], less the timings if left out.
+    fn header(&self) -> Vec<&'static str> {
+        self.written(HEADER)
+    }
+
+    /// The entries of `all` (one per column of [`HEADER`]) that are written.
+    fn written<T>(&self, all: [T; 8]) -> Vec<T> {
+        let keep = |i: &usize| self.timings || !TIMING_COLUMNS.contains(i);
+        all.into_iter().enumerate().filter(|(i, _)| keep(i)).map(|(_, cell)| cell).collect()
+    }
+
+    fn cells(&self, row: &TableRow) -> Vec<String> {
         let d = self.digits;
-        [
+        self.written([
             row.solver.clone(),
             row.step.to_string(),
             row.columns.to_string(),
@@ -78,13 +103,13 @@ impl ConvergenceTable {
             round_significant(row.e_rms, d),
             round_significant(row.e_max, d),
             round_significant(row.residual, d),
-        ]
+        ])
     }
 
     /// Writes the table as CSV (RFC 4180, with a header line).
     pub fn write_csv(&self, out: impl Write) -> io::Result<()> {
         let mut w = csv::Writer::from_writer(out);
-        w.write_record(HEADER)?;
+        w.write_record(self.header())?;
         for row in &self.rows {
             w.write_record(self.cells(row))?;
         }
@@ -93,8 +118,9 @@ impl ConvergenceTable {
 
     /// Writes the table as a GitHub-flavoured Markdown table, numbers right-aligned.
     pub fn write_markdown(&self, mut out: impl Write) -> io::Result<()> {
-        writeln!(out, "| {} |", HEADER.join(" | "))?;
-        writeln!(out, "|---|{}", "--:|".repeat(HEADER.len() - 1))?;
+        let header = self.header();
+        writeln!(out, "| {} |", header.join(" | "))?;
+        writeln!(out, "|---|{}", "--:|".repeat(header.len() - 1))?;
         for row in &self.rows {
             let mut cells = self.cells(row);
             cells[0] = cells[0].replace('|', "\\|");

@@ -4,6 +4,7 @@
 
 mod metrics;
 mod reference;
+mod scenes;
 mod table;
 
 use radiosity_core::{Channels, DenseColumns, LinearSystem};

@@ -44,6 +44,18 @@ fn fewer_digits() {
     insta::assert_snapshot!(String::from_utf8(out).unwrap());
 }
 
+#[test]
+fn without_timings() {
+    // Both formats lose the same two columns, and nothing else.
+    let t = table().without_timings();
+    let (mut csv, mut markdown) = (Vec::new(), Vec::new());
+    t.write_csv(&mut csv).unwrap();
+    t.write_markdown(&mut markdown).unwrap();
+    let (csv, markdown) = (String::from_utf8(csv).unwrap(), String::from_utf8(markdown).unwrap());
+    assert!(csv.starts_with("solver,step,columns,e_rms,e_max,residual\n"), "{csv}");
+    insta::assert_snapshot!(format!("{csv}\n{markdown}"));
+}
+
 fn check(x: f64, digits: usize, expect: &str) {
     assert_eq!(round_significant(x, digits), expect, "{x} to {digits} digits");
 }

@@ -65,6 +65,13 @@ impl<'a> Backend<'a> {
         }
     }
 
+    /// Whether [`ColumnSource::fill_row`] gives exact rows: for the analytic backend and a
+    /// stored matrix. Hemicube and Monte Carlo columns are not reciprocal, and a row of the
+    /// matrix they assemble would need every column.
+    pub fn serves_rows(&self) -> bool {
+        matches!(self, Backend::Analytic(_) | Backend::Matrix(_))
+    }
+
     fn source(&self) -> &dyn ColumnSource {
         match self {
             Backend::Analytic(b) => b,

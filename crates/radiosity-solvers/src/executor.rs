@@ -32,6 +32,12 @@ pub trait Solver {
     /// power (for shooting methods that of the shot radiosity, `Σ A |ΔB| / Σ A E`), or `None`
     /// while it does not know one.
     fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real>;
+
+    /// Whether the solver gathers along rows of F ([`Problem::row`]) rather than shooting
+    /// columns: its system is then the column system only if the source serves exact rows.
+    fn gathers_rows(&self) -> bool {
+        false
+    }
 }
 
 /// Watches a run between steps.

@@ -54,4 +54,8 @@ impl Solver for GaussSeidel {
     fn residual_power(&self, _problem: &Problem<'_>, _state: &State) -> Option<Real> {
         self.sweep.last()
     }
+
+    fn gathers_rows(&self) -> bool {
+        true
+    }
 }

@@ -49,4 +49,8 @@ impl Solver for Jacobi {
     fn residual_power(&self, _problem: &Problem<'_>, _state: &State) -> Option<Real> {
         self.sweep.last()
     }
+
+    fn gathers_rows(&self) -> bool {
+        true
+    }
 }

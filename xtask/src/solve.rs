@@ -74,6 +74,7 @@ struct PatchJson {
 #[derive(Serialize)]
 struct StatsJson {
     columns: u64,
+    columns_reused: u64,
     steps: u64,
     seconds: Real,
     ff_seconds: Real,
@@ -130,6 +131,7 @@ pub fn run(args: &Args) -> Result<()> {
     let metrics = Evaluator::new(&system, &matrix, &reference)?.evaluate(&run.state.radiosity)?;
     let stats = StatsJson {
         columns: run.state.columns,
+        columns_reused: run.state.columns_reused,
         steps: run.state.step,
         seconds: run.state.ff_seconds + run.state.solve_seconds,
         ff_seconds: run.state.ff_seconds,
@@ -144,8 +146,12 @@ pub fn run(args: &Args) -> Result<()> {
         println!("scene        {}: {} patches", args.scene, scene.len());
         println!("solver       {} with {}", run.solver, spec.canonical());
         println!("stopped      {}", stats.termination);
+        let reused = match stats.columns_reused {
+            0 => String::new(),
+            k => format!(" (and {k} served again from memory)"),
+        };
         println!(
-            "work         {} steps, {} columns, {:.3} s ({:.3} s in form factors)",
+            "work         {} steps, {} columns{reused}, {:.3} s ({:.3} s in form factors)",
             stats.steps, stats.columns, stats.seconds, stats.ff_seconds
         );
         println!(

@@ -293,6 +293,33 @@ fn solve_reports_error_against_the_reference() {
 }
 
 #[test]
+fn solve_stops_at_every_kind_of_rule() {
+    let stats = |rules: &str| {
+        let r = stdout_json(&["solve", "--scene", "multi-cubes", "--solver", "pr", "--until", rules, "--json"]);
+        r["stats"].clone()
+    };
+    let s = stats("columns=100");
+    assert_eq!((s["columns"].as_u64(), s["termination"].as_str()), (Some(100), Some("100 columns computed")));
+    let s = stats("columns=0.5n");
+    assert_eq!(s["columns"], 240);
+    let s = stats("steps=70,columns=100");
+    assert_eq!((s["steps"].as_u64(), s["termination"].as_str()), (Some(70), Some("70 steps taken")));
+    let s = stats("rms=1e-2");
+    assert!(s["termination"].as_str().unwrap().starts_with("e_rms reached"), "{s}");
+    assert!(s["e_rms"].as_f64().unwrap() <= 1e-2, "{s}");
+    let s = stats("residual=1e-2");
+    assert!(s["termination"].as_str().unwrap().starts_with("residual power reached"), "{s}");
+    // 480 columns take about 0.3 s: 20 ms stops the run early, after at least 20 ms.
+    let s = stats("time=20ms");
+    assert!(s["termination"].as_str().unwrap().starts_with("time limit"), "{s}");
+    assert!(s["seconds"].as_f64().unwrap() >= 0.02 && s["columns"].as_u64().unwrap() < 480, "{s}");
+    // An error below round-off cannot be reached: the run ends at round-off, and says so.
+    let r = stdout_json(&["solve", "--scene", "furnace:res=2", "--solver", "pr", "--until", "rms=1e-30", "--json"]);
+    let termination = r["stats"]["termination"].as_str().unwrap().to_string();
+    assert!(termination == "converged to round-off" || termination.starts_with("step cap"), "{termination}");
+}
+
+#[test]
 fn solve_gathers_exact_rows_or_says_it_cannot() {
     // Analytic rows are exact: Gauss–Seidel reaches the reference of the same columns.
     let args = ["solve", "--scene", "furnace:res=2:block=true", "--solver", "gauss-seidel", "--until", "steps=40n"];

@@ -117,6 +117,7 @@ impl<'s> Executor<'s> {
     fn account(&self, problem: &Problem<'_>, state: &mut State, wall: f64, ff_before: f64) {
         let ff = problem.ff_seconds() - ff_before;
         state.columns = problem.columns_fetched();
+        state.columns_reused = problem.columns_reused();
         state.ff_seconds += ff;
         state.solve_seconds += (wall - ff).max(0.0);
     }

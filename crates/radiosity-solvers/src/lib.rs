@@ -33,6 +33,7 @@ pub mod feda;
 pub mod gathering;
 pub mod gauss_seidel;
 pub mod jacobi;
+pub mod memory;
 pub mod overshooting;
 pub mod problem;
 pub mod progressive;
@@ -46,6 +47,7 @@ pub mod xu;
 
 pub use error::SolverError;
 pub use executor::{Executor, NoObserver, Observer, Run, Solver};
+pub use memory::ColumnMemory;
 pub use problem::Problem;
 pub use state::State;
 pub use stop::{Count, StopRule, StopRules, TerminationReason};

@@ -17,6 +17,7 @@ pub struct Problem<'a> {
     system: &'a LinearSystem,
     columns: &'a dyn ColumnSource,
     fetched: Cell<u64>,
+    reused: Cell<u64>,
     ff_seconds: Cell<f64>,
 }
 
@@ -26,7 +27,7 @@ impl<'a> Problem<'a> {
         if columns.patch_count() != system.len() {
             return Err(SolverError::SizeMismatch { columns: columns.patch_count(), system: system.len() });
         }
-        Ok(Problem { system, columns, fetched: Cell::new(0), ff_seconds: Cell::new(0.0) })
+        Ok(Problem { system, columns, fetched: Cell::new(0), reused: Cell::new(0), ff_seconds: Cell::new(0.0) })
     }
 
     /// The system.
@@ -77,6 +78,17 @@ impl<'a> Problem<'a> {
     /// Columns computed so far.
     pub fn columns_fetched(&self) -> u64 {
         self.fetched.get()
+    }
+
+    /// Records that a solver served a column from its own memory instead of computing it
+    /// ([`crate::memory::ColumnMemory`] calls this): it costs no column, and is counted apart.
+    pub fn note_reuse(&self) {
+        self.reused.set(self.reused.get() + 1);
+    }
+
+    /// Columns served again from memory so far.
+    pub fn columns_reused(&self) -> u64 {
+        self.reused.get()
     }
 
     /// Seconds spent computing columns so far.

@@ -20,6 +20,8 @@ pub struct State {
     pub step: u64,
     /// Columns computed so far.
     pub columns: u64,
+    /// Columns served again from a solver's memory, at no cost: not counted in `columns`.
+    pub columns_reused: u64,
     /// Seconds spent computing columns.
     pub ff_seconds: f64,
     /// Seconds spent in the solver outside column computations.
@@ -35,6 +37,7 @@ impl State {
             unshot: emission.to_vec(),
             step: 0,
             columns: 0,
+            columns_reused: 0,
             ff_seconds: 0.0,
             solve_seconds: 0.0,
         }

@@ -262,3 +262,30 @@ fn errors_are_reported_not_panicked() {
         assert!(err.to_string().contains(": the radiosity of patch"), "{err}");
     }
 }
+
+#[test]
+fn a_column_served_from_memory_costs_no_column_and_is_counted_apart() {
+    let system = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![1.0; 6]).unwrap();
+    let f = cube();
+    let problem = Problem::new(&system, &f).unwrap();
+    let mut memory = ColumnMemory::new(6, 2);
+    let mut scratch = Vec::new();
+    assert_eq!(memory.column(&problem, 0, &mut scratch), f.column(0));
+    assert_eq!(memory.column(&problem, 1, &mut scratch), f.column(1));
+    assert_eq!(memory.column(&problem, 0, &mut scratch), f.column(0));
+    assert_eq!((problem.columns_fetched(), problem.columns_reused()), (2, 1));
+    // Full: 2 is stored in place of the least recently used, 1; 0 stays.
+    assert_eq!(memory.column(&problem, 2, &mut scratch), f.column(2));
+    assert!(memory.contains(0) && memory.contains(2) && !memory.contains(1));
+    assert_eq!(memory.peek(2), Some(f.column(2)));
+    assert_eq!(memory.peek(1), None);
+    assert_eq!(memory.column(&problem, 1, &mut scratch), f.column(1));
+    assert_eq!((problem.columns_fetched(), problem.columns_reused()), (4, 1));
+    assert_eq!(memory.len(), 2);
+    // No capacity: every column is computed.
+    let mut none = ColumnMemory::new(6, 0);
+    assert_eq!(none.column(&problem, 3, &mut scratch), f.column(3));
+    assert_eq!(none.column(&problem, 3, &mut scratch), f.column(3));
+    assert_eq!((problem.columns_fetched(), problem.columns_reused()), (6, 1));
+    assert!(none.is_empty());
+}

@@ -26,7 +26,8 @@ pub struct Args {
     #[arg(long, value_name = "SCENE")]
     scene: String,
     /// The solver: jacobi, gauss-seidel, sor-ω, southwell, pr, feda, shao, xu, xu-direct,
-    /// xu-ambient or relax-ω.
+    /// xu-ambient, relax-ω; group-S-gM (group shooting); S-gM[-mK][:f=N|:f=auto] (group
+    /// accelerated).
     #[arg(long, value_name = "SOLVER")]
     solver: String,
     /// The form-factor backend, with `:key=value` parameters.
@@ -78,6 +79,7 @@ struct StatsJson {
     steps: u64,
     seconds: Real,
     ff_seconds: Real,
+    group_seconds: Real,
     e_rms: Real,
     e_max: Real,
     residual: Real,
@@ -135,6 +137,7 @@ pub fn run(args: &Args) -> Result<()> {
         steps: run.state.step,
         seconds: run.state.ff_seconds + run.state.solve_seconds,
         ff_seconds: run.state.ff_seconds,
+        group_seconds: run.state.group_seconds,
         e_rms: metrics.e_rms,
         e_max: metrics.e_max,
         residual: metrics.residual,
@@ -154,6 +157,13 @@ pub fn run(args: &Args) -> Result<()> {
             "work         {} steps, {} columns{reused}, {:.3} s ({:.3} s in form factors)",
             stats.steps, stats.columns, stats.seconds, stats.ff_seconds
         );
+        if stats.group_seconds > 0.0 {
+            println!(
+                "groups       {:.3} s solving groups, {:.2}% of the run",
+                stats.group_seconds,
+                100.0 * stats.group_seconds / stats.seconds
+            );
+        }
         println!(
             "error        e_rms {:.4e}, e_max {:.4e}, residual power {:.4e}",
             stats.e_rms, stats.e_max, stats.residual

@@ -341,8 +341,8 @@ fn solve_gathers_exact_rows_or_says_it_cannot() {
 
 #[test]
 fn solve_refuses_bad_arguments_before_any_work() {
-    let e = failure(&["solve", "--scene", "multi-cubes", "--solver", "xu-g30"]);
-    assert!(e.contains("unknown solver 'xu-g30'") && e.contains("pr"), "{e}");
+    let e = failure(&["solve", "--scene", "multi-cubes", "--solver", "xu-q30"]);
+    assert!(e.contains("unknown solver 'xu-q30'") && e.contains("pr"), "{e}");
     let e = failure(&["solve", "--scene", "multi-cubes", "--solver", "pr", "--until", "columns=abc"]);
     assert!(e.contains("invalid stop rule 'columns=abc'"), "{e}");
     let e = failure(&["solve", "--scene", "multi-cubes", "--solver", "pr", "--ff", "radiance"]);

@@ -24,6 +24,7 @@
 //! ```
 
 pub mod column;
+pub mod dense_lu;
 pub mod error;
 pub mod math;
 pub mod patch;

@@ -6,7 +6,7 @@
 //! Run with `cargo bench -p radiosity-eval --bench lu`.
 
 use criterion::{BenchmarkId, Criterion, criterion_main};
-use radiosity_eval::reference::lu_solve;
+use radiosity_core::dense_lu::lu_solve;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::hint::black_box;
@@ -30,7 +30,7 @@ fn system(n: usize) -> (Vec<f64>, Vec<f64>) {
     (a, e)
 }
 
-/// The reference's own solver (`radiosity_eval::reference::lu_solve`), so the figures are
+/// The reference's own solver (`radiosity_core::dense_lu::lu_solve`), so the figures are
 /// those of the code that runs.
 fn faer_solve(a: &[f64], e: &[f64], n: usize, parallel: bool) -> f64 {
     lu_solve(n, parallel, |i, j| a[i * n + j], |i| e[i]).expect("the test matrix is regular")[0]

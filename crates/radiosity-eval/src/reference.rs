@@ -41,9 +41,7 @@
 use crate::error::EvalError;
 use crate::matrix::{FormFactors, check_sizes};
 use crate::metrics::{Contraction, Residual};
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::lu::partial_pivoting::{factor, solve};
-use faer::{Conj, Mat, Par};
+use radiosity_core::dense_lu::{SingularPivot, lu_solve};
 use radiosity_core::{Channels, ColumnSource, LinearSystem, Real};
 use rayon::prelude::*;
 use std::fmt;
@@ -284,42 +282,6 @@ fn dense_lu(system: &LinearSystem, m: &FormFactors) -> Result<Vec<Real>, EvalErr
 fn lu_channel(system: &LinearSystem, m: &FormFactors, c: usize) -> Result<Vec<Real>, EvalError> {
     lu_solve(system.len(), false, |i, j| Real::from(i == j) - system.rho(i, c) * m.get(i, j), |i| system.e(i, c))
         .map_err(|SingularPivot { pivot, value }| EvalError::Singular { channel: c, pivot, value })
-}
-
-/// A zero or non-finite pivot met by [`lu_solve`].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SingularPivot {
-    /// The pivot's index.
-    pub pivot: usize,
-    /// Its value.
-    pub value: Real,
-}
-
-/// Solves the `n × n` system `a x = b` by faer's LU with partial pivoting, one right-hand
-/// side, on one thread or (`parallel`) on rayon's. The dense reference uses it per channel,
-/// and the `lu` bench times it, so the measured figures are those of this code.
-pub fn lu_solve(
-    n: usize,
-    parallel: bool,
-    a: impl Fn(usize, usize) -> Real,
-    b: impl Fn(usize) -> Real,
-) -> Result<Vec<Real>, SingularPivot> {
-    let par = if parallel { Par::rayon(0) } else { Par::Seq };
-    let mut a = Mat::from_fn(n, n, a);
-    let mut fwd = vec![0usize; n];
-    let mut bwd = vec![0usize; n];
-    let mut mem = MemBuffer::new(
-        factor::lu_in_place_scratch::<usize, Real>(n, n, par, Default::default())
-            .or(solve::solve_in_place_scratch::<usize, Real>(n, 1, par)),
-    );
-    let (_, perm) =
-        factor::lu_in_place(a.as_mut(), &mut fwd, &mut bwd, par, MemStack::new(&mut mem), Default::default());
-    if let Some(pivot) = (0..n).find(|&p| !(a[(p, p)].is_finite() && a[(p, p)] != 0.0)) {
-        return Err(SingularPivot { pivot, value: a[(pivot, pivot)] });
-    }
-    let mut rhs = Mat::from_fn(n, 1, |i, _| b(i));
-    solve::solve_in_place_with_conj(a.as_ref(), a.as_ref(), perm, Conj::No, rhs.as_mut(), par, MemStack::new(&mut mem));
-    Ok((0..n).map(|i| rhs[(i, 0)]).collect())
 }
 
 /// Gauss–Seidel on all channels at once, rows in order, until the certified relative bound

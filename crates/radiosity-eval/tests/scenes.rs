@@ -11,7 +11,9 @@ use radiosity_eval::metrics::errors;
 use radiosity_eval::{ConvergenceTable, Evaluator, FormFactors, ReferenceParams, ReferenceSolution, TableRow};
 use radiosity_ff::{Backend, BackendSpec, FormFactorInput};
 use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
-use radiosity_solvers::{Executor, Observer, POINT_SOLVERS, Problem, Run, State, StopRules, solver_by_name};
+use radiosity_solvers::{
+    Executor, GROUP_SOLVERS, Observer, POINT_SOLVERS, Problem, Run, State, StopRules, solver_by_name,
+};
 use std::panic::{self, AssertUnwindSafe};
 use std::sync::OnceLock;
 
@@ -89,13 +91,13 @@ impl Observer for RmsObserver<'_> {
     }
 }
 
-/// Runs every point solver on `scene` until e_rms ≤ 1e-9 and checks that each ends within
-/// [`RMS_BOUND`]. A solver that panics does not hide the others: every failure is listed
+/// Runs every point and group solver on `scene` until e_rms ≤ 1e-9 and checks that each ends
+/// within [`RMS_BOUND`]. A solver that panics does not hide the others: every failure is listed
 /// before the test fails.
 fn check_reaches_reference(scene: &str) {
     let fixture = fixture(scene);
     let mut failures = Vec::new();
-    for &name in POINT_SOLVERS.iter() {
+    for &name in POINT_SOLVERS.iter().chain(&GROUP_SOLVERS) {
         let rules = StopRules { step_cap: STEP_CAP, ..StopRules::parse(RMS_TARGET).unwrap() };
         // The fixture is only read, so a panic cannot leave it half-updated.
         let attempt = panic::catch_unwind(AssertUnwindSafe(|| fixture.run(name, rules, &mut RmsObserver(fixture))));
@@ -230,7 +232,8 @@ fn check_residual_keeps_falling(scene: &str) {
     let fixture = fixture(scene);
     let n = fixture.n() as u64;
     let mut stalls = Vec::new();
-    for &name in POINT_SOLVERS.iter().filter(|s| !["jacobi", "gauss-seidel", "sor-1.2"].contains(s)) {
+    let shooting = POINT_SOLVERS.iter().filter(|s| !["jacobi", "gauss-seidel", "sor-1.2"].contains(s));
+    for &name in shooting.chain(&GROUP_SOLVERS) {
         let evaluator = Evaluator::new(&fixture.system, &fixture.matrix, &fixture.reference).unwrap();
         let mut recorder = ResidualRecorder { evaluator, every: n, residuals: Vec::new() };
         fixture.run(name, StopRules::parse("steps=12n").unwrap(), &mut recorder);

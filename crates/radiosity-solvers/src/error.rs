@@ -34,6 +34,23 @@ pub enum SolverError {
         /// What is wrong with it.
         reason: String,
     },
+    /// A group system `Φ_rr y = s` that LU cannot solve.
+    #[error(
+        "step {step}: the group system of {size} patches is singular in channel {channel} (pivot {pivot} is {value}); \
+         are the form factors' rows summing far above 1?"
+    )]
+    SingularGroup {
+        /// The step.
+        step: u64,
+        /// Patches in the group.
+        size: usize,
+        /// The channel.
+        channel: usize,
+        /// The pivot's index.
+        pivot: usize,
+        /// Its value.
+        value: f64,
+    },
     /// Invalid solver parameters.
     #[error("{0}")]
     BadParams(String),

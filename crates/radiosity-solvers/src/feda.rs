@@ -11,10 +11,7 @@
 //! - Feda & Purgathofer 1992, "Accelerating radiosity by overshooting", Third Eurographics
 //!   Workshop on Rendering, 21–32.
 
-use crate::overshooting::{AmbientTerm, Overshoot, Overshooting};
+use crate::overshooting::{AmbientTerm, Overshoot};
 
-/// The `feda` solver.
-pub fn feda() -> Overshooting {
-    let rule = Overshoot { row: None, ambient: AmbientTerm::AllBounces, omega: 1.0 };
-    Overshooting::without_relaxation("feda", rule)
-}
+/// Feda's overshoot.
+pub const RULE: Overshoot = Overshoot { row: None, ambient: AmbientTerm::AllBounces, omega: 1.0 };

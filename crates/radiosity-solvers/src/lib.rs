@@ -32,6 +32,9 @@ pub mod executor;
 pub mod feda;
 pub mod gathering;
 pub mod gauss_seidel;
+pub mod group_accelerated;
+pub mod group_shooting;
+pub mod group_step;
 pub mod jacobi;
 pub mod memory;
 pub mod overshooting;
@@ -47,7 +50,10 @@ pub mod xu;
 
 pub use error::SolverError;
 pub use executor::{Executor, NoObserver, Observer, Run, Solver};
+pub use group_accelerated::{Frequency, GroupAccelerated, GroupAcceleratedParams};
+pub use group_shooting::GroupShooting;
 pub use memory::ColumnMemory;
+pub use overshooting::Overshoot;
 pub use problem::Problem;
 pub use state::State;
 pub use stop::{Count, StopRule, StopRules, TerminationReason};
@@ -68,29 +74,125 @@ pub const POINT_SOLVERS: [&str; 11] = [
     "relax-1.5",
 ];
 
+/// The group solvers, by canonical name (the paper's, with fixed frequencies so that runs are
+/// deterministic): run by the scene-level tests.
+pub const GROUP_SOLVERS: [&str; 8] = [
+    "group-southwell-g30",
+    "group-pr-g30",
+    "group-feda-g30",
+    "group-xu-g30",
+    "pr-g30:f=10",
+    "pr-g30-m480:f=10",
+    "xu-g30:f=10",
+    "xu-g30-m480:f=10",
+];
+
 /// The solver names accepted by [`solver_by_name`], as listed to users.
-pub const SOLVER_NAMES: &str = "jacobi, gauss-seidel, sor-ω (e.g. sor-1.2), southwell, pr, feda, shao, xu, xu-direct, xu-ambient, relax-ω (e.g. relax-1.5)";
+pub const SOLVER_NAMES: &str = "jacobi, gauss-seidel, sor-ω (e.g. sor-1.2); southwell, pr, feda, shao, xu, xu-direct, \
+     xu-ambient, relax-ω (e.g. relax-1.5); group-S-gM for a shooting method S (group-pr-g30, group-xu-g30); S-gM and \
+     S-gM-mK, group-accelerated (pr-g30, xu-g30-m480), with :f=N or :f=auto[:target=0.05]";
+
+/// The overshoot and selection weighting of a shooting method's name (`pr`, `xu`, `relax-1.5`).
+fn shooting_rule(name: &str) -> Option<Result<(Overshoot, bool), SolverError>> {
+    let rule = match name {
+        "southwell" => return Some(Ok((Overshoot::NONE, false))),
+        "pr" => Overshoot::NONE,
+        "feda" => feda::RULE,
+        "shao" => shao::RULE,
+        "xu" => xu::rule(xu::XuParts::BOTH),
+        "xu-direct" => xu::rule(xu::XuParts { direct: true, ambient: false }),
+        "xu-ambient" => xu::rule(xu::XuParts { direct: false, ambient: true }),
+        _ => {
+            let omega = name.strip_prefix("relax-")?.parse::<f64>().ok()?;
+            if !(omega > 0.0 && omega < 2.0) {
+                return Some(Err(SolverError::BadParams(format!("relaxation needs 0 < ω < 2, not {omega}"))));
+            }
+            relax::rule(omega)
+        }
+    };
+    Some(Ok((rule, true)))
+}
+
+/// Splits `head-gM` into `head` and `M`.
+fn split_size<'a>(name: &'a str, marker: &str) -> Option<(&'a str, usize)> {
+    let (head, size) = name.rsplit_once(marker)?;
+    if size.is_empty() || !size.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    Some((head, size.parse().ok()?))
+}
+
+/// The frequency parameters of a group-accelerated name (`f=10`, `f=auto`, `target=0.05`).
+fn parse_frequency(name: &str, params: &str) -> Result<Frequency, SolverError> {
+    let (mut fixed, mut target) = (None, 0.05);
+    for pair in params.split(':').filter(|p| !p.is_empty()) {
+        let bad = |why: &str| SolverError::BadParams(format!("solver '{name}': '{pair}' {why}"));
+        match pair.split_once('=') {
+            Some(("f", "auto")) => fixed = None,
+            Some(("f", v)) => {
+                fixed = Some(v.parse::<u64>().ok().filter(|&f| f > 0).ok_or_else(|| bad("needs f=auto or f ≥ 1"))?)
+            }
+            Some(("target", v)) => {
+                target = v
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|t| *t > 0.0 && t.is_finite())
+                    .ok_or_else(|| bad("needs a positive number"))?
+            }
+            _ => return Err(bad("is not a parameter; group-accelerated solvers take f=N, f=auto and target=X")),
+        }
+    }
+    Ok(fixed.map_or(Frequency::Auto { target }, Frequency::Fixed))
+}
 
 /// The solver a command-line name designates.
 pub fn solver_by_name(name: &str) -> Result<Box<dyn Solver>, SolverError> {
-    Ok(match name {
-        "jacobi" => Box::new(jacobi::Jacobi::default()),
-        "gauss-seidel" => Box::new(gauss_seidel::GaussSeidel::new(1.0)?),
-        "southwell" => Box::new(southwell::Southwell::default()),
-        "pr" => Box::new(progressive::ProgressiveRefinement::default()),
-        "feda" => Box::new(feda::feda()),
-        "shao" => Box::new(shao::shao()),
-        "xu" => Box::new(xu::xu(xu::XuParts::BOTH)),
-        "xu-direct" => Box::new(xu::xu(xu::XuParts { direct: true, ambient: false })),
-        "xu-ambient" => Box::new(xu::xu(xu::XuParts { direct: false, ambient: true })),
-        _ => {
-            if let Some(omega) = name.strip_prefix("sor-").and_then(|w| w.parse::<f64>().ok()) {
-                return Ok(Box::new(gauss_seidel::GaussSeidel::new(omega)?));
-            }
-            if let Some(omega) = name.strip_prefix("relax-").and_then(|w| w.parse::<f64>().ok()) {
-                return Ok(Box::new(relax::relax(omega)?));
-            }
-            return Err(SolverError::BadParams(format!("unknown solver '{name}'; solvers are {SOLVER_NAMES}")));
+    let unknown = || SolverError::BadParams(format!("unknown solver '{name}'; solvers are {SOLVER_NAMES}"));
+    let (head, params) = name.split_once(':').unwrap_or((name, ""));
+    let no_params = || {
+        if params.is_empty() {
+            Ok(())
+        } else {
+            Err(SolverError::BadParams(format!("solver '{head}' takes no parameters, not '{params}'")))
         }
-    })
+    };
+    let simple: Option<Box<dyn Solver>> = match head {
+        "jacobi" => Some(Box::new(jacobi::Jacobi::default())),
+        "gauss-seidel" => Some(Box::new(gauss_seidel::GaussSeidel::new(1.0)?)),
+        "southwell" => Some(Box::new(southwell::Southwell::default())),
+        "pr" => Some(Box::new(progressive::ProgressiveRefinement::default())),
+        _ => None,
+    };
+    if let Some(solver) = simple {
+        no_params()?;
+        return Ok(solver);
+    }
+    if let Some(omega) = head.strip_prefix("sor-").and_then(|w| w.parse::<f64>().ok()) {
+        no_params()?;
+        return Ok(Box::new(gauss_seidel::GaussSeidel::new(omega)?));
+    }
+    if let Some(rule) = shooting_rule(head) {
+        no_params()?;
+        return Ok(Box::new(overshooting::Overshooting::new(head, rule?.0)?));
+    }
+    if let Some(rest) = head.strip_prefix("group-") {
+        let (base, m) = split_size(rest, "-g").ok_or_else(unknown)?;
+        let (rule, by_area) = shooting_rule(base).ok_or_else(unknown)??;
+        no_params()?;
+        return Ok(Box::new(GroupShooting::new(head, m, rule, by_area)?));
+    }
+    let (grouped, memory) = match split_size(head, "-m") {
+        Some((grouped, k)) if grouped.contains("-g") => (grouped, Some(k)),
+        _ => (head, None),
+    };
+    let (base, m) = split_size(grouped, "-g").ok_or_else(unknown)?;
+    let (rule, by_area) = shooting_rule(base).ok_or_else(unknown)??;
+    if !by_area {
+        return Err(SolverError::BadParams(format!(
+            "'{name}': group acceleration applies to PR and the overshooting methods, not to {base}"
+        )));
+    }
+    let params =
+        GroupAcceleratedParams { group: m, memory: memory.unwrap_or(m), frequency: parse_frequency(name, params)? };
+    Ok(Box::new(GroupAccelerated::new(name, rule, params)?))
 }

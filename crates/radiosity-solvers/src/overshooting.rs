@@ -76,7 +76,7 @@ pub enum AmbientTerm {
     LaterBounces,
 }
 
-/// Which terms an overshooting variant uses.
+/// Which terms an overshooting variant uses; all off is PR.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Overshoot {
     /// The row term, if any.
@@ -87,39 +87,63 @@ pub struct Overshoot {
     pub omega: Real,
 }
 
-/// Point shooting with an overshoot: the solver behind `feda`, `shao`, `xu` and `relax-ω`.
-#[derive(Debug)]
-pub struct Overshooting {
-    name: String,
+impl Overshoot {
+    /// No overshoot: progressive refinement.
+    pub const NONE: Overshoot = Overshoot { row: None, ambient: AmbientTerm::Off, omega: 1.0 };
+}
+
+/// The overshoot of a shooting method, and what it remembers to estimate it for selection:
+/// shared by point, group and group-accelerated shooting.
+#[derive(Clone, Debug)]
+pub struct OvershootTracker {
     rule: Overshoot,
-    /// `a_c` per channel.
-    ambient_weight: Vec<Real>,
+    /// Whether selection weighs by area (PR and overshooting) or not (Southwell).
+    by_area: bool,
+    /// `ρ̄_c` per channel.
+    mean_rho: Vec<Real>,
     /// The row term of each patch's last shot, patch-major.
     last_row: Vec<Real>,
     /// The unshot power just after each patch's last shot (`NaN`: never shot).
     power_then: Vec<Real>,
-    column: Vec<Real>,
 }
 
 /// The state-wide quantities an overshoot needs, measured before each step.
-struct Ambient {
+#[derive(Clone, Debug)]
+pub struct Ambient {
     /// `ΔB̄_c`.
     mean: Vec<Real>,
     /// The area-weighted mean of `max(ΔB_c, 0)`.
     positive: Vec<Real>,
     /// `Σ_c Σ_i A_i |ΔB_ic|`.
     power: Real,
+    /// The fraction of the area outside the group (1 for a point shot).
+    outside: Real,
 }
 
 impl Ambient {
-    fn measure(problem: &Problem<'_>, state: &State) -> Ambient {
+    /// Measures the ambient quantities of `state`.
+    pub fn measure(problem: &Problem<'_>, state: &State) -> Ambient {
+        Ambient::measure_outside(problem, state, &[])
+    }
+
+    /// Measures the ambient quantities of `state` counting only the unshot radiosity outside
+    /// `group` (sorted patch indices) in the means, still divided by the whole area: the
+    /// light a group step's solve does not already account for. `power` counts every patch.
+    pub fn measure_outside(problem: &Problem<'_>, state: &State, group: &[usize]) -> Ambient {
         let (area, k) = (problem.system().areas(), state.channels);
         let (mut mean, mut positive, mut power, mut total) = (vec![0.0; k], vec![0.0; k], 0.0, 0.0);
+        let mut outside_area = 0.0;
         for (i, unshot) in state.unshot.chunks_exact(k).enumerate() {
             total += area[i];
+            let outside = group.binary_search(&i).is_err();
+            if outside {
+                outside_area += area[i];
+            }
             for (c, &u) in unshot.iter().enumerate() {
-                mean[c] += area[i] * u;
-                positive[c] += area[i] * u.max(0.0);
+                if outside {
+                    mean[c] += area[i] * u;
+                    positive[c] += area[i] * u.max(0.0);
+                }
                 power += area[i] * u.abs();
             }
         }
@@ -127,32 +151,50 @@ impl Ambient {
             mean[c] /= total;
             positive[c] /= total;
         }
-        Ambient { mean, positive, power }
+        Ambient { mean, positive, power, outside: outside_area / total }
+    }
+
+    /// `Σ_c Σ_i A_i |ΔB_ic|`.
+    pub fn power(&self) -> Real {
+        self.power
     }
 }
 
-impl Overshooting {
-    /// An overshooting solver named `name` (as on the command line) using `rule`.
-    pub fn new(name: impl Into<String>, rule: Overshoot) -> Result<Overshooting, SolverError> {
+impl OvershootTracker {
+    /// A tracker for `rule`, choosing by area-weighted values (`by_area`) or plain ones.
+    /// `rule.omega` must lie in `(0, 2)`.
+    pub fn new(rule: Overshoot, by_area: bool) -> Result<OvershootTracker, SolverError> {
         if !(rule.omega > 0.0 && rule.omega < 2.0) {
             return Err(SolverError::BadParams(format!("relaxation needs 0 < ω < 2, not {}", rule.omega)));
         }
-        Ok(Overshooting::unchecked(name, rule))
+        Ok(OvershootTracker { rule, by_area, mean_rho: Vec::new(), last_row: Vec::new(), power_then: Vec::new() })
     }
 
-    /// The solver for a rule without relaxation (`ω = 1`, always valid).
-    pub(crate) fn without_relaxation(name: impl Into<String>, rule: Overshoot) -> Overshooting {
-        Overshooting::unchecked(name, Overshoot { omega: 1.0, ..rule })
+    /// The rule.
+    pub fn rule(&self) -> Overshoot {
+        self.rule
     }
 
-    fn unchecked(name: impl Into<String>, rule: Overshoot) -> Overshooting {
-        Overshooting {
-            name: name.into(),
-            rule,
-            ambient_weight: Vec::new(),
-            last_row: Vec::new(),
-            power_then: Vec::new(),
-            column: Vec::new(),
+    /// Prepares for a run on `problem`.
+    pub fn init(&mut self, problem: &Problem<'_>) {
+        let (system, k, n) = (problem.system(), problem.channels(), problem.n());
+        let total: Real = system.areas().iter().sum();
+        self.mean_rho =
+            (0..k).map(|c| (0..n).map(|i| system.areas()[i] * system.rho(i, c)).sum::<Real>() / total).collect();
+        self.last_row = vec![0.0; n * k];
+        self.power_then = vec![Real::NAN; n];
+    }
+
+    /// The ambient weight `a_c`: `R̄ = 1/(1 − ρ̄)` for all bounces, `ρ̄ R̄` for the bounces after
+    /// the first. For a group step, bounces that come back through the group are the group's
+    /// own solve's business, so only the outside fraction `φ` of the area reflects:
+    /// `1/(1 − ρ̄ φ)` and `ρ̄ φ/(1 − ρ̄ φ)`; `φ = 1` for a point shot.
+    fn ambient_weight(&self, ambient: &Ambient, c: usize) -> Real {
+        let reflected = self.mean_rho[c] * ambient.outside;
+        match self.rule.ambient {
+            AmbientTerm::Off => 0.0,
+            AmbientTerm::AllBounces => 1.0 / (1.0 - reflected),
+            AmbientTerm::LaterBounces => reflected / (1.0 - reflected),
         }
     }
 
@@ -170,63 +212,148 @@ impl Overshooting {
         for c in 0..k {
             let rho = problem.system().rho(j, c);
             let unshot = state.unshot[j * k + c];
-            plus[c] = rho * (row[c] + self.ambient_weight[c] * ambient.mean[c]) + (self.rule.omega - 1.0) * unshot;
+            let weight = self.ambient_weight(ambient, c);
+            plus[c] = rho * (row[c] + weight * ambient.mean[c]) + (self.rule.omega - 1.0) * unshot;
         }
     }
 
-    /// The row term of patch `j` as estimated without its row, into `row`.
-    fn estimated_row(&self, ambient: &Ambient, k: usize, j: usize, row: &mut [Real]) {
-        let Some(term) = self.rule.row else {
-            row.fill(0.0);
-            return;
-        };
-        let then = self.power_then[j];
-        if then.is_nan() {
-            row.copy_from_slice(match term {
-                RowTerm::Signed => &ambient.mean,
-                RowTerm::Positive => &ambient.positive,
-            });
-        } else {
-            let scale = if then > 0.0 { ambient.power / then } else { 0.0 };
-            for (r, &last) in row.iter_mut().zip(&self.last_row[j * k..(j + 1) * k]) {
-                *r = last * scale;
+    /// The overshoot of patch `j` as estimated without its row, into `plus`.
+    pub fn estimate(&self, problem: &Problem<'_>, state: &State, ambient: &Ambient, j: usize, plus: &mut [Real]) {
+        let k = state.channels;
+        let mut row = vec![0.0; k];
+        if let Some(term) = self.rule.row {
+            let then = self.power_then[j];
+            if then.is_nan() {
+                row.copy_from_slice(match term {
+                    RowTerm::Signed => &ambient.mean,
+                    RowTerm::Positive => &ambient.positive,
+                });
+            } else {
+                let scale = if then > 0.0 { ambient.power / then } else { 0.0 };
+                for (r, &last) in row.iter_mut().zip(&self.last_row[j * k..(j + 1) * k]) {
+                    *r = last * scale;
+                }
             }
         }
+        self.overshoot(problem, state, ambient, j, &row, plus);
     }
 
-    /// The patch maximising `A_j Σ_c |ΔB_jc + ΔB⁺_jc|`, lowest index on ties.
-    fn select(&self, problem: &Problem<'_>, state: &State, ambient: &Ambient) -> usize {
-        let (area, k) = (problem.system().areas(), state.channels);
-        let (mut row, mut plus) = (vec![0.0; k], vec![0.0; k]);
-        let mut best = (0, Real::NEG_INFINITY);
-        for (j, (unshot, a)) in state.unshot.chunks_exact(k).zip(area).enumerate() {
-            self.estimated_row(ambient, k, j, &mut row);
-            self.overshoot(problem, state, ambient, j, &row, &mut plus);
-            let value = a * unshot.iter().zip(&plus).map(|(u, p)| (u + p).abs()).sum::<Real>();
-            if value > best.1 {
-                best = (j, value);
-            }
-        }
-        best.0
-    }
-
-    /// The exact row term of `j` from its column: `Σ_i F_ji f(ΔB_i)` with
-    /// `F_ji = F_ij A_i / A_j`.
-    fn exact_row(&self, problem: &Problem<'_>, state: &State, j: usize, row: &mut [Real]) {
+    /// The exact overshoot of patch `j` into `plus`, from its column (`column[i] = F_ij`;
+    /// the row follows by reciprocity, `F_ji = F_ij A_i / A_j`), and its row term into `row`.
+    /// The row term leaves out the patches of `group` (sorted; empty for a point shot), whose
+    /// exchanges with `j` a group step solves exactly.
+    #[allow(clippy::too_many_arguments)]
+    pub fn exact(
+        &self,
+        problem: &Problem<'_>,
+        state: &State,
+        ambient: &Ambient,
+        j: usize,
+        column: &[Real],
+        group: &[usize],
+        row: &mut [Real],
+        plus: &mut [Real],
+    ) {
         row.fill(0.0);
-        let Some(term) = self.rule.row else { return };
-        let (area, k) = (problem.system().areas(), state.channels);
-        for (i, &f) in self.column.iter().enumerate() {
-            if f == 0.0 {
-                continue;
-            }
-            let f_ji = f * area[i] / area[j];
-            for (c, r) in row.iter_mut().enumerate() {
-                let u = state.unshot[i * k + c];
-                *r += f_ji * if term == RowTerm::Positive { u.max(0.0) } else { u };
+        if let Some(term) = self.rule.row {
+            let (area, k) = (problem.system().areas(), state.channels);
+            for (i, &f) in column.iter().enumerate() {
+                if f == 0.0 || (!group.is_empty() && group.binary_search(&i).is_ok()) {
+                    continue;
+                }
+                let f_ji = f * area[i] / area[j];
+                for (c, r) in row.iter_mut().enumerate() {
+                    let u = state.unshot[i * k + c];
+                    *r += f_ji * if term == RowTerm::Positive { u.max(0.0) } else { u };
+                }
             }
         }
+        self.overshoot(problem, state, ambient, j, row, plus);
     }
+
+    /// The selection value of patch `j` shooting with overshoot `plus`:
+    /// `A_j Σ_c |ΔB_jc + ΔB⁺_jc|` (without `A_j` for Southwell).
+    pub fn value(&self, problem: &Problem<'_>, state: &State, j: usize, plus: &[Real]) -> Real {
+        let k = state.channels;
+        let weight = if self.by_area { problem.system().areas()[j] } else { 1.0 };
+        weight * state.unshot[j * k..(j + 1) * k].iter().zip(plus).map(|(u, p)| (u + p).abs()).sum::<Real>()
+    }
+
+    /// Every patch's estimated selection value.
+    pub fn values(&self, problem: &Problem<'_>, state: &State, ambient: &Ambient) -> Vec<Real> {
+        let mut plus = vec![0.0; state.channels];
+        (0..problem.n())
+            .map(|j| {
+                self.estimate(problem, state, ambient, j, &mut plus);
+                self.value(problem, state, j, &plus)
+            })
+            .collect()
+    }
+
+    /// Records that `j` shot with row term `row`, leaving unshot power `power`.
+    pub fn record(&mut self, j: usize, row: &[Real], power: Real) {
+        let k = row.len();
+        self.last_row[j * k..(j + 1) * k].copy_from_slice(row);
+        self.power_then[j] = power;
+    }
+}
+
+/// The index of the largest value, lowest index on ties.
+pub fn argmax(values: &[Real]) -> usize {
+    let mut best = (0, Real::NEG_INFINITY);
+    for (j, &v) in values.iter().enumerate() {
+        if v > best.1 {
+            best = (j, v);
+        }
+    }
+    best.0
+}
+
+/// The `m` largest positive values among `candidates`, largest first (lower index first on
+/// ties): fewer when fewer are positive.
+pub fn top(values: &[Real], candidates: impl Iterator<Item = usize>, m: usize) -> Vec<usize> {
+    let mut chosen: Vec<usize> = candidates.filter(|&j| values[j] > 0.0).collect();
+    chosen.sort_by(|&a, &b| values[b].total_cmp(&values[a]).then(a.cmp(&b)));
+    chosen.truncate(m);
+    chosen
+}
+
+/// Point shooting with an overshoot: the solver behind `feda`, `shao`, `xu` and `relax-ω`.
+#[derive(Debug)]
+pub struct Overshooting {
+    name: String,
+    tracker: OvershootTracker,
+    column: Vec<Real>,
+}
+
+impl Overshooting {
+    /// An overshooting solver named `name` (as on the command line) using `rule`.
+    pub fn new(name: impl Into<String>, rule: Overshoot) -> Result<Overshooting, SolverError> {
+        Ok(Overshooting { name: name.into(), tracker: OvershootTracker::new(rule, true)?, column: Vec::new() })
+    }
+}
+
+/// One point shot from `j` with its exact overshoot, through `column` (already fetched):
+/// shoots `ΔB_j + ΔB⁺_j`, leaves `−ΔB⁺_j`, and records the shot in `tracker`.
+pub fn shoot_with_overshoot(
+    problem: &Problem<'_>,
+    state: &mut State,
+    tracker: &mut OvershootTracker,
+    ambient: &Ambient,
+    j: usize,
+    column: &[Real],
+) -> Result<(), SolverError> {
+    let k = state.channels;
+    let (mut row, mut plus) = (vec![0.0; k], vec![0.0; k]);
+    tracker.exact(problem, state, ambient, j, column, &[], &mut row, &mut plus);
+    let unshot = &state.unshot[j * k..(j + 1) * k];
+    let amount: Vec<Real> = unshot.iter().zip(&plus).map(|(u, p)| u + p).collect();
+    shoot_column(problem, state, &amount, column)?;
+    for (u, p) in state.unshot[j * k..(j + 1) * k].iter_mut().zip(&plus) {
+        *u = -p;
+    }
+    tracker.record(j, &row, Ambient::measure(problem, state).power);
+    Ok(())
 }
 
 impl Solver for Overshooting {
@@ -235,42 +362,16 @@ impl Solver for Overshooting {
     }
 
     fn init(&mut self, problem: &Problem<'_>, _state: &mut State) -> Result<(), SolverError> {
-        let (system, k, n) = (problem.system(), problem.channels(), problem.n());
-        let total: Real = system.areas().iter().sum();
-        self.ambient_weight = (0..k)
-            .map(|c| {
-                let mean_rho = (0..n).map(|i| system.areas()[i] * system.rho(i, c)).sum::<Real>() / total;
-                let all = 1.0 / (1.0 - mean_rho);
-                match self.rule.ambient {
-                    AmbientTerm::Off => 0.0,
-                    AmbientTerm::AllBounces => all,
-                    AmbientTerm::LaterBounces => mean_rho * all,
-                }
-            })
-            .collect();
-        self.last_row = vec![0.0; n * k];
-        self.power_then = vec![Real::NAN; n];
-        self.column = vec![0.0; n];
+        self.tracker.init(problem);
+        self.column = vec![0.0; problem.n()];
         Ok(())
     }
 
     fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
-        let k = state.channels;
         let ambient = Ambient::measure(problem, state);
-        let j = self.select(problem, state, &ambient);
+        let j = argmax(&self.tracker.values(problem, state, &ambient));
         problem.column(j, &mut self.column);
-        let (mut row, mut plus) = (vec![0.0; k], vec![0.0; k]);
-        self.exact_row(problem, state, j, &mut row);
-        self.overshoot(problem, state, &ambient, j, &row, &mut plus);
-        let unshot = &state.unshot[j * k..(j + 1) * k];
-        let amount: Vec<Real> = unshot.iter().zip(&plus).map(|(u, p)| u + p).collect();
-        shoot_column(problem, state, &amount, &self.column)?;
-        for (u, p) in state.unshot[j * k..(j + 1) * k].iter_mut().zip(&plus) {
-            *u = -p;
-        }
-        self.last_row[j * k..(j + 1) * k].copy_from_slice(&row);
-        self.power_then[j] = Ambient::measure(problem, state).power;
-        Ok(())
+        shoot_with_overshoot(problem, state, &mut self.tracker, &ambient, j, &self.column)
     }
 
     fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real> {

@@ -10,11 +10,10 @@
 //! - Gortler, Cohen & Slusallek 1993, "Radiosity and relaxation methods: progressive
 //!   refinement is Southwell relaxation", Princeton CS-TR-408-93.
 
-use crate::error::SolverError;
-use crate::overshooting::{AmbientTerm, Overshoot, Overshooting};
+use crate::overshooting::{AmbientTerm, Overshoot};
 use radiosity_core::Real;
 
-/// The `relax-ω` solver; `omega` must lie in `(0, 2)`.
-pub fn relax(omega: Real) -> Result<Overshooting, SolverError> {
-    Overshooting::new(format!("relax-{omega}"), Overshoot { row: None, ambient: AmbientTerm::Off, omega })
+/// The over-relaxation overshoot; `omega` must lie in `(0, 2)`, which the solvers check.
+pub fn rule(omega: Real) -> Overshoot {
+    Overshoot { row: None, ambient: AmbientTerm::Off, omega }
 }

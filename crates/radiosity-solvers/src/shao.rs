@@ -11,10 +11,7 @@
 //! - Shao & Badler 1993, "Analysis and acceleration of progressive refinement radiosity
 //!   method", Fourth Eurographics Workshop on Rendering, 247–258.
 
-use crate::overshooting::{AmbientTerm, Overshoot, Overshooting, RowTerm};
+use crate::overshooting::{AmbientTerm, Overshoot, RowTerm};
 
-/// The `shao` solver.
-pub fn shao() -> Overshooting {
-    let rule = Overshoot { row: Some(RowTerm::Positive), ambient: AmbientTerm::Off, omega: 1.0 };
-    Overshooting::without_relaxation("shao", rule)
-}
+/// Shao's overshoot.
+pub const RULE: Overshoot = Overshoot { row: Some(RowTerm::Positive), ambient: AmbientTerm::Off, omega: 1.0 };

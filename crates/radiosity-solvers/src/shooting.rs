@@ -36,18 +36,21 @@ pub fn shoot_column(
         if f == 0.0 {
             continue;
         }
-        for c in 0..k {
-            let delta = rho[i * k + c] * f * amount[c];
-            state.radiosity[i * k + c] += delta;
-            state.unshot[i * k + c] += delta;
-            if !state.radiosity[i * k + c].is_finite() {
-                return Err(SolverError::NonFinite {
-                    step: state.step + 1,
-                    patch: i,
-                    value: state.radiosity[i * k + c],
-                });
-            }
+        for (c, &a) in amount.iter().enumerate() {
+            receive(state, i * k + c, rho[i * k + c] * f * a)?;
         }
+    }
+    Ok(())
+}
+
+/// Adds `delta` to the radiosity and the unshot radiosity at `idx` (`i * channels + c`),
+/// stopping the run if the radiosity stops being finite.
+pub fn receive(state: &mut State, idx: usize, delta: Real) -> Result<(), SolverError> {
+    state.radiosity[idx] += delta;
+    state.unshot[idx] += delta;
+    if !state.radiosity[idx].is_finite() {
+        let k = state.channels;
+        return Err(SolverError::NonFinite { step: state.step + 1, patch: idx / k, value: state.radiosity[idx] });
     }
     Ok(())
 }

@@ -26,6 +26,8 @@ pub struct State {
     pub ff_seconds: f64,
     /// Seconds spent in the solver outside column computations.
     pub solve_seconds: f64,
+    /// Of `solve_seconds`, the seconds spent building and solving group systems.
+    pub group_seconds: f64,
 }
 
 impl State {
@@ -40,6 +42,7 @@ impl State {
             columns_reused: 0,
             ff_seconds: 0.0,
             solve_seconds: 0.0,
+            group_seconds: 0.0,
         }
     }
 

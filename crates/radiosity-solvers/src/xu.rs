@@ -21,7 +21,7 @@
 //! - Xu & Fussell 1994, "A fast solver of radiosity equation systems", Pacific Graphics.
 //! - Rousselle & Renaud, "Group accelerated shooting methods for radiosity", §2.
 
-use crate::overshooting::{AmbientTerm, Overshoot, Overshooting, RowTerm};
+use crate::overshooting::{AmbientTerm, Overshoot, RowTerm};
 
 /// Which parts of Xu's overshoot to use.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -47,12 +47,11 @@ impl XuParts {
     }
 }
 
-/// The `xu` solver with the parts chosen (`XuParts::BOTH` for `xu`).
-pub fn xu(parts: XuParts) -> Overshooting {
-    let rule = Overshoot {
+/// Xu's overshoot with the parts chosen (`XuParts::BOTH` for `xu`).
+pub fn rule(parts: XuParts) -> Overshoot {
+    Overshoot {
         row: parts.direct.then_some(RowTerm::Signed),
         ambient: if parts.ambient { AmbientTerm::LaterBounces } else { AmbientTerm::Off },
         omega: 1.0,
-    };
-    Overshooting::without_relaxation(parts.name(), rule)
+    }
 }

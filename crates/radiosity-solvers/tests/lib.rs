@@ -31,9 +31,16 @@ fn cube() -> DenseColumns {
     })
 }
 
-/// Every point solver, and under-relaxed SOR and relaxation.
-fn solvers() -> impl Iterator<Item = &'static str> {
-    POINT_SOLVERS.into_iter().chain(["sor-0.8", "relax-0.8"])
+/// Every point solver, the group solvers with groups of 3, under-relaxed SOR and relaxation,
+/// and group acceleration at every step.
+fn solvers() -> Vec<String> {
+    let groups = GROUP_SOLVERS.iter().map(|s| s.replace("g30", "g3"));
+    POINT_SOLVERS
+        .iter()
+        .map(|s| s.to_string())
+        .chain(groups)
+        .chain(["sor-0.8", "relax-0.8", "pr-g2:f=1"].map(String::from))
+        .collect()
 }
 
 /// Runs `name` under `rules`, with a step cap of 2000n: these systems are tiny, and the
@@ -64,7 +71,7 @@ fn furnace_identity_per_channel() {
     let e = [1.0, 2.0, 3.0];
     let system = LinearSystem::new(Channels::Rgb, vec![1.0; 6], rho.repeat(6), e.repeat(6)).unwrap();
     let f = cube();
-    for name in solvers() {
+    for name in solvers().iter().map(String::as_str) {
         let run = solve(name, &system, &f, "residual=1e-13");
         assert!(
             matches!(run.termination, TerminationReason::Residual(_) | TerminationReason::RoundOff),
@@ -90,7 +97,7 @@ fn two_patches_match_their_closed_form() {
     let f = DenseColumns::from_rows(2, &[0.0, a, b, 0.0]).unwrap();
     let d = 1.0 - r1 * r2 * a * b;
     let exact = [(e1 + r1 * a * e2) / d, (e2 + r2 * b * e1) / d];
-    for name in solvers() {
+    for name in solvers().iter().map(String::as_str) {
         let run = solve(name, &system, &f, "residual=1e-14");
         for (i, exact) in exact.iter().enumerate() {
             assert!((run.state.radiosity[i] / exact - 1.0).abs() < 1e-12, "{name}: patch {i}");
@@ -106,7 +113,7 @@ fn the_unit_cube_with_an_emitting_top() {
         e[1] = 1.0;
         let system = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![rho; 6], e).unwrap();
         let f = cube();
-        for name in solvers() {
+        for name in solvers().iter().map(String::as_str) {
             let b = solve(name, &system, &f, "residual=1e-14").state.radiosity;
             for (i, expected) in [(1, top), (0, bottom), (2, side), (5, side)] {
                 assert!((b[i] - expected).abs() < 5e-7, "{name}, ρ = {rho}: patch {i} is {} not {expected}", b[i]);
@@ -120,7 +127,7 @@ fn accounting_counts_one_column_a_step() {
     let system =
         LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![1.0, 0.0, 0.0, 0.0, 0.0, 0.0]).unwrap();
     let f = cube();
-    for name in solvers() {
+    for name in POINT_SOLVERS.into_iter().chain(["sor-0.8", "relax-0.8"]) {
         let run = solve(name, &system, &f, "steps=2n");
         assert_eq!(run.termination, TerminationReason::Steps(12), "{name}");
         assert_eq!(run.state.columns, 12, "{name}");
@@ -151,7 +158,7 @@ fn column_time_is_form_factor_time() {
     let system = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![1.0; 6]).unwrap();
     let f = cube();
     let slow = Sleepy(&f);
-    for name in solvers() {
+    for name in solvers().iter().map(String::as_str) {
         let mut solver = solver_by_name(name).unwrap();
         let problem = Problem::new(&system, &slow).unwrap();
         let run = Executor::new(solver.as_mut(), StopRules::parse("steps=12").unwrap())
@@ -245,8 +252,27 @@ fn stop_rules_parse_and_refuse_clearly() {
 
 #[test]
 fn errors_are_reported_not_panicked() {
-    let names = solver_by_name("xu-g30").err().unwrap().to_string();
-    assert!(names.contains("unknown solver 'xu-g30'") && names.contains("pr"), "{names}");
+    let names = solver_by_name("xu-q30").err().unwrap().to_string();
+    assert!(names.contains("unknown solver 'xu-q30'") && names.contains("pr-g30"), "{names}");
+    for (bad, words) in [
+        ("xu-g30-m10", "must hold at least a group"),
+        ("pr-g0", "at least one patch"),
+        ("group-pr-g0", "at least one patch"),
+        ("pr-g30:f=0", "f ≥ 1"),
+        ("pr-g30:f=often", "f ≥ 1"),
+        ("pr-g30:target=-1", "positive number"),
+        ("pr-g30:speed=2", "not a parameter"),
+        ("southwell-g30", "not to southwell"),
+        ("group-relax-2.5-g30", "0 < ω < 2"),
+        ("group-magic-g30", "unknown solver"),
+        ("pr:f=10", "takes no parameters"),
+    ] {
+        let e = solver_by_name(bad).err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(e.contains(words), "{bad}: {e}");
+    }
+    for good in ["pr-g30", "xu-g30-m480:f=10", "pr-g30:f=auto:target=0.1", "group-southwell-g5", "relax-1.2-g8-m16"] {
+        assert_eq!(solver_by_name(good).unwrap().name(), good);
+    }
     assert!(solver_by_name("sor-2.5").err().unwrap().to_string().contains("0 < ω < 2"));
     let system = LinearSystem::new(Channels::Grey, vec![1.0; 2], vec![0.5; 2], vec![1.0; 2]).unwrap();
     let f = cube();
@@ -254,12 +280,15 @@ fn errors_are_reported_not_panicked() {
     // A form factor that is not finite stops the run at the first step that uses it (within
     // the first sweep or the first two shots), naming a patch.
     let broken = DenseColumns::from_rows(2, &[0.0, 0.5, f64::INFINITY, 0.0]).unwrap();
-    for name in solvers() {
+    for name in solvers().iter().map(String::as_str) {
         let mut solver = solver_by_name(name).unwrap();
         let problem = Problem::new(&system, &broken).unwrap();
         let err = Executor::new(solver.as_mut(), StopRules::default()).run(&problem, &mut NoObserver).unwrap_err();
-        assert!(matches!(err, SolverError::NonFinite { step: 1 | 2, .. }), "{name}: {err:?}");
-        assert!(err.to_string().contains(": the radiosity of patch"), "{err}");
+        assert!(
+            matches!(err, SolverError::NonFinite { step: 1 | 2, .. } | SolverError::SingularGroup { step: 1 | 2, .. }),
+            "{name}: {err:?}"
+        );
+        assert!(err.to_string().starts_with("step "), "{err}");
     }
 }
 
@@ -288,4 +317,107 @@ fn a_column_served_from_memory_costs_no_column_and_is_counted_apart() {
     assert_eq!(none.column(&problem, 3, &mut scratch), f.column(3));
     assert_eq!((problem.columns_fetched(), problem.columns_reused()), (6, 1));
     assert!(none.is_empty());
+}
+
+/// A 12-patch enclosure-like system with exact reciprocity and unequal areas: `F_ij = G_ij /
+/// A_i` for a symmetric `G` scaled so rows sum to at most 0.95, RGB, three emitters.
+fn twelve() -> (LinearSystem, DenseColumns) {
+    let n = 12;
+    let area: Vec<Real> = (0..n).map(|i| 1.0 + (i % 5) as Real * 0.3).collect();
+    let g = |i: usize, j: usize| if i == j { 0.0 } else { 1.0 + ((i * 7 + j * 7 + i * j) % 11) as Real };
+    let max_row = (0..n).map(|i| (0..n).map(|j| g(i, j)).sum::<Real>() / area[i]).fold(0.0, Real::max);
+    let f = DenseColumns::from_fn(n, |i, j| 0.95 * g(i, j) / area[i] / max_row);
+    let rho: Vec<Real> = (0..3 * n).map(|idx| 0.3 + 0.6 * ((idx * 5) % 7) as Real / 7.0).collect();
+    let e: Vec<Real> = (0..3 * n).map(|idx| if (idx / 3) % 4 == 1 { 1.0 + (idx % 3) as Real } else { 0.0 }).collect();
+    (LinearSystem::new(Channels::Rgb, area, rho, e).unwrap(), f)
+}
+
+/// `E + ρ F x − x` for the shot radiosity `x = B − ΔB`.
+fn residual_of_shot(system: &LinearSystem, f: &DenseColumns, state: &State) -> Vec<Real> {
+    let (n, k) = (system.len(), 3);
+    let x: Vec<Real> = state.radiosity.iter().zip(&state.unshot).map(|(b, u)| b - u).collect();
+    (0..n * k)
+        .map(|idx| {
+            let (i, c) = (idx / k, idx % k);
+            let fx: Real = (0..n).map(|j| f.get(i, j) * x[j * k + c]).sum();
+            system.e(i, c) + system.rho(i, c) * fx - x[idx]
+        })
+        .collect()
+}
+
+const SHOOTING: [&str; 10] = [
+    "southwell",
+    "pr",
+    "xu",
+    "shao",
+    "relax-1.5",
+    "group-pr-g4",
+    "group-xu-g4",
+    "group-southwell-g3",
+    "pr-g4:f=2",
+    "xu-g3-m8:f=1",
+];
+
+#[test]
+fn shooting_keeps_the_unshot_radiosity_equal_to_the_residual_of_the_shot_one() {
+    // Whatever the overshoot and the group, ΔB stays exactly the residual of x = B − ΔB.
+    let (system, f) = twelve();
+    for name in SHOOTING {
+        for steps in [1, 5, 17] {
+            let run = solve(name, &system, &f, &format!("steps={steps}"));
+            let r = residual_of_shot(&system, &f, &run.state);
+            for (idx, (r, u)) in r.iter().zip(&run.state.unshot).enumerate() {
+                assert!((r - u).abs() < 1e-13, "{name} after {steps} steps, entry {idx}: residual {r}, unshot {u}");
+            }
+        }
+    }
+}
+
+#[test]
+fn a_group_step_leaves_zero_unshot_in_the_group_or_minus_the_overshoot() {
+    let (system, f) = twelve();
+    let k = 3;
+    // Group PR: the group holds exactly zero unshot after its step. The first group is the 3
+    // emitters (no other patch has unshot radiosity); the second, 4 patches, which leaves
+    // exactly 4 zeros (the emitters received light again).
+    let zeros = |state: &State| (0..12).filter(|&i| (0..k).all(|c| state.unshot[i * k + c] == 0.0)).count();
+    let run = solve("group-pr-g4", &system, &f, "steps=1");
+    assert_eq!((zeros(&run.state), run.state.columns), (3, 3), "{:?}", run.state.unshot);
+    let run = solve("group-pr-g4", &system, &f, "steps=2");
+    assert_eq!(zeros(&run.state), 4, "{:?}", run.state.unshot);
+    // Group relaxation: the group holds exactly −ΔB⁺ = −(ω − 1) ΔB. The first group is the
+    // 3 emitters.
+    let run = solve("group-relax-1.5-g4", &system, &f, "steps=1");
+    for i in 0..12 {
+        for c in 0..k {
+            let expected = if system.e(i, c) > 0.0 { -0.5 * system.e(i, c) } else { 0.0 };
+            let got = run.state.unshot[i * k + c];
+            assert!(system.e(i, c) == 0.0 || got == expected, "patch {i}: {got} against {expected}");
+        }
+    }
+    // Group Feda: the overshoot anticipates light from outside the group only; with every
+    // emitter in the group nothing is outside, so the group holds exactly zero.
+    let run = solve("group-feda-g4", &system, &f, "steps=1");
+    assert_eq!(zeros(&run.state), 4, "{:?}", run.state.unshot);
+}
+
+#[test]
+fn group_acceleration_stores_columns_and_reuses_them() {
+    let (system, f) = twelve();
+    // Emitters that reflect nothing shoot once, and their columns are not kept; the other 9
+    // columns are computed once and then served from a memory that holds them all.
+    let rho: Vec<Real> = (0..36)
+        .map(|idx| if system.emissions()[idx - idx % 3] > 0.0 { 0.0 } else { system.reflectivities()[idx] })
+        .collect();
+    let dark_emitters =
+        LinearSystem::new(Channels::Rgb, system.areas().to_vec(), rho, system.emissions().to_vec()).unwrap();
+    let run = solve("pr-g4-m12:f=3", &dark_emitters, &f, "steps=200");
+    assert_eq!(run.state.columns, 12);
+    assert!(run.state.columns_reused > 0);
+    assert_eq!(run.state.columns + run.state.columns_reused, run.state.step);
+    assert!(run.state.group_seconds > 0.0 && run.state.group_seconds <= run.state.solve_seconds);
+    // Group shooting with the group's columns kept: a member chosen again costs nothing. The
+    // first group is the 3 emitters, every later one has 4 patches.
+    let run = solve("group-pr-g4", &system, &f, "steps=30");
+    assert_eq!(run.state.columns + run.state.columns_reused, 4 * run.state.step - 1);
 }

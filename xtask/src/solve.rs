@@ -45,11 +45,22 @@ pub struct Args {
     out: Option<PathBuf>,
 }
 
-/// Computes `e_rms` against the reference between steps, when a rule needs it.
+/// Computes `e_rms` against the reference between steps, when a rule needs it, and records
+/// when it first fell to each power of ten.
 struct RmsObserver<'a> {
     system: &'a LinearSystem,
     reference: &'a ReferenceSolution,
     needed: bool,
+    reached: Vec<ReachedJson>,
+}
+
+/// Where a run stood when its `e_rms` first fell to `e_rms`.
+#[derive(Serialize)]
+struct ReachedJson {
+    e_rms: Real,
+    steps: u64,
+    columns: u64,
+    seconds: Real,
 }
 
 impl Observer for RmsObserver<'_> {
@@ -57,7 +68,15 @@ impl Observer for RmsObserver<'_> {
         if !self.needed {
             return None;
         }
-        errors(self.system, self.reference, &state.radiosity).ok().map(|e| e.e_rms)
+        let e_rms = errors(self.system, self.reference, &state.radiosity).ok()?.e_rms;
+        // Powers of ten from 1e-1 down to 1e-15, each recorded once, in order.
+        let power = |k: usize| 10f64.powi(-(k as i32) - 1);
+        while self.reached.len() < 15 && e_rms <= power(self.reached.len()) {
+            let seconds = state.ff_seconds + state.solve_seconds;
+            let e_rms = power(self.reached.len());
+            self.reached.push(ReachedJson { e_rms, steps: state.step, columns: state.columns, seconds });
+        }
+        Some(e_rms)
     }
 }
 
@@ -84,6 +103,8 @@ struct StatsJson {
     e_max: Real,
     residual: Real,
     termination: String,
+    /// With an `rms=` rule: the first step at which `e_rms` fell to each power of ten.
+    reached: Vec<ReachedJson>,
     reference: String,
     certificate: String,
 }
@@ -127,8 +148,10 @@ pub fn run(args: &Args) -> Result<()> {
             spec.canonical()
         );
     }
-    let problem = Problem::new(&system, &backend)?;
-    let mut observer = RmsObserver { system: &system, reference: &reference, needed: rules.needs_error() };
+    let order = radiosity_geom::spatial_order::spatial_order(scene);
+    let problem = Problem::new(&system, &backend)?.with_patch_order(&order)?;
+    let mut observer =
+        RmsObserver { system: &system, reference: &reference, needed: rules.needs_error(), reached: Vec::new() };
     let run = Executor::new(solver.as_mut(), rules).run(&problem, &mut observer)?;
     let metrics = Evaluator::new(&system, &matrix, &reference)?.evaluate(&run.state.radiosity)?;
     let stats = StatsJson {
@@ -142,6 +165,7 @@ pub fn run(args: &Args) -> Result<()> {
         e_max: metrics.e_max,
         residual: metrics.residual,
         termination: run.termination.to_string(),
+        reached: std::mem::take(&mut observer.reached),
         reference: reference.method().to_string(),
         certificate: reference.certificate().to_string(),
     };
@@ -168,6 +192,12 @@ pub fn run(args: &Args) -> Result<()> {
             "error        e_rms {:.4e}, e_max {:.4e}, residual power {:.4e}",
             stats.e_rms, stats.e_max, stats.residual
         );
+        for r in &stats.reached {
+            println!(
+                "reached      e_rms {:.0e} after {} steps, {} columns, {:.3} s",
+                r.e_rms, r.steps, r.columns, r.seconds
+            );
+        }
         println!("reference    {}; {}", stats.reference, stats.certificate);
         return Ok(());
     }

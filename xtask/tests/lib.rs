@@ -307,6 +307,11 @@ fn solve_stops_at_every_kind_of_rule() {
     let s = stats("rms=1e-2");
     assert!(s["termination"].as_str().unwrap().starts_with("e_rms reached"), "{s}");
     assert!(s["e_rms"].as_f64().unwrap() <= 1e-2, "{s}");
+    // Where e_rms first fell to 1e-1 and 1e-2: the second is where the run stopped.
+    let reached = s["reached"].as_array().unwrap();
+    assert_eq!(reached.iter().map(|r| r["e_rms"].as_f64().unwrap()).collect::<Vec<_>>(), [1e-1, 1e-2], "{s}");
+    assert!(reached[0]["columns"].as_u64() <= reached[1]["columns"].as_u64(), "{s}");
+    assert_eq!(reached[1]["columns"], s["columns"]);
     let s = stats("residual=1e-2");
     assert!(s["termination"].as_str().unwrap().starts_with("residual power reached"), "{s}");
     // 480 columns take about 0.3 s: 20 ms stops the run early, after at least 20 ms.

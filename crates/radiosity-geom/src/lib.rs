@@ -23,6 +23,7 @@ pub mod error;
 pub mod gltf_input;
 pub mod mesh;
 pub mod scenes;
+pub mod spatial_order;
 pub mod spec;
 pub mod visibility;
 
@@ -30,6 +31,7 @@ pub use analysis::{Closure, Decision, SceneAnalysis};
 pub use error::GeomError;
 pub use mesh::SceneBuilder;
 pub use scenes::{BuiltinScene, builtin_scenes};
+pub use spatial_order::spatial_order;
 pub use spec::{KeyValueParams, ParamDoc};
 pub use visibility::{RayHit, Visibility};
 

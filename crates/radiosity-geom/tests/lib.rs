@@ -6,4 +6,5 @@ mod builtin_large;
 mod gltf_input;
 mod mesh;
 mod scenes;
+mod spatial_order;
 mod visibility;

@@ -28,6 +28,18 @@
 //!   are known) costs `O(n K)` a step and, measured on multi-cubes with `xu-g30-m480`,
 //!   changed no choice in `n` steps. Group selection is over stored patches only, and exact.
 //!
+//! ## Beyond the paper
+//!
+//! The paper names three directions as future work (§4.2, §5); each is a parameter here, to be
+//! compared against its rule:
+//!
+//! - `:groups=interaction` ([`GroupBuilding::Interaction`]): groups grown for the energy their
+//!   members exchange, from the stored form factors, instead of the top `m` by unshot energy;
+//! - `:inner=gs` ([`InnerSolve::GaussSeidel`]): large groups solved by Gauss–Seidel instead
+//!   of LU;
+//! - `:adaptive=τ`: the group takes every stored patch whose selection value is at least `τ`
+//!   times the largest, between 4 and `m` patches.
+//!
 //! ## References
 //!
 //! - Rousselle & Renaud, "Group accelerated shooting methods for radiosity", §4.
@@ -35,12 +47,14 @@
 use crate::error::SolverError;
 use crate::executor::Solver;
 use crate::group_shooting::shoot_group;
+use crate::group_step::InnerSolve;
 use crate::memory::ColumnMemory;
 use crate::overshooting::{Ambient, Overshoot, OvershootTracker, argmax, shoot_with_overshoot, top};
 use crate::problem::Problem;
 use crate::shooting::unshot_power;
 use crate::state::State;
 use radiosity_core::Real;
+use std::time::Instant;
 
 /// How often group steps run.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -54,16 +68,53 @@ pub enum Frequency {
     },
 }
 
+/// How the group is chosen among the stored patches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum GroupBuilding {
+    /// The paper's rule: the `m` stored patches with the largest `A |ΔB + ΔB⁺|`.
+    #[default]
+    Unshot,
+    /// Beyond the paper: seeded with the stored patch of largest `A |ΔB + ΔB⁺|`, then grown by
+    /// the stored patch that exchanges the most unshot energy with the group so far (from the
+    /// stored form factors; see [`GroupAccelerated`]).
+    Interaction,
+}
+
 /// Parameters of a group-accelerated method.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GroupAcceleratedParams {
-    /// Group size `m`.
+    /// Group size `m` (the largest size when `adaptive` is set).
     pub group: usize,
     /// Columns kept in memory, `K ≥ m`.
     pub memory: usize,
     /// How often group steps run.
     pub frequency: Frequency,
+    /// How the group is chosen.
+    pub building: GroupBuilding,
+    /// Beyond the paper: adaptive `m`, taking every stored patch whose selection value is at
+    /// least this fraction of the largest (at most `group`, at least [`MIN_ADAPTIVE_GROUP`]).
+    pub adaptive: Option<Real>,
+    /// How group systems are solved.
+    pub inner: InnerSolve,
 }
+
+impl GroupAcceleratedParams {
+    /// The paper's method: groups of `group` from a memory of `memory` columns, by unshot
+    /// energy, solved by LU.
+    pub fn paper(group: usize, memory: usize, frequency: Frequency) -> GroupAcceleratedParams {
+        GroupAcceleratedParams {
+            group,
+            memory,
+            frequency,
+            building: GroupBuilding::Unshot,
+            adaptive: None,
+            inner: InnerSolve::Lu,
+        }
+    }
+}
+
+/// The smallest group an adaptive size gives.
+pub const MIN_ADAPTIVE_GROUP: usize = 4;
 
 /// Group-accelerated shooting.
 #[derive(Debug)]
@@ -145,12 +196,17 @@ impl GroupAccelerated {
     }
 
     fn group_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
+        // Everything here is the group step's cost: choosing the group (exact overshoots of
+        // every stored patch, `O(n K)`) as well as solving it.
+        let start = Instant::now();
         let ambient = Ambient::measure(problem, state);
         let mut values = vec![0.0; problem.n()];
         self.exact_values(problem, state, &ambient, &mut values);
-        let group = top(&values, self.memory.patches().iter().copied(), self.params.group);
-        let seconds =
-            if group.is_empty() { 0.0 } else { shoot_group(problem, state, &mut self.tracker, &self.memory, &group)? };
+        let group = self.choose_group(problem, &values);
+        if !group.is_empty() {
+            shoot_group(problem, state, &mut self.tracker, &self.memory, &group, self.params.inner)?;
+        }
+        let seconds = start.elapsed().as_secs_f64();
         state.group_seconds += seconds;
         self.groups += 1;
         self.since_group = 0;
@@ -166,6 +222,57 @@ impl GroupAccelerated {
             };
         }
         Ok(())
+    }
+
+    /// The group among the stored patches, given every stored patch's selection value.
+    fn choose_group(&self, problem: &Problem<'_>, values: &[Real]) -> Vec<usize> {
+        let stored = self.memory.patches();
+        let size = match self.params.adaptive {
+            None => self.params.group,
+            Some(fraction) => {
+                let best = stored.iter().map(|&j| values[j]).fold(0.0, Real::max);
+                let above = stored.iter().filter(|&&j| values[j] >= fraction * best && values[j] > 0.0).count();
+                above.clamp(MIN_ADAPTIVE_GROUP.min(self.params.group), self.params.group)
+            }
+        };
+        match self.params.building {
+            GroupBuilding::Unshot => top(values, stored.iter().copied(), size),
+            GroupBuilding::Interaction => self.interaction_group(problem, values, size),
+        }
+    }
+
+    /// Greedy interaction group: start from the stored patch of largest value `v`, then add the
+    /// stored patch `k` maximising `Σ_{g ∈ G} (v_g ρ̄_k F_gk + v_k ρ̄_g F_kg)`, the unshot power
+    /// the group and `k` would send each other and reflect (`ρ̄` the mean over channels; the
+    /// form factors from the stored columns). `O(m K)` for the scores.
+    fn interaction_group(&self, problem: &Problem<'_>, values: &[Real], size: usize) -> Vec<usize> {
+        let stored = self.memory.patches();
+        let system = problem.system();
+        let k = problem.channels();
+        let rho = |j: usize| (0..k).map(|c| system.rho(j, c)).sum::<Real>() / k as Real;
+        let Some(&seed) = top(values, stored.iter().copied(), 1).first() else { return Vec::new() };
+        let mut group = vec![seed];
+        let mut score = vec![0.0; stored.len()];
+        let mut taken: Vec<bool> = stored.iter().map(|&j| j == seed).collect();
+        let mut last = seed;
+        while group.len() < size {
+            // Add the exchanges with the last member to every candidate's score.
+            let last_column = self.memory.peek(last).expect("stored");
+            for (slot, &j) in stored.iter().enumerate() {
+                if !taken[slot] {
+                    let column = self.memory.peek(j).expect("stored");
+                    // F_{last, j} = column_j[last]; F_{j, last} = column_last[j].
+                    score[slot] += values[last] * rho(j) * column[last] + values[j] * rho(last) * last_column[j];
+                }
+            }
+            let best =
+                (0..stored.len()).filter(|&s| !taken[s]).max_by(|&a, &b| score[a].total_cmp(&score[b]).then(b.cmp(&a)));
+            let Some(best) = best.filter(|&s| score[s] > 0.0) else { break };
+            taken[best] = true;
+            last = stored[best];
+            group.push(last);
+        }
+        group
     }
 
     fn point_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {

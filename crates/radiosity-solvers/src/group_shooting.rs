@@ -17,7 +17,7 @@
 
 use crate::error::SolverError;
 use crate::executor::Solver;
-use crate::group_step::group_shot;
+use crate::group_step::{InnerSolve, group_shot};
 use crate::memory::ColumnMemory;
 use crate::overshooting::{Ambient, Overshoot, OvershootTracker, top};
 use crate::problem::Problem;
@@ -73,6 +73,7 @@ pub(crate) fn shoot_group(
     tracker: &mut OvershootTracker,
     memory: &ColumnMemory,
     group: &[usize],
+    inner: InnerSolve,
 ) -> Result<f64, SolverError> {
     let start = Instant::now();
     let k = state.channels;
@@ -85,7 +86,7 @@ pub(crate) fn shoot_group(
         let (row, p) = (&mut rows[a * k..(a + 1) * k], &mut plus[a * k..(a + 1) * k]);
         tracker.exact(problem, state, &ambient, g, columns[a], &sorted, row, p);
     }
-    group_shot(problem, state, group, &columns, &plus)?;
+    group_shot(problem, state, group, &columns, &plus, inner)?;
     let power = Ambient::measure(problem, state).power();
     for (a, &g) in group.iter().enumerate() {
         tracker.record(g, &rows[a * k..(a + 1) * k], power);
@@ -115,7 +116,7 @@ impl Solver for GroupShooting {
         for &g in &group {
             self.memory.column(problem, g, &mut scratch);
         }
-        state.group_seconds += shoot_group(problem, state, &mut self.tracker, &self.memory, &group)?;
+        state.group_seconds += shoot_group(problem, state, &mut self.tracker, &self.memory, &group, InnerSolve::Lu)?;
         Ok(())
     }
 

@@ -33,6 +33,7 @@ pub mod feda;
 pub mod gathering;
 pub mod gauss_seidel;
 pub mod group_accelerated;
+pub mod group_gathering;
 pub mod group_shooting;
 pub mod group_step;
 pub mod jacobi;
@@ -50,8 +51,10 @@ pub mod xu;
 
 pub use error::SolverError;
 pub use executor::{Executor, NoObserver, Observer, Run, Solver};
-pub use group_accelerated::{Frequency, GroupAccelerated, GroupAcceleratedParams};
+pub use group_accelerated::{Frequency, GroupAccelerated, GroupAcceleratedParams, GroupBuilding};
+pub use group_gathering::GroupGathering;
 pub use group_shooting::GroupShooting;
+pub use group_step::InnerSolve;
 pub use memory::ColumnMemory;
 pub use overshooting::Overshoot;
 pub use problem::Problem;
@@ -76,7 +79,7 @@ pub const POINT_SOLVERS: [&str; 11] = [
 
 /// The group solvers, by canonical name (the paper's, with fixed frequencies so that runs are
 /// deterministic): run by the scene-level tests.
-pub const GROUP_SOLVERS: [&str; 8] = [
+pub const GROUP_SOLVERS: [&str; 10] = [
     "group-southwell-g30",
     "group-pr-g30",
     "group-feda-g30",
@@ -85,12 +88,22 @@ pub const GROUP_SOLVERS: [&str; 8] = [
     "pr-g30-m480:f=10",
     "xu-g30:f=10",
     "xu-g30-m480:f=10",
+    "group-jacobi-g30",
+    "group-gs-g30",
 ];
+
+/// The group-accelerated variants beyond the paper (its future work, §4.2 and §5), each
+/// compared against the paper's rule (`xu-g30-m480:f=10`): groups built for interaction,
+/// group systems solved by Gauss–Seidel, and an adaptive group size. Run by the scene-level
+/// tests.
+pub const BEYOND_PAPER_SOLVERS: [&str; 3] =
+    ["xu-g30-m480:f=10:groups=interaction", "xu-g30-m480:f=10:inner=gs", "xu-g30-m480:f=10:adaptive=0.1"];
 
 /// The solver names accepted by [`solver_by_name`], as listed to users.
 pub const SOLVER_NAMES: &str = "jacobi, gauss-seidel, sor-ω (e.g. sor-1.2); southwell, pr, feda, shao, xu, xu-direct, \
-     xu-ambient, relax-ω (e.g. relax-1.5); group-S-gM for a shooting method S (group-pr-g30, group-xu-g30); S-gM and \
-     S-gM-mK, group-accelerated (pr-g30, xu-g30-m480), with :f=N or :f=auto[:target=0.05]";
+     xu-ambient, relax-ω (e.g. relax-1.5); group-jacobi-gM and group-gs-gM, group gathering (group-jacobi-g30, \
+     group-gs-g30), with :groups=index or :groups=spatial; group-S-gM for a shooting method S (group-pr-g30, \
+     group-xu-g30); S-gM and S-gM-mK, group-accelerated (pr-g30, xu-g30-m480), with :f=N or :f=auto[:target=0.05]";
 
 /// The overshoot and selection weighting of a shooting method's name (`pr`, `xu`, `relax-1.5`).
 fn shooting_rule(name: &str) -> Option<Result<(Overshoot, bool), SolverError>> {
@@ -122,27 +135,44 @@ fn split_size<'a>(name: &'a str, marker: &str) -> Option<(&'a str, usize)> {
     Some((head, size.parse().ok()?))
 }
 
-/// The frequency parameters of a group-accelerated name (`f=10`, `f=auto`, `target=0.05`).
-fn parse_frequency(name: &str, params: &str) -> Result<Frequency, SolverError> {
+/// The parameters of a group-accelerated name: `f=10`, `f=auto`, `target=0.05`,
+/// `groups=unshot|interaction`, `inner=lu|gs`, `adaptive=0.1`.
+fn parse_accelerated(
+    name: &str,
+    group: usize,
+    memory: usize,
+    params: &str,
+) -> Result<GroupAcceleratedParams, SolverError> {
     let (mut fixed, mut target) = (None, 0.05);
+    let mut out = GroupAcceleratedParams::paper(group, memory, Frequency::Auto { target });
     for pair in params.split(':').filter(|p| !p.is_empty()) {
         let bad = |why: &str| SolverError::BadParams(format!("solver '{name}': '{pair}' {why}"));
+        let fraction = |v: &str| v.parse::<f64>().ok().filter(|t| *t > 0.0 && t.is_finite());
         match pair.split_once('=') {
             Some(("f", "auto")) => fixed = None,
             Some(("f", v)) => {
                 fixed = Some(v.parse::<u64>().ok().filter(|&f| f > 0).ok_or_else(|| bad("needs f=auto or f ≥ 1"))?)
             }
-            Some(("target", v)) => {
-                target = v
-                    .parse::<f64>()
-                    .ok()
-                    .filter(|t| *t > 0.0 && t.is_finite())
-                    .ok_or_else(|| bad("needs a positive number"))?
+            Some(("target", v)) => target = fraction(v).ok_or_else(|| bad("needs a positive number"))?,
+            Some(("groups", "unshot")) => out.building = GroupBuilding::Unshot,
+            Some(("groups", "interaction")) => out.building = GroupBuilding::Interaction,
+            Some(("groups", _)) => return Err(bad("needs groups=unshot or groups=interaction")),
+            Some(("inner", "lu")) => out.inner = InnerSolve::Lu,
+            Some(("inner", "gs")) => out.inner = InnerSolve::GaussSeidel,
+            Some(("inner", _)) => return Err(bad("needs inner=lu or inner=gs")),
+            Some(("adaptive", v)) => {
+                out.adaptive = Some(fraction(v).filter(|t| *t <= 1.0).ok_or_else(|| bad("needs a fraction in (0, 1]"))?)
             }
-            _ => return Err(bad("is not a parameter; group-accelerated solvers take f=N, f=auto and target=X")),
+            _ => {
+                return Err(bad(
+                    "is not a parameter; group-accelerated solvers take f=N, f=auto, target=X, groups=unshot|interaction, \
+                     inner=lu|gs and adaptive=X",
+                ));
+            }
         }
     }
-    Ok(fixed.map_or(Frequency::Auto { target }, Frequency::Fixed))
+    out.frequency = fixed.map_or(Frequency::Auto { target }, Frequency::Fixed);
+    Ok(out)
 }
 
 /// The solver a command-line name designates.
@@ -175,6 +205,11 @@ pub fn solver_by_name(name: &str) -> Result<Box<dyn Solver>, SolverError> {
         no_params()?;
         return Ok(Box::new(overshooting::Overshooting::new(head, rule?.0)?));
     }
+    if let Some((base @ ("jacobi" | "gs"), m)) = head.strip_prefix("group-").and_then(|rest| split_size(rest, "-g")) {
+        let sweep = if base == "jacobi" { group_gathering::Sweep::Jacobi } else { group_gathering::Sweep::GaussSeidel };
+        let partition = group_gathering::Partition::parse(head, params)?;
+        return Ok(Box::new(GroupGathering::new(sweep, m, partition)?));
+    }
     if let Some(rest) = head.strip_prefix("group-") {
         let (base, m) = split_size(rest, "-g").ok_or_else(unknown)?;
         let (rule, by_area) = shooting_rule(base).ok_or_else(unknown)??;
@@ -192,7 +227,6 @@ pub fn solver_by_name(name: &str) -> Result<Box<dyn Solver>, SolverError> {
             "'{name}': group acceleration applies to PR and the overshooting methods, not to {base}"
         )));
     }
-    let params =
-        GroupAcceleratedParams { group: m, memory: memory.unwrap_or(m), frequency: parse_frequency(name, params)? };
+    let params = parse_accelerated(name, m, memory.unwrap_or(m), params)?;
     Ok(Box::new(GroupAccelerated::new(name, rule, params)?))
 }

@@ -220,7 +220,9 @@ impl OvershootTracker {
     /// The overshoot of patch `j` as estimated without its row, into `plus`.
     pub fn estimate(&self, problem: &Problem<'_>, state: &State, ambient: &Ambient, j: usize, plus: &mut [Real]) {
         let k = state.channels;
-        let mut row = vec![0.0; k];
+        // At most 3 channels: no allocation in this per-patch, per-step path.
+        let mut row = [0.0; 3];
+        let row = &mut row[..k];
         if let Some(term) = self.rule.row {
             let then = self.power_then[j];
             if then.is_nan() {
@@ -235,7 +237,7 @@ impl OvershootTracker {
                 }
             }
         }
-        self.overshoot(problem, state, ambient, j, &row, plus);
+        self.overshoot(problem, state, ambient, j, row, plus);
     }
 
     /// The exact overshoot of patch `j` into `plus`, from its column (`column[i] = F_ij`;

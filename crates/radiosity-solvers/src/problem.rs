@@ -6,6 +6,10 @@
 //! unit of cost of every method (DESIGN §3). A row costs one column too: the source gives it
 //! when it can ([`radiosity_core::ColumnSource::fill_row`]), and otherwise it follows from the
 //! same column by reciprocity, `F_ji = F_ij A_i / A_j`.
+//!
+//! A problem may also carry a spatially coherent order of the patches
+//! ([`Problem::with_patch_order`]), for solvers that group patches by proximity
+//! (`group-gs-gM:groups=spatial`); the others ignore it.
 
 use crate::error::SolverError;
 use radiosity_core::{ColumnSource, LinearSystem, Real};
@@ -19,6 +23,7 @@ pub struct Problem<'a> {
     fetched: Cell<u64>,
     reused: Cell<u64>,
     ff_seconds: Cell<f64>,
+    order: Option<&'a [usize]>,
 }
 
 impl<'a> Problem<'a> {
@@ -27,7 +32,46 @@ impl<'a> Problem<'a> {
         if columns.patch_count() != system.len() {
             return Err(SolverError::SizeMismatch { columns: columns.patch_count(), system: system.len() });
         }
-        Ok(Problem { system, columns, fetched: Cell::new(0), reused: Cell::new(0), ff_seconds: Cell::new(0.0) })
+        Ok(Problem {
+            system,
+            columns,
+            fetched: Cell::new(0),
+            reused: Cell::new(0),
+            ff_seconds: Cell::new(0.0),
+            order: None,
+        })
+    }
+
+    /// The problem with a spatially coherent order of its patches (patches near each other
+    /// consecutive in it), which must be a permutation of `0..n`.
+    pub fn with_patch_order(mut self, order: &'a [usize]) -> Result<Problem<'a>, SolverError> {
+        let n = self.n();
+        if order.len() != n {
+            return Err(SolverError::BadParams(format!(
+                "the patch order has {} entries but the system has {n} patches",
+                order.len()
+            )));
+        }
+        let mut seen = vec![false; n];
+        for (at, &i) in order.iter().enumerate() {
+            let why = if i >= n {
+                "out of range"
+            } else if std::mem::replace(&mut seen[i], true) {
+                "repeated"
+            } else {
+                continue;
+            };
+            return Err(SolverError::BadParams(format!(
+                "the patch order is not a permutation of 0..{n}: entry {at}, patch {i}, is {why}"
+            )));
+        }
+        self.order = Some(order);
+        Ok(self)
+    }
+
+    /// The spatially coherent patch order the caller gave, if any.
+    pub fn patch_order(&self) -> Option<&[usize]> {
+        self.order
     }
 
     /// The system.

@@ -345,7 +345,10 @@ fn residual_of_shot(system: &LinearSystem, f: &DenseColumns, state: &State) -> V
         .collect()
 }
 
-const SHOOTING: [&str; 10] = [
+const SHOOTING: [&str; 13] = [
+    "xu-g4-m8:f=2:inner=gs",
+    "pr-g4-m12:f=2:groups=interaction",
+    "xu-g4-m12:f=2:adaptive=0.2",
     "southwell",
     "pr",
     "xu",
@@ -420,4 +423,134 @@ fn group_acceleration_stores_columns_and_reuses_them() {
     // first group is the 3 emitters, every later one has 4 patches.
     let run = solve("group-pr-g4", &system, &f, "steps=30");
     assert_eq!(run.state.columns + run.state.columns_reused, 4 * run.state.step - 1);
+}
+
+/// Runs `name` on `problem` under `rules`, with the step cap of [`solve`].
+fn solve_problem(name: &str, problem: &Problem<'_>, rules: &str) -> Result<Run, SolverError> {
+    let mut solver = solver_by_name(name)?;
+    let rules = StopRules { step_cap: 2000.0, ..StopRules::parse(rules).unwrap() };
+    Executor::new(solver.as_mut(), rules).run(problem, &mut NoObserver)
+}
+
+/// The largest relative difference between two radiosity vectors.
+fn max_relative(a: &[Real], b: &[Real]) -> Real {
+    a.iter().zip(b).map(|(x, y)| (x - y).abs() / y.abs().max(1e-300)).fold(0.0, Real::max)
+}
+
+#[test]
+fn one_group_holding_every_patch_solves_the_system_in_one_step() {
+    // The unit cube with an emitting top, ρ = 0.9, and the 12-patch RGB system: with m = n
+    // the one group's LU is the whole solve.
+    let mut e = vec![0.0; 6];
+    e[1] = 1.0;
+    let cube_system = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.9; 6], e).unwrap();
+    let (twelve_system, twelve_f) = twelve();
+    for (system, f, name) in [(&cube_system, &cube(), "group-gs-g6"), (&twelve_system, &twelve_f, "group-gs-g12")] {
+        let exact = solve("gauss-seidel", system, f, "residual=1e-15").state.radiosity;
+        for solver in [name.to_string(), name.replace("gs", "jacobi"), format!("{name}0")] {
+            let run = solve(&solver, system, f, "steps=1");
+            assert_eq!((run.state.step, run.state.columns), (1, system.len() as u64), "{solver}");
+            let error = max_relative(&run.state.radiosity, &exact);
+            assert!(error < 1e-12, "{solver}: {error:e} from Gauss–Seidel");
+            assert!(run.state.group_seconds > 0.0 && run.state.group_seconds <= run.state.solve_seconds);
+        }
+    }
+    // The cube's closed form (to 6 decimals, as above).
+    let b = solve("group-gs-g6", &cube_system, &cube(), "steps=1").state.radiosity;
+    for (i, expected) in [(1, 2.372881), (0, 1.525311), (2, 1.525452)] {
+        assert!((b[i] - expected).abs() < 5e-7, "patch {i}: {}", b[i]);
+    }
+}
+
+#[test]
+fn group_gathering_converges_to_gauss_seidel_a_group_of_columns_a_step() {
+    let (system, f) = twelve();
+    let exact = solve("gauss-seidel", &system, &f, "residual=1e-15").state.radiosity;
+    for name in ["group-jacobi-g4", "group-gs-g4", "group-gs-g5", "group-jacobi-g4:groups=index"] {
+        let run = solve(name, &system, &f, "residual=1e-13");
+        assert!(matches!(run.termination, TerminationReason::Residual(_)), "{name}: {}", run.termination);
+        let error = max_relative(&run.state.radiosity, &exact);
+        assert!(error < 1e-12, "{name}: {error:e} from Gauss–Seidel after {} steps", run.state.step);
+        if name.contains("g4") {
+            // 12 = 3 × 4: every step gathers a whole group of 4 rows.
+            assert_eq!(run.state.columns, 4 * run.state.step, "{name}");
+        }
+        // The unshot radiosity keeps each patch's last change, as for point gathering.
+        assert!(run.state.unshot.iter().all(|u| u.is_finite()));
+        assert_eq!(run.solver, name.trim_end_matches(":groups=index"));
+    }
+    // Groups of 5 over 12 patches: 5 + 5 + 2, so a sweep is 3 steps and 12 columns.
+    let run = solve("group-gs-g5", &system, &f, "steps=3");
+    assert_eq!(run.state.columns, 12);
+    // Group Gauss–Seidel needs no more sweeps than point Gauss–Seidel, and group Jacobi no more
+    // than point Jacobi.
+    let columns = |name: &str| solve(name, &system, &f, "residual=1e-10").state.columns;
+    assert!(columns("group-gs-g4") <= columns("gauss-seidel"));
+    assert!(columns("group-jacobi-g4") <= columns("jacobi"));
+}
+
+#[test]
+fn spatial_groups_follow_the_order_the_problem_carries() {
+    let (system, f) = twelve();
+    let exact = solve("gauss-seidel", &system, &f, "residual=1e-15").state.radiosity;
+    let reversed: Vec<usize> = (0..12).rev().collect();
+    let problem = Problem::new(&system, &f).unwrap().with_patch_order(&reversed).unwrap();
+    assert_eq!(problem.patch_order(), Some(&reversed[..]));
+    for name in ["group-gs-g4:groups=spatial", "group-jacobi-g4:groups=spatial"] {
+        let first = solve_problem(name, &problem, "steps=1").unwrap();
+        // The first group is patches 11, 10, 9, 8: they alone changed.
+        let changed: Vec<usize> = (0..12)
+            .filter(|&i| first.state.radiosity[i * 3..i * 3 + 3] != system.emissions()[i * 3..i * 3 + 3])
+            .collect();
+        assert_eq!(changed, vec![8, 9, 10, 11], "{name}");
+        let run = solve_problem(name, &problem, "residual=1e-13").unwrap();
+        assert!(matches!(run.termination, TerminationReason::Residual(_)), "{name}: {}", run.termination);
+        assert_eq!(run.solver, name);
+        let error = max_relative(&run.state.radiosity, &exact);
+        assert!(error < 1e-12, "{name}: {error:e} from Gauss–Seidel");
+    }
+    // Point solvers and index groups ignore the order.
+    let plain = solve("group-gs-g4", &system, &f, "steps=5").state.radiosity;
+    assert_eq!(solve_problem("group-gs-g4", &problem, "steps=5").unwrap().state.radiosity, plain);
+    // Without an order: a clear error at the start of the run, not a panic.
+    let bare = Problem::new(&system, &f).unwrap();
+    let err = solve_problem("group-gs-g30:groups=spatial", &bare, "steps=1").unwrap_err();
+    assert!(matches!(err, SolverError::BadParams(_)), "{err:?}");
+    assert_eq!(
+        err.to_string(),
+        "group-gs-g30:groups=spatial needs a spatial patch order, which the caller did not give"
+    );
+    // An order that is not a permutation of 0..n is refused.
+    for (bad, words) in [
+        (vec![0, 1, 2], "3 entries"),
+        ((0..11).chain([3]).collect::<Vec<_>>(), "patch 3, is repeated"),
+        ((0..11).chain([12]).collect::<Vec<_>>(), "patch 12, is out of range"),
+    ] {
+        let err = Problem::new(&system, &f).unwrap().with_patch_order(&bad).err().unwrap();
+        assert!(matches!(err, SolverError::BadParams(_)) && err.to_string().contains(words), "{bad:?}: {err}");
+    }
+    // Names and parameters.
+    for (bad, words) in [
+        ("group-gs-g0", "at least one patch"),
+        ("group-jacobi-g30:groups=random", "groups=index or groups=spatial"),
+        ("group-gs-g30:f=10", "not a parameter"),
+    ] {
+        let e = solver_by_name(bad).err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(e.contains(words), "{bad}: {e}");
+    }
+    assert_eq!(solver_by_name("group-gs-g30:groups=index").unwrap().name(), "group-gs-g30");
+    assert_eq!(solver_by_name("group-jacobi-g8:groups=spatial").unwrap().name(), "group-jacobi-g8:groups=spatial");
+}
+
+#[test]
+fn inner_gauss_seidel_solves_the_group_as_lu_does() {
+    // Large groups solved iteratively: the same radiosity as LU, to the inner tolerance.
+    let (system, f) = twelve();
+    for name in ["xu-g8-m12:f=1", "pr-g12:f=1"] {
+        let lu = solve(name, &system, &f, "steps=40");
+        let gs = solve(&format!("{name}:inner=gs"), &system, &f, "steps=40");
+        for (a, b) in lu.state.radiosity.iter().zip(&gs.state.radiosity) {
+            assert!((a - b).abs() <= 1e-11 * a.abs().max(1.0), "{name}: {a} against {b}");
+        }
+    }
 }

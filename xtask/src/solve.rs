@@ -11,13 +11,14 @@
 use crate::ff::obtain;
 use crate::scene_report::{prepare, print_warnings};
 use anyhow::{Context, Result};
-use radiosity_core::{LinearSystem, Real};
+use radiosity_core::{LinearSystem, Real, Scene};
 use radiosity_eval::metrics::errors;
 use radiosity_eval::{Evaluator, FormFactors, ReferenceParams, ReferenceSolution};
 use radiosity_ff::{Backend, BackendSpec, FormFactorInput};
 use radiosity_solvers::{Executor, Observer, Problem, State, StopRules, solver_by_name};
 use serde::Serialize;
 use std::path::PathBuf;
+use std::time::Instant;
 
 /// Arguments of `solve`.
 #[derive(Debug, clap::Args)]
@@ -26,8 +27,9 @@ pub struct Args {
     #[arg(long, value_name = "SCENE")]
     scene: String,
     /// The solver: jacobi, gauss-seidel, sor-ω, southwell, pr, feda, shao, xu, xu-direct,
-    /// xu-ambient, relax-ω; group-S-gM (group shooting); S-gM[-mK][:f=N|:f=auto] (group
-    /// accelerated).
+    /// xu-ambient, relax-ω; group-jacobi-gM, group-gs-gM[:groups=spatial] (group gathering);
+    /// group-S-gM (group shooting); S-gM[-mK][:f=N|:f=auto] (group accelerated); reference
+    /// (the exact solution).
     #[arg(long, value_name = "SOLVER")]
     solver: String,
     /// The form-factor backend, with `:key=value` parameters.
@@ -121,7 +123,9 @@ struct SolveJson<'a> {
 /// Runs `solve`.
 pub fn run(args: &Args) -> Result<()> {
     let spec = BackendSpec::parse(&args.ff)?;
-    let mut solver = solver_by_name(&args.solver)?;
+    // `reference` is the exact solution itself: its cost is assembling F and solving it.
+    let exact = args.solver == "reference";
+    let mut solver = if exact { None } else { Some(solver_by_name(&args.solver)?) };
     let rules = StopRules::parse(&args.until)?;
     let prepared = prepare(&args.scene)?;
     print_warnings(&prepared.report());
@@ -135,9 +139,22 @@ pub fn run(args: &Args) -> Result<()> {
     // F is fetched once, outside the run, and serves both the reference and the final
     // metrics (the residual would otherwise cost another n columns).
     let params = ReferenceParams::default();
+    let start = Instant::now();
     let matrix = FormFactors::assemble(&backend, params.max_matrix_bytes).context("the reference solution failed")?;
+    let assembly_seconds = start.elapsed().as_secs_f64();
     let reference =
         ReferenceSolution::solve_matrix(&system, &matrix, params).context("the reference solution failed")?;
+    let reference_seconds = start.elapsed().as_secs_f64();
+    let Some(solver) = solver.as_mut() else {
+        let mut state = State::from_emission(system.emissions(), system.channels().count());
+        state.radiosity.copy_from_slice(reference.values());
+        state.unshot.fill(0.0);
+        state.columns = system.len() as u64;
+        state.ff_seconds = assembly_seconds;
+        state.solve_seconds = reference_seconds - assembly_seconds;
+        let run = Outcome { state, termination: None, solver: "reference".into() };
+        return report(args, &spec, scene, &system, &matrix, &reference, run, Vec::new());
+    };
     if solver.gathers_rows() && !backend.serves_rows() {
         eprintln!(
             "warning: {} gathers along rows of F, which {} cannot give exactly; they are taken from its \
@@ -153,7 +170,30 @@ pub fn run(args: &Args) -> Result<()> {
     let mut observer =
         RmsObserver { system: &system, reference: &reference, needed: rules.needs_error(), reached: Vec::new() };
     let run = Executor::new(solver.as_mut(), rules).run(&problem, &mut observer)?;
-    let metrics = Evaluator::new(&system, &matrix, &reference)?.evaluate(&run.state.radiosity)?;
+    let run = Outcome { state: run.state, termination: Some(run.termination.to_string()), solver: run.solver };
+    report(args, &spec, scene, &system, &matrix, &reference, run, observer.reached)
+}
+
+/// What a run left, for the report: the exact reference has no termination.
+struct Outcome {
+    state: State,
+    termination: Option<String>,
+    solver: String,
+}
+
+/// Prints the summary or writes the JSON of a run.
+#[allow(clippy::too_many_arguments)]
+fn report(
+    args: &Args,
+    spec: &BackendSpec,
+    scene: &Scene,
+    system: &LinearSystem,
+    matrix: &FormFactors,
+    reference: &ReferenceSolution,
+    run: Outcome,
+    reached: Vec<ReachedJson>,
+) -> Result<()> {
+    let metrics = Evaluator::new(system, matrix, reference)?.evaluate(&run.state.radiosity)?;
     let stats = StatsJson {
         columns: run.state.columns,
         columns_reused: run.state.columns_reused,
@@ -164,8 +204,8 @@ pub fn run(args: &Args) -> Result<()> {
         e_rms: metrics.e_rms,
         e_max: metrics.e_max,
         residual: metrics.residual,
-        termination: run.termination.to_string(),
-        reached: std::mem::take(&mut observer.reached),
+        termination: run.termination.unwrap_or_else(|| format!("solved exactly: {}", reference.method())),
+        reached,
         reference: reference.method().to_string(),
         certificate: reference.certificate().to_string(),
     };

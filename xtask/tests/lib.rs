@@ -293,6 +293,23 @@ fn solve_reports_error_against_the_reference() {
 }
 
 #[test]
+fn solve_reference_is_the_exact_solution_and_group_methods_run() {
+    let r = stdout_json(&["solve", "--scene", "furnace:res=2", "--solver", "reference", "--json"]);
+    assert_eq!(r["stats"]["e_rms"], 0.0);
+    assert!(r["stats"]["termination"].as_str().unwrap().contains("dense LU"), "{}", r["stats"]);
+    assert_eq!(r["stats"]["columns"], 24);
+    // A group-accelerated run reports the time spent on groups; group gathering runs on the
+    // spatial order the scene gives.
+    for solver in ["xu-g8-m16:f=4", "group-gs-g8:groups=spatial"] {
+        let r =
+            stdout_json(&["solve", "--scene", "cornell:res=2", "--solver", solver, "--until", "steps=60", "--json"]);
+        let s = &r["stats"];
+        assert!(s["group_seconds"].as_f64().unwrap() > 0.0, "{solver}: {s}");
+        assert!(s["group_seconds"].as_f64() <= s["seconds"].as_f64(), "{solver}: {s}");
+    }
+}
+
+#[test]
 fn solve_stops_at_every_kind_of_rule() {
     let stats = |rules: &str| {
         let r = stdout_json(&["solve", "--scene", "multi-cubes", "--solver", "pr", "--until", rules, "--json"]);

@@ -25,6 +25,13 @@
 //! exact, so the group keeps the residual `s − Φ_rr y − ΔB⁺` as unshot (round-off small), and
 //! the unshot radiosity stays exactly the residual of the shot radiosity.
 //!
+//! Measured (`cargo bench -p radiosity-solvers --bench group_solve`, criterion medians, one
+//! group step on a 3400-patch RGB system, 2 cores): LU against Gauss–Seidel took 0.37 / 0.37 ms
+//! at m = 25, 0.72 / 0.79 at 50, 2.1 / 1.7 at 100, 3.7 / 5.4 at 200 and 12.6 / 12.8 at 400.
+//! There is no crossover up to m = 400: the `O(n m)` shot to every patch costs as much as
+//! either solve, and faer's LU stays as fast as the ~45 sweeps Gauss–Seidel needs at
+//! `ρ F` norm 0.54. LU remains the default.
+//!
 //! ## References
 //!
 //! - Rousselle & Renaud, "Group accelerated shooting methods for radiosity", §3.2–3.3.

@@ -4,9 +4,14 @@
 //! with a non-zero exit code; nothing here panics on bad input.
 
 mod compare;
+mod experiment;
+mod export;
 mod ff;
+mod paper;
+mod render;
 mod scene_report;
 mod scenes;
+mod shading;
 mod solve;
 
 use clap::{Parser, Subcommand};
@@ -28,8 +33,14 @@ enum Command {
     Ff(ff::Args),
     /// Run one solver on a scene and report its error against the reference solution.
     Solve(solve::Args),
-    /// Compare solvers on a scene (not implemented yet: prepares the scene and reports its analysis).
+    /// Compare solvers on a scene: convergence table, report and plots under results/.
     Compare(compare::Args),
+    /// Run the paper's figures 1–3 and set each of its claims beside our measurement.
+    Paper(paper::Args),
+    /// Render the solved scene to a PNG image.
+    Render(render::Args),
+    /// Export the solved scene as glTF binary with per-vertex colours.
+    Export(export::Args),
 }
 
 fn main() -> ExitCode {
@@ -39,6 +50,9 @@ fn main() -> ExitCode {
         Command::Ff(args) => ff::run(&args),
         Command::Solve(args) => solve::run(&args),
         Command::Compare(args) => compare::run(&args),
+        Command::Paper(args) => paper::run(&args),
+        Command::Render(args) => render::run(&args),
+        Command::Export(args) => export::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

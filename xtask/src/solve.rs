@@ -8,37 +8,21 @@
 //! solver run under the stop rules. The run's columns, steps and seconds are the solver's
 //! alone.
 
-use crate::ff::obtain;
+use crate::experiment::{Experiment, SolveArgs};
 use crate::scene_report::{prepare, print_warnings};
 use anyhow::{Context, Result};
-use radiosity_core::{LinearSystem, Real, Scene};
+use radiosity_core::{LinearSystem, Real};
 use radiosity_eval::metrics::errors;
-use radiosity_eval::{Evaluator, FormFactors, ReferenceParams, ReferenceSolution};
-use radiosity_ff::{Backend, BackendSpec, FormFactorInput};
-use radiosity_solvers::{Executor, Observer, Problem, State, StopRules, solver_by_name};
+use radiosity_eval::{Evaluator, ReferenceSolution};
+use radiosity_solvers::{Observer, State};
 use serde::Serialize;
 use std::path::PathBuf;
-use std::time::Instant;
 
 /// Arguments of `solve`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The scene: a built-in name with `:key=value` parameters, or a .gltf/.glb path.
-    #[arg(long, value_name = "SCENE")]
-    scene: String,
-    /// The solver: jacobi, gauss-seidel, sor-ω, southwell, pr, feda, shao, xu, xu-direct,
-    /// xu-ambient, relax-ω; group-jacobi-gM, group-gs-gM[:groups=spatial] (group gathering);
-    /// group-S-gM (group shooting); S-gM[-mK][:f=N|:f=auto] (group accelerated); reference
-    /// (the exact solution).
-    #[arg(long, value_name = "SOLVER")]
-    solver: String,
-    /// The form-factor backend, with `:key=value` parameters.
-    #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic")]
-    ff: String,
-    /// Stop rules, the first to hold stops the run: columns=N, columns=2n, steps=N, rms=1e-3,
-    /// residual=1e-4, time=30s.
-    #[arg(long, value_name = "RULES", default_value = "columns=2n")]
-    until: String,
+    #[command(flatten)]
+    run: SolveArgs,
     /// Print the patches and the run's figures as JSON.
     #[arg(long, conflicts_with = "out")]
     json: bool,
@@ -122,56 +106,25 @@ struct SolveJson<'a> {
 
 /// Runs `solve`.
 pub fn run(args: &Args) -> Result<()> {
-    let spec = BackendSpec::parse(&args.ff)?;
+    let (spec, rules) = args.run.check()?;
     // `reference` is the exact solution itself: its cost is assembling F and solving it.
-    let exact = args.solver == "reference";
-    let mut solver = if exact { None } else { Some(solver_by_name(&args.solver)?) };
-    let rules = StopRules::parse(&args.until)?;
-    let prepared = prepare(&args.scene)?;
+    let exact = args.run.solver == "reference";
+    let prepared = prepare(&args.run.scene)?;
     print_warnings(&prepared.report());
-    let scene = &prepared.loaded.scene;
-    let system = LinearSystem::from_scene(scene);
-    let input = FormFactorInput { scene, visibility: &prepared.visibility, analysis: &prepared.analysis };
-    let backend = match spec {
-        BackendSpec::Matrix { .. } => Backend::Matrix(obtain(&prepared, &spec)?.matrix),
-        _ => Backend::columns(&spec, input),
-    };
-    // F is fetched once, outside the run, and serves both the reference and the final
-    // metrics (the residual would otherwise cost another n columns).
-    let params = ReferenceParams::default();
-    let start = Instant::now();
-    let matrix = FormFactors::assemble(&backend, params.max_matrix_bytes).context("the reference solution failed")?;
-    let assembly_seconds = start.elapsed().as_secs_f64();
-    let reference =
-        ReferenceSolution::solve_matrix(&system, &matrix, params).context("the reference solution failed")?;
-    let reference_seconds = start.elapsed().as_secs_f64();
-    let Some(solver) = solver.as_mut() else {
-        let mut state = State::from_emission(system.emissions(), system.channels().count());
-        state.radiosity.copy_from_slice(reference.values());
-        state.unshot.fill(0.0);
-        state.columns = system.len() as u64;
-        state.ff_seconds = assembly_seconds;
-        state.solve_seconds = reference_seconds - assembly_seconds;
-        let run = Outcome { state, termination: None, solver: "reference".into() };
-        return report(args, &spec, scene, &system, &matrix, &reference, run, Vec::new());
-    };
-    if solver.gathers_rows() && !backend.serves_rows() {
-        eprintln!(
-            "warning: {} gathers along rows of F, which {} cannot give exactly; they are taken from its \
-             columns by reciprocity, which these form factors do not satisfy, so the run converges to another \
-             system's solution, off the reference by as much as their reciprocity error (`cargo xtask ff` \
-             reports it)",
-            solver.name(),
-            spec.canonical()
-        );
+    let experiment = Experiment::new(&prepared, spec)?;
+    if exact {
+        let run = Outcome { state: experiment.exact_state(), termination: None, solver: "reference".into() };
+        return report(args, &experiment, run, Vec::new());
     }
-    let order = radiosity_geom::spatial_order::spatial_order(scene);
-    let problem = Problem::new(&system, &backend)?.with_patch_order(&order)?;
-    let mut observer =
-        RmsObserver { system: &system, reference: &reference, needed: rules.needs_error(), reached: Vec::new() };
-    let run = Executor::new(solver.as_mut(), rules).run(&problem, &mut observer)?;
+    let mut observer = RmsObserver {
+        system: &experiment.system,
+        reference: &experiment.reference,
+        needed: rules.needs_error(),
+        reached: Vec::new(),
+    };
+    let run = experiment.run(&args.run.solver, rules, &mut observer)?;
     let run = Outcome { state: run.state, termination: Some(run.termination.to_string()), solver: run.solver };
-    report(args, &spec, scene, &system, &matrix, &reference, run, observer.reached)
+    report(args, &experiment, run, observer.reached)
 }
 
 /// What a run left, for the report: the exact reference has no termination.
@@ -182,18 +135,10 @@ struct Outcome {
 }
 
 /// Prints the summary or writes the JSON of a run.
-#[allow(clippy::too_many_arguments)]
-fn report(
-    args: &Args,
-    spec: &BackendSpec,
-    scene: &Scene,
-    system: &LinearSystem,
-    matrix: &FormFactors,
-    reference: &ReferenceSolution,
-    run: Outcome,
-    reached: Vec<ReachedJson>,
-) -> Result<()> {
-    let metrics = Evaluator::new(system, matrix, reference)?.evaluate(&run.state.radiosity)?;
+fn report(args: &Args, experiment: &Experiment<'_>, run: Outcome, reached: Vec<ReachedJson>) -> Result<()> {
+    let (system, reference, spec) = (&experiment.system, &experiment.reference, &experiment.spec);
+    let scene = &experiment.prepared.loaded.scene;
+    let metrics = Evaluator::new(system, &experiment.matrix, reference)?.evaluate(&run.state.radiosity)?;
     let stats = StatsJson {
         columns: run.state.columns,
         columns_reused: run.state.columns_reused,
@@ -210,7 +155,7 @@ fn report(
         certificate: reference.certificate().to_string(),
     };
     if !args.json && args.out.is_none() {
-        println!("scene        {}: {} patches", args.scene, scene.len());
+        println!("scene        {}: {} patches", args.run.scene, scene.len());
         println!("solver       {} with {}", run.solver, spec.canonical());
         println!("stopped      {}", stats.termination);
         let reused = match stats.columns_reused {
@@ -259,7 +204,7 @@ fn report(
             }
         })
         .collect();
-    let json = SolveJson { scene: &args.scene, solver: run.solver.clone(), ff: spec.canonical(), patches, stats };
+    let json = SolveJson { scene: &args.run.scene, solver: run.solver.clone(), ff: spec.canonical(), patches, stats };
     let text = serde_json::to_string(&json)?;
     match &args.out {
         Some(path) => std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))?,

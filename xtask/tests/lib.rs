@@ -4,6 +4,9 @@
 use assert_cmd::Command;
 use serde_json::Value;
 
+mod export;
+mod render;
+
 fn xtask(args: &[&str]) -> assert_cmd::assert::Assert {
     Command::cargo_bin("xtask").unwrap().args(args).env("RUST_BACKTRACE", "1").assert()
 }
@@ -73,11 +76,50 @@ fn explain_gives_a_reason_for_every_decision() {
 }
 
 #[test]
-fn compare_says_what_it_does_not_do_yet() {
-    let out = xtask(&["compare"]).success().get_output().stdout.clone();
-    let text = String::from_utf8(out).unwrap();
-    assert!(text.contains("multi-cubes: 480 patches"), "{text}");
-    assert!(text.contains("not implemented yet") && text.contains("cargo xtask solve"), "{text}");
+fn compare_writes_the_table_the_report_and_the_plots() {
+    let dir = std::env::temp_dir().join(format!("radiosity-compare-{}", std::process::id()));
+    let dir_arg = dir.to_str().unwrap();
+    let args = ["compare", "--scene", "cornell:res=2", "--solvers", "pr,xu-g8-m16:f=4", "--out", dir_arg];
+    let out = xtask(&args).success().get_output().stdout.clone();
+    let summary = String::from_utf8(out).unwrap();
+    assert!(summary.contains("pr") && summary.contains("xu-g8-m16:f=4") && summary.contains("e_rms @n"), "{summary}");
+    let csv = std::fs::read_to_string(dir.join("convergence.csv")).unwrap();
+    assert!(csv.starts_with("solver,step,columns,seconds,ff_seconds,e_rms,e_max,residual\n"), "{csv}");
+    assert!(csv.lines().any(|l| l.starts_with("xu-g8-m16:f=4,")), "{csv}");
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    for section in ["n/4", "1e-2", "1e-3", "Where the time went", "Left out", "dense LU", "e_rms-seconds.png"] {
+        assert!(report.contains(section), "missing {section} in\n{report}");
+    }
+    for plot in ["e_rms-steps", "e_rms-columns", "e_rms-seconds"] {
+        let svg = std::fs::read_to_string(dir.join(format!("{plot}.svg"))).unwrap();
+        assert!(svg.contains("<svg") && svg.contains("xu-g8-m16:f=4"), "{plot}");
+        let png = std::fs::read(dir.join(format!("{plot}.png"))).unwrap();
+        assert!(png.starts_with(b"\x89PNG"), "{plot}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+    let e = failure(&["compare", "--solvers", "pr,magic"]);
+    assert!(e.contains("unknown solver 'magic'") && e.contains("pr-g30"), "{e}");
+    let e = failure(&["compare", "--solvers", " , "]);
+    assert!(e.contains("no solver"), "{e}");
+    let e = failure(&["compare", "--until", "colums=2n"]);
+    assert!(e.contains("unknown rule"), "{e}");
+}
+
+#[test]
+fn paper_sets_each_claim_beside_the_measurement() {
+    let dir = std::env::temp_dir().join(format!("radiosity-paper-{}", std::process::id()));
+    xtask(&["paper", "--scenes", "multi-cubes", "--out", dir.to_str().unwrap()]).success();
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    for text in ["Fig. 1", "n = 480", "`xu-g30-m480` beats `xu-g30` at n steps", "multi-cubes/e_rms-steps.png"] {
+        assert!(report.contains(text), "missing {text} in\n{report}");
+    }
+    // Each claim row ends with its verdict.
+    let verdicts = report.lines().filter(|l| l.ends_with("| yes |") || l.ends_with("| **no** |")).count();
+    assert_eq!(verdicts, 5, "{report}");
+    assert!(dir.join("multi-cubes").join("e_rms-steps.svg").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+    let e = failure(&["paper", "--scenes", "cornell"]);
+    assert!(e.contains("'cornell' is not one of the paper's scenes"), "{e}");
 }
 
 #[test]

@@ -78,4 +78,7 @@ pub enum EvalError {
         /// What is required of it.
         reason: &'static str,
     },
+    /// A plot could not be drawn or written.
+    #[error("cannot draw the plot: {0}")]
+    Plot(String),
 }

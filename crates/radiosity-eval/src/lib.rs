@@ -11,7 +11,8 @@
 //! - [`ConvergenceTable`] ([`table`]): rows of measured points written as CSV or Markdown
 //!   with floats rounded to fixed significant digits;
 //! - [`FormFactors`] ([`matrix`]): the form-factor matrix fetched once from any
-//!   [`ColumnSource`](radiosity_core::ColumnSource) and held in memory.
+//!   [`ColumnSource`](radiosity_core::ColumnSource) and held in memory;
+//! - [`plot`]: e_rms against steps, columns or seconds, as SVG and PNG.
 //!
 //! With `xtask`, it is the only crate that will write files; it writes to any
 //! [`std::io::Write`] and leaves opening files to its callers.
@@ -37,6 +38,7 @@
 pub mod error;
 pub mod matrix;
 pub mod metrics;
+pub mod plot;
 pub mod reference;
 pub mod table;
 

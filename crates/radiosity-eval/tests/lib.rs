@@ -3,6 +3,7 @@
 //! hand-made vectors, and tables under snapshot tests.
 
 mod metrics;
+mod plot;
 mod reference;
 mod scenes;
 mod table;

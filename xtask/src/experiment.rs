@@ -41,7 +41,7 @@ impl SolveArgs {
     pub fn check(&self) -> Result<(BackendSpec, StopRules)> {
         let spec = BackendSpec::parse(&self.ff)?;
         if self.solver != "reference" {
-            solver_by_name(&self.solver)?;
+            solver_by_name(&self.solver).map_err(|e| anyhow::anyhow!("{e}; or reference, the exact solution"))?;
         }
         Ok((spec, StopRules::parse(&self.until)?))
     }

@@ -406,7 +406,7 @@ fn solve_gathers_exact_rows_or_says_it_cannot() {
 #[test]
 fn solve_refuses_bad_arguments_before_any_work() {
     let e = failure(&["solve", "--scene", "multi-cubes", "--solver", "xu-q30"]);
-    assert!(e.contains("unknown solver 'xu-q30'") && e.contains("pr"), "{e}");
+    assert!(e.contains("unknown solver 'xu-q30'") && e.contains("pr-g30") && e.contains("or reference"), "{e}");
     let e = failure(&["solve", "--scene", "multi-cubes", "--solver", "pr", "--until", "columns=abc"]);
     assert!(e.contains("invalid stop rule 'columns=abc'"), "{e}");
     let e = failure(&["solve", "--scene", "multi-cubes", "--solver", "pr", "--ff", "radiance"]);

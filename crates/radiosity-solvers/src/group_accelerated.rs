@@ -12,9 +12,9 @@
 //! paper's "first approach", §4.1); with `K > m` it is the best `m` of everything stored (its
 //! optimised variant, §4.2, `pr-g30-m480`).
 //!
-//! - **Emitters first.** Group steps start once every emitter has shot, and emitters' columns
-//!   are not stored: an emitter usually reflects little, and a group of emitters exchanges
-//!   almost nothing (paper §4.1).
+//! - **Emitters first.** The first shots are the emitters', each once, in order of selection
+//!   value; group steps start after them, and emitters' columns are not stored: an emitter
+//!   usually reflects little, and a group of emitters exchanges almost nothing (paper §4.1).
 //! - **Frequency.** Fixed (`:f=N`, deterministic), or automatic (`:f=auto`, the default; the
 //!   paper's rule): after each group step, `f = ⌈t_group / (target · t_column)⌉` with `t_group`
 //!   the measured seconds of that group step, `t_column` the mean seconds of a column so far
@@ -277,7 +277,17 @@ impl GroupAccelerated {
 
     fn point_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
         let ambient = Ambient::measure(problem, state);
-        let j = argmax(&self.tracker.values(problem, state, &ambient));
+        let mut values = self.tracker.values(problem, state, &ambient);
+        if self.emitters_count > 0 {
+            // Emitters first: until each has shot, only they are candidates, so a weak
+            // emitter cannot hold group steps back for long.
+            for (v, &left) in values.iter_mut().zip(&self.emitters_left) {
+                if !left {
+                    *v = Real::NEG_INFINITY;
+                }
+            }
+        }
+        let j = argmax(&values);
         let column = if self.emitters_left[j] || self.is_emitter(problem, j) {
             // Emitters' columns are not kept (see the module documentation).
             self.scratch.resize(problem.n(), 0.0);

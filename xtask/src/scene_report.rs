@@ -119,6 +119,7 @@ impl PreparedScene {
 /// Prints the load warnings of a scene to stderr.
 pub fn print_warnings(report: &SceneReport) {
     for w in &report.warnings {
-        eprintln!("warning: {}: {w}", report.scene);
+        // File loaders name the file in their warnings already.
+        eprintln!("warning: {w}");
     }
 }

@@ -140,6 +140,29 @@ fn bad_scene_arguments_fail_cleanly() {
     assert!(e.contains("no/such/file.mgf"), "{e}");
 }
 
+#[test]
+fn mgf_scenes_load_and_bad_mgf_fails_cleanly() {
+    // The classic scenes, with RenderPark's patch counts at division 4 beside ours: cube and
+    // corridor agree to a patch; the rest differ as the MGF loader's tests explain.
+    let shared = format!("{}/../../shared/scenes/mgf", env!("CARGO_MANIFEST_DIR"));
+    for (file, renderpark, emitters) in [("cube.mgf", 66.0, 2), ("corridor.mgf", 488.0, 57)] {
+        let r = stdout_json(&["scenes", "--explain", &format!("{shared}/{file}"), "--json"]);
+        let patches = r["patches"].as_f64().unwrap();
+        assert!((patches - renderpark).abs() <= 1.0, "{file}: {patches} patches");
+        assert_eq!(r["emitters"], emitters, "{file}");
+    }
+    for (name, words) in [
+        ("mgf/unknown.mgf", "unknown MGF entity 'bogus'"),
+        ("mgf/undefined_vertex.mgf", "undefined vertex 'v12'"),
+        ("mgf/undefined_material.mgf", "undefined material 'nowhere'"),
+        ("mgf/cycle_a.mgf", "include cycle"),
+        ("mgf/missing_include.mgf", "cannot read included file"),
+    ] {
+        let e = failure(&["scenes", "--explain", &fixture(name)]);
+        assert!(e.contains(".mgf:") && e.contains(words), "{name}: {e}");
+    }
+}
+
 fn fixture(name: &str) -> String {
     format!("{}/../crates/radiosity-geom/test_data/{name}", env!("CARGO_MANIFEST_DIR"))
 }

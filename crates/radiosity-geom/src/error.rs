@@ -76,6 +76,60 @@ pub enum GeomError {
         /// Why nothing was usable, starting with "; " or empty.
         detail: String,
     },
+    /// An MGF entity this loader does not know.
+    #[error("{path}:{line}: unknown MGF entity '{entity}'")]
+    MgfUnknownEntity {
+        /// The file.
+        path: PathBuf,
+        /// The line (1-based) where the entity starts.
+        line: usize,
+        /// The entity's name as written.
+        entity: String,
+    },
+    /// An MGF entity with wrong or missing arguments.
+    #[error("{path}:{line}: {message}")]
+    MgfBadEntity {
+        /// The file.
+        path: PathBuf,
+        /// The line (1-based) where the entity starts.
+        line: usize,
+        /// What is wrong, naming the entity.
+        message: String,
+    },
+    /// A reference to a vertex, material or colour that was never defined.
+    #[error("{path}:{line}: undefined {kind} '{name}'")]
+    MgfUndefined {
+        /// The file.
+        path: PathBuf,
+        /// The line (1-based) of the reference.
+        line: usize,
+        /// `vertex`, `material` or `colour`.
+        kind: &'static str,
+        /// The name referred to.
+        name: String,
+    },
+    /// An MGF include that is already being read further up the chain of includes.
+    #[error("{path}:{line}: including {include} makes an include cycle")]
+    MgfIncludeCycle {
+        /// The including file.
+        path: PathBuf,
+        /// The line of the `i` entity.
+        line: usize,
+        /// The included file.
+        include: PathBuf,
+    },
+    /// An MGF include that cannot be read.
+    #[error("{path}:{line}: cannot read included file {include}: {message}")]
+    MgfMissingInclude {
+        /// The including file.
+        path: PathBuf,
+        /// The line of the `i` entity.
+        line: usize,
+        /// The included file.
+        include: PathBuf,
+        /// The operating system's message.
+        message: String,
+    },
     /// A file format this build does not read yet.
     #[error("{path}: {format} input is not supported yet")]
     UnsupportedFormat {

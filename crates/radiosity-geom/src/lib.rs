@@ -1,4 +1,4 @@
-//! Geometry for radiosity: meshing, built-in scenes, glTF input, BVH visibility and scene
+//! Geometry for radiosity: meshing, built-in scenes, glTF and MGF input, BVH visibility and scene
 //! analysis.
 //!
 //! The entry point is [`load_scene`], which takes a scene argument as users write it on the
@@ -22,6 +22,7 @@ pub mod analysis;
 pub mod error;
 pub mod gltf_input;
 pub mod mesh;
+pub mod mgf;
 pub mod scenes;
 pub mod spatial_order;
 pub mod spec;
@@ -52,10 +53,14 @@ pub struct LoadedScene {
 /// optional `:key=value` parameters.
 pub fn load_scene(arg: &str) -> Result<LoadedScene, GeomError> {
     if let Some((path, format, params)) = split_file_argument(arg) {
-        let params = KeyValueParams::parse(&format!("scene '{}'", path.display()), params, gltf_input::PARAMS)?;
+        let docs = match format {
+            FileFormat::Gltf => gltf_input::PARAMS,
+            FileFormat::Mgf => mgf::PARAMS,
+        };
+        let params = KeyValueParams::parse(&format!("scene '{}'", path.display()), params, docs)?;
         return match format {
             FileFormat::Gltf => gltf_input::load(&path, &params),
-            FileFormat::Mgf => Err(GeomError::UnsupportedFormat { path, format: "MGF" }),
+            FileFormat::Mgf => mgf::load(&path, &params),
         };
     }
     let mut parts = arg.split(':');

@@ -5,8 +5,10 @@
 
 use radiosity_core::{Patch, Real, Spectrum, Vec3};
 use radiosity_geom::gltf_input::{self, PARAMS};
-use radiosity_geom::{GeomError, KeyValueParams, LoadedScene, load_scene};
+use radiosity_geom::{GeomError, KeyValueParams, LoadedScene};
 use std::path::Path;
+
+use crate::{fixture, load, load_err};
 
 const CORNELL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/scenes/cornell-box-toy-ray-tracer.gltf");
 
@@ -16,24 +18,6 @@ const CORNELL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/scen
 /// so 6 × 6/3 + 30/3 + 30/3 = 32; none is degenerate (checked with a Python script that
 /// decodes the embedded buffer).
 const CORNELL_TRIANGLES: usize = 32;
-
-fn fixture(name: &str) -> String {
-    format!("{}/test_data/{name}", env!("CARGO_MANIFEST_DIR"))
-}
-
-fn load(arg: &str) -> LoadedScene {
-    load_scene(arg).unwrap_or_else(|e| panic!("{arg} should load: {e}"))
-}
-
-fn load_err(arg: &str) -> (GeomError, String) {
-    match load_scene(arg) {
-        Ok(_) => panic!("{arg} should fail to load"),
-        Err(e) => {
-            let message = e.to_string();
-            (e, message)
-        }
-    }
-}
 
 fn close(a: Vec3, b: Vec3, tol: Real) -> bool {
     (a - b).length() <= tol

@@ -5,6 +5,30 @@ mod analysis;
 mod builtin_large;
 mod gltf_input;
 mod mesh;
+mod mgf_input;
 mod scenes;
 mod spatial_order;
 mod visibility;
+
+use radiosity_geom::{GeomError, LoadedScene, load_scene};
+
+/// A file in `test_data/`.
+fn fixture(name: &str) -> String {
+    format!("{}/test_data/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Loads a scene argument that must load.
+fn load(arg: &str) -> LoadedScene {
+    load_scene(arg).unwrap_or_else(|e| panic!("{arg} should load: {e}"))
+}
+
+/// Loads a scene argument that must fail, with its error and message.
+fn load_err(arg: &str) -> (GeomError, String) {
+    match load_scene(arg) {
+        Ok(_) => panic!("{arg} should fail to load"),
+        Err(e) => {
+            let message = e.to_string();
+            (e, message)
+        }
+    }
+}

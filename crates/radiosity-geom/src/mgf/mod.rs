@@ -1,0 +1,762 @@
+//! MGF input (Materials and Geometry Format 2.0, Greg Ward, LBL): the classic radiosity test
+//! scenes as patches, with diffuse materials.
+//!
+//! What is read, and how it maps to a [`Scene`](radiosity_core::Scene):
+//!
+//! - **Syntax.** One entity per line, words separated by white space; a line ending in `\`
+//!   continues on the next; lines starting with `#` are comments.
+//! - **Contexts.** Colours (`c`), materials (`m`) and vertices (`v`) are named contexts:
+//!   `c name =` defines `name` afresh and makes it current, `c name = other` defines it as a
+//!   copy of `other`, `c name` makes an existing one current, and `c` alone makes a fresh
+//!   unnamed one current. Entities that follow modify the current context (and the named
+//!   one it is): `cxy`, `cspec`, `cct`, `cmix` for colours; `rd`, `ed` for materials; `p`,
+//!   `n` for vertices. Names are global to the scene, across includes.
+//! - **Materials.** `rd` (diffuse reflectance) and `ed` (diffuse emission) each take the
+//!   current colour at the moment they are given; the RGB values are the colour's linear RGB
+//!   with luminance the given value (see [`colour`]). A reflectivity that reaches 1 in a
+//!   channel after conversion is clamped to 0.999 (the radiosity system needs ρ < 1), with a
+//!   warning naming the materials. Specular and transmission attributes (`rs`, `ts`, `td`,
+//!   `sides`, `ir`) and `ies` luminaires are ignored with one warning counting them: patches
+//!   are diffuse reflectors and emitters.
+//! - **Geometry.** `f` faces are split into triangles and quads by [`polygon`] (non-convex
+//!   faces and holes joined by seam edges are ear-clipped); `fh` faces with holes are joined
+//!   into one outline by seam edges first. Curved primitives (`cyl`, `cone`, `sph`, `ring`,
+//!   `torus`) are tessellated and `prism` extruded by [`shapes`], with `div` divisions per
+//!   quarter circle (RenderPark's default 4). Vertex normals (`n`) are used only for the axes
+//!   of `ring` and `torus`. Faces with no area are dropped and counted in one warning.
+//! - **Orientation.** Patches are one-sided; a face's front is the side from which its
+//!   vertices run counter-clockwise (MGF's right-hand rule).
+//! - **Transforms.** `xf` pushes a transform (`-t x y z`, `-rx`/`-ry`/`-rz` degrees,
+//!   `-s f`, `-mx`/`-my`/`-mz` mirrors), applied in the order written, and `xf` alone pops it.
+//!   `-i N` applies the transforms after it `N` times; `-a N` makes an array: the enclosed
+//!   entities (up to the matching `xf`, or the end of the file) are instantiated `N` times,
+//!   the `k`-th with the transforms after `-a` applied `k` times (`k = 0 … N − 1`); several
+//!   `-a` give every combination. Transforms apply to geometry when it is instantiated, so a
+//!   vertex defined outside an `xf` block is transformed inside it. A transform that mirrors
+//!   space reverses the winding of faces, so their front stays on the same side.
+//! - **Includes.** `i file [xf arguments]` reads `file` relative to the including file, under
+//!   its own transform (arrays included). A file that includes itself, directly or not, is an
+//!   error naming the line, as is a file that cannot be read.
+//! - **Objects.** `o name` opens an object and `o` closes it; patches belong to the object
+//!   path of open objects joined by `/` (the file's name outside any object).
+//! - **Meshing.** Each piece of a face is one patch, unless `size` is positive: then pieces are
+//!   cut into patches whose edges are at most `size` times the bounding-box diagonal of the
+//!   scene, as for glTF.
+//!
+//! Everything else is an error of one sentence naming the file and line: an unknown entity,
+//! wrong arguments, an undefined vertex, material or colour, a face with fewer than three
+//! vertices, a bare `xf` with nothing to end.
+
+pub mod colour;
+pub mod polygon;
+pub mod shapes;
+
+use crate::LoadedScene;
+use crate::error::GeomError;
+use crate::mesh::SceneBuilder;
+use crate::spec::{KeyValueParams, ParamDoc};
+use colour::Colour;
+use glam::{DMat4, DVec3};
+use radiosity_core::math::bounding_diagonal;
+use radiosity_core::{Material, MaterialId, ObjectId, Real, Spectrum, Vec3};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+
+/// Parameters an MGF file takes after its path.
+pub const PARAMS: &[ParamDoc] = &[
+    ParamDoc {
+        key: "size",
+        default: "0",
+        doc: "largest patch edge as a fraction of the scene's bounding-box diagonal; 0 keeps each face piece as one patch",
+    },
+    ParamDoc {
+        key: "div",
+        default: "4",
+        doc: "divisions per quarter circle of curved primitives (cyl, cone, sph, ring, torus), as RenderPark's default 4",
+    },
+];
+
+/// The largest reflectivity a converted colour keeps.
+const MAX_REFLECTIVITY: Real = 0.999;
+
+/// Loads an MGF file as a scene; see the module documentation for the mapping.
+pub fn load(path: &Path, params: &KeyValueParams) -> Result<LoadedScene, GeomError> {
+    let size = params.real("size", 0.0, |v| v >= 0.0, "a fraction of the bounding-box diagonal, at least 0")?;
+    let div = params.count("div", 4, 1, 64)?;
+    let name = std::iter::once(path.display().to_string())
+        .chain(params.given().map(|(k, v)| format!(":{k}={v}")))
+        .collect::<String>();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| GeomError::Io { path: path.to_path_buf(), message: e.to_string() })?;
+    let root = Rc::new(parse(path, &text));
+    let mut loader = Loader::new(path, div, name);
+    loader.include_stack.push(std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf()));
+    loader.run(&root, 0..root.entities.len(), 1)?;
+    loader.finish(size)
+}
+
+/// One entity: its first line and its words.
+#[derive(Debug)]
+struct Entity {
+    line: usize,
+    words: Vec<String>,
+}
+
+/// A parsed file.
+#[derive(Debug)]
+struct Source {
+    path: PathBuf,
+    entities: Vec<Entity>,
+}
+
+/// Splits a file into entities: joins continued lines, drops comments and blank lines.
+fn parse(path: &Path, text: &str) -> Source {
+    let mut entities = Vec::new();
+    let mut pending: Option<(usize, String)> = None;
+    for (i, raw) in text.lines().enumerate() {
+        let trimmed = raw.trim_end();
+        let (body, continues) = match trimmed.strip_suffix('\\') {
+            Some(body) => (body, true),
+            None => (trimmed, false),
+        };
+        let (line, mut acc) = pending.take().unwrap_or((i + 1, String::new()));
+        acc.push(' ');
+        acc.push_str(body);
+        if continues {
+            pending = Some((line, acc));
+            continue;
+        }
+        let words: Vec<String> = acc.split_whitespace().map(str::to_string).collect();
+        if words.first().is_some_and(|w| !w.starts_with('#')) {
+            entities.push(Entity { line, words });
+        }
+    }
+    if let Some((line, acc)) = pending {
+        let words: Vec<String> = acc.split_whitespace().map(str::to_string).collect();
+        if words.first().is_some_and(|w| !w.starts_with('#')) {
+            entities.push(Entity { line, words });
+        }
+    }
+    Source { path: path.to_path_buf(), entities }
+}
+
+/// An MGF material as far as radiosity needs it.
+#[derive(Clone, Debug, Default)]
+struct Mat {
+    rd: Real,
+    rd_colour: Colour,
+    ed: Real,
+    ed_colour: Colour,
+}
+
+/// A vertex: position and (optional, zero if absent) normal.
+#[derive(Clone, Debug, Default)]
+struct Vertex {
+    p: Vec3,
+    n: Vec3,
+}
+
+/// A named context (colours, materials, vertices): the named values and the current one.
+#[derive(Debug)]
+struct Context<T> {
+    kind: &'static str,
+    named: HashMap<String, T>,
+    current: T,
+    current_name: Option<String>,
+}
+
+impl<T: Clone + Default> Context<T> {
+    fn new(kind: &'static str) -> Self {
+        Context { kind, named: HashMap::new(), current: T::default(), current_name: None }
+    }
+
+    fn get(&self, name: &str, at: &At<'_>) -> Result<&T, GeomError> {
+        self.named.get(name).ok_or_else(|| at.undefined(self.kind, name))
+    }
+
+    /// `c`, `c name`, `c name =`, `c name = template`.
+    fn select(&mut self, words: &[String], at: &At<'_>) -> Result<(), GeomError> {
+        match words {
+            [_] => {
+                self.current = T::default();
+                self.current_name = None;
+            }
+            [_, name] => {
+                self.current = self.get(name, at)?.clone();
+                self.current_name = Some(name.clone());
+            }
+            [_, name, eq] if eq == "=" => {
+                self.current = T::default();
+                self.named.insert(name.clone(), self.current.clone());
+                self.current_name = Some(name.clone());
+            }
+            [_, name, eq, template] if eq == "=" => {
+                self.current = self.get(template, at)?.clone();
+                self.named.insert(name.clone(), self.current.clone());
+                self.current_name = Some(name.clone());
+            }
+            _ => return Err(at.bad(format!("'{}' takes a name, 'name =' or 'name = template'", words[0]))),
+        }
+        Ok(())
+    }
+
+    /// Changes the current value (and the named one it is).
+    fn modify(&mut self, f: impl FnOnce(&mut T)) {
+        f(&mut self.current);
+        if let Some(name) = &self.current_name {
+            self.named.insert(name.clone(), self.current.clone());
+        }
+    }
+}
+
+/// Where an entity is, for error messages.
+struct At<'a> {
+    path: &'a Path,
+    line: usize,
+}
+
+impl At<'_> {
+    fn bad(&self, message: String) -> GeomError {
+        GeomError::MgfBadEntity { path: self.path.to_path_buf(), line: self.line, message }
+    }
+
+    fn undefined(&self, kind: &'static str, name: &str) -> GeomError {
+        GeomError::MgfUndefined { path: self.path.to_path_buf(), line: self.line, kind, name: name.to_string() }
+    }
+
+    fn real(&self, entity: &str, word: &str) -> Result<Real, GeomError> {
+        word.parse::<Real>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| self.bad(format!("'{entity}' expects a number, found '{word}'")))
+    }
+
+    fn reals<const N: usize>(&self, words: &[String]) -> Result<[Real; N], GeomError> {
+        if words.len() != N + 1 {
+            return Err(self.bad(format!("'{}' takes {N} numbers, found {}", words[0], words.len() - 1)));
+        }
+        let mut out = [0.0; N];
+        for (o, w) in out.iter_mut().zip(&words[1..]) {
+            *o = self.real(&words[0], w)?;
+        }
+        Ok(out)
+    }
+}
+
+/// How a group of `xf` arguments repeats.
+enum Repeat {
+    Once,
+    Iterate(usize),
+    Array(usize),
+}
+
+/// The instances of an `xf` argument list: one matrix per array element (one if no `-a`).
+fn transforms(words: &[String], at: &At<'_>) -> Result<Vec<DMat4>, GeomError> {
+    let mut groups: Vec<(Repeat, DMat4)> = vec![(Repeat::Once, DMat4::IDENTITY)];
+    let mut i = 0;
+    let number = |i: usize| -> Result<Real, GeomError> {
+        let w = words.get(i).ok_or_else(|| at.bad(format!("'xf {}' is missing a number", words[i - 1])))?;
+        at.real("xf", w)
+    };
+    while i < words.len() {
+        let flag = words[i].as_str();
+        let m = match flag {
+            "-t" => {
+                let v = DVec3::new(number(i + 1)?, number(i + 2)?, number(i + 3)?);
+                i += 3;
+                DMat4::from_translation(v)
+            }
+            "-rx" | "-ry" | "-rz" => {
+                let a = number(i + 1)?.to_radians();
+                i += 1;
+                match flag {
+                    "-rx" => DMat4::from_rotation_x(a),
+                    "-ry" => DMat4::from_rotation_y(a),
+                    _ => DMat4::from_rotation_z(a),
+                }
+            }
+            "-s" => {
+                let s = number(i + 1)?;
+                if s == 0.0 {
+                    return Err(at.bad("'xf -s' must not scale by 0".into()));
+                }
+                i += 1;
+                DMat4::from_scale(DVec3::splat(s))
+            }
+            "-mx" => DMat4::from_scale(DVec3::new(-1.0, 1.0, 1.0)),
+            "-my" => DMat4::from_scale(DVec3::new(1.0, -1.0, 1.0)),
+            "-mz" => DMat4::from_scale(DVec3::new(1.0, 1.0, -1.0)),
+            "-i" | "-a" => {
+                let n = number(i + 1)?;
+                if !(n >= 1.0 && n.fract() == 0.0 && n <= 1e6) {
+                    return Err(at.bad(format!("'xf {flag}' needs a positive whole count, found {n}")));
+                }
+                i += 2;
+                let repeat = if flag == "-i" { Repeat::Iterate(n as usize) } else { Repeat::Array(n as usize) };
+                groups.push((repeat, DMat4::IDENTITY));
+                continue;
+            }
+            _ => return Err(at.bad(format!("'xf' has no option '{flag}'"))),
+        };
+        i += 1;
+        let last = groups.last_mut().expect("groups start non-empty");
+        last.1 = m * last.1;
+    }
+    let mut instances = vec![DMat4::IDENTITY];
+    for (repeat, m) in groups {
+        instances = match repeat {
+            Repeat::Once => instances.into_iter().map(|t| m * t).collect(),
+            Repeat::Iterate(n) => {
+                let p = (0..n).fold(DMat4::IDENTITY, |acc, _| m * acc);
+                instances.into_iter().map(|t| p * t).collect()
+            }
+            Repeat::Array(n) => {
+                let mut out = Vec::with_capacity(instances.len() * n);
+                let mut p = DMat4::IDENTITY;
+                for _ in 0..n {
+                    out.extend(instances.iter().map(|t| p * *t));
+                    p = m * p;
+                }
+                out
+            }
+        };
+    }
+    Ok(instances)
+}
+
+/// A face ready for meshing.
+struct Face {
+    points: Vec<Vec3>,
+    material: MaterialId,
+    object: ObjectId,
+}
+
+struct Loader {
+    root: PathBuf,
+    div: usize,
+    builder: SceneBuilder,
+    colours: Context<Colour>,
+    materials: Context<Mat>,
+    vertices: Context<Vertex>,
+    /// Cumulative transforms; the last is current.
+    xf: Vec<DMat4>,
+    objects: Vec<String>,
+    include_stack: Vec<PathBuf>,
+    sources: HashMap<PathBuf, Rc<Source>>,
+    faces: Vec<Face>,
+    material_ids: HashMap<(String, [u64; 6]), MaterialId>,
+    object_ids: HashMap<String, ObjectId>,
+    ignored: BTreeMap<String, usize>,
+    clamped: BTreeSet<String>,
+    degenerate: usize,
+    read: usize,
+}
+
+impl Loader {
+    fn new(root: &Path, div: usize, name: String) -> Self {
+        Loader {
+            root: root.to_path_buf(),
+            div,
+            builder: SceneBuilder::new(name),
+            colours: Context::new("colour"),
+            materials: Context::new("material"),
+            vertices: Context::new("vertex"),
+            xf: vec![DMat4::IDENTITY],
+            objects: Vec::new(),
+            include_stack: Vec::new(),
+            sources: HashMap::new(),
+            faces: Vec::new(),
+            material_ids: HashMap::new(),
+            object_ids: HashMap::new(),
+            ignored: BTreeMap::new(),
+            clamped: BTreeSet::new(),
+            degenerate: 0,
+            read: 0,
+        }
+    }
+
+    /// Runs the entities `range` of `src`; a bare `xf` may not pop below `floor` transforms.
+    fn run(&mut self, src: &Rc<Source>, range: Range<usize>, floor: usize) -> Result<(), GeomError> {
+        let mut i = range.start;
+        while i < range.end {
+            let e = &src.entities[i];
+            let at = At { path: &src.path, line: e.line };
+            if e.words[0] == "xf" {
+                if e.words.len() == 1 {
+                    if self.xf.len() <= floor {
+                        return Err(at.bad("'xf' without arguments ends no transform".into()));
+                    }
+                    self.xf.pop();
+                    i += 1;
+                    continue;
+                }
+                let instances = transforms(&e.words[1..], &at)?;
+                let current = *self.xf.last().expect("the identity is never popped");
+                if instances.len() == 1 {
+                    self.xf.push(current * instances[0]);
+                    i += 1;
+                    continue;
+                }
+                let end = matching_end(src, i, range.end);
+                let depth = self.xf.len();
+                for m in instances {
+                    self.xf.push(current * m);
+                    self.run(src, i + 1..end, depth + 1)?;
+                    self.xf.truncate(depth);
+                }
+                i = end + 1;
+                continue;
+            }
+            self.entity(&e.words, &at)?;
+            i += 1;
+        }
+        Ok(())
+    }
+
+    fn entity(&mut self, words: &[String], at: &At<'_>) -> Result<(), GeomError> {
+        let name = words[0].as_str();
+        match name {
+            "c" => self.colours.select(words, at)?,
+            "cxy" => {
+                let [x, y] = at.reals::<2>(words)?;
+                let c = Colour::from_xy(x, y).ok_or_else(|| at.bad(format!("'cxy {x} {y}' is not a chromaticity")))?;
+                self.colours.modify(|v| *v = c);
+            }
+            "cspec" => {
+                if words.len() < 5 {
+                    return Err(at.bad("'cspec' takes a wavelength range and at least two samples".into()));
+                }
+                let v: Vec<Real> = words[1..].iter().map(|w| at.real("cspec", w)).collect::<Result<_, _>>()?;
+                let c = Colour::from_samples(v[0], v[1], &v[2..])
+                    .ok_or_else(|| at.bad("'cspec' gives no visible light (or a bad wavelength range)".into()))?;
+                self.colours.modify(|v| *v = c);
+            }
+            "cct" => {
+                let [t] = at.reals::<1>(words)?;
+                let c = Colour::black_body(t).ok_or_else(|| at.bad(format!("'cct {t}' is not a temperature")))?;
+                self.colours.modify(|v| *v = c);
+            }
+            "cmix" => {
+                if words.len() < 3 || words.len() % 2 == 0 {
+                    return Err(at.bad("'cmix' takes pairs of weight and colour name".into()));
+                }
+                let mut parts = Vec::new();
+                for pair in words[1..].chunks(2) {
+                    parts.push((at.real("cmix", &pair[0])?, *self.colours.get(&pair[1], at)?));
+                }
+                let c = Colour::mix(&parts).ok_or_else(|| at.bad("'cmix' weights sum to no light".into()))?;
+                self.colours.modify(|v| *v = c);
+            }
+            "m" => self.materials.select(words, at)?,
+            "rd" | "ed" => {
+                let [v] = at.reals::<1>(words)?;
+                if v < 0.0 || (name == "rd" && v > 1.0) {
+                    return Err(at.bad(format!("'{name} {v}' is out of range")));
+                }
+                let c = self.colours.current;
+                self.materials.modify(|m| {
+                    if name == "rd" {
+                        (m.rd, m.rd_colour) = (v, c);
+                    } else {
+                        (m.ed, m.ed_colour) = (v, c);
+                    }
+                });
+            }
+            "rs" | "ts" | "td" | "sides" | "ir" | "ies" => *self.ignored.entry(name.to_string()).or_default() += 1,
+            "v" => self.vertices.select(words, at)?,
+            "p" | "n" => {
+                let [x, y, z] = at.reals::<3>(words)?;
+                let v = Vec3::new(x, y, z);
+                self.vertices.modify(|vx| if name == "p" { vx.p = v } else { vx.n = v });
+            }
+            "o" => {
+                if words.len() == 1 {
+                    self.objects.pop();
+                } else {
+                    self.objects.push(words[1..].join(" "));
+                }
+            }
+            "i" => self.include(words, at)?,
+            "f" => {
+                if words.len() < 4 {
+                    return Err(at.bad(format!("a face needs at least 3 vertices, found {}", words.len() - 1)));
+                }
+                let points = self.points(&words[1..], at)?;
+                self.emit(vec![points], at)?;
+            }
+            "fh" => {
+                let points = self.face_with_holes(&words[1..], at)?;
+                self.emit(vec![points], at)?;
+            }
+            "sph" | "cyl" | "cone" | "ring" | "torus" | "prism" => {
+                let faces = self.shape(words, at)?;
+                self.emit(faces, at)?;
+            }
+            _ => {
+                return Err(GeomError::MgfUnknownEntity {
+                    path: at.path.to_path_buf(),
+                    line: at.line,
+                    entity: name.to_string(),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    fn vertex(&self, name: &str, at: &At<'_>) -> Result<&Vertex, GeomError> {
+        self.vertices.get(name, at)
+    }
+
+    fn points(&self, names: &[String], at: &At<'_>) -> Result<Vec<Vec3>, GeomError> {
+        names.iter().map(|n| self.vertex(n, at).map(|v| v.p)).collect()
+    }
+
+    /// `fh v… - h… - h…`: the outline with each hole joined to it by a seam between their
+    /// closest vertices.
+    fn face_with_holes(&self, words: &[String], at: &At<'_>) -> Result<Vec<Vec3>, GeomError> {
+        let mut loops = words.split(|w| w == "-");
+        let mut outline = self.points(loops.next().unwrap_or_default(), at)?;
+        if outline.len() < 3 {
+            return Err(at.bad(format!("a face needs at least 3 vertices, found {}", outline.len())));
+        }
+        for hole in loops {
+            let hole = self.points(hole, at)?;
+            if hole.len() < 3 {
+                return Err(at.bad(format!("a hole needs at least 3 vertices, found {}", hole.len())));
+            }
+            let (mut best, mut oi, mut hi) = (Real::INFINITY, 0, 0);
+            for (i, o) in outline.iter().enumerate() {
+                for (j, h) in hole.iter().enumerate() {
+                    let d = (*o - *h).length_squared();
+                    if d < best {
+                        (best, oi, hi) = (d, i, j);
+                    }
+                }
+            }
+            let mut joined = outline[..=oi].to_vec();
+            joined.extend((0..=hole.len()).map(|k| hole[(hi + k) % hole.len()]));
+            joined.extend_from_slice(&outline[oi..]);
+            outline = joined;
+        }
+        Ok(outline)
+    }
+
+    fn shape(&self, words: &[String], at: &At<'_>) -> Result<Vec<Vec<Vec3>>, GeomError> {
+        let entity = words[0].as_str();
+        let div = self.div;
+        let args = &words[1..];
+        let expect = |n: usize| {
+            if args.len() == n {
+                Ok(())
+            } else {
+                Err(at.bad(format!("'{entity}' takes {n} arguments, found {}", args.len())))
+            }
+        };
+        let result = match entity {
+            "sph" => {
+                expect(2)?;
+                shapes::sphere(self.vertex(&args[0], at)?.p, at.real(entity, &args[1])?, div)
+            }
+            "cyl" => {
+                expect(3)?;
+                let r = at.real(entity, &args[1])?;
+                shapes::cone(self.vertex(&args[0], at)?.p, r, self.vertex(&args[2], at)?.p, r, div)
+            }
+            "cone" => {
+                expect(4)?;
+                let (r1, r2) = (at.real(entity, &args[1])?, at.real(entity, &args[3])?);
+                shapes::cone(self.vertex(&args[0], at)?.p, r1, self.vertex(&args[2], at)?.p, r2, div)
+            }
+            "ring" | "torus" => {
+                expect(3)?;
+                let v = self.vertex(&args[0], at)?;
+                let (r0, r1) = (at.real(entity, &args[1])?, at.real(entity, &args[2])?);
+                if entity == "ring" {
+                    shapes::ring(v.p, v.n, r0, r1, div)
+                } else {
+                    shapes::torus(v.p, v.n, r0, r1, div)
+                }
+            }
+            _ => {
+                if args.len() < 4 {
+                    return Err(at.bad(format!("'prism' takes at least 3 vertices and a length, found {}", args.len())));
+                }
+                let base = self.points(&args[..args.len() - 1], at)?;
+                shapes::prism(&base, at.real(entity, &args[args.len() - 1])?)
+            }
+        };
+        result.map_err(|m| at.bad(format!("'{entity}': {m}")))
+    }
+
+    /// Transforms polygons by the current transform and queues them with the current material
+    /// and object.
+    fn emit(&mut self, polygons: Vec<Vec<Vec3>>, at: &At<'_>) -> Result<(), GeomError> {
+        let m = *self.xf.last().expect("the identity is never popped");
+        let mirrored = m.determinant() < 0.0;
+        let material = self.material_id(at)?;
+        let object = self.object_id();
+        for polygon in polygons {
+            let mut points: Vec<Vec3> = polygon.iter().map(|p| m.transform_point3(*p)).collect();
+            if mirrored {
+                points.reverse();
+            }
+            self.faces.push(Face { points, material, object });
+        }
+        Ok(())
+    }
+
+    fn material_id(&mut self, at: &At<'_>) -> Result<MaterialId, GeomError> {
+        let mat = &self.materials.current;
+        let name = self.materials.current_name.clone().unwrap_or_else(|| "(unnamed material)".into());
+        let mut reflectivity = mat.rd_colour.rgb(mat.rd);
+        let emission = mat.ed_colour.rgb(mat.ed);
+        let key = {
+            let r = reflectivity.0;
+            let e = emission.0;
+            (name.clone(), [r[0], r[1], r[2], e[0], e[1], e[2]].map(Real::to_bits))
+        };
+        if let Some(&id) = self.material_ids.get(&key) {
+            return Ok(id);
+        }
+        if reflectivity.0.iter().any(|&r| r > MAX_REFLECTIVITY) {
+            self.clamped.insert(name.clone());
+            reflectivity = Spectrum(reflectivity.0.map(|r| r.min(MAX_REFLECTIVITY)));
+        }
+        let id = self
+            .builder
+            .material(Material::new(name.clone(), reflectivity, emission))
+            .map_err(|e| at.bad(format!("material '{name}': {e}")))?;
+        self.material_ids.insert(key, id);
+        Ok(id)
+    }
+
+    fn object_id(&mut self) -> ObjectId {
+        let name = if self.objects.is_empty() {
+            self.root.file_name().map_or_else(|| "(top level)".into(), |n| n.to_string_lossy().into_owned())
+        } else {
+            self.objects.join("/")
+        };
+        if let Some(&id) = self.object_ids.get(&name) {
+            return id;
+        }
+        let id = self.builder.object(name.clone());
+        self.object_ids.insert(name, id);
+        id
+    }
+
+    /// `i file [xf arguments]`.
+    fn include(&mut self, words: &[String], at: &At<'_>) -> Result<(), GeomError> {
+        let Some(file) = words.get(1) else {
+            return Err(at.bad("'i' needs a file name".into()));
+        };
+        let include = at.path.parent().unwrap_or(Path::new(".")).join(file);
+        let missing = |message: String| GeomError::MgfMissingInclude {
+            path: at.path.to_path_buf(),
+            line: at.line,
+            include: include.clone(),
+            message,
+        };
+        let canonical = std::fs::canonicalize(&include).map_err(|e| missing(e.to_string()))?;
+        if self.include_stack.contains(&canonical) {
+            return Err(GeomError::MgfIncludeCycle { path: at.path.to_path_buf(), line: at.line, include });
+        }
+        let source = match self.sources.get(&canonical) {
+            Some(s) => Rc::clone(s),
+            None => {
+                let text = std::fs::read_to_string(&include).map_err(|e| missing(e.to_string()))?;
+                let s = Rc::new(parse(&include, &text));
+                self.sources.insert(canonical.clone(), Rc::clone(&s));
+                s
+            }
+        };
+        let instances = transforms(&words[2..], at)?;
+        let current = *self.xf.last().expect("the identity is never popped");
+        let depth = self.xf.len();
+        self.include_stack.push(canonical);
+        for m in instances {
+            self.xf.push(current * m);
+            self.run(&source, 0..source.entities.len(), depth + 1)?;
+            self.xf.truncate(depth);
+        }
+        self.include_stack.pop();
+        Ok(())
+    }
+
+    fn finish(mut self, size: Real) -> Result<LoadedScene, GeomError> {
+        let path = self.root.clone();
+        let with_file = |e: GeomError| match e {
+            GeomError::Core { context, cause } => GeomError::core(format!("{}: {context}", path.display()), cause),
+            e => e,
+        };
+        let mut pieces = Vec::new();
+        for face in std::mem::take(&mut self.faces) {
+            self.read += 1;
+            match polygon::split(&face.points) {
+                Ok(parts) => pieces.extend(parts.into_iter().map(|p| (p, face.material, face.object))),
+                Err(polygon::Degenerate) => self.degenerate += 1,
+            }
+        }
+        if pieces.is_empty() {
+            let detail = if self.degenerate > 0 {
+                format!("; all {} of its faces are degenerate", self.degenerate)
+            } else {
+                "; it has no faces".to_string()
+            };
+            return Err(GeomError::EmptyFile { path, detail });
+        }
+        let target = size * bounding_diagonal(pieces.iter().flat_map(|(p, _, _)| p.iter().copied()));
+        for (p, material, object) in pieces {
+            let added = match (size > 0.0, p.as_slice()) {
+                (true, &[a, b, c]) => self.builder.triangle_sized([a, b, c], target, material, object),
+                (true, &[a, b, c, d]) => self.builder.quad_sized([a, b, c, d], target, material, object),
+                _ => self.builder.polygon(&p, material, object),
+            };
+            added.map_err(with_file)?;
+        }
+        let mut warnings = Vec::new();
+        let file = path.display();
+        if self.degenerate > 0 {
+            let s = if self.degenerate == 1 { "" } else { "s" };
+            warnings.push(format!(
+                "{file}: dropped {} degenerate face{s} (zero area) of {} read",
+                self.degenerate, self.read
+            ));
+        }
+        if !self.ignored.is_empty() {
+            let total: usize = self.ignored.values().sum();
+            let list = self.ignored.iter().map(|(k, n)| format!("{k} ×{n}")).collect::<Vec<_>>().join(", ");
+            warnings.push(format!(
+                "{file}: ignored {total} non-diffuse attributes ({list}): patches are diffuse reflectors and emitters only"
+            ));
+        }
+        if !self.clamped.is_empty() {
+            let list = self.clamped.iter().map(|n| format!("'{n}'")).collect::<Vec<_>>().join(", ");
+            warnings.push(format!(
+                "{file}: reflectivity of {list} reaches 1 in a channel after colour conversion and is clamped to {MAX_REFLECTIVITY}"
+            ));
+        }
+        let scene = self.builder.build().map_err(with_file)?;
+        Ok(LoadedScene { scene, warnings })
+    }
+}
+
+/// The index of the bare `xf` that ends the block opened at `start`, or `end` if none does.
+fn matching_end(src: &Source, start: usize, end: usize) -> usize {
+    let mut depth = 0usize;
+    for j in start..end {
+        let w = &src.entities[j].words;
+        if w[0] == "xf" {
+            if w.len() > 1 {
+                depth += 1;
+            } else {
+                depth -= 1;
+                if depth == 0 {
+                    return j;
+                }
+            }
+        }
+    }
+    end
+}

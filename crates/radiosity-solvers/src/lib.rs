@@ -103,7 +103,8 @@ pub const BEYOND_PAPER_SOLVERS: [&str; 3] =
 pub const SOLVER_NAMES: &str = "jacobi, gauss-seidel, sor-ω (e.g. sor-1.2); southwell, pr, feda, shao, xu, xu-direct, \
      xu-ambient, relax-ω (e.g. relax-1.5); group-jacobi-gM and group-gs-gM, group gathering (group-jacobi-g30, \
      group-gs-g30), with :groups=index or :groups=spatial; group-S-gM for a shooting method S (group-pr-g30, \
-     group-xu-g30); S-gM and S-gM-mK, group-accelerated (pr-g30, xu-g30-m480), with :f=N or :f=auto[:target=0.05]";
+     group-xu-g30); S-gM and S-gM-mK, group-accelerated (pr-g30, xu-g30-m480), with :f=N or :f=auto[:target=0.05], \
+     and beyond the paper :groups=interaction, :inner=gs, :adaptive=0.1";
 
 /// The overshoot and selection weighting of a shooting method's name (`pr`, `xu`, `relax-1.5`).
 fn shooting_rule(name: &str) -> Option<Result<(Overshoot, bool), SolverError>> {

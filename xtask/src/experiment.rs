@@ -21,8 +21,8 @@ pub struct SolveArgs {
     #[arg(long, value_name = "SCENE")]
     pub scene: String,
     /// The solver: jacobi, gauss-seidel, sor-ω, southwell, pr, feda, shao, xu, xu-direct,
-    /// xu-ambient, relax-ω; group-jacobi-gM, group-gs-gM[:groups=spatial] (group gathering);
-    /// group-S-gM (group shooting); S-gM[-mK][:f=N|:f=auto] (group accelerated); reference
+    /// xu-ambient, relax-ω; group-jacobi-gM, `group-gs-gM[:groups=spatial]` (group gathering);
+    /// group-S-gM (group shooting); `S-gM[-mK][:f=N|:f=auto]` (group accelerated); reference
     /// (the exact solution).
     #[arg(long, value_name = "SOLVER")]
     pub solver: String,

@@ -18,10 +18,10 @@
 //!   warning naming the materials. Specular and transmission attributes (`rs`, `ts`, `td`,
 //!   `sides`, `ir`) and `ies` luminaires are ignored with one warning counting them: patches
 //!   are diffuse reflectors and emitters.
-//! - **Geometry.** `f` faces are split into triangles and quads by [`polygon`] (non-convex
+//! - **Geometry.** `f` faces are split into triangles and quads by `polygon` (non-convex
 //!   faces and holes joined by seam edges are ear-clipped); `fh` faces with holes are joined
 //!   into one outline by seam edges first. Curved primitives (`cyl`, `cone`, `sph`, `ring`,
-//!   `torus`) are tessellated and `prism` extruded by [`shapes`], with `div` divisions per
+//!   `torus`) are tessellated and `prism` extruded by `shapes`, with `div` divisions per
 //!   quarter circle (RenderPark's default 4). Vertex normals (`n`) are used only for the axes
 //!   of `ring` and `torus`. Faces with no area are dropped and counted in one warning.
 //! - **Orientation.** Patches are one-sided; a face's front is the side from which its
@@ -48,8 +48,8 @@
 //! vertices, a bare `xf` with nothing to end.
 
 pub mod colour;
-pub mod polygon;
-pub mod shapes;
+pub(crate) mod polygon;
+pub(crate) mod shapes;
 
 use crate::LoadedScene;
 use crate::error::GeomError;

@@ -139,7 +139,12 @@ impl<'p> Experiment<'p> {
         } else {
             self.run(solver, StopRules::parse(until)?, &mut NoObserver)?.state
         };
-        let k = state.channels;
-        Ok(state.radiosity.chunks_exact(k).map(|b| if k == 1 { [b[0]; 3] } else { [b[0], b[1], b[2]] }).collect())
+        Ok(rgb(&state))
     }
+}
+
+/// The radiosity of every patch of `state` as RGB (a grey channel repeated three times).
+pub fn rgb(state: &State) -> Vec<[Real; 3]> {
+    let k = state.channels;
+    state.radiosity.chunks_exact(k).map(|b| if k == 1 { [b[0]; 3] } else { [b[0], b[1], b[2]] }).collect()
 }

@@ -8,7 +8,7 @@
 //! solver run under the stop rules. The run's columns, steps and seconds are the solver's
 //! alone.
 
-use crate::experiment::{Experiment, SolveArgs};
+use crate::experiment::{Experiment, SolveArgs, rgb};
 use crate::scene_report::{prepare, print_warnings};
 use anyhow::{Context, Result};
 use radiosity_core::{LinearSystem, Real};
@@ -186,22 +186,19 @@ fn report(args: &Args, experiment: &Experiment<'_>, run: Outcome, reached: Vec<R
         println!("reference    {}; {}", stats.reference, stats.certificate);
         return Ok(());
     }
-    let k = system.channels().count();
     let patches = scene
         .patches()
         .iter()
+        .zip(rgb(&run.state))
         .enumerate()
-        .map(|(i, p)| {
-            let b = &run.state.radiosity[i * k..(i + 1) * k];
-            PatchJson {
-                id: i,
-                area: p.area(),
-                centroid: p.centroid().to_array(),
-                normal: p.normal().to_array(),
-                reflectivity: scene.reflectivity(i).0,
-                emission: scene.emission(i).0,
-                radiosity: if k == 1 { [b[0]; 3] } else { [b[0], b[1], b[2]] },
-            }
+        .map(|(i, (p, radiosity))| PatchJson {
+            id: i,
+            area: p.area(),
+            centroid: p.centroid().to_array(),
+            normal: p.normal().to_array(),
+            reflectivity: scene.reflectivity(i).0,
+            emission: scene.emission(i).0,
+            radiosity,
         })
         .collect();
     let json = SolveJson { scene: &args.run.scene, solver: run.solver.clone(), ff: spec.canonical(), patches, stats };

@@ -131,8 +131,6 @@ pub struct GroupAccelerated {
     since_group: u64,
     /// Point steps between group steps (0 before the first).
     period: u64,
-    /// Group steps run.
-    groups: u64,
 }
 
 impl GroupAccelerated {
@@ -170,13 +168,7 @@ impl GroupAccelerated {
             emitters_count: 0,
             since_group: 0,
             period: 0,
-            groups: 0,
         })
-    }
-
-    /// Group steps run so far.
-    pub fn group_steps(&self) -> u64 {
-        self.groups
     }
 
     fn group_due(&self) -> bool {
@@ -208,7 +200,6 @@ impl GroupAccelerated {
         }
         let seconds = start.elapsed().as_secs_f64();
         state.group_seconds += seconds;
-        self.groups += 1;
         self.since_group = 0;
         if let Frequency::Fixed(f) = self.params.frequency {
             self.period = f;
@@ -288,7 +279,7 @@ impl GroupAccelerated {
             }
         }
         let j = argmax(&values);
-        let column = if self.emitters_left[j] || self.is_emitter(problem, j) {
+        let column = if self.is_emitter(problem, j) {
             // Emitters' columns are not kept (see the module documentation).
             self.scratch.resize(problem.n(), 0.0);
             problem.column(j, &mut self.scratch);
@@ -322,7 +313,6 @@ impl Solver for GroupAccelerated {
         self.emitters_count = self.emitters_left.iter().filter(|&&e| e).count();
         self.since_group = 0;
         self.period = 0;
-        self.groups = 0;
         Ok(())
     }
 

@@ -170,11 +170,6 @@ impl OvershootTracker {
         Ok(OvershootTracker { rule, by_area, mean_rho: Vec::new(), last_row: Vec::new(), power_then: Vec::new() })
     }
 
-    /// The rule.
-    pub fn rule(&self) -> Overshoot {
-        self.rule
-    }
-
     /// Prepares for a run on `problem`.
     pub fn init(&mut self, problem: &Problem<'_>) {
         let (system, k, n) = (problem.system(), problem.channels(), problem.n());

@@ -113,7 +113,7 @@ impl<'a> Problem<'a> {
     }
 
     /// Turns column `i`, in place, into row `i` by reciprocity: `F_ij = F_ji A_j / A_i`.
-    pub fn reciprocal_row(area: &[Real], i: usize, column: &mut [Real]) {
+    fn reciprocal_row(area: &[Real], i: usize, column: &mut [Real]) {
         for (j, f) in column.iter_mut().enumerate() {
             *f *= area[j] / area[i];
         }

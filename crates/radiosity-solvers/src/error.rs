@@ -34,7 +34,8 @@ pub enum SolverError {
         /// What is wrong with it.
         reason: String,
     },
-    /// A group system `Φ_rr y = s` that LU cannot solve.
+    /// A group gathering system `Φ_rr δ = R` that LU cannot solve ([`crate::group_gathering`];
+    /// group shooting falls back to point shots instead, [`crate::group_step`]).
     #[error(
         "step {step}: the group system of {size} patches is singular in channel {channel} (pivot {pivot} is {value}); \
          are the form factors' rows summing far above 1?"

@@ -4,6 +4,29 @@
 //! Timing: a run's time is split into form-factor seconds (measured by the [`Problem`] around
 //! every column) and solve seconds (the rest of each step). Observers run between steps,
 //! outside both, so computing metrics against a reference never counts as solver time.
+//!
+//! ## Divergence and values that are not finite
+//!
+//! Before every step the executor reads the solver's residual power `R`
+//! ([`Solver::residual_power`], when it knows one) and keeps `R_first`, the first one known,
+//! and `R_min`, the smallest so far. The run ends with [`TerminationReason::Diverged`] when
+//!
+//! `R > DIVERGENCE_FACTOR · max(R_min, DIVERGENCE_FLOOR · R_first)`
+//!
+//! with [`DIVERGENCE_FACTOR`] = 1e4 and [`DIVERGENCE_FLOOR`] = 1e-6, `R_min` taken before `R`.
+//! A convergent iteration's residual need not fall monotonically (overshooting and
+//! over-relaxation raise it for a while, gathering reports an estimate), but it does not rise
+//! ten thousandfold above its best. The floor keeps round-off out: near convergence a residual
+//! of 1e-15 may rebound by large factors without meaning anything, so the rise is measured
+//! from no lower than 1e-6 of the first residual. A divergent run returns its state: that the
+//! method diverges on these form factors is a result worth reporting, not an error. The rule
+//! is checked before the stop rules, so a divergence is never reported as a rule that held.
+//!
+//! A residual power that is not finite ends the run with [`SolverError::NonFinite`], naming
+//! the steps taken and the first patch whose radiosity (or shot radiosity `B − ΔB`) is not
+//! finite. The solvers check every value they update and stop the step that produced it
+//! first; this check catches what they cannot see. If every value is finite and only their
+//! sum overflowed, the run ends as diverged, with an infinite residual.
 
 use crate::error::SolverError;
 use crate::problem::Problem;
@@ -14,6 +37,54 @@ use std::time::{Duration, Instant};
 
 /// Relative residual power below which a run has converged to round-off.
 pub const ROUND_OFF: Real = 1e-14;
+
+/// How far the residual power may rise above its smallest value so far before the run is
+/// declared divergent (module doc).
+pub const DIVERGENCE_FACTOR: Real = 1e4;
+
+/// The floor under the smallest residual power in the divergence rule, relative to the first
+/// residual power known (module doc): rebounds from below it are round-off.
+pub const DIVERGENCE_FLOOR: Real = 1e-6;
+
+/// The residual powers the divergence rule remembers.
+#[derive(Clone, Copy, Debug)]
+struct Watch {
+    /// The first residual power known.
+    first: Option<Real>,
+    /// The smallest so far (infinite before the first).
+    minimum: Real,
+}
+
+impl Watch {
+    fn new() -> Watch {
+        Watch { first: None, minimum: Real::INFINITY }
+    }
+
+    /// Takes the residual power `r` of `state` (finite): a divergence, if `r` shows one.
+    fn see(&mut self, state: &State, r: Real) -> Option<TerminationReason> {
+        let first = *self.first.get_or_insert(r);
+        let minimum = self.minimum;
+        self.minimum = minimum.min(r);
+        (minimum.is_finite() && r > DIVERGENCE_FACTOR * minimum.max(DIVERGENCE_FLOOR * first))
+            .then_some(TerminationReason::Diverged { step: state.step, residual: r, minimum })
+    }
+}
+
+/// Why the residual power `r` of `state` is not finite: the first patch whose radiosity, or
+/// else whose shot radiosity `B − ΔB`, is not finite; a divergence with an infinite residual
+/// when every value is finite and only the sum overflowed.
+fn not_finite(state: &State, r: Real, watch: &Watch) -> Result<TerminationReason, SolverError> {
+    let k = state.channels;
+    let shot = |idx: usize| state.radiosity[idx] - state.unshot[idx];
+    let bad = (0..state.radiosity.len())
+        .find(|&idx| !state.radiosity[idx].is_finite())
+        .map(|idx| (idx, state.radiosity[idx]))
+        .or_else(|| (0..state.radiosity.len()).find(|&idx| !shot(idx).is_finite()).map(|idx| (idx, shot(idx))));
+    match bad {
+        Some((idx, value)) => Err(SolverError::NonFinite { step: state.step, patch: idx / k, value }),
+        None => Ok(TerminationReason::Diverged { step: state.step, residual: r, minimum: watch.minimum }),
+    }
+}
 
 /// One solver: how to start and how to take one step.
 pub trait Solver {
@@ -80,7 +151,8 @@ impl<'s> Executor<'s> {
         Executor { solver, rules }
     }
 
-    /// Runs from `B = ΔB = E` until a rule holds, round-off, or the step cap.
+    /// Runs from `B = ΔB = E` until a rule holds, round-off, the step cap, or a divergence
+    /// (module doc).
     pub fn run(&mut self, problem: &Problem<'_>, observer: &mut dyn Observer) -> Result<Run, SolverError> {
         let n = problem.n();
         let mut state = State::from_emission(problem.system().emissions(), problem.channels());
@@ -89,6 +161,7 @@ impl<'s> Executor<'s> {
         self.solver.init(problem, &mut state)?;
         self.account(problem, &mut state, start.elapsed().as_secs_f64(), start_ff);
         let mut error = observer.observe(&state);
+        let mut watch = Watch::new();
         // The cap guards runs whose rules cannot be met; an explicit `steps=` or `columns=`
         // beyond it raises it (one step costs at least one column or none).
         let explicit = self.rules.rules.iter().filter_map(|r| match *r {
@@ -97,7 +170,7 @@ impl<'s> Executor<'s> {
         });
         let cap = explicit.fold((self.rules.step_cap * n as f64).ceil() as u64, u64::max);
         let termination = loop {
-            if let Some(reason) = self.check(problem, &state, error, n) {
+            if let Some(reason) = self.check(problem, &state, error, n, &mut watch)? {
                 break reason;
             }
             if state.step >= cap {
@@ -122,8 +195,25 @@ impl<'s> Executor<'s> {
         state.solve_seconds += (wall - ff).max(0.0);
     }
 
-    fn check(&self, problem: &Problem<'_>, state: &State, error: Option<Real>, n: usize) -> Option<TerminationReason> {
+    /// Why the run ends before the next step, if it does: a residual power that is not finite
+    /// (an error) or shows a divergence, then the stop rules in order, then round-off.
+    fn check(
+        &self,
+        problem: &Problem<'_>,
+        state: &State,
+        error: Option<Real>,
+        n: usize,
+        watch: &mut Watch,
+    ) -> Result<Option<TerminationReason>, SolverError> {
         let residual = self.solver.residual_power(problem, state);
+        if let Some(r) = residual {
+            if !r.is_finite() {
+                return not_finite(state, r, watch).map(Some);
+            }
+            if let Some(diverged) = watch.see(state, r) {
+                return Ok(Some(diverged));
+            }
+        }
         for rule in &self.rules.rules {
             let reason = match *rule {
                 StopRule::Columns(c) if state.columns >= c.resolve(n) => TerminationReason::Columns(state.columns),
@@ -137,8 +227,8 @@ impl<'s> Executor<'s> {
                 }
                 _ => continue,
             };
-            return Some(reason);
+            return Ok(Some(reason));
         }
-        residual.is_some_and(|r| r <= ROUND_OFF).then_some(TerminationReason::RoundOff)
+        Ok(residual.is_some_and(|r| r <= ROUND_OFF).then_some(TerminationReason::RoundOff))
     }
 }

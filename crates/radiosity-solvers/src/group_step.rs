@@ -1,11 +1,12 @@
 //! The group shooting step shared by group shooting and group-accelerated shooting: solve the
-//! group's own interactions exactly, then shoot the result to every patch.
+//! group's own interactions exactly, then shoot the result to every patch; or, when the group
+//! system cannot be trusted, shoot the group's patches one after another.
 //!
 //! ## Rule (DESIGN §4)
 //!
 //! For a group `r` of `m` patches with their columns, and per channel:
 //!
-//! 1. solve `Φ_rr y = s_r` with `s_r = ΔB_r + ΔB⁺_r` and `Φ_rr = I − diag(ρ_r) F_rr`
+//! 1. solve `Φ_rr y = s_r` with `s_r = ΔB_r + ΔB⁺_r` and `Φ_rr = I − N`, `N = diag(ρ_r) F_rr`
 //!    (`m × m`, LU with partial pivoting, [`radiosity_core::dense_lu`]);
 //! 2. for **every** patch `i`, `δ_i = ρ_i Σ_{k∈r} F_ik y_k` and `B_i += δ_i`; for `i` outside
 //!    `r` also `ΔB_i += δ_i`;
@@ -19,29 +20,86 @@
 //! Cost: one `m × m` LU per channel (`O(m³)`), and `O(n m)` per channel for the update. The
 //! columns must already be in hand: this step computes none.
 //!
-//! **Inner Gauss–Seidel** ([`InnerSolve::GaussSeidel`], beyond the paper, which names larger
-//! groups solved iteratively as future work): `y ← s + diag(ρ_r) F_rr y`, patch by patch,
-//! until a sweep changes `y` by less than 1e-13 relative, `O(m²)` a sweep. Its `y` is not
-//! exact, so the group keeps the residual `s − Φ_rr y − ΔB⁺` as unshot (round-off small), and
-//! the unshot radiosity stays exactly the residual of the shot radiosity.
+//! ## When the group system is trusted
+//!
+//! A group system is solved, and its solution amplified through the shot to every patch, only
+//! when it is well posed; otherwise the step falls back (below). The test per channel, and the
+//! estimate it records ([`State::group_condition`], the largest over channels and steps):
+//!
+//! - **LU.** Form factors and reflectivities are non-negative, so `N ≥ 0` entrywise and
+//!   `Φ_rr = I − N` is a Z-matrix. A Z-matrix is a nonsingular M-matrix exactly when the
+//!   spectral radius of `N` is below 1, exactly when some `z > 0` has `Φ_rr z > 0`, and its
+//!   inverse is then `Σ_k N^k ≥ 0` entrywise (Berman & Plemmons, ch. 6, Theorem 2.3:
+//!   semipositive and inverse-positive Z-matrices). The factorisation that solves
+//!   `Φ_rr y = s` also solves `Φ_rr z = 1` ([`radiosity_core::dense_lu::lu_solve_columns`]).
+//!   If every `z_a` is finite and positive, `Φ_rr` is a nonsingular M-matrix, and since
+//!   `Φ_rr⁻¹ ≥ 0`, `‖Φ_rr⁻¹‖_∞ = ‖Φ_rr⁻¹ 1‖_∞ = max_a z_a` exactly, so
+//!   `κ_∞ = ‖Φ_rr‖_∞ · max_a z_a` with `‖Φ_rr‖_∞ = max_a Σ_b |δ_ab − ρ_a F_ab|`: the condition
+//!   number itself, not a bound (Higham, ch. 7 for `κ_∞`, ch. 15 on estimating it). A zero or
+//!   non-finite pivot, a `z_a` that is not finite and positive, or a negative or non-finite
+//!   entry of `N` mean that `Φ_rr` is not a nonsingular M-matrix: the form factors inside the
+//!   group exceed what light can do (some `ρ_a Σ_b F_ab ≥ 1`, since row sums of `N` below 1
+//!   bound its spectral radius below 1). The step then falls back and records `κ_∞ = ∞`. It
+//!   also falls back when `κ_∞ >` [`CONDITION_LIMIT`], recording `κ_∞`.
+//! - **Inner Gauss–Seidel.** With `q = max_a Σ_b |ρ_a F_ab|` over the group (the largest row
+//!   sum of `N`, `‖N‖_∞`) below 1, the Neumann series gives `‖Φ_rr⁻¹‖_∞ ≤ 1/(1 − q)` and
+//!   `‖Φ_rr‖_∞ ≤ 1 + q`, so `κ_∞ ≤ (1 + q)/(1 − q)`, recorded as the estimate; `Φ_rr` is then
+//!   strictly diagonally dominant and the sweeps converge (Saad, §4.2). The step falls back
+//!   when `q ≥ 1` or an entry of `N` is not finite (no bound: recorded as `∞`), when the bound
+//!   exceeds [`CONDITION_LIMIT`] (recorded as the bound), and when the sweeps fail (a value
+//!   that is not finite, or [`MAX_INNER_SWEEPS`] sweeps without meeting the stopping rule
+//!   below; recorded as the bound).
+//!
+//! ## Fallback
+//!
+//! The step does not solve the group. It shoots the group's patches one after another, in
+//! group order, as plain progressive-refinement point shots from the columns already in hand:
+//! for each member `k`, `s_k = ΔB_k` (as it is now, so later shots see earlier ones),
+//! `δ_i = ρ_i F_ik s_k` for every `i`, `B_i += δ_i`, `ΔB_i += δ_i`, then `ΔB_k −= s_k` (zero
+//! for planar patches, `F_kk = 0`; the subtraction keeps the invariant when `F_kk ≠ 0`). The
+//! overshoots are not used. This costs no column, keeps `ΔB` exactly the residual of
+//! `x = B − ΔB`, and cannot amplify anything that a point method would not. The step counts
+//! in [`State::group_fallbacks`]. A system whose groups are not M-matrices is not physical as
+//! a whole either (the spectral radius of `ρ F` is at least that of any principal block): its
+//! runs end as diverged ([`crate::executor`]).
+//!
+//! ## Inner Gauss–Seidel
+//!
+//! [`InnerSolve::GaussSeidel`], beyond the paper, which names larger groups solved iteratively
+//! as future work: `y_a ← (s_a + Σ_{b≠a} N_ab y_b) / (1 − N_aa)`, patch by patch, `O(m²)` a
+//! sweep. It stops on the true residual of the group system: after a sweep that changed `y` by
+//! at most 1e-13 of `Σ_a |y_a|`, it computes `Σ_a |s_a − (Φ_rr y)_a|` and stops once that is
+//! at most 1e-13 `Σ_a |y_a|` (a small change between iterates is only the signal to check; it
+//! proves nothing). Its `y` is not exact, so the group keeps that residual `s − Φ_rr y − ΔB⁺`
+//! as unshot (round-off small), and the unshot radiosity stays exactly the residual of the
+//! shot radiosity. Convergence slows as `q → 1`: on a closed furnace of 30 patches a group
+//! step needed 1297 sweeps at `ρ = 0.99` and would need about 11 900 at `ρ = 0.999`, beyond
+//! [`MAX_INNER_SWEEPS`], so that group falls back.
 //!
 //! Measured (`cargo bench -p radiosity-solvers --bench group_solve`, criterion medians, one
-//! group step on a 3400-patch RGB system, 2 cores): LU against Gauss–Seidel took 0.37 / 0.37 ms
-//! at m = 25, 0.72 / 0.79 at 50, 2.1 / 1.7 at 100, 3.7 / 5.4 at 200 and 12.6 / 12.8 at 400.
-//! There is no crossover up to m = 400: the `O(n m)` shot to every patch costs as much as
-//! either solve, and faer's LU stays as fast as the ~45 sweeps Gauss–Seidel needs at
-//! `ρ F` norm 0.54. LU remains the default.
+//! group step on a 3400-patch RGB system, 2 cores, before the condition estimate): LU against
+//! Gauss–Seidel took 0.37 / 0.37 ms at m = 25, 0.72 / 0.79 at 50, 2.1 / 1.7 at 100, 3.7 / 5.4
+//! at 200 and 12.6 / 12.8 at 400. There is no crossover up to m = 400: the `O(n m)` shot to
+//! every patch costs as much as either solve, and faer's LU stays as fast as the ~45 sweeps
+//! Gauss–Seidel needs at `ρ F` norm 0.54. LU remains the default. The second right-hand side
+//! adds `O(m²)` to the LU's `O(m³)`.
 //!
 //! ## References
 //!
 //! - Rousselle & Renaud, "Group accelerated shooting methods for radiosity", §3.2–3.3.
+//! - Berman & Plemmons 1994, *Nonnegative Matrices in the Mathematical Sciences*, SIAM,
+//!   ch. 6 (nonsingular M-matrices and their nonnegative inverses).
+//! - Higham 2002, *Accuracy and Stability of Numerical Algorithms*, 2nd ed., SIAM, ch. 7
+//!   (condition numbers of linear systems) and ch. 15 (condition number estimation).
+//! - Saad 2003, *Iterative Methods for Sparse Linear Systems*, 2nd ed., SIAM, §4.2
+//!   (convergence of Gauss–Seidel for diagonally dominant matrices).
 
 use crate::error::SolverError;
 use crate::problem::Problem;
-use crate::shooting::receive;
+use crate::shooting::{receive, set_unshot, shoot_column};
 use crate::state::State;
 use radiosity_core::Real;
-use radiosity_core::dense_lu::{SingularPivot, lu_solve};
+use radiosity_core::dense_lu::lu_solve_columns;
 
 /// How a group system `Φ_rr y = s` is solved.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -49,15 +107,123 @@ pub enum InnerSolve {
     /// Dense LU with partial pivoting: exact, `O(m³)`.
     #[default]
     Lu,
-    /// Gauss–Seidel sweeps to 1e-13 relative change: `O(m²)` a sweep.
+    /// Gauss–Seidel sweeps until the group system's residual is 1e-13 of the solution:
+    /// `O(m²)` a sweep.
     GaussSeidel,
 }
 
-/// Sweeps allowed to the inner Gauss–Seidel before it gives up.
-const MAX_INNER_SWEEPS: usize = 10_000;
+/// The largest condition number `κ_∞(Φ_rr)` (or, for the inner Gauss–Seidel, its bound) with
+/// which a group system is solved; a worse group falls back to point shots. LU is backward
+/// stable, so the group's residual `s − Φ_rr y`, which the step takes as zero, is round-off
+/// relative to `‖Φ_rr‖ ‖y‖`, that is up to about `κ_∞ ε` relative to `s` (Higham, ch. 7): at
+/// the limit about 1e-6, the most the step lets into the invariant "ΔB is the residual of
+/// `x`". Physical groups stay far below it: a closed furnace of reflectivity `ρ` has
+/// `κ_∞ = (1 + ρ)/(1 − ρ)`, 2·10⁴ at `ρ = 0.9999`.
+pub const CONDITION_LIMIT: Real = 1e10;
+
+/// Sweeps allowed to the inner Gauss–Seidel before it gives up (and the step falls back).
+pub const MAX_INNER_SWEEPS: usize = 10_000;
+
+/// The inner Gauss–Seidel's tolerance: the residual `Σ |s − Φ_rr y|` relative to `Σ |y|`.
+const INNER_TOLERANCE: Real = 1e-13;
+
+/// What a group system gave in one channel.
+enum ChannelSolve {
+    /// Trusted: the solution, the residual the group keeps (zero for LU) and `κ_∞` (or its
+    /// bound).
+    Solved { y: Vec<Real>, left: Vec<Real>, condition: Real },
+    /// Not trusted: the condition estimate that refused it (infinite when the system is
+    /// singular, not an M-matrix, or without a bound).
+    Refused { condition: Real },
+}
+
+/// `N = diag(ρ_r) F_rr` for channel `c`, row-major.
+fn group_matrix(problem: &Problem<'_>, group: &[usize], columns: &[&[Real]], c: usize) -> Vec<Real> {
+    let m = group.len();
+    let system = problem.system();
+    let mut n_rr = vec![0.0; m * m];
+    for (a, &g) in group.iter().enumerate() {
+        let rho = system.rho(g, c);
+        for (b, column) in columns.iter().enumerate() {
+            n_rr[a * m + b] = rho * column[g];
+        }
+    }
+    n_rr
+}
+
+/// Solves `(I − N) y = s` by LU, with the M-matrix test and `κ_∞` of the module doc.
+fn solve_lu(m: usize, n_rr: &[Real], s: Vec<Real>) -> ChannelSolve {
+    let refused = ChannelSolve::Refused { condition: Real::INFINITY };
+    if n_rr.iter().any(|&v| !(v.is_finite() && v >= 0.0)) {
+        return refused;
+    }
+    let phi = |a: usize, b: usize| Real::from(a == b) - n_rr[a * m + b];
+    let norm = (0..m).map(|a| (0..m).map(|b| phi(a, b).abs()).sum::<Real>()).fold(0.0, Real::max);
+    let Ok(mut solved) = lu_solve_columns(m, false, phi, &[s, vec![1.0; m]]) else { return refused };
+    let z = solved.pop().expect("two right-hand sides");
+    let y = solved.pop().expect("two right-hand sides");
+    if z.iter().any(|&v| !(v.is_finite() && v > 0.0)) {
+        return refused;
+    }
+    // Finite and positive factors: the product is never NaN (at worst it overflows to ∞).
+    let condition = norm * z.iter().copied().fold(0.0, Real::max);
+    if condition > CONDITION_LIMIT {
+        return ChannelSolve::Refused { condition };
+    }
+    ChannelSolve::Solved { y, left: vec![0.0; m], condition }
+}
+
+/// Solves `(I − N) y = s` by Gauss–Seidel, with the bound and the residual stopping rule of
+/// the module doc.
+fn solve_gauss_seidel(m: usize, n_rr: &[Real], s: Vec<Real>) -> ChannelSolve {
+    if n_rr.iter().any(|v| !v.is_finite()) {
+        return ChannelSolve::Refused { condition: Real::INFINITY };
+    }
+    let q = (0..m).map(|a| n_rr[a * m..(a + 1) * m].iter().map(|v| v.abs()).sum::<Real>()).fold(0.0, Real::max);
+    if q >= 1.0 {
+        return ChannelSolve::Refused { condition: Real::INFINITY };
+    }
+    let condition = (1.0 + q) / (1.0 - q);
+    if condition > CONDITION_LIMIT {
+        return ChannelSolve::Refused { condition };
+    }
+    // q < 1, so every diagonal entry 1 − N_aa ≥ 1 − q is positive.
+    let diagonal: Vec<Real> = (0..m).map(|a| 1.0 - n_rr[a * m + a]).collect();
+    let mut y = s.clone();
+    let mut left = vec![0.0; m];
+    for _ in 0..MAX_INNER_SWEEPS {
+        let (mut change, mut norm) = (0.0, 0.0);
+        for a in 0..m {
+            let row = &n_rr[a * m..(a + 1) * m];
+            let others: Real = (0..m).filter(|&b| b != a).map(|b| row[b] * y[b]).sum();
+            let next = (s[a] + others) / diagonal[a];
+            change += (next - y[a]).abs();
+            norm += next.abs();
+            y[a] = next;
+        }
+        if !(change.is_finite() && norm.is_finite()) {
+            break;
+        }
+        if change <= INNER_TOLERANCE * norm {
+            // The true residual of the group system, s − (I − N) y, decides.
+            let mut residual = 0.0;
+            for a in 0..m {
+                let row = &n_rr[a * m..(a + 1) * m];
+                left[a] = s[a] - y[a] + row.iter().zip(&y).map(|(n, v)| n * v).sum::<Real>();
+                residual += left[a].abs();
+            }
+            if residual <= INNER_TOLERANCE * norm {
+                return ChannelSolve::Solved { y, left, condition };
+            }
+        }
+    }
+    ChannelSolve::Refused { condition }
+}
 
 /// Runs one group step on `group` (patch indices) with `columns[a][i] = F_{i, group[a]}` and
-/// overshoots `plus[a * k + c]` (all zero for group PR and Southwell).
+/// overshoots `plus[a * k + c]` (all zero for group PR and Southwell): the group solve and
+/// shot, or the point-shot fallback when the group system is not trusted (module doc). Either
+/// way it records the condition estimate in `state`.
 pub fn group_shot(
     problem: &Problem<'_>,
     state: &mut State,
@@ -67,55 +233,39 @@ pub fn group_shot(
     inner: InnerSolve,
 ) -> Result<(), SolverError> {
     let (m, k, n) = (group.len(), state.channels, problem.n());
+    if m == 0 {
+        return Ok(());
+    }
     let system = problem.system();
     // y[a * k + c], and what the group keeps unshot beyond −ΔB⁺ (zero for LU).
     let mut y = vec![0.0; m * k];
     let mut left = vec![0.0; m * k];
+    let (mut condition, mut trusted) = (0.0, true);
     for c in 0..k {
-        let f_rr = |a: usize, b: usize| system.rho(group[a], c) * columns[b][group[a]];
-        let s = |a: usize| state.unshot[group[a] * k + c] + plus[a * k + c];
+        let n_rr = group_matrix(problem, group, columns, c);
+        let s: Vec<Real> = (0..m).map(|a| state.unshot[group[a] * k + c] + plus[a * k + c]).collect();
         let solved = match inner {
-            InnerSolve::Lu => lu_solve(m, false, |a, b| Real::from(a == b) - f_rr(a, b), s).map_err(
-                |SingularPivot { pivot, value }| SolverError::SingularGroup {
-                    step: state.step + 1,
-                    size: m,
-                    channel: c,
-                    pivot,
-                    value,
-                },
-            )?,
-            InnerSolve::GaussSeidel => {
-                let mut v: Vec<Real> = (0..m).map(s).collect();
-                for sweep in 0.. {
-                    let (mut change, mut norm) = (0.0, 0.0);
-                    for a in 0..m {
-                        let next = s(a) + (0..m).filter(|&b| b != a).map(|b| f_rr(a, b) * v[b]).sum::<Real>();
-                        change += (next - v[a]).abs();
-                        norm += next.abs();
-                        v[a] = next;
-                    }
-                    if change <= 1e-13 * norm {
-                        break;
-                    }
-                    if sweep == MAX_INNER_SWEEPS || !norm.is_finite() {
-                        return Err(SolverError::SingularGroup {
-                            step: state.step + 1,
-                            size: m,
-                            channel: c,
-                            pivot: 0,
-                            value: change / norm,
-                        });
-                    }
-                }
-                for a in 0..m {
-                    left[a * k + c] = s(a) - v[a] + (0..m).map(|b| f_rr(a, b) * v[b]).sum::<Real>();
-                }
-                v
-            }
+            InnerSolve::Lu => solve_lu(m, &n_rr, s),
+            InnerSolve::GaussSeidel => solve_gauss_seidel(m, &n_rr, s),
         };
-        for (a, v) in solved.into_iter().enumerate() {
-            y[a * k + c] = v;
+        match solved {
+            ChannelSolve::Solved { y: yc, left: lc, condition: kc } => {
+                condition = Real::max(condition, kc);
+                for a in 0..m {
+                    y[a * k + c] = yc[a];
+                    left[a * k + c] = lc[a];
+                }
+            }
+            ChannelSolve::Refused { condition: kc } => {
+                condition = Real::max(condition, kc);
+                trusted = false;
+            }
         }
+    }
+    state.group_condition = state.group_condition.max(condition);
+    if !trusted {
+        state.group_fallbacks += 1;
+        return point_shots(problem, state, group, columns);
     }
     let mut delta = vec![0.0; k];
     for i in 0..n {
@@ -134,7 +284,29 @@ pub fn group_shot(
     }
     for (a, &g) in group.iter().enumerate() {
         for c in 0..k {
-            state.unshot[g * k + c] = left[a * k + c] - plus[a * k + c];
+            set_unshot(state, g * k + c, left[a * k + c] - plus[a * k + c])?;
+        }
+    }
+    Ok(())
+}
+
+/// The fallback: the group's members shot one after another, in group order, as plain
+/// progressive-refinement shots from their columns, each shooting its unshot radiosity as it
+/// is when its turn comes.
+fn point_shots(
+    problem: &Problem<'_>,
+    state: &mut State,
+    group: &[usize],
+    columns: &[&[Real]],
+) -> Result<(), SolverError> {
+    let k = state.channels;
+    let mut amount = vec![0.0; k];
+    for (&g, column) in group.iter().zip(columns) {
+        amount.copy_from_slice(&state.unshot[g * k..(g + 1) * k]);
+        shoot_column(problem, state, &amount, column)?;
+        for (c, &s) in amount.iter().enumerate() {
+            let rest = state.unshot[g * k + c] - s;
+            set_unshot(state, g * k + c, rest)?;
         }
     }
     Ok(())

@@ -52,7 +52,7 @@
 use crate::error::SolverError;
 use crate::executor::Solver;
 use crate::problem::Problem;
-use crate::shooting::{shoot_column, unshot_power};
+use crate::shooting::{set_unshot, shoot_column, unshot_power};
 use crate::state::State;
 use radiosity_core::Real;
 
@@ -346,8 +346,8 @@ pub fn shoot_with_overshoot(
     let unshot = &state.unshot[j * k..(j + 1) * k];
     let amount: Vec<Real> = unshot.iter().zip(&plus).map(|(u, p)| u + p).collect();
     shoot_column(problem, state, &amount, column)?;
-    for (u, p) in state.unshot[j * k..(j + 1) * k].iter_mut().zip(&plus) {
-        *u = -p;
+    for (c, p) in plus.iter().enumerate() {
+        set_unshot(state, j * k + c, -p)?;
     }
     tracker.record(j, &row, Ambient::measure(problem, state).power);
     Ok(())

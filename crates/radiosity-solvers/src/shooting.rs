@@ -55,6 +55,17 @@ pub fn receive(state: &mut State, idx: usize, delta: Real) -> Result<(), SolverE
     Ok(())
 }
 
+/// Sets the unshot radiosity at `idx` (`i * channels + c`) to `value`, stopping the run if it
+/// is not finite: the shot radiosity `x = B − ΔB` would not be either.
+pub fn set_unshot(state: &mut State, idx: usize, value: Real) -> Result<(), SolverError> {
+    state.unshot[idx] = value;
+    if !value.is_finite() {
+        let k = state.channels;
+        return Err(SolverError::NonFinite { step: state.step + 1, patch: idx / k, value });
+    }
+    Ok(())
+}
+
 /// The residual power of the shot radiosity: `Σ_c Σ_i A_i |ΔB_ic| / Σ_c Σ_i A_i E_ic`.
 pub fn unshot_power(problem: &Problem<'_>, state: &State) -> Real {
     let (area, emission, k) = (problem.system().areas(), problem.system().emissions(), state.channels);

@@ -28,6 +28,15 @@ pub struct State {
     pub solve_seconds: f64,
     /// Of `solve_seconds`, the seconds spent building and solving group systems.
     pub group_seconds: f64,
+    /// Group shooting steps that did not solve their group system and shot its patches one
+    /// after another instead ([`crate::group_step`]): the system was singular, not an
+    /// M-matrix, or worse conditioned than [`crate::group_step::CONDITION_LIMIT`].
+    pub group_fallbacks: u64,
+    /// The largest estimate of the condition number `κ_∞(Φ_rr)` over the group shooting steps
+    /// so far, the largest over channels in each step ([`crate::group_step`]): 0 while no
+    /// group step has run, infinite once a step found a singular group system or one that is
+    /// not an M-matrix.
+    pub group_condition: Real,
 }
 
 impl State {
@@ -43,6 +52,8 @@ impl State {
             ff_seconds: 0.0,
             solve_seconds: 0.0,
             group_seconds: 0.0,
+            group_fallbacks: 0,
+            group_condition: 0.0,
         }
     }
 

@@ -3,8 +3,9 @@
 //! Rules are a comma list, and the first that holds stops the run: `columns=N`, `columns=2n`
 //! (a multiple of the patch count), `steps=N` (also `steps=3n`), `rms=1e-3`, `residual=1e-4`,
 //! `time=30s` (`ms`, `s` or `min`). Every run ends even if no rule can hold any more: at
-//! round-off convergence (nothing left to shoot or gather), or at a step cap of `20n` steps,
-//! raised to the largest `steps=` or `columns=` rule given.
+//! round-off convergence (nothing left to shoot or gather), at a step cap of `20n` steps,
+//! raised to the largest `steps=` or `columns=` rule given, or when the residual power shows
+//! that the iteration diverges ([`crate::executor`]).
 
 use crate::error::SolverError;
 use radiosity_core::Real;
@@ -141,6 +142,17 @@ pub enum TerminationReason {
     RoundOff,
     /// The step cap was reached before any rule held.
     StepCap(u64),
+    /// The residual power rose far above its minimum ([`crate::executor`]): the iteration
+    /// diverges, usually because the form factors are not physical (`ρ F` row sums above 1).
+    /// The run's state is returned as it stands.
+    Diverged {
+        /// The steps taken when the rise was seen.
+        step: u64,
+        /// The residual power then.
+        residual: Real,
+        /// The smallest residual power before it.
+        minimum: Real,
+    },
 }
 
 impl std::fmt::Display for TerminationReason {
@@ -153,6 +165,9 @@ impl std::fmt::Display for TerminationReason {
             TerminationReason::Time(t) => write!(f, "time limit of {:.3} s reached", t.as_secs_f64()),
             TerminationReason::RoundOff => write!(f, "converged to round-off"),
             TerminationReason::StepCap(k) => write!(f, "step cap of {k} steps reached before any rule held"),
+            TerminationReason::Diverged { step, residual, minimum } => {
+                write!(f, "diverged: the residual power rose from {minimum:.1e} to {residual:.1e} by step {step}")
+            }
         }
     }
 }

@@ -334,7 +334,7 @@ fn twelve() -> (LinearSystem, DenseColumns) {
 
 /// `E + ρ F x − x` for the shot radiosity `x = B − ΔB`.
 fn residual_of_shot(system: &LinearSystem, f: &DenseColumns, state: &State) -> Vec<Real> {
-    let (n, k) = (system.len(), 3);
+    let (n, k) = (system.len(), state.channels);
     let x: Vec<Real> = state.radiosity.iter().zip(&state.unshot).map(|(b, u)| b - u).collect();
     (0..n * k)
         .map(|idx| {
@@ -553,4 +553,358 @@ fn inner_gauss_seidel_solves_the_group_as_lu_does() {
             assert!((a - b).abs() <= 1e-11 * a.abs().max(1.0), "{name}: {a} against {b}");
         }
     }
+}
+
+// Guard rails: the condition of group systems, their fallback, and divergence.
+
+use radiosity_core::dense_lu::{lu_solve, lu_solve_columns};
+use radiosity_solvers::executor::{DIVERGENCE_FACTOR, DIVERGENCE_FLOOR};
+use radiosity_solvers::group_step::{CONDITION_LIMIT, InnerSolve, group_shot};
+
+#[test]
+fn lu_solves_several_right_hand_sides_with_one_factorisation() {
+    let a = [[4.0, 1.0, 0.5], [1.0, 3.0, -1.0], [0.0, 2.0, 5.0]];
+    let rhs = vec![vec![1.0, 2.0, 3.0], vec![1.0; 3], vec![-2.0, 0.0, 7.5]];
+    let solved = lu_solve_columns(3, false, |i, j| a[i][j], &rhs).unwrap();
+    assert_eq!(solved.len(), 3);
+    for (b, x) in rhs.iter().zip(&solved) {
+        for i in 0..3 {
+            let ax: Real = (0..3).map(|j| a[i][j] * x[j]).sum();
+            assert!((ax - b[i]).abs() < 1e-14, "{ax} against {}", b[i]);
+        }
+        // The one-column wrapper gives the same solution.
+        assert_eq!(&lu_solve(3, false, |i, j| a[i][j], |i| b[i]).unwrap(), x);
+    }
+    assert!(lu_solve_columns(3, false, |i, j| a[i][j], &[]).unwrap().is_empty());
+    let singular =
+        lu_solve_columns(2, false, |_, _| 1.0, &rhs[..1].iter().map(|b| b[..2].to_vec()).collect::<Vec<_>>());
+    assert_eq!(singular.unwrap_err().value, 0.0);
+}
+
+/// A closed grey furnace of `n` patches whose form factors come from `f` (rows summing to 1),
+/// uniform reflectivity `rho`, every patch emitting 1.
+fn furnace(area: Vec<Real>, rho: Real, f: impl FnMut(usize, usize) -> Real) -> (LinearSystem, DenseColumns) {
+    let n = area.len();
+    let system = LinearSystem::new(Channels::Grey, area, vec![rho; n], vec![1.0; n]).unwrap();
+    (system, DenseColumns::from_fn(n, f))
+}
+
+#[test]
+fn the_condition_estimate_is_exact_on_a_closed_furnace() {
+    for rho in [0.5, 0.999] {
+        // Planar patches, F_ij = 1/(n − 1) off the diagonal: ‖Φ‖_∞ = 1 + ρ and
+        // Φ⁻¹ 1 = 1/(1 − ρ), so κ_∞ = (1 + ρ)/(1 − ρ).
+        let (system, f) = furnace(vec![1.0; 6], rho, |i, j| if i == j { 0.0 } else { 0.2 });
+        let run = solve("group-pr-g6", &system, &f, "steps=1");
+        let exact = (1.0 + rho) / (1.0 - rho);
+        let got = run.state.group_condition;
+        assert!((got / exact - 1.0).abs() < 1e-9, "ρ = {rho}: κ_∞ {got} against {exact}");
+        assert_eq!(run.state.group_fallbacks, 0);
+        // The one group is the whole system: one step solves it, B = E/(1 − ρ).
+        for b in &run.state.radiosity {
+            assert!((b * (1.0 - rho) - 1.0).abs() < 1e-10, "ρ = {rho}: {b}");
+        }
+        // F_ij = A_j / ΣA (rows sum to 1, with F_ii = A_i/ΣA ≠ 0): Φ = I − ρ 1 wᵀ with
+        // w = A/ΣA, so ‖Φ‖_∞ = 1 + ρ − 2ρ min w and ‖Φ⁻¹‖_∞ = 1/(1 − ρ) (Sherman–Morrison).
+        let area: Vec<Real> = (0..6).map(|i| 1.0 + i as Real).collect();
+        let total: Real = area.iter().sum();
+        let weights: Vec<Real> = area.iter().map(|a| a / total).collect();
+        let (system, f) = furnace(area.clone(), rho, |_, j| weights[j]);
+        let run = solve("group-pr-g6", &system, &f, "steps=1");
+        let exact = (1.0 + rho - 2.0 * rho * weights[0]) / (1.0 - rho);
+        let got = run.state.group_condition;
+        assert!((got / exact - 1.0).abs() < 1e-9, "ρ = {rho}, F_ij = A_j/ΣA: κ_∞ {got} against {exact}");
+        for b in &run.state.radiosity {
+            assert!((b * (1.0 - rho) - 1.0).abs() < 1e-10, "ρ = {rho}: {b}");
+        }
+    }
+    // The inner Gauss–Seidel's bound (1 + q)/(1 − q), q = ‖ρ F_rr‖_∞ = ρ, is exact here too.
+    let (system, f) = furnace(vec![1.0; 6], 0.5, |i, j| if i == j { 0.0 } else { 0.2 });
+    let problem = Problem::new(&system, &f).unwrap();
+    let group: Vec<usize> = (0..6).collect();
+    let columns: Vec<&[Real]> = group.iter().map(|&g| f.column(g)).collect();
+    for inner in [InnerSolve::Lu, InnerSolve::GaussSeidel] {
+        let mut state = State::from_emission(system.emissions(), 1);
+        group_shot(&problem, &mut state, &group, &columns, &[0.0; 6], inner).unwrap();
+        assert!((state.group_condition / 3.0 - 1.0).abs() < 1e-12, "{inner:?}: {}", state.group_condition);
+    }
+    // No group step: no estimate.
+    assert_eq!(solve("pr", &system, &f, "steps=3").state.group_condition, 0.0);
+    assert_eq!(CONDITION_LIMIT, 1e10);
+}
+
+/// Checks that `ΔB` is the residual of `x = B − ΔB`, to 1e-12 relative to the largest `|x|`
+/// (at least 1).
+fn assert_unshot_is_the_residual(name: &str, system: &LinearSystem, f: &DenseColumns, state: &State) {
+    let scale = state.radiosity.iter().zip(&state.unshot).map(|(b, u)| (b - u).abs()).fold(1.0, Real::max);
+    let r = residual_of_shot(system, f, state);
+    for (idx, (r, u)) in r.iter().zip(&state.unshot).enumerate() {
+        assert!((r - u).abs() <= 1e-12 * scale, "{name}, entry {idx}: residual {r}, unshot {u}");
+    }
+}
+
+/// Six RGB patches; patches 0, 1 and 2 see each other with F = `inside` (so `ρ F_rr` has
+/// spectral radius `2 ρ inside`), every other pair with F = 0.05, ρ = 0.9; patches 0, 1 and 2
+/// emit (`emitting_group`) or patch 5 alone does, seen by the group with F = 0.3.
+fn bad_group(inside: Real, emitting_group: bool) -> (LinearSystem, DenseColumns) {
+    let n = 6;
+    let e: Vec<Real> = (0..3 * n).map(|idx| if (idx / 3 < 3) == emitting_group { 1.0 } else { 0.0 }).collect();
+    let f = DenseColumns::from_fn(n, |i, j| match (i, j) {
+        _ if i == j => 0.0,
+        (0..3, 0..3) => inside,
+        (0..3, 5) if !emitting_group => 0.3,
+        _ => 0.05,
+    });
+    (LinearSystem::new(Channels::Rgb, vec![1.0; n], vec![0.9; 3 * n], e).unwrap(), f)
+}
+
+#[test]
+fn a_group_that_is_singular_or_not_an_m_matrix_falls_back_to_point_shots() {
+    // inside = 1/(2ρ): ρ F_rr has spectral radius exactly 1 and Φ_rr is singular, its
+    // pivot an exact zero (ρ F = 1/2 is exact in binary); inside = 1.2: spectral radius 2.16,
+    // Φ_rr is regular but not an M-matrix.
+    for inside in [1.0 / 1.8, 1.2] {
+        let (system, f) = bad_group(inside, true);
+        let problem = Problem::new(&system, &f).unwrap();
+        let group = [0, 1, 2];
+        let columns: Vec<&[Real]> = group.iter().map(|&g| f.column(g)).collect();
+        for inner in [InnerSolve::Lu, InnerSolve::GaussSeidel] {
+            let mut state = State::from_emission(system.emissions(), 3);
+            group_shot(&problem, &mut state, &group, &columns, &[0.0; 9], inner).unwrap();
+            assert_eq!(state.group_fallbacks, 1, "{inside}, {inner:?}");
+            assert_eq!(state.group_condition, Real::INFINITY, "{inside}, {inner:?}");
+            // The fallback shot each member in turn: the last one holds nothing.
+            assert!(state.unshot[6..9].iter().all(|&u| u == 0.0), "{:?}", state.unshot);
+            assert_unshot_is_the_residual(&format!("{inside}, {inner:?}"), &system, &f, &state);
+        }
+        // Through the solvers: the group steps fall back, nothing fails, and ΔB stays the
+        // residual of the shot radiosity. Group acceleration's groups come after the emitter
+        // (patch 5) and leave out the last shooter: pairs, which are not M-matrices only for
+        // inside = 1.2 (spectral radius ρ · inside).
+        let (late, late_f) = bad_group(inside, false);
+        let mut cases = vec![("group-pr-g3", &system, &f), ("group-xu-g3", &system, &f)];
+        if inside > 1.0 {
+            cases.extend([("pr-g2-m3:f=1", &late, &late_f), ("pr-g2-m3:f=1:inner=gs", &late, &late_f)]);
+        }
+        for (name, system, f) in cases {
+            let run = solve(name, system, f, "steps=8");
+            assert!(run.state.group_fallbacks > 0, "{name}, {inside}: {}", run.state.group_condition);
+            assert_eq!(run.state.group_condition, Real::INFINITY, "{name}, {inside}");
+            assert_unshot_is_the_residual(&format!("{name}, {inside}"), system, f, &run.state);
+        }
+    }
+}
+
+#[test]
+fn a_well_posed_group_does_not_fall_back() {
+    let (system, f) = twelve();
+    for name in SHOOTING.iter().filter(|s| s.contains("-g")) {
+        let run = solve(name, &system, &f, "steps=17");
+        assert_eq!(run.state.group_fallbacks, 0, "{name}");
+        let kappa = run.state.group_condition;
+        assert!((1.0..1e3).contains(&kappa), "{name}: κ_∞ {kappa}");
+    }
+}
+
+#[test]
+fn inner_gauss_seidel_stops_on_the_residual_of_the_group_system() {
+    // One group step with the inner Gauss–Seidel: the group keeps s − Φ_rr y as unshot, and
+    // that residual, not the last change of y, is below 1e-13 Σ |y|.
+    let (system, f) = twelve();
+    let problem = Problem::new(&system, &f).unwrap();
+    let k = 3;
+    let group: Vec<usize> = (0..12).collect();
+    let columns: Vec<&[Real]> = group.iter().map(|&g| f.column(g)).collect();
+    let mut state = State::from_emission(system.emissions(), k);
+    group_shot(&problem, &mut state, &group, &columns, &[0.0; 36], InnerSolve::GaussSeidel).unwrap();
+    assert_eq!(state.group_fallbacks, 0);
+    for c in 0..k {
+        // The shot radiosity started at 0, so y = x = B − ΔB.
+        let y: Vec<Real> = (0..12).map(|i| state.radiosity[i * k + c] - state.unshot[i * k + c]).collect();
+        let mut residual = 0.0;
+        for i in 0..12 {
+            let phi_y = y[i] - system.rho(i, c) * (0..12).map(|j| f.get(i, j) * y[j]).sum::<Real>();
+            let r = system.e(i, c) - phi_y;
+            assert!((r - state.unshot[i * k + c]).abs() < 1e-15, "channel {c}, patch {i}");
+            residual += r.abs();
+        }
+        let norm: Real = y.iter().map(|v| v.abs()).sum();
+        assert!(residual <= 1e-13 * norm, "channel {c}: residual {residual:e} of Σ|y| {norm:e}");
+    }
+    // As LU does, to that tolerance.
+    let mut lu = State::from_emission(system.emissions(), k);
+    group_shot(&problem, &mut lu, &group, &columns, &[0.0; 36], InnerSolve::Lu).unwrap();
+    for (a, b) in lu.radiosity.iter().zip(&state.radiosity) {
+        assert!((a - b).abs() <= 1e-12 * a.abs(), "{a} against {b}");
+    }
+}
+
+/// Six patches seeing each other with F = 0.9 and ρ = 0.9: ρ F has row sums 4.05, far above 1,
+/// so every method must blow up.
+fn non_physical() -> (LinearSystem, DenseColumns) {
+    let mut e = vec![0.0; 6];
+    e[0] = 1.0;
+    let system = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.9; 6], e).unwrap();
+    (system, DenseColumns::from_fn(6, |i, j| if i == j { 0.0 } else { 0.9 }))
+}
+
+#[test]
+fn a_non_physical_system_ends_as_diverged_within_the_step_cap() {
+    let (system, f) = non_physical();
+    let cap = StopRules::default().step_cap;
+    let names = ["pr", "southwell", "xu", "relax-1.5", "jacobi", "gauss-seidel", "sor-1.2"];
+    let groups = ["group-pr-g3", "group-southwell-g3", "pr-g3:f=1", "xu-g3-m6:f=2", "group-gs-g3", "group-jacobi-g3"];
+    for name in names.into_iter().chain(groups) {
+        let run = solve_capped(name, &system, &f, "", cap);
+        let TerminationReason::Diverged { step, residual, minimum } = run.termination else {
+            panic!("{name}: {}", run.termination)
+        };
+        assert_eq!(step, run.state.step, "{name}");
+        assert!(step < 20 * 6, "{name}: {step} steps");
+        assert!(residual > DIVERGENCE_FACTOR * minimum.max(DIVERGENCE_FLOOR), "{name}: {residual} from {minimum}");
+        assert!(run.state.radiosity.iter().all(|b| b.is_finite()), "{name}");
+        let text = run.termination.to_string();
+        assert!(
+            text.starts_with("diverged: the residual power rose from ") && text.ends_with(&format!("by step {step}"))
+        );
+        // A residual rule cannot hide it.
+        let run = solve_capped(name, &system, &f, "residual=1e-3,steps=100", cap);
+        assert!(matches!(run.termination, TerminationReason::Diverged { .. }), "{name}: {}", run.termination);
+    }
+    let shown = TerminationReason::Diverged { step: 812, residual: 45.0, minimum: 1.2e-3 }.to_string();
+    assert_eq!(shown, "diverged: the residual power rose from 1.2e-3 to 4.5e1 by step 812");
+}
+
+#[test]
+fn a_physical_system_never_diverges() {
+    // Residuals that are not monotone (over-relaxation, overshooting, gathering estimates)
+    // rise for a while but never ten thousandfold above their best.
+    let (twelve_system, twelve_f) = twelve();
+    let mut e = vec![0.0; 6];
+    e[1] = 1.0;
+    let cube_systems: Vec<LinearSystem> = [0.5, 0.9, 0.999]
+        .map(|rho| LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![rho; 6], e.clone()).unwrap())
+        .into();
+    let f = cube();
+    let names = solvers().into_iter().chain(["relax-1.9", "sor-1.9", "xu", "relax-1.9-g3-m6:f=2"].map(String::from));
+    for name in names.collect::<Vec<_>>() {
+        let mut cases: Vec<(&LinearSystem, &DenseColumns)> = cube_systems.iter().map(|s| (s, &f)).collect();
+        cases.push((&twelve_system, &twelve_f));
+        for (system, f) in cases {
+            let run = solve(&name, system, f, "residual=1e-15");
+            assert!(
+                !matches!(run.termination, TerminationReason::Diverged { .. }),
+                "{name} on {} patches: {}",
+                system.len(),
+                run.termination
+            );
+        }
+    }
+}
+
+/// A column source whose column 3 is NaN from the `after`-th column fetched on.
+struct Poisoned<'a> {
+    inner: &'a DenseColumns,
+    after: u64,
+    fetched: std::sync::atomic::AtomicU64,
+}
+
+impl radiosity_core::ColumnSource for Poisoned<'_> {
+    fn patch_count(&self) -> usize {
+        radiosity_core::ColumnSource::patch_count(self.inner)
+    }
+
+    fn fill_column(&self, j: usize, column: &mut [Real]) {
+        radiosity_core::ColumnSource::fill_column(self.inner, j, column);
+        let count = self.fetched.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        if count >= self.after {
+            column[3] = Real::NAN;
+        }
+    }
+}
+
+#[test]
+fn a_value_that_is_not_finite_stops_the_run_with_an_error_naming_the_patch() {
+    // Every solver, a NaN form factor met late in the run: an error naming the step and a
+    // patch, never a divergence or a panic.
+    let (system, f) = twelve();
+    for name in solvers().iter().map(String::as_str) {
+        let poisoned = Poisoned { inner: &f, after: 20, fetched: Default::default() };
+        let problem = Problem::new(&system, &poisoned).unwrap();
+        let err = solve_problem(name, &problem, "residual=1e-15").unwrap_err();
+        let SolverError::NonFinite { step, patch, value } = err else { panic!("{name}: {err:?}") };
+        assert!(!value.is_finite() && patch < 12 && step > 0, "{name}: {err}");
+    }
+}
+
+/// A solver that does nothing but write `value` into patch 4's radiosity and unshot radiosity
+/// (`both`), its unshot radiosity (`unshot`) or every unshot radiosity (`all`) at its step
+/// `at`, unchecked, and reports the residual power `script[step]`, then the unshot power once
+/// the script ends.
+struct Rogue {
+    script: Vec<Real>,
+    at: u64,
+    target: &'static str,
+    value: Real,
+}
+
+impl Solver for Rogue {
+    fn name(&self) -> String {
+        "rogue".into()
+    }
+
+    fn next_step(&mut self, _problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
+        if state.step == self.at {
+            match self.target {
+                "both" => (state.radiosity[4], state.unshot[4]) = (self.value, self.value),
+                "unshot" => state.unshot[4] = self.value,
+                _ => state.unshot.fill(self.value),
+            }
+        }
+        Ok(())
+    }
+
+    fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real> {
+        Some(self.script.get(state.step as usize).copied().unwrap_or_else(|| shooting::unshot_power(problem, state)))
+    }
+}
+
+fn run_rogue(rogue: &mut Rogue, rules: &str) -> Result<Run, SolverError> {
+    let system = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![1.0; 6]).unwrap();
+    let f = cube();
+    let problem = Problem::new(&system, &f).unwrap();
+    Executor::new(rogue, StopRules::parse(rules).unwrap()).run(&problem, &mut NoObserver)
+}
+
+#[test]
+fn the_executor_stops_a_residual_that_is_not_finite_with_an_error() {
+    // A radiosity that is NaN, or an unshot radiosity that is infinite (the shot radiosity
+    // B − ΔB is then −∞): an error naming the step that produced it and the patch.
+    for (target, value, shown) in [("both", Real::NAN, Real::NAN), ("unshot", Real::INFINITY, Real::NEG_INFINITY)] {
+        let mut rogue = Rogue { script: Vec::new(), at: 2, target, value };
+        let err = run_rogue(&mut rogue, "steps=10").unwrap_err();
+        let SolverError::NonFinite { step, patch, value } = err else { panic!("{target}: {err:?}") };
+        assert_eq!((step, patch), (3, 4), "{target}");
+        assert!(value.is_nan() == shown.is_nan() && (value.is_nan() || value == shown), "{target}: {value}");
+    }
+    // Every value finite, only their sum overflows: a divergence with an infinite residual.
+    let mut rogue = Rogue { script: Vec::new(), at: 2, target: "all", value: 1e308 };
+    let run = run_rogue(&mut rogue, "steps=10").unwrap();
+    assert_eq!(run.termination, TerminationReason::Diverged { step: 3, residual: Real::INFINITY, minimum: 1.0 });
+}
+
+#[test]
+fn the_divergence_rule_measures_rises_from_a_floor_under_the_minimum() {
+    let rogue = |script: Vec<Real>| Rogue { script, at: u64::MAX, target: "none", value: 0.0 };
+    // From 1e-12 (round-off below the floor of 1e-6 of the first residual) to 5e-3: within
+    // 1e4 × 1e-6; to 2e-2: beyond it.
+    let run = run_rogue(&mut rogue(vec![1.0, 1e-12, 5e-3, 5e-3, 5e-3]), "steps=4").unwrap();
+    assert_eq!(run.termination, TerminationReason::Steps(4));
+    let run = run_rogue(&mut rogue(vec![1.0, 1e-12, 5e-3, 2e-2]), "steps=4").unwrap();
+    assert_eq!(run.termination, TerminationReason::Diverged { step: 3, residual: 2e-2, minimum: 1e-12 });
+    // Above the floor the minimum counts: from 0.1 to 999 is within 1e4, to 1001 beyond it.
+    let run = run_rogue(&mut rogue(vec![1.0, 0.1, 999.0, 999.0, 999.0]), "steps=4").unwrap();
+    assert_eq!(run.termination, TerminationReason::Steps(4));
+    let run = run_rogue(&mut rogue(vec![1.0, 0.1, 1001.0]), "steps=4").unwrap();
+    assert_eq!(run.termination, TerminationReason::Diverged { step: 2, residual: 1001.0, minimum: 0.1 });
 }

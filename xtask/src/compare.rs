@@ -12,7 +12,7 @@
 //! and the residual power (a product with F) only at about 100 points of each run. Its cost
 //! is reported apart as measurement overhead.
 
-use crate::experiment::Experiment;
+use crate::experiment::{Experiment, require_emitters, solver_error};
 use crate::scene_report::{prepare, print_warnings};
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -193,7 +193,7 @@ impl Plan {
             bail!("--solvers names no solver");
         }
         for name in &names {
-            solver_by_name(name)?;
+            solver_by_name(name).map_err(|e| solver_error(name, &e, ""))?;
         }
         let rules = StopRules::parse(until)?;
         Ok(Plan { scene: scene.to_string(), names, spec, rules, until: until.to_string() })
@@ -212,9 +212,25 @@ pub struct Comparison {
 pub fn run(args: &Args) -> Result<()> {
     let plan = Plan::new(&args.scene, &args.solvers, &args.ff, &args.until)?;
     let out = args.out.clone().unwrap_or_else(|| default_out(&args.scene));
+    check_out_dir(&out)?;
     let comparison = execute(&plan, &out)?;
     print_summary(&comparison.outcomes, comparison.n);
     println!("wrote {} (report.md, convergence.csv and plots)", out.display());
+    Ok(())
+}
+
+/// Checks, before any work, that `dir` is a directory or can be created as one: the nearest
+/// part of it that exists is a directory.
+fn check_out_dir(dir: &Path) -> Result<()> {
+    if let Some(existing) = dir.ancestors().find(|a| !a.as_os_str().is_empty() && a.exists()) {
+        if !existing.is_dir() {
+            bail!(
+                "cannot create the output folder {}: {} is a file, not a directory",
+                dir.display(),
+                existing.display()
+            );
+        }
+    }
     Ok(())
 }
 
@@ -237,6 +253,7 @@ pub fn execute(plan: &Plan, out: &Path) -> Result<Comparison> {
     let prepared = prepare(&plan.scene)?;
     let report = prepared.report();
     print_warnings(&report);
+    require_emitters(&prepared)?;
     let n = report.patches as u64;
     eprintln!("{}: {} patches; left out: {}", report.scene, n, left_out(&report.left_out));
     let spinner = progress(0, true);

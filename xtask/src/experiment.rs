@@ -7,11 +7,12 @@
 
 use crate::ff::obtain;
 use crate::scene_report::PreparedScene;
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use radiosity_core::{LinearSystem, Real};
 use radiosity_eval::{FormFactors, ReferenceParams, ReferenceSolution};
 use radiosity_ff::{Backend, BackendSpec, FormFactorInput};
-use radiosity_solvers::{Executor, NoObserver, Observer, Problem, Run, State, StopRules, solver_by_name};
+use radiosity_solvers::{Executor, NoObserver, Observer, Problem, Run, SolverError, State, StopRules, solver_by_name};
+use std::path::Path;
 use std::time::Instant;
 
 /// The arguments that name one solved scene, shared by `solve`, `render` and `export`.
@@ -41,10 +42,58 @@ impl SolveArgs {
     pub fn check(&self) -> Result<(BackendSpec, StopRules)> {
         let spec = BackendSpec::parse(&self.ff)?;
         if self.solver != "reference" {
-            solver_by_name(&self.solver).map_err(|e| anyhow::anyhow!("{e}; or reference, the exact solution"))?;
+            solver_by_name(&self.solver)
+                .map_err(|e| solver_error(&self.solver, &e, "; or reference, the exact solution"))?;
         }
         Ok((spec, StopRules::parse(&self.until)?))
     }
+}
+
+/// The error for a solver name that `solver_by_name` refused, as one sentence that names the
+/// solver as written. `list_end` is appended to the list of known solvers when the name is
+/// unknown (`solve` also takes `reference`); other refusals (a parameter out of range) do not
+/// get it, since the list is not what is wrong.
+pub fn solver_error(name: &str, e: &SolverError, list_end: &str) -> anyhow::Error {
+    let message = e.to_string();
+    if message.starts_with("unknown solver") {
+        anyhow::anyhow!("{message}{list_end}")
+    } else if message.contains("solver '") {
+        anyhow::anyhow!("{message}")
+    } else if message.starts_with('\'') {
+        anyhow::anyhow!("solver {message}")
+    } else {
+        anyhow::anyhow!("solver '{name}': {message}")
+    }
+}
+
+/// Checks, before any work, that `path` can be written as a file: it is not a directory and
+/// the directory it goes into exists.
+pub fn check_output_file(path: &Path) -> Result<()> {
+    if path.is_dir() {
+        bail!("cannot write {}: it is a directory; --out names the file to write", path.display());
+    }
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        if parent.exists() && !parent.is_dir() {
+            bail!("cannot write {}: {} is not a directory", path.display(), parent.display());
+        }
+        if !parent.exists() {
+            bail!("cannot write {}: the directory {} does not exist", path.display(), parent.display());
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a scene that emits nothing before any form factor is computed: its radiosity is
+/// zero everywhere, so there is no error relative to the reference to measure.
+pub fn require_emitters(prepared: &PreparedScene) -> Result<()> {
+    if prepared.analysis.emitters.value.is_empty() {
+        bail!(
+            "scene '{}' emits no light (no patch has an emission above 0), so its radiosity is zero everywhere and \
+             there is no error to measure",
+            prepared.loaded.scene.name()
+        );
+    }
+    Ok(())
 }
 
 /// A prepared scene with everything solvers are measured against.

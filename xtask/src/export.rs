@@ -31,7 +31,7 @@
 //! The file is written by `gltf::binary::Glb`: header, JSON chunk, BIN chunk, each 4-byte
 //! aligned. Only `.glb` is written; a `.gltf` output is refused with a message saying so.
 
-use crate::experiment::{Experiment, SolveArgs};
+use crate::experiment::{Experiment, SolveArgs, check_output_file};
 use crate::scene_report::{prepare, print_warnings};
 use anyhow::{Context, Result, bail};
 use gltf::json;
@@ -59,6 +59,7 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<()> {
     // Every argument is checked before any geometry is built, so a typo fails at once.
     check_output(&args.out)?;
+    check_output_file(&args.out)?;
     let (spec, _) = args.run.check()?;
     let prepared = prepare(&args.run.scene)?;
     print_warnings(&prepared.report());

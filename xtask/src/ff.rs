@@ -110,17 +110,11 @@ fn areas(prepared: &PreparedScene) -> Vec<f64> {
 
 /// Assembles the matrix, or for `matrix` loads it from the cache.
 pub(crate) fn obtain(prepared: &PreparedScene, spec: &BackendSpec) -> Result<Obtained> {
-    let input = FormFactorInput {
-        scene: &prepared.loaded.scene,
-        visibility: &prepared.visibility,
-        analysis: &prepared.analysis,
-    };
     let BackendSpec::Matrix { rebalance, .. } = spec else {
-        let backend = Backend::columns(spec, input);
         let start = Instant::now();
-        let matrix = assemble(&backend);
+        let (matrix, clamped, _) = assemble_stored(prepared, spec, false)?;
         let seconds = start.elapsed().as_secs_f64();
-        return Ok(Obtained { matrix, seconds, clamped: Some(backend.clamped()), rebalanced: None, cache: None });
+        return Ok(Obtained { matrix, seconds, clamped: Some(clamped), rebalanced: None, cache: None });
     };
     let key = cache_key(prepared, spec);
     let path = cache_dir().join(format!("ff-{:016x}.bin", xxh3_64(key.as_bytes())));
@@ -137,10 +131,33 @@ pub(crate) fn obtain(prepared: &PreparedScene, spec: &BackendSpec) -> Result<Obt
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
         Err(e) => eprintln!("warning: cannot read cache file {}: {e}", path.display()),
     }
-    let backend = Backend::columns(spec, input);
     let start = Instant::now();
+    let (matrix, clamped, rebalanced) = assemble_stored(prepared, spec, *rebalance)?;
+    let seconds = start.elapsed().as_secs_f64();
+    let write_error = write_atomically(&path, &matrix.to_bytes(&key)).err().map(|e| format!("{e:#}"));
+    if let Some(e) = &write_error {
+        eprintln!("warning: the matrix was not cached: {e}");
+    }
+    let cache = Some(CacheUse { path, loaded: false, write_error });
+    Ok(Obtained { matrix, seconds, clamped: Some(clamped), rebalanced, cache })
+}
+
+/// What [`assemble_stored`] gives: the matrix, the entries clamped, and the figures before
+/// rebalancing with what rebalancing did.
+pub(crate) type Assembled = (StoredMatrix, u64, Option<(MatrixFigures, RebalanceReport)>);
+
+/// Assembles the full matrix of the backend `spec` names (for `matrix:of=…`, of the backend
+/// it stores), and rebalances it when asked, without the cache: the matrix, the entries clamped, and the figures before
+/// rebalancing with what rebalancing did.
+pub(crate) fn assemble_stored(prepared: &PreparedScene, spec: &BackendSpec, rebalance: bool) -> Result<Assembled> {
+    let input = FormFactorInput {
+        scene: &prepared.loaded.scene,
+        visibility: &prepared.visibility,
+        analysis: &prepared.analysis,
+    };
+    let backend = Backend::columns(spec, input);
     let mut matrix = assemble(&backend);
-    let rebalanced = if *rebalance {
+    let rebalanced = if rebalance {
         let area = areas(prepared);
         let before = matrix.figures(&area);
         let report = matrix.rebalance(&area, prepared.analysis.closure.value.is_closed())?;
@@ -148,13 +165,7 @@ pub(crate) fn obtain(prepared: &PreparedScene, spec: &BackendSpec) -> Result<Obt
     } else {
         None
     };
-    let seconds = start.elapsed().as_secs_f64();
-    let write_error = write_atomically(&path, &matrix.to_bytes(&key)).err().map(|e| format!("{e:#}"));
-    if let Some(e) = &write_error {
-        eprintln!("warning: the matrix was not cached: {e}");
-    }
-    let cache = Some(CacheUse { path, loaded: false, write_error });
-    Ok(Obtained { matrix, seconds, clamped: Some(backend.clamped()), rebalanced, cache })
+    Ok((matrix, backend.clamped(), rebalanced))
 }
 
 /// Assembles every column with a progress bar on stderr (hidden when stderr is not a

@@ -13,6 +13,7 @@ mod scene_report;
 mod scenes;
 mod shading;
 mod solve;
+mod stress;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -41,10 +42,15 @@ enum Command {
     Render(render::Args),
     /// Export the solved scene as glTF binary with per-vertex colours.
     Export(export::Args),
+    /// Run every solver and backend over stiff and extreme scenes and report what fails.
+    Stress(stress::Args),
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return argument_error(e),
+    };
     let result = match cli.command {
         Command::Scenes(args) => scenes::run(&args),
         Command::Ff(args) => ff::run(&args),
@@ -53,6 +59,7 @@ fn main() -> ExitCode {
         Command::Paper(args) => paper::run(&args),
         Command::Render(args) => render::run(&args),
         Command::Export(args) => export::run(&args),
+        Command::Stress(args) => stress::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -61,4 +68,26 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// Help and version go to stdout as clap writes them; an argument error becomes one sentence
+/// on stderr with exit code 1, like every other error (clap would print usage lines too).
+fn argument_error(e: clap::Error) -> ExitCode {
+    use clap::error::ErrorKind;
+    if matches!(
+        e.kind(),
+        ErrorKind::DisplayHelp | ErrorKind::DisplayVersion | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+    ) {
+        e.exit();
+    }
+    let rendered = e.render().to_string();
+    let sentence: Vec<&str> = rendered
+        .lines()
+        .map(str::trim)
+        .take_while(|line| !line.starts_with("Usage:") && !line.starts_with("For more information"))
+        .filter(|line| !line.is_empty())
+        .collect();
+    let sentence = sentence.join(" ");
+    eprintln!("error: {}; see cargo xtask --help", sentence.strip_prefix("error: ").unwrap_or(&sentence));
+    ExitCode::FAILURE
 }

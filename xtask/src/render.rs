@@ -36,7 +36,7 @@
 //! radiosity picture is for. Each ray's exposed colour is clamped to `[0, 1]`, the rays of a
 //! pixel averaged, and the mean encoded with the sRGB transfer curve into an 8-bit RGB PNG.
 
-use crate::experiment::{Experiment, SolveArgs};
+use crate::experiment::{Experiment, SolveArgs, check_output_file};
 use crate::scene_report::{prepare, print_warnings};
 use anyhow::{Context, Result, bail};
 use radiosity_core::{Patch, PatchShape, Real, Scene, Vec3};
@@ -86,6 +86,7 @@ pub fn run(args: &Args) -> Result<()> {
     if !args.out.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
         bail!("the output image must be a .png file, not '{}'", args.out.display());
     }
+    check_output_file(&args.out)?;
     for (name, side) in [("width", args.width), ("height", args.height)] {
         if !(1..=MAX_SIDE).contains(&side) {
             bail!("--{name} {side} is out of range: an image side is 1 to {MAX_SIDE} pixels");

@@ -8,7 +8,7 @@
 //! solver run under the stop rules. The run's columns, steps and seconds are the solver's
 //! alone.
 
-use crate::experiment::{Experiment, SolveArgs, rgb};
+use crate::experiment::{Experiment, SolveArgs, check_output_file, require_emitters, rgb};
 use crate::scene_report::{prepare, print_warnings};
 use anyhow::{Context, Result};
 use radiosity_core::{LinearSystem, Real};
@@ -107,10 +107,14 @@ struct SolveJson<'a> {
 /// Runs `solve`.
 pub fn run(args: &Args) -> Result<()> {
     let (spec, rules) = args.run.check()?;
+    if let Some(out) = &args.out {
+        check_output_file(out)?;
+    }
     // `reference` is the exact solution itself: its cost is assembling F and solving it.
     let exact = args.run.solver == "reference";
     let prepared = prepare(&args.run.scene)?;
     print_warnings(&prepared.report());
+    require_emitters(&prepared)?;
     let experiment = Experiment::new(&prepared, spec)?;
     if exact {
         let run = Outcome { state: experiment.exact_state(), termination: None, solver: "reference".into() };

@@ -4,8 +4,10 @@
 use assert_cmd::Command;
 use serde_json::Value;
 
+mod bad_input;
 mod export;
 mod render;
+mod stress;
 
 fn xtask(args: &[&str]) -> assert_cmd::assert::Assert {
     Command::cargo_bin("xtask").unwrap().args(args).env("RUST_BACKTRACE", "1").assert()
@@ -17,7 +19,7 @@ fn stdout_json(args: &[&str]) -> Value {
 }
 
 /// Runs a command that must fail, and checks the failure is one clean sentence.
-fn failure(args: &[&str]) -> String {
+pub(crate) fn failure(args: &[&str]) -> String {
     let out = xtask(args).failure().code(1).get_output().clone();
     let stderr = String::from_utf8(out.stderr).unwrap();
     let lines: Vec<&str> = stderr.lines().collect();
@@ -48,7 +50,7 @@ fn scenes_lists_the_paper_figures() {
     assert_eq!(furnace["channels"], 1);
     assert_eq!(furnace["left_out"].as_array().unwrap().len(), 2);
     assert_eq!(get("cornell")["channels"], 3);
-    assert_eq!(scenes.len(), 5);
+    assert_eq!(scenes.len(), 6);
 }
 
 #[test]
@@ -163,7 +165,7 @@ fn mgf_scenes_load_and_bad_mgf_fails_cleanly() {
     }
 }
 
-fn fixture(name: &str) -> String {
+pub(crate) fn fixture(name: &str) -> String {
     format!("{}/../crates/radiosity-geom/test_data/{name}", env!("CARGO_MANIFEST_DIR"))
 }
 

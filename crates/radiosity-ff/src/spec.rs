@@ -144,10 +144,9 @@ impl BackendSpec {
                 let p = KeyValueParams::parse(&owner, own.iter().copied(), MATRIX_PARAMS)?;
                 let of = own.iter().find_map(|i| i.strip_prefix("of=")).unwrap_or("analytic");
                 if of == "matrix" {
-                    return Err(FfError::UnknownBackend {
-                        name: "matrix of matrix".into(),
-                        valid: "analytic, hemicube, montecarlo for of=".into(),
-                    });
+                    let expected =
+                        "analytic, hemicube or montecarlo: a stored matrix is assembled from a column backend";
+                    return Err(p.reject("of", expected).into());
                 }
                 BackendSpec::Matrix {
                     of: Box::new(Self::parse_named(of, &inner)?),

@@ -6,3 +6,4 @@ mod closed_forms;
 mod hemicube;
 mod matrix;
 mod montecarlo;
+mod scale;

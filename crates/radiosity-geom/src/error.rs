@@ -50,8 +50,13 @@ pub enum GeomError {
         expected: String,
     },
     /// A parameter written without `=`.
-    #[error("scene parameter '{0}' is not of the form key=value")]
-    MalformedParameter(String),
+    #[error("{owner}: parameter '{item}' is not of the form key=value")]
+    MalformedParameter {
+        /// What the parameter belongs to: `scene 'cornell'`, `backend 'analytic'`.
+        owner: String,
+        /// The item as written.
+        item: String,
+    },
     /// A file that cannot be read.
     #[error("cannot read {path}: {message}")]
     Io {

@@ -40,7 +40,9 @@ impl KeyValueParams {
     ) -> Result<KeyValueParams, GeomError> {
         let mut values: Vec<(String, String)> = Vec::new();
         for item in items {
-            let (key, value) = item.split_once('=').ok_or_else(|| GeomError::MalformedParameter(item.to_string()))?;
+            let (key, value) = item
+                .split_once('=')
+                .ok_or_else(|| GeomError::MalformedParameter { owner: owner.to_string(), item: item.to_string() })?;
             let (key, value) = (key.trim(), value.trim());
             if !docs.iter().any(|d| d.key == key) {
                 let valid = if docs.is_empty() {

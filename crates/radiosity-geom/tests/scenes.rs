@@ -160,3 +160,162 @@ fn bad_scene_arguments_are_clear_errors() {
     let e = err("nowhere/scene.gltf");
     assert!(e.contains("nowhere/scene.gltf"), "{e}");
 }
+
+/// The inner box's patches of an `inner-box` scene (object "inner box").
+fn inner_patches(s: &Scene) -> Vec<&radiosity_core::Patch> {
+    let id = s.objects().iter().position(|o| o == "inner box").expect("an inner box");
+    s.patches().iter().filter(|p| p.object.0 as usize == id).collect()
+}
+
+#[test]
+fn inner_box_counts_and_areas_of_every_suite_case() {
+    // (argument, wall patches, inner patches, inner box (size, height), scale), the counts
+    // worked out by hand from ceil(edge · res): at res=3 an edge of 0.4 takes 2 patches and one
+    // of 0.8 takes 3; at res=2 an edge of 5e-4 takes 1.
+    let cases = [
+        ("inner-box", 54, 24, (0.4, 0.4), 1.0),
+        ("inner-box:res=2:size=5e-4:height=5e-4", 24, 6, (5e-4, 5e-4), 1.0),
+        ("inner-box:res=2:size=5e-4:height=5e-4:emission=0:inner-emission=1e6", 24, 6, (5e-4, 5e-4), 1.0),
+        ("inner-box:gap=0", 54, 24, (0.4, 0.4), 1.0),
+        ("inner-box:gap=1e-6", 54, 24, (0.4, 0.4), 1.0),
+        // Top and bottom 3 × 3, each side 3 strips of 0.8/3 by 1e-4.
+        ("inner-box:size=0.8:height=1e-4:gap=0.45", 54, 18 + 12, (0.8, 1e-4), 1.0),
+        ("inner-box:scale=1e-4", 54, 24, (0.4, 0.4), 1e-4),
+        ("inner-box:scale=1e4", 54, 24, (0.4, 0.4), 1e4),
+    ];
+    for (arg, walls, inner, (size, height), scale) in cases {
+        let s = scene(arg);
+        assert_eq!(s.len(), walls + inner, "{arg}");
+        assert_eq!(inner_patches(&s).len(), inner, "{arg}");
+        let inner_area = (2.0 * size * size + 4.0 * size * height) * scale * scale;
+        assert_relative_eq!(object_area(&s, "box"), 6.0 * scale * scale, max_relative = 1e-13);
+        assert_relative_eq!(object_area(&s, "inner box"), inner_area, max_relative = 1e-12);
+        assert_relative_eq!(s.total_area(), 6.0 * scale * scale + inner_area, max_relative = 1e-13);
+        // Walls are res × res per face, all the same size.
+        let wall_patch = 6.0 * scale * scale / walls as f64;
+        for p in &s.patches()[..walls] {
+            assert_relative_eq!(p.area(), wall_patch, max_relative = 1e-12);
+        }
+    }
+    // Area ratio 1e6: wall patch 0.25, inner face 2.5e-7.
+    let s = scene("inner-box:res=2:size=5e-4:height=5e-4");
+    let (largest, smallest) =
+        s.patches().iter().fold((0.0f64, f64::INFINITY), |(hi, lo), p| (hi.max(p.area()), lo.min(p.area())));
+    assert_relative_eq!(largest, 0.25, max_relative = 1e-13);
+    assert_relative_eq!(smallest, 2.5e-7, max_relative = 1e-9);
+    assert_relative_eq!(largest / smallest, 1e6, max_relative = 1e-9);
+    // The tiny bright emitter: only the six inner faces emit.
+    let s = scene("inner-box:res=2:size=5e-4:height=5e-4:emission=0:inner-emission=1e6");
+    assert_eq!(s.emitters(), (24..30).collect::<Vec<_>>());
+    assert_eq!(s.emission(24).0, [1e6; 3]);
+    assert_eq!(s.emission(0).0, [0.0; 3]);
+    // Thin slab: its sides are strips 1e-4 high.
+    let s = scene("inner-box:size=0.8:height=1e-4:gap=0.45");
+    let strips = inner_patches(&s).into_iter().filter(|p| p.normal().y.abs() < 1e-12).count();
+    assert_eq!(strips, 12);
+    // Touching: at gap=0 the bottom face lies on the floor, facing it, and the sides end on it.
+    let s = scene("inner-box:gap=0");
+    let bottom: Vec<_> = inner_patches(&s).into_iter().filter(|p| p.normal().y < -0.5).collect();
+    assert_eq!(bottom.len(), 4);
+    assert!(bottom.iter().all(|p| p.vertices().iter().all(|v| v.y == 0.0)));
+}
+
+#[test]
+fn inner_box_defaults_are_uniform_and_its_inner_faces_face_outward() {
+    let s = scene("inner-box");
+    assert_eq!(s.channels(), Channels::Grey);
+    assert_eq!(s.emitters().len(), s.len());
+    assert!((0..s.len()).all(|i| s.emission(i).0 == [1.0; 3] && s.reflectivity(i).0 == [0.5; 3]));
+    let walls_centre = Vec3::splat(0.5);
+    for arg in ["inner-box", "inner-box:gap=0", "inner-box:size=0.8:height=1e-4:gap=0.45", "inner-box:scale=1e4"] {
+        let s = scene(arg);
+        let inner = inner_patches(&s);
+        // The inner box's centre, from its own patches' extent.
+        let (lo, hi) = inner
+            .iter()
+            .flat_map(|p| p.vertices().iter())
+            .fold((Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)), |(lo, hi), v| (lo.min(*v), hi.max(*v)));
+        let centre = (lo + hi) * 0.5;
+        for p in &inner {
+            assert!(p.normal().dot(p.centroid() - centre) > 0.0, "{arg}: inner patch faces inward");
+        }
+        let scale = if arg.ends_with("1e4") { 1e4 } else { 1.0 };
+        let id = s.objects().iter().position(|o| o == "box").unwrap();
+        for p in s.patches().iter().filter(|p| p.object.0 as usize == id) {
+            assert!(p.normal().dot(walls_centre * scale - p.centroid()) > 0.0, "{arg}: wall faces outward");
+        }
+    }
+    // Another inner emission and colours.
+    let s = scene("inner-box:res=2:rho=0.9/0.5/0:emission=0:inner-emission=2/1/0");
+    assert_eq!(s.channels(), Channels::Rgb);
+    assert_eq!(s.emitters().len(), 6);
+    assert_eq!(s.emission(29).0, [2.0, 1.0, 0.0]);
+    assert_eq!(s.reflectivity(0).0, [0.9, 0.5, 0.0]);
+}
+
+#[test]
+fn scale_multiplies_coordinates_exactly() {
+    for (one, arg) in [
+        ("inner-box", "inner-box:scale=1e4"),
+        ("inner-box", "inner-box:scale=1e-4"),
+        ("inner-box:size=0.8:height=1e-4:gap=0.45", "inner-box:size=0.8:height=1e-4:gap=0.45:scale=1e4"),
+        ("furnace:block=true", "furnace:block=true:scale=1e4"),
+        ("furnace:block=true", "furnace:block=true:scale=1e-4"),
+    ] {
+        let factor: f64 = arg.rsplit('=').next().unwrap().parse().unwrap();
+        let (a, b) = (scene(one), scene(arg));
+        assert_eq!(a.len(), b.len(), "{arg}");
+        for (p, q) in a.patches().iter().zip(b.patches()) {
+            let expected = p.centroid() * factor;
+            let error = (q.centroid() - expected).length();
+            assert!(error <= 1e-12 * expected.length(), "{arg}: {} against {expected}", q.centroid());
+            assert_eq!(p.vertices().len(), q.vertices().len());
+            // The scene is meshed at scale 1 and scaled: each vertex is the product, rounded
+            // once, so the same faces are flat (or tilted by an ulp) at every scale.
+            for (v, w) in p.vertices().iter().zip(q.vertices()) {
+                assert_eq!(*w, *v * factor, "{arg}");
+            }
+            assert_relative_eq!(q.area(), p.area() * factor * factor, max_relative = 1e-12);
+            assert!((p.normal() - q.normal()).length() <= 1e-14, "{arg}: {} against {}", p.normal(), q.normal());
+            if p.normal().to_array().iter().filter(|c| **c == 0.0).count() == 2 {
+                assert_eq!(p.normal(), q.normal(), "{arg}: a flat face stays flat");
+            }
+        }
+    }
+    // furnace's total area scales with the square.
+    assert_relative_eq!(scene("furnace:scale=1e-8").total_area(), 6e-16, max_relative = 1e-13);
+    assert_relative_eq!(scene("furnace:scale=1e8").total_area(), 6e16, max_relative = 1e-13);
+}
+
+#[test]
+fn bad_inner_box_parameters_name_the_key() {
+    let err = |arg: &str| load_scene(arg).unwrap_err().to_string();
+    let e = err("inner-box:gap=0.6");
+    assert!(e.contains("gap=0.6") && e.contains("gap + height < 1"), "{e}");
+    let e = err("inner-box:gap=0.5:height=0.5");
+    assert!(e.contains("gap=0.5") && e.contains("gap + height < 1"), "{e}");
+    let e = err("inner-box:height=0.7");
+    assert!(e.contains("height=0.7") && e.contains("gap + height < 1"), "{e}");
+    let e = err("inner-box:gap=-0.1");
+    assert!(e.contains("gap=-0.1") && e.contains(">= 0"), "{e}");
+    for size in ["0", "1", "-0.5", "nan"] {
+        let e = err(&format!("inner-box:size={size}"));
+        assert!(e.contains(&format!("size={size}")) && e.contains("(0, 1)"), "{e}");
+    }
+    let e = err("inner-box:height=0");
+    assert!(e.contains("height=0") && e.contains("(0, 1)"), "{e}");
+    let e = err("inner-box:rho=1");
+    assert!(e.contains("rho=1") && e.contains("[0, 1)"), "{e}");
+    let e = err("inner-box:inner-emission=-1");
+    assert!(e.contains("inner-emission=-1") && e.contains(">= 0"), "{e}");
+    let e = err("inner-box:res=0");
+    assert!(e.contains("res=0") && e.contains("integer from 1 to 1000"), "{e}");
+    for scale in ["0", "-1", "1e-9", "1e9", "inf"] {
+        for name in ["inner-box", "furnace"] {
+            let e = err(&format!("{name}:scale={scale}"));
+            assert!(e.contains(&format!("scale={scale}")) && e.contains("[1e-8, 1e8]"), "{e}");
+        }
+    }
+    let e = err("inner-box:sise=0.3");
+    assert!(e.contains("no parameter 'sise'") && e.contains("res, size, height, gap"), "{e}");
+}

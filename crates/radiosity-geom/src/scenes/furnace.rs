@@ -3,6 +3,8 @@
 //! Layout: the unit cube `[0, 1]³`, every face facing inwards and cut into `res × res`
 //! patches; with `block=true`, a solid cube `[0.3, 0.7]³` facing outwards sits in the middle,
 //! cut to the same patch size. Every patch has reflectivity `rho` and emission `emission`.
+//! `scale` multiplies every coordinate of the scene meshed at scale 1, so the same patches
+//! appear at every scale: results that depend on the coordinate scale are bugs.
 //!
 //! Because the box is closed, every row of `F` sums to 1, so the uniform vector
 //! `B = E / (1 − ρ)` (per channel) solves `B = E + ρ F B` exactly, with or without the block
@@ -24,6 +26,7 @@ pub const PARAMS: &[ParamDoc] = &[
     ParamDoc { key: "rho", default: "0.5", doc: "reflectivity of every patch, grey or r/g/b, each in [0, 1)" },
     ParamDoc { key: "emission", default: "1", doc: "emission of every patch, grey or r/g/b, each >= 0" },
     ParamDoc { key: "block", default: "false", doc: "add a solid cube in the middle of the box" },
+    ParamDoc { key: "scale", default: "1", doc: "factor multiplying every coordinate, in [1e-8, 1e8]" },
 ];
 
 /// Builds the scene.
@@ -32,6 +35,7 @@ pub fn build(name: &str, params: &KeyValueParams) -> Result<LoadedScene, GeomErr
     let rho = params.spectrum("rho", Spectrum::grey(0.5), |v| (0.0..1.0).contains(&v), "a reflectivity in [0, 1)")?;
     let emission = params.spectrum("emission", Spectrum::grey(1.0), |v| v >= 0.0, "an emission >= 0")?;
     let block = params.flag("block", false)?;
+    let scale = params.real("scale", 1.0, |v| (1e-8..=1e8).contains(&v), "a scale in [1e-8, 1e8]")?;
 
     let mut b = SceneBuilder::new(name);
     let material = b.material(Material::new("furnace", rho, emission))?;
@@ -42,5 +46,5 @@ pub fn build(name: &str, params: &KeyValueParams) -> Result<LoadedScene, GeomErr
         let inner = b.object("block");
         b.axis_box([Vec3::splat(0.3), Vec3::splat(0.7)], &BoxFace::ALL, Facing::Outward, target, material, inner)?;
     }
-    Ok(LoadedScene { scene: b.build()?, warnings: Vec::new() })
+    Ok(LoadedScene { scene: super::scaled(b.build()?, scale)?, warnings: Vec::new() })
 }

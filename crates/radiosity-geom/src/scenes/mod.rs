@@ -7,13 +7,16 @@
 
 pub mod cornell;
 pub mod furnace;
+pub mod inner_box;
 pub mod labyrinth;
 pub mod multi_cubes;
 pub mod office;
 
 use crate::LoadedScene;
 use crate::error::GeomError;
+use crate::mesh::SceneBuilder;
 use crate::spec::{KeyValueParams, ParamDoc};
+use radiosity_core::{Real, Scene, Vec3};
 
 /// A built-in scene: its name, a one-line summary, its parameters and its generator.
 #[derive(Clone, Copy, Debug)]
@@ -50,9 +53,43 @@ const BUILTIN: &[BuiltinScene] = &[
     BuiltinScene { name: "office", summary: office::SUMMARY, params: office::PARAMS, generator: office::build },
     BuiltinScene { name: "cornell", summary: cornell::SUMMARY, params: cornell::PARAMS, generator: cornell::build },
     BuiltinScene { name: "furnace", summary: furnace::SUMMARY, params: furnace::PARAMS, generator: furnace::build },
+    BuiltinScene {
+        name: "inner-box",
+        summary: inner_box::SUMMARY,
+        params: inner_box::PARAMS,
+        generator: inner_box::build,
+    },
 ];
 
 /// Every built-in scene, in a fixed order.
 pub fn builtin_scenes() -> &'static [BuiltinScene] {
     BUILTIN
+}
+
+/// `scene` with every vertex multiplied by `scale`, patches, materials and objects unchanged
+/// and in order; `scale = 1` returns it as it is.
+///
+/// Scenes with a `scale` parameter mesh at scale 1 and scale afterwards, so that each
+/// coordinate is the unit scene's, rounded once. Meshing at the target scale instead rounds
+/// differently at each scale: bilinear subdivision computes a coordinate that all corners of a
+/// face share as `x (1 − s) + x s`, which is exactly `x` for some `x` and an ulp off for others.
+/// That tilted the wall at `x = 1e-4` of `inner-box:scale=1e-4` by 2e-16 where the wall at
+/// `x = 1` stays flat, and a tilt whose sign flips the z component of a normal turns the
+/// tangent frame about it by 180°, so every Monte Carlo ray of that wall went elsewhere.
+pub(crate) fn scaled(scene: Scene, scale: Real) -> Result<Scene, GeomError> {
+    if scale == 1.0 {
+        return Ok(scene);
+    }
+    let mut b = SceneBuilder::new(scene.name());
+    for material in scene.materials() {
+        b.material(material.clone())?;
+    }
+    for object in scene.objects() {
+        b.object(object.clone());
+    }
+    for p in scene.patches() {
+        let v: Vec<Vec3> = p.vertices().iter().map(|v| *v * scale).collect();
+        b.polygon(&v, p.material, p.object)?;
+    }
+    b.build()
 }

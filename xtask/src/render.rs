@@ -194,9 +194,12 @@ impl Camera {
                 let (c, size) = ((lo + hi) * 0.5, (hi - lo).max_element());
                 Camera { eye: v(c.x, 0.8 * size, lo.z - 0.25 * size), target: v(c.x, 0.0, c.z), fov: 52.0 }
             }
-            // Inside the closed unit cube, near a top corner, looking across to the opposite
-            // bottom corner (past the inner block, if any).
-            "furnace" => Camera { eye: v(0.08, 0.85, 0.08), target: v(0.75, 0.3, 0.75), fov: 75.0 },
+            // Inside the closed cube (the unit cube times `scale`), near a top corner, looking
+            // across to the opposite bottom corner (past the inner block, if any).
+            "furnace" => {
+                let size = (hi - lo).max_element();
+                Camera { eye: lo + size * v(0.08, 0.85, 0.08), target: lo + size * v(0.75, 0.3, 0.75), fov: 75.0 }
+            }
             // Anything else: from the +z side, 15° above, far enough for the bounding sphere
             // to fit the narrower of the two fields of view.
             _ => {

@@ -37,7 +37,8 @@
 //! Everything that cannot be loaded is an error of one sentence naming the file and, where it
 //! applies, the mesh, node or material: a missing or unreadable file, truncated or corrupt
 //! data, extensions the file requires that we do not support, NaN or infinite positions,
-//! missing `POSITION` data, indices past the vertices, and a scene without any usable
+//! missing `POSITION` data, indices past the vertices, a node hierarchy that is not a set of
+//! disjoint trees (a cycle, or a node reached twice), and a scene without any usable
 //! triangle. The gltf crate's reader indexes slices and asserts sizes as it goes, so accessor
 //! layouts and byte ranges are checked here before anything is read: a malformed file must
 //! not panic.
@@ -55,6 +56,12 @@ use radiosity_core::{CoreError, Material, MaterialId, ObjectId, Patch, Real, Spe
 use std::collections::HashMap;
 use std::path::Path;
 
+/// The most elements an accessor without a buffer view may declare. Such an accessor is
+/// zeros except for its sparse elements, so its `count` is not bounded by the file: a 900-byte
+/// file declaring two billion positions would otherwise make the loader allocate 48 GB and
+/// abort. 2^24 vertices is far beyond any scene radiosity can solve.
+const MAX_UNSTORED_ELEMENTS: usize = 1 << 24;
+
 /// Parameters a glTF file takes after its path.
 pub const PARAMS: &[ParamDoc] = &[ParamDoc {
     key: "size",
@@ -68,8 +75,36 @@ const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &["KHR_materials_emissive_strengt
 /// Loads the triangles of a glTF 2.0 file (`.gltf` with embedded or external buffers, or
 /// binary `.glb`) as a scene; see the module documentation for the mapping.
 pub fn load(path: &Path, params: &KeyValueParams) -> Result<LoadedScene, GeomError> {
-    let size = params.real("size", 0.0, |v| v >= 0.0, "a fraction of the bounding-box diagonal, at least 0")?;
-    let (document, buffers) = open(path)?;
+    let size = size(params)?;
+    let bytes = std::fs::read(path).map_err(|e| GeomError::Io { path: path.to_path_buf(), message: e.to_string() })?;
+    load_bytes(&bytes, path, Some(path.parent().unwrap_or(Path::new(""))), size, params)
+}
+
+/// Loads glTF 2.0 held in memory, text or binary (told apart by the `glTF` magic of binary
+/// glTF, not by `name`), exactly as [`load`] loads a file with these bytes. `name` stands for
+/// the file in error messages and in the scene's name. There is no directory to resolve
+/// relative URIs against, so a buffer stored in an external file is an error; buffers must be
+/// data URIs or the binary chunk.
+pub fn load_slice(bytes: &[u8], name: &Path, params: &KeyValueParams) -> Result<LoadedScene, GeomError> {
+    load_bytes(bytes, name, None, size(params)?, params)
+}
+
+/// The `size` parameter.
+fn size(params: &KeyValueParams) -> Result<Real, GeomError> {
+    params.real("size", 0.0, |v| v >= 0.0, "a fraction of the bounding-box diagonal, at least 0")
+}
+
+/// Loads glTF from `bytes`, which were read from `path` (a name for messages when `base` is
+/// `None`), meshed at `size`; external buffers are read relative to `base`, and refused
+/// without one.
+fn load_bytes(
+    bytes: &[u8],
+    path: &Path,
+    base: Option<&Path>,
+    size: Real,
+    params: &KeyValueParams,
+) -> Result<LoadedScene, GeomError> {
+    let (document, buffers) = open(bytes, path, base)?;
     let name = std::iter::once(path.display().to_string())
         .chain(params.given().map(|(k, v)| format!(":{k}={v}")))
         .collect::<String>();
@@ -84,22 +119,22 @@ pub fn load(path: &Path, params: &KeyValueParams) -> Result<LoadedScene, GeomErr
         degenerate: 0,
         meshes: 0,
     };
+    let mut reached = vec![Reached::No; document.nodes().len()];
     for node in Loader::roots(&document) {
-        loader.visit(node, DMat4::IDENTITY, &mut Vec::new())?;
+        loader.visit(node, &mut reached)?;
     }
     loader.finish(size)
 }
 
-/// Reads, parses and validates the file and loads its buffers (images are never read).
-fn open(path: &Path) -> Result<(Document, Vec<Vec<u8>>), GeomError> {
-    let bytes = std::fs::read(path).map_err(|e| GeomError::Io { path: path.to_path_buf(), message: e.to_string() })?;
+/// Parses and validates the bytes of `path` and loads its buffers (images are never read).
+fn open(bytes: &[u8], path: &Path, base: Option<&Path>) -> Result<(Document, Vec<Vec<u8>>), GeomError> {
     let fail = |message: String| GeomError::Gltf { path: path.to_path_buf(), message };
     if bytes.is_empty() {
         return Err(GeomError::EmptyFile { path: path.to_path_buf(), detail: "; the file is empty".into() });
     }
-    check_glb_header(&bytes).map_err(fail)?;
+    check_glb_header(bytes).map_err(fail)?;
     let Gltf { document, blob } =
-        Gltf::from_slice_without_validation(&bytes).map_err(|e| fail(describe_gltf_error(&e, &bytes)))?;
+        Gltf::from_slice_without_validation(bytes).map_err(|e| fail(describe_gltf_error(&e, bytes)))?;
     let unsupported: Vec<&str> =
         document.extensions_required().filter(|e| !SUPPORTED_REQUIRED_EXTENSIONS.contains(e)).collect();
     if !unsupported.is_empty() {
@@ -111,7 +146,7 @@ fn open(path: &Path) -> Result<(Document, Vec<Vec<u8>>), GeomError> {
         )));
     }
     let document = validate(document).map_err(fail)?;
-    let buffers = read_buffers(&document, path, blob).map_err(fail)?;
+    let buffers = read_buffers(&document, base, blob).map_err(fail)?;
     Ok((document, buffers))
 }
 
@@ -215,10 +250,9 @@ fn missing_positions(path: &str) -> Option<(usize, usize)> {
     (rest == ".attributes[\"POSITION\"]").then_some((mesh.parse().ok()?, primitive.parse().ok()?))
 }
 
-/// Loads every buffer (data URI, external file beside the glTF file, or the `.glb` binary
-/// chunk), checking each holds the bytes it declares.
-fn read_buffers(document: &Document, path: &Path, mut blob: Option<Vec<u8>>) -> Result<Vec<Vec<u8>>, String> {
-    let base = path.parent().unwrap_or(Path::new(""));
+/// Loads every buffer (data URI, external file in `base`, or the `.glb` binary chunk),
+/// checking each holds the bytes it declares.
+fn read_buffers(document: &Document, base: Option<&Path>, mut blob: Option<Vec<u8>>) -> Result<Vec<Vec<u8>>, String> {
     let mut buffers = Vec::new();
     for buffer in document.buffers() {
         let i = buffer.index();
@@ -227,13 +261,15 @@ fn read_buffers(document: &Document, path: &Path, mut blob: Option<Vec<u8>>) -> 
             gltf::buffer::Source::Uri(uri) => format!("'{uri}'"),
             gltf::buffer::Source::Bin => "the binary chunk".to_string(),
         };
-        let data =
-            gltf::buffer::Data::from_source_and_blob(buffer.source(), Some(base), &mut blob).map_err(|e| match e {
-                gltf::Error::Base64(e) => format!("buffer {i} has an invalid base64 data URI ({e})"),
-                gltf::Error::MissingBlob => format!("buffer {i} refers to the binary chunk, but there is none"),
-                gltf::Error::UnsupportedScheme => format!("buffer {i} has a URI scheme that is not supported"),
-                e => format!("buffer {i} cannot be read from {source}: {e}"),
-            })?;
+        let data = gltf::buffer::Data::from_source_and_blob(buffer.source(), base, &mut blob).map_err(|e| match e {
+            gltf::Error::Base64(e) => format!("buffer {i} has an invalid base64 data URI ({e})"),
+            gltf::Error::MissingBlob => format!("buffer {i} refers to the binary chunk, but there is none"),
+            gltf::Error::UnsupportedScheme => format!("buffer {i} has a URI scheme that is not supported"),
+            gltf::Error::ExternalReferenceInSliceImport => {
+                format!("buffer {i} is stored in {source}, and glTF loaded from memory cannot read other files")
+            }
+            e => format!("buffer {i} cannot be read from {source}: {e}"),
+        })?;
         if data.0.len() < buffer.length() {
             return Err(format!(
                 "buffer {i} is truncated: it declares {} bytes, but {source} holds {}",
@@ -251,6 +287,17 @@ struct Triangle {
     v: [Vec3; 3],
     material: MaterialId,
     object: ObjectId,
+}
+
+/// How far the walk of the node hierarchy has gone through a node.
+#[derive(Clone, Copy)]
+enum Reached {
+    /// Not yet.
+    No,
+    /// It is being visited: it is an ancestor of the nodes visited now.
+    OnPath,
+    /// It and all its descendants have been visited.
+    Done,
 }
 
 /// The state of one load: materials and objects so far, the triangles kept and counters for
@@ -290,23 +337,51 @@ impl<'a> Loader<'a> {
         document.nodes().filter(|n| !is_child[n.index()]).collect()
     }
 
-    /// Adds the meshes of `node` and its descendants; `parent` is the parent's world matrix
-    /// and `ancestors` the indices of the nodes above, to refuse cycles.
-    fn visit(&mut self, node: Node<'_>, parent: DMat4, ancestors: &mut Vec<usize>) -> Result<(), GeomError> {
-        if ancestors.contains(&node.index()) {
-            return Err(
-                self.error(format!("{} is its own ancestor (the node hierarchy has a cycle)", node_label(&node)))
-            );
+    /// Adds the meshes of `root` and its descendants. `reached` holds how far each node of the
+    /// document has been visited, so that a node met again is refused: on the current path it
+    /// makes a cycle, elsewhere the hierarchy is not a set of disjoint trees (and a node shared
+    /// by two parents at each of n levels would be visited 2^n times). The walk keeps its own
+    /// stack, so a deep hierarchy cannot overflow the thread's.
+    fn visit(&mut self, root: Node<'_>, reached: &mut [Reached]) -> Result<(), GeomError> {
+        enum Step<'d> {
+            /// Visit a node under the parent's world matrix.
+            Enter(Node<'d>, DMat4),
+            /// All descendants of this node are done.
+            Leave(usize),
         }
-        let world = parent * self.local_transform(&node)?;
-        if let Some(mesh) = node.mesh() {
-            self.mesh(&node, &mesh, &world)?;
+        let mut stack = vec![Step::Enter(root, DMat4::IDENTITY)];
+        while let Some(step) = stack.pop() {
+            let (node, parent) = match step {
+                Step::Leave(index) => {
+                    reached[index] = Reached::Done;
+                    continue;
+                }
+                Step::Enter(node, parent) => (node, parent),
+            };
+            match reached[node.index()] {
+                Reached::No => {}
+                Reached::OnPath => {
+                    return Err(self
+                        .error(format!("{} is its own ancestor (the node hierarchy has a cycle)", node_label(&node))));
+                }
+                Reached::Done => {
+                    return Err(self.error(format!(
+                        "{} is reached twice from its scene (it is listed twice, or has more than one parent), \
+                         but glTF nodes must form disjoint trees",
+                        node_label(&node)
+                    )));
+                }
+            }
+            reached[node.index()] = Reached::OnPath;
+            let world = parent * self.local_transform(&node)?;
+            if let Some(mesh) = node.mesh() {
+                self.mesh(&node, &mesh, &world)?;
+            }
+            stack.push(Step::Leave(node.index()));
+            // Reversed, so that children are visited in the order they are listed.
+            let children: Vec<Node<'_>> = node.children().collect();
+            stack.extend(children.into_iter().rev().map(|child| Step::Enter(child, world)));
         }
-        ancestors.push(node.index());
-        for child in node.children() {
-            self.visit(child, world, ancestors)?;
-        }
-        ancestors.pop();
         Ok(())
     }
 
@@ -486,6 +561,12 @@ impl<'a> Loader<'a> {
         let item = accessor.size();
         if let Some(view) = accessor.view() {
             self.check_range(&view, accessor.offset(), accessor.count(), item).map_err(fail)?;
+        } else if accessor.count() > MAX_UNSTORED_ELEMENTS {
+            return Err(fail(format!(
+                "has no buffer view yet declares {} elements; elements not stored in the file are refused beyond \
+                 {MAX_UNSTORED_ELEMENTS}",
+                accessor.count()
+            )));
         }
         if let Some(sparse) = accessor.sparse() {
             if sparse.count() == 0 {

@@ -293,6 +293,96 @@ fn bad_geometry_is_an_error_naming_the_mesh() {
 }
 
 #[test]
+fn a_node_reached_twice_is_an_error_not_a_second_instance() {
+    // `leaf` is a child of both `left` and `right`: glTF nodes must form disjoint trees.
+    check_gltf_error("shared_child.gltf", &["node 'leaf'", "reached twice", "disjoint trees"]);
+}
+
+/// `quad.gltf` with its nodes replaced by `nodes`, as JSON text.
+fn quad_with_nodes(nodes: serde_json::Value) -> Vec<u8> {
+    let mut json: serde_json::Value = serde_json::from_slice(&std::fs::read(fixture("quad.gltf")).unwrap()).unwrap();
+    json["nodes"] = nodes;
+    serde_json::to_vec(&json).unwrap()
+}
+
+#[test]
+fn a_node_shared_at_every_level_is_refused_at_once_rather_than_visited_exponentially() {
+    // Node i lists node i + 1 twice, 64 levels deep: walked as a tree, the quad at the bottom
+    // would be instanced 2^64 times. The walk is depth-first, so the quad is the first node
+    // met twice.
+    let mut nodes: Vec<serde_json::Value> = (1..=64).map(|i| serde_json::json!({ "children": [i, i] })).collect();
+    nodes.push(serde_json::json!({ "name": "quad", "mesh": 0 }));
+    let bytes = quad_with_nodes(nodes.into());
+    let e = gltf_input::load_slice(&bytes, Path::new("doubling.gltf"), &KeyValueParams::default()).unwrap_err();
+    let message = e.to_string();
+    assert!(matches!(e, GeomError::Gltf { .. }), "{message}");
+    assert!(message.contains("doubling.gltf") && message.contains("node 'quad' is reached twice"), "{message}");
+}
+
+#[test]
+fn a_deep_node_hierarchy_loads_without_overflowing_the_stack() {
+    // A chain of 100 000 nodes, each the only child of the one before, with the quad at the
+    // bottom; the test thread's stack is far smaller than a recursive walk would need.
+    const DEPTH: usize = 100_000;
+    let mut nodes: Vec<serde_json::Value> = (1..=DEPTH).map(|i| serde_json::json!({ "children": [i] })).collect();
+    nodes.push(serde_json::json!({ "name": "quad", "mesh": 0 }));
+    let bytes = quad_with_nodes(nodes.into());
+    let loaded = gltf_input::load_slice(&bytes, Path::new("deep.gltf"), &KeyValueParams::default()).unwrap();
+    check_unit_quad(&loaded);
+}
+
+#[test]
+fn bytes_in_memory_load_like_the_file_they_came_from() {
+    for name in ["quad.gltf", "emissive.glb"] {
+        let path = fixture(name);
+        let params = KeyValueParams::parse("test", ["size=0.3"], PARAMS).unwrap();
+        let from_file = gltf_input::load(Path::new(&path), &params).unwrap();
+        let from_memory = gltf_input::load_slice(&std::fs::read(&path).unwrap(), Path::new(&path), &params).unwrap();
+        assert_eq!(from_memory.scene.name(), from_file.scene.name());
+        assert_eq!(from_memory.scene.len(), from_file.scene.len());
+        for (a, b) in from_memory.scene.patches().iter().zip(from_file.scene.patches()) {
+            assert_eq!(a.vertices(), b.vertices());
+        }
+        assert_eq!(from_memory.warnings, from_file.warnings);
+    }
+}
+
+#[test]
+fn bytes_in_memory_cannot_refer_to_external_buffers() {
+    let text = std::fs::read_to_string(fixture("quad.gltf")).unwrap();
+    let start = text.find("data:application").unwrap();
+    let end = start + text[start..].find('"').unwrap();
+    let external = format!("{}quad.bin{}", &text[..start], &text[end..]);
+    let e =
+        gltf_input::load_slice(external.as_bytes(), Path::new("memory.gltf"), &KeyValueParams::default()).unwrap_err();
+    let message = e.to_string();
+    assert!(matches!(e, GeomError::Gltf { .. }), "{message}");
+    assert!(message.contains("memory.gltf") && message.contains("buffer 0 is stored in 'quad.bin'"), "{message}");
+    assert!(message.contains("loaded from memory"), "{message}");
+}
+
+#[test]
+fn accessors_without_storage_cannot_declare_billions_of_elements() {
+    // Zeros except for one sparse element: the count is not bounded by the file, and two
+    // billion positions would be a 48 GB allocation.
+    let text = r#"{
+      "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+      "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1]}}],
+      "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "material": 0}]}],
+      "buffers": [{"byteLength": 16, "uri": "data:application/octet-stream;base64,AAAAAAAAgD8AAIA/AACAPw=="}],
+      "bufferViews": [{"buffer": 0, "byteLength": 4}, {"buffer": 0, "byteOffset": 4, "byteLength": 12}],
+      "accessors": [{"componentType": 5126, "type": "VEC3", "count": 2000000000,
+                     "min": [0, 0, 0], "max": [1, 1, 1],
+                     "sparse": {"count": 1, "indices": {"bufferView": 0, "componentType": 5125},
+                                "values": {"bufferView": 1}}}]
+    }"#;
+    let e = gltf_input::load_slice(text.as_bytes(), Path::new("huge.gltf"), &KeyValueParams::default()).unwrap_err();
+    let message = e.to_string();
+    assert!(message.contains("huge.gltf") && message.contains("no buffer view"), "{message}");
+    assert!(message.contains("2000000000 elements"), "{message}");
+}
+
+#[test]
 fn scenes_without_usable_triangles_are_empty_file_errors() {
     for (name, why) in [("empty_scene.gltf", "no node of its scene has a mesh"), ("all_degenerate.gltf", "degenerate")]
     {

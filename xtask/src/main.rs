@@ -3,6 +3,7 @@
 //! Each subcommand lives in its own module. Errors reach the user as one sentence on stderr
 //! with a non-zero exit code; nothing here panics on bad input.
 
+mod bench;
 mod compare;
 mod experiment;
 mod export;
@@ -44,6 +45,9 @@ enum Command {
     Export(export::Args),
     /// Run every solver and backend over stiff and extreme scenes and report what fails.
     Stress(stress::Args),
+    /// Measure columns per second against the ray-tracing limit, matrix assembly, group
+    /// solves and end-to-end time and memory to accuracy, as a Markdown report.
+    Bench(bench::Args),
 }
 
 fn main() -> ExitCode {
@@ -60,6 +64,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render::run(&args),
         Command::Export(args) => export::run(&args),
         Command::Stress(args) => stress::run(&args),
+        Command::Bench(args) => bench::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -5,6 +5,7 @@ use assert_cmd::Command;
 use serde_json::Value;
 
 mod bad_input;
+mod bench;
 mod export;
 mod render;
 mod stress;

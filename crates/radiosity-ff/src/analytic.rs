@@ -72,11 +72,13 @@ use crate::ff_point_polygon::{MAX_CLIPPED, clip_above, distance_to_polygon, poin
 use crate::guard::ClampCounter;
 use crate::quadrature::{Panel, for_each_point_in, gauss_legendre, order_for, parametrisation};
 use crate::spec::AnalyticParams;
+use crate::traced::ShadowSegment;
 use radiosity_core::{ColumnSource, Patch, Real, Scene, Vec3};
 use radiosity_geom::{SceneAnalysis, Visibility};
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
+use rayon::prelude::*;
 
 /// Relative tolerance (of the scene diagonal) for "behind a plane".
 const PLANE_TOLERANCE: Real = 1e-9;
@@ -137,6 +139,36 @@ impl<'a> AnalyticColumns<'a> {
 
     /// `F_ij` before clamping.
     pub fn pair(&self, i: usize, j: usize) -> Real {
+        match self.visibility {
+            Some(vis) => self.pair_traced(i, j, &mut |p, from, q, to| vis.unoccluded_between(p, from, q, to)),
+            // Never called: nothing is traced without visibility.
+            None => self.pair_traced(i, j, &mut |_, _, _, _| true),
+        }
+    }
+
+    /// Appends to `out` every shadow-ray segment that computing column `j` traces, in the
+    /// order the column traces them (receivers `i` in index order): nothing when the analysis
+    /// says nothing can occlude. It runs the same code as [`ColumnSource::fill_column`], the
+    /// kernel included (a segment is traced only for pairs whose unoccluded form factor is
+    /// not zero), with each segment recorded instead of traced, so the segments are exactly
+    /// those of the column and the column's values do not change. `cargo xtask bench` traces
+    /// them straight through the BVH to set the backend against the ray-tracing limit.
+    pub fn shadow_segments(&self, j: usize, out: &mut Vec<ShadowSegment>) {
+        if self.visibility.is_none() {
+            return;
+        }
+        for i in 0..self.scene.len() {
+            self.pair_traced(i, j, &mut |p, from, q, to| {
+                out.push(ShadowSegment { p, from, q, to });
+                true
+            });
+        }
+    }
+
+    /// `F_ij` before clamping, with `trace(p, from, q, to)` answering whether the segment
+    /// from `p` on patch `from` to `q` on patch `to` is unoccluded; it is called only when
+    /// shadow rays are traced.
+    fn pair_traced(&self, i: usize, j: usize, trace: &mut impl FnMut(Vec3, usize, Vec3, usize) -> bool) -> Real {
         if i == j {
             return 0.0;
         }
@@ -149,7 +181,7 @@ impl<'a> AnalyticColumns<'a> {
             return 0.0;
         }
         match self.visibility {
-            Some(vis) => unoccluded * self.visible_fraction(vis, i, j),
+            Some(_) => unoccluded * self.visible_fraction(i, j, trace),
             None => unoccluded,
         }
     }
@@ -233,7 +265,7 @@ impl<'a> AnalyticColumns<'a> {
 
     /// The kernel-weighted fraction of `rays` jittered segments between the patches that no
     /// other patch blocks (see the module documentation).
-    fn visible_fraction(&self, vis: &Visibility, i: usize, j: usize) -> Real {
+    fn visible_fraction(&self, i: usize, j: usize, trace: &mut impl FnMut(Vec3, usize, Vec3, usize) -> bool) -> Real {
         let (lo, hi) = (i.min(j), i.max(j));
         let (plo, phi) = (&self.scene.patches()[lo], &self.scene.patches()[hi]);
         let mut rng = pair_rng(self.params.seed, lo, hi);
@@ -241,7 +273,7 @@ impl<'a> AnalyticColumns<'a> {
         if k == 1 {
             let p = plo.point_at(rng.random(), rng.random());
             let q = phi.point_at(rng.random(), rng.random());
-            return if vis.unoccluded_between(p, lo, q, hi) { 1.0 } else { 0.0 };
+            return if trace(p, lo, q, hi) { 1.0 } else { 0.0 };
         }
         // `side²` strata of `hi`'s parameter square, and `k / side²` jittered (Latin
         // hypercube) points on `lo`, each joined to a jittered point of every stratum.
@@ -271,7 +303,7 @@ impl<'a> AnalyticColumns<'a> {
                 let q = parametrisation(phi, s0 + cell * rng.random::<Real>(), t0 + cell * rng.random::<Real>()).0;
                 // The stratum as seen from p; the weights of one point sum to F(dA_p → hi).
                 let weight = if front { point_to_polygon(p, plo.normal(), corners) } else { 0.0 };
-                let visible = vis.unoccluded_between(p, lo, q, hi);
+                let visible = trace(p, lo, q, hi);
                 total += weight;
                 rays += 1;
                 if visible {
@@ -321,24 +353,27 @@ fn behind(a: &Patch, b: &Patch, tolerance: Real) -> bool {
     a.vertices().iter().all(|v| n.dot(*v - o) <= tolerance)
 }
 
+/// Pairs computed by one rayon task: enough to outweigh the task's cost (a pair costs a few
+/// hundred nanoseconds to microseconds).
+const PAIRS_PER_TASK: usize = 64;
+
 impl ColumnSource for AnalyticColumns<'_> {
     fn patch_count(&self) -> usize {
         self.scene.len()
     }
 
+    /// The pairs of a column are independent, so they are computed on rayon's threads: a
+    /// solver asks for one column at a time, and this is where its second core goes to work.
+    /// Each entry is the same whichever thread computes it.
     fn fill_column(&self, j: usize, column: &mut [Real]) {
-        for (i, f) in column.iter_mut().enumerate() {
-            *f = self.pair(i, j);
-        }
+        column.par_iter_mut().with_min_len(PAIRS_PER_TASK).enumerate().for_each(|(i, f)| *f = self.pair(i, j));
         self.clamped.clamp(column);
     }
 
     /// Every pair is computed on its own, whichever column asks, so row `i` holds exactly the
     /// entries the columns hold, at the cost of one column.
     fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
-        for (j, f) in row.iter_mut().enumerate() {
-            *f = self.pair(i, j);
-        }
+        row.par_iter_mut().with_min_len(PAIRS_PER_TASK).enumerate().for_each(|(j, f)| *f = self.pair(i, j));
         self.clamped.clamp(row);
         true
     }

@@ -38,6 +38,7 @@ pub mod matrix;
 pub mod montecarlo;
 pub mod quadrature;
 pub mod spec;
+pub mod traced;
 
 pub use analytic::AnalyticColumns;
 pub use backend::{Backend, FormFactorInput};
@@ -46,3 +47,4 @@ pub use hemicube::HemicubeColumns;
 pub use matrix::StoredMatrix;
 pub use montecarlo::{MonteCarloColumns, RayTally};
 pub use spec::{AnalyticParams, BackendSpec, HemicubeParams, MonteCarloParams};
+pub use traced::{ColumnRays, HitRay, ShadowSegment, TracedRays};

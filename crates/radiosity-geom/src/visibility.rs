@@ -272,3 +272,116 @@ impl Visibility {
             .min_by(|a, b| a.t.total_cmp(&b.t))
     }
 }
+
+/// The BVH of a [`Visibility`] traversed with obvhs's own `f32` ray-triangle test: the
+/// ray-tracing limit that `cargo xtask bench` sets form-factor backends against.
+///
+/// It answers the same two questions as [`Visibility::unoccluded_between`] and
+/// [`Visibility::first_hit`], skipping the same patches, over the same tree and with the same
+/// BVH-space rays, but tests candidate triangles with obvhs's `Triangle::intersect` in `f32`
+/// (the triangles in the normalised frame, not inflated) instead of the exact `f64` test in
+/// scene coordinates. The difference in speed between the two is what exactness costs; the
+/// answers may differ on grazing rays and at shared edges, so it is for measuring only.
+pub struct RawTracer<'v> {
+    visibility: &'v Visibility,
+    /// Every triangle in the BVH's frame, indexed like `Visibility::triangles`.
+    triangles: Vec<Triangle>,
+}
+
+impl std::fmt::Debug for RawTracer<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RawTracer").field("triangles", &self.triangles.len()).finish_non_exhaustive()
+    }
+}
+
+impl Visibility {
+    /// The same BVH with obvhs's `f32` triangle test, for measuring ([`RawTracer`]).
+    pub fn raw_tracer(&self) -> RawTracer<'_> {
+        let triangles = self
+            .triangles
+            .iter()
+            .map(|t| {
+                let v = t.map(|v| Vec3A::from(((v - self.centre) * self.inv_scale).as_vec3()));
+                Triangle { v0: v[0], v1: v[1], v2: v[2] }
+            })
+            .collect();
+        RawTracer { visibility: self, triangles }
+    }
+}
+
+impl RawTracer<'_> {
+    /// Like [`Visibility::unoccluded_between`]: true when no patch other than `from` and `to`
+    /// blocks the segment from `p` to `q`, hits within `1e-9` of either end ignored.
+    pub fn unoccluded_between(&self, p: Vec3, from: usize, q: Vec3, to: usize) -> bool {
+        let vis = self.visibility;
+        let d = q - p;
+        if !is_nonzero(d) {
+            return true;
+        }
+        let (mut ray, map) = vis.bvh_ray(p, d, 1.0);
+        ray.tmin = map.to_bvh(T_MARGIN);
+        ray.tmax = map.to_bvh(1.0 - T_MARGIN);
+        let (from, to) = (from as u32, to as u32);
+        vis.bvh.ray_traverse_miss(ray, |ray, id| {
+            let tri = vis.bvh.primitive_indices[id] as usize;
+            let patch = vis.triangle_patch[tri];
+            if patch == from || patch == to { f32::INFINITY } else { self.triangles[tri].intersect(ray) }
+        })
+    }
+
+    /// Like [`Visibility::first_hit`], reduced to the patch hit: the closest patch other than
+    /// `skip` along the ray `origin + t · direction`.
+    pub fn first_hit_patch(&self, origin: Vec3, direction: Vec3, skip: Option<usize>) -> Option<usize> {
+        let vis = self.visibility;
+        if !is_nonzero(direction) {
+            return None;
+        }
+        let skip = skip.map_or(u32::MAX, |s| s as u32);
+        let (mut ray, map) = vis.bvh_ray(origin, direction, Real::INFINITY);
+        ray.tmin = map.to_bvh(vis.ray_margin(direction));
+        let mut hit = obvhs::ray::RayHit::none();
+        vis.bvh
+            .ray_traverse(ray, &mut hit, |ray, id| {
+                let tri = vis.bvh.primitive_indices[id] as usize;
+                if vis.triangle_patch[tri] == skip { f32::INFINITY } else { self.triangles[tri].intersect(ray) }
+            })
+            .then(|| vis.triangle_patch[vis.bvh.primitive_indices[hit.primitive_id as usize] as usize] as usize)
+    }
+}
+
+#[cfg(test)]
+mod raw_tracer_tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn the_raw_tracer_answers_as_the_exact_queries_but_for_rare_grazing_cases() {
+        let scene = crate::load_scene("multi-cubes").unwrap().scene;
+        let vis = Visibility::new(&scene);
+        let raw = vis.raw_tracer();
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let n = scene.len();
+        let (mut segments, mut rays, mut traced, mut clear) = (0, 0, 0, 0);
+        for _ in 0..4000 {
+            let (a, b) = (rng.random_range(0..n), rng.random_range(0..n));
+            let p = scene.patches()[a].point_at(rng.random(), rng.random());
+            let q = scene.patches()[b].point_at(rng.random(), rng.random());
+            let exact = vis.unoccluded_between(p, a, q, b);
+            clear += usize::from(exact);
+            segments += usize::from(raw.unoccluded_between(p, a, q, b) == exact);
+            // Rays leave a patch on its front, as the backends' do; rays in the patch's own
+            // plane, which no backend traces, graze coplanar neighbours and are left out.
+            let normal = scene.patches()[a].normal();
+            let d = if normal.dot(q - p) < 0.0 { p - q } else { q - p };
+            if normal.dot(d) > 1e-3 * d.length() {
+                traced += 1;
+                rays +=
+                    usize::from(raw.first_hit_patch(p, d, Some(a)) == vis.first_hit(p, d, Some(a)).map(|h| h.patch));
+            }
+        }
+        assert!(clear > 400 && clear < 3600, "{clear} of 4000 segments clear: not a useful test");
+        assert!(segments >= 3960, "{segments} of 4000 segments agree");
+        assert!(traced > 2000 && rays as f64 >= 0.99 * traced as f64, "{rays} of {traced} rays agree");
+    }
+}

@@ -1,0 +1,336 @@
+//! The rays a backend traces for one column, listed without computing the column: what
+//! `cargo xtask bench` traces straight through the BVH to set the form-factor pipeline against
+//! the ray-tracing limit on the same rays.
+//!
+//! - `analytic` traces shadow-ray **segments** between two patches
+//!   ([`AnalyticColumns::shadow_segments`], which runs the backend's own code with each
+//!   segment recorded instead of traced);
+//! - `hemicube` and `montecarlo` trace **rays** to their first hit, skipping the shooter. Their
+//!   rays are generated here the way [`HemicubeColumns`] and [`MonteCarloColumns`] generate
+//!   them (same seeds, streams, strata and order); the tests below check, ray for ray, that
+//!   tracing them gives exactly the backends' rows, so the two cannot drift apart unnoticed.
+//!
+//! A stored matrix traces nothing.
+
+use crate::analytic::AnalyticColumns;
+use crate::backend::FormFactorInput;
+use crate::hemicube::HemicubeColumns;
+use crate::montecarlo::MAX_BATCH;
+use crate::spec::{BackendSpec, MonteCarloParams};
+use radiosity_core::math::cosine_direction;
+use radiosity_core::{ColumnSource, Patch, Real, Scene, Vec3};
+use rand::seq::SliceRandom;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::f64::consts::TAU;
+
+/// A shadow-ray segment: `p` on patch `from` to `q` on patch `to`, both patches ignored as
+/// occluders ([`radiosity_geom::Visibility::unoccluded_between`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadowSegment {
+    /// The start, a point of patch `from`.
+    pub p: Vec3,
+    /// The patch `p` lies on.
+    pub from: usize,
+    /// The end, a point of patch `to`.
+    pub q: Vec3,
+    /// The patch `q` lies on.
+    pub to: usize,
+}
+
+/// A ray traced to its first hit, ignoring patch `skip` (the shooter it leaves from;
+/// [`radiosity_geom::Visibility::first_hit`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HitRay {
+    /// Where the ray starts.
+    pub origin: Vec3,
+    /// Its direction (not normalised).
+    pub direction: Vec3,
+    /// The patch it leaves from.
+    pub skip: usize,
+}
+
+/// The rays of one or more columns.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TracedRays {
+    /// Occlusion queries on segments (`analytic`).
+    Segments(Vec<ShadowSegment>),
+    /// First-hit queries on rays (`hemicube`, `montecarlo`).
+    Rays(Vec<HitRay>),
+}
+
+impl TracedRays {
+    /// The number of rays.
+    pub fn len(&self) -> usize {
+        match self {
+            TracedRays::Segments(s) => s.len(),
+            TracedRays::Rays(r) => r.len(),
+        }
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Removes every ray, keeping the kind and the allocation.
+    pub fn clear(&mut self) {
+        match self {
+            TracedRays::Segments(s) => s.clear(),
+            TracedRays::Rays(r) => r.clear(),
+        }
+    }
+}
+
+/// Lists the rays each column of one backend traces.
+#[derive(Debug)]
+pub struct ColumnRays<'a> {
+    kind: Kind<'a>,
+}
+
+#[derive(Debug)]
+enum Kind<'a> {
+    Analytic(AnalyticColumns<'a>),
+    Hemicube { scene: &'a Scene, columns: HemicubeColumns<'a>, seed: u64 },
+    MonteCarlo { scene: &'a Scene, params: MonteCarloParams },
+}
+
+impl<'a> ColumnRays<'a> {
+    /// The rays of the backend `spec` names, on `input`; `None` for `matrix`, which traces
+    /// nothing once stored.
+    pub fn new(spec: &BackendSpec, input: FormFactorInput<'a>) -> Option<ColumnRays<'a>> {
+        let kind = match spec {
+            BackendSpec::Analytic(p) => {
+                Kind::Analytic(AnalyticColumns::new(input.scene, input.visibility, input.analysis, *p))
+            }
+            BackendSpec::Hemicube(p) => Kind::Hemicube {
+                scene: input.scene,
+                columns: HemicubeColumns::new(input.scene, input.visibility, *p),
+                seed: p.seed,
+            },
+            BackendSpec::MonteCarlo(p) => Kind::MonteCarlo { scene: input.scene, params: *p },
+            BackendSpec::Matrix { .. } => return None,
+        };
+        Some(ColumnRays { kind })
+    }
+
+    /// An empty list of the kind this backend traces.
+    pub fn empty(&self) -> TracedRays {
+        match self.kind {
+            Kind::Analytic(_) => TracedRays::Segments(Vec::new()),
+            _ => TracedRays::Rays(Vec::new()),
+        }
+    }
+
+    /// Appends the rays of column `j` to `out` (which must be of the kind [`Self::empty`]
+    /// gives; rays of the other kind are not appended). A `j` out of range adds nothing.
+    pub fn rays(&self, j: usize, out: &mut TracedRays) {
+        match (&self.kind, out) {
+            (Kind::Analytic(a), TracedRays::Segments(s)) if j < a.patch_count() => a.shadow_segments(j, s),
+            (Kind::Hemicube { scene, columns, seed }, TracedRays::Rays(r)) => {
+                hemicube_rays(scene, columns, *seed, j, r)
+            }
+            (Kind::MonteCarlo { scene, params }, TracedRays::Rays(r)) => montecarlo_rays(scene, *params, j, r),
+            _ => {}
+        }
+    }
+}
+
+/// The rays of the hemicube at shooter `j`, in pixel order (as `HemicubeColumns::row`).
+fn hemicube_rays(scene: &Scene, columns: &HemicubeColumns<'_>, seed: u64, j: usize, out: &mut Vec<HitRay>) {
+    let Some(patch) = scene.patches().get(j) else {
+        return;
+    };
+    let n = patch.normal();
+    let (t0, b0) = n.any_orthonormal_pair();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(j as u64);
+    let (sin, cos) = (TAU * rng.random::<Real>()).sin_cos();
+    let t = t0 * cos + b0 * sin;
+    let b = n.cross(t);
+    let origin = patch.centroid();
+    out.extend(columns.pixels().map(|(d, _)| HitRay { origin, direction: t * d.x + b * d.y + n * d.z, skip: j }));
+}
+
+/// The rays of Monte Carlo shooter `j`, batch by batch (as `MonteCarloColumns::batch`).
+fn montecarlo_rays(scene: &Scene, params: MonteCarloParams, j: usize, out: &mut Vec<HitRay>) {
+    let Some(patch) = scene.patches().get(j) else {
+        return;
+    };
+    let rays = params.rays;
+    let count = rays.div_ceil(MAX_BATCH);
+    if count == 0 {
+        return;
+    }
+    let (base, extra) = (rays / count, rays % count);
+    let n = patch.normal();
+    let sampler = AreaSampler::new(patch);
+    for k in 0..count {
+        let size = base + usize::from(k < extra);
+        let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
+        rng.set_stream(j as u64);
+        rng.set_word_pos((k as u128) << 32);
+        let mut strata: [Vec<u32>; 4] = std::array::from_fn(|_| (0..size as u32).collect());
+        for s in &mut strata {
+            s.shuffle(&mut rng);
+        }
+        let jitter = |stratum: u32, rng: &mut ChaCha8Rng| (stratum as Real + rng.random::<Real>()) / size as Real;
+        out.extend((0..size).map(|r| {
+            let origin = sampler.point(jitter(strata[0][r], &mut rng), jitter(strata[1][r], &mut rng));
+            let (u1, u2) = (jitter(strata[2][r], &mut rng), jitter(strata[3][r], &mut rng));
+            HitRay { origin, direction: cosine_direction(n, u1, u2), skip: j }
+        }));
+    }
+}
+
+/// Uniform sampling by area over a patch's fan triangles (as the Monte Carlo backend's).
+struct AreaSampler {
+    triangles: [[Vec3; 3]; 2],
+    split: Real,
+}
+
+impl AreaSampler {
+    fn new(patch: &Patch) -> AreaSampler {
+        let mut triangles = [[Vec3::ZERO; 3]; 2];
+        let mut areas = [0.0; 2];
+        for (k, tri) in patch.triangles().take(2).enumerate() {
+            triangles[k] = tri;
+            areas[k] = (tri[1] - tri[0]).cross(tri[2] - tri[0]).length();
+        }
+        let total = areas[0] + areas[1];
+        let split = if total > 0.0 && areas[1] > 0.0 { areas[0] / total } else { 1.0 };
+        AreaSampler { triangles, split }
+    }
+
+    fn point(&self, s: Real, t: Real) -> Vec3 {
+        let (tri, s) = if s < self.split || self.split >= 1.0 {
+            (&self.triangles[0], s / self.split)
+        } else {
+            (&self.triangles[1], ((s - self.split) / (1.0 - self.split)).min(1.0))
+        };
+        let r = s.sqrt();
+        tri[0] * (1.0 - r) + tri[1] * (r * (1.0 - t)) + tri[2] * (r * t)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::MonteCarloColumns;
+    use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
+
+    fn setup(arg: &str) -> (Scene, Visibility) {
+        let scene = load_scene(arg).unwrap().scene;
+        let visibility = Visibility::new(&scene);
+        (scene, visibility)
+    }
+
+    #[test]
+    fn analytic_segments_are_those_that_decide_the_column() {
+        // One ray per pair: F_ij > 0 exactly where the pair's kernel is non-zero and its one
+        // segment is clear, and every such pair has exactly one segment.
+        let (scene, visibility) = setup("multi-cubes");
+        let analysis = SceneAnalysis::new(&scene, &visibility);
+        let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
+        let spec = BackendSpec::parse("analytic").unwrap();
+        let rays = ColumnRays::new(&spec, input).unwrap();
+        let backend = AnalyticColumns::new(
+            &scene,
+            &visibility,
+            &analysis,
+            match spec {
+                BackendSpec::Analytic(p) => p,
+                _ => unreachable!(),
+            },
+        );
+        let mut column = vec![0.0; scene.len()];
+        for j in [0, 17, 240, 479] {
+            let mut out = rays.empty();
+            rays.rays(j, &mut out);
+            let TracedRays::Segments(segments) = out else { panic!("analytic traces segments") };
+            assert!(!segments.is_empty());
+            backend.fill_column(j, &mut column);
+            let mut seen = vec![false; scene.len()];
+            for s in &segments {
+                assert!(s.from == j || s.to == j, "{s:?}");
+                let i = if s.from == j { s.to } else { s.from };
+                assert!(!seen[i], "two segments for pair ({i}, {j})");
+                seen[i] = true;
+                let clear = visibility.unoccluded_between(s.p, s.from, s.q, s.to);
+                assert_eq!(clear, column[i] > 0.0, "pair ({i}, {j})");
+            }
+            for (i, &f) in column.iter().enumerate() {
+                assert!(f == 0.0 || seen[i], "F_{i}{j} = {f} without a segment");
+            }
+        }
+    }
+
+    #[test]
+    fn hemicube_rays_give_the_backend_row() {
+        let (scene, visibility) = setup("cornell:res=2");
+        let analysis = SceneAnalysis::new(&scene, &visibility);
+        let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
+        let spec = BackendSpec::parse("hemicube:res=16:seed=3").unwrap();
+        let BackendSpec::Hemicube(params) = spec else { unreachable!() };
+        let backend = HemicubeColumns::new(&scene, &visibility, params);
+        let rays = ColumnRays::new(&spec, input).unwrap();
+        let weights: Vec<Real> = backend.pixels().map(|(_, w)| w).collect();
+        let mut column = vec![0.0; scene.len()];
+        for j in [0, 5, scene.len() - 1] {
+            let mut out = rays.empty();
+            rays.rays(j, &mut out);
+            let TracedRays::Rays(list) = out else { panic!("hemicube traces rays") };
+            assert_eq!(list.len(), weights.len());
+            let mut row = vec![0.0; scene.len()];
+            for (ray, w) in list.iter().zip(&weights) {
+                if let Some(hit) = visibility.first_hit(ray.origin, ray.direction, Some(ray.skip)).filter(|h| h.front) {
+                    row[hit.patch] += w;
+                }
+            }
+            backend.fill_column(j, &mut column);
+            let aj = scene.patches()[j].area();
+            for (i, p) in scene.patches().iter().enumerate() {
+                let expected = (row[i] * aj / p.area()).clamp(0.0, 1.0);
+                assert_eq!(column[i], expected, "F_{i}{j}");
+            }
+        }
+    }
+
+    #[test]
+    fn montecarlo_rays_give_the_backend_tally() {
+        let (scene, visibility) = setup("cornell:res=2");
+        let analysis = SceneAnalysis::new(&scene, &visibility);
+        let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
+        // More than one batch, of unequal sizes.
+        let spec = BackendSpec::parse("montecarlo:rays=9001:seed=5").unwrap();
+        let BackendSpec::MonteCarlo(params) = spec else { unreachable!() };
+        let backend = MonteCarloColumns::new(&scene, &visibility, params);
+        let rays = ColumnRays::new(&spec, input).unwrap();
+        for j in [0, 7, scene.len() - 1] {
+            let mut out = rays.empty();
+            rays.rays(j, &mut out);
+            let TracedRays::Rays(list) = out else { panic!("montecarlo traces rays") };
+            assert_eq!(list.len(), 9001);
+            let mut front = vec![0u64; scene.len()];
+            for ray in &list {
+                if let Some(hit) = visibility.first_hit(ray.origin, ray.direction, Some(ray.skip)).filter(|h| h.front) {
+                    front[hit.patch] += 1;
+                }
+            }
+            assert_eq!(front, backend.tally(j).front, "shooter {j}");
+        }
+    }
+
+    #[test]
+    fn a_stored_matrix_traces_nothing() {
+        let (scene, visibility) = setup("furnace:res=2");
+        let analysis = SceneAnalysis::new(&scene, &visibility);
+        let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
+        assert!(ColumnRays::new(&BackendSpec::parse("matrix").unwrap(), input).is_none());
+        // Nothing can occlude in the furnace: the analytic backend traces no segment.
+        let rays = ColumnRays::new(&BackendSpec::parse("analytic").unwrap(), input).unwrap();
+        let mut out = rays.empty();
+        rays.rays(0, &mut out);
+        assert!(out.is_empty());
+    }
+}

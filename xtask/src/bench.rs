@@ -1,0 +1,378 @@
+//! `cargo xtask bench [--out FILE.md] [--quick] [--only SECTIONS] [--runs N]`: the
+//! performance figures, as one Markdown report of medians over several runs.
+//!
+//! Form factors dominate the cost of radiosity, so speed is measured where it is spent and
+//! against what limits it:
+//!
+//! 1. **`columns`**: form-factor columns per second for each backend on `office`, on 1 and 2
+//!    threads (dedicated rayon pools), over a fixed, seeded sample of columns spread over the
+//!    scene; beside them, rays per second for the **same rays** traced straight through the
+//!    BVH, once through [`radiosity_geom::Visibility`] (the exact `f64` queries the backends
+//!    call) and once with obvhs's own `f32` triangle test ([`radiosity_geom::visibility::RawTracer`]).
+//!    The rays are listed by [`radiosity_ff::ColumnRays`] without computing the columns. The
+//!    ratio of the rates is how close the pipeline gets to the ray-tracing limit.
+//! 2. **`assembly`**: the time to assemble `office`'s full matrix with the analytic backend
+//!    at k = 1 and k = 4 shadow rays per pair, each pair computed once
+//!    ([`radiosity_ff::StoredMatrix::assemble_reciprocal`]), beside column-by-column assembly
+//!    (what `--ff matrix` does); storage and bytes of the stored matrix, its row sums and
+//!    reciprocity.
+//! 3. **`lu`**: one group system `Φ_rr y = s` (with the second right-hand side of the condition
+//!    estimate, as a group step solves it) for group sizes m = 20 to 500, nalgebra's LU against
+//!    faer's ([`radiosity_core::dense_lu`], what the solvers use), on the synthetic
+//!    labyrinth-sized system of the `group_solve` criterion bench.
+//! 4. **`e2e`**: wall time from scene load (load, BVH, analysis, form-factor setup, solve) to
+//!    e_rms ≤ 1e-1, 1e-2 and 1e-3 on `office`, for `pr`, `xu`, a group-accelerated variant and
+//!    the full-matrix alternative (`gauss-seidel` over `--ff matrix`, assembled fresh, the
+//!    assembly counted), each in a child process (this executable, re-invoked) whose **peak
+//!    resident memory** (`VmHWM`) is reported too. The reference is solved once, before and
+//!    outside every timed run, and handed to the children in a file; the children compute
+//!    e_rms between steps and subtract that time from the wall time.
+//!
+//! Each section's medians are over `--runs` runs (default 5 for `columns` and `lu`, 3 for
+//! `assembly` and `e2e`). The report states the machine's core count and ends with the
+//! performance targets beside the measurement.
+//!
+//! Reproduce with `cargo xtask bench --out bench.md` on a quiet machine (about 20 minutes on
+//! 2 cores; sections can be run alone with `--only columns,lu`). `--quick` shrinks everything
+//! (a 171-patch Cornell box, a dozen columns, small backends, one end-to-end run) into a
+//! smoke test of a few seconds whose figures mean nothing.
+
+mod assembly;
+mod columns;
+mod e2e;
+mod lu;
+
+use crate::experiment::check_output_file;
+use crate::scene_report::{PreparedScene, prepare, print_warnings};
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::fmt::Write as _;
+use std::io::IsTerminal;
+use std::path::PathBuf;
+
+/// The sections, in report order.
+const SECTIONS: [&str; 4] = ["columns", "assembly", "lu", "e2e"];
+
+/// Arguments of `bench`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Also write the Markdown report to this file.
+    #[arg(long, value_name = "FILE")]
+    out: Option<PathBuf>,
+    /// A smoke test: a small scene, few columns, small backends, few runs (figures mean nothing).
+    #[arg(long)]
+    quick: bool,
+    /// Only these sections, comma-separated: columns, assembly, lu, e2e (e2e includes memory).
+    #[arg(long, value_name = "SECTIONS")]
+    only: Option<String>,
+    /// Runs per measurement (default 5 for columns and lu, 3 for assembly and e2e; with
+    /// --quick 2 and 1).
+    #[arg(long, value_name = "N")]
+    runs: Option<usize>,
+    /// The scene (default office; with --quick cornell:res=4).
+    #[arg(long, value_name = "SCENE")]
+    scene: Option<String>,
+    /// Columns in the sample of the columns section (default 200; with --quick 12).
+    #[arg(long, value_name = "N")]
+    columns: Option<usize>,
+    /// End-to-end solvers, besides the full-matrix alternative (default pr,xu,xu-g50-m500).
+    #[arg(long, value_name = "S1,S2,…")]
+    solvers: Option<String>,
+    /// Longest solver time (form factors and solve) of one end-to-end run, in seconds
+    /// (default 300; with --quick 60).
+    #[arg(long, value_name = "SECONDS")]
+    max_seconds: Option<f64>,
+    /// Internal: run one end-to-end case in this process and print its figures as JSON.
+    #[arg(long, hide = true, value_name = "SOLVER")]
+    child_solver: Option<String>,
+    /// Internal: the backend of the end-to-end case.
+    #[arg(long, hide = true, value_name = "BACKEND")]
+    child_ff: Option<String>,
+    /// Internal: the reference solution, raw little-endian f64.
+    #[arg(long, hide = true, value_name = "FILE")]
+    child_reference: Option<PathBuf>,
+}
+
+/// What every section is run with.
+pub(crate) struct Config {
+    quick: bool,
+    scene: String,
+    /// Runs of the cheap sections (columns, lu).
+    runs_cheap: usize,
+    /// Runs of the heavy sections (assembly, e2e).
+    runs_heavy: usize,
+    /// Columns in the sample of section 1.
+    columns: usize,
+    /// Backends of section 1.
+    backends: Vec<String>,
+    /// Shadow rays per pair in section 2.
+    assembly_rays: Vec<usize>,
+    /// Group sizes of section 3.
+    group_sizes: Vec<usize>,
+    /// Solvers of section 4, besides the full-matrix alternative.
+    solvers: Vec<String>,
+    /// Wall-time cap of one end-to-end run.
+    max_seconds: f64,
+    /// The shortest timed measurement in section 1: shorter ones are repeated.
+    min_seconds: f64,
+}
+
+impl Config {
+    fn new(args: &Args) -> Result<Config> {
+        let quick = args.quick;
+        if args.runs == Some(0) {
+            bail!("--runs must be at least 1");
+        }
+        if args.columns == Some(0) {
+            bail!("--columns must be at least 1");
+        }
+        if let Some(s) = args.max_seconds {
+            if !(s.is_finite() && s > 0.0) {
+                bail!("--max-seconds must be a positive number of seconds, not {s}");
+            }
+        }
+        let default_solvers = if quick { "pr,xu,xu-g10-m40" } else { "pr,xu,xu-g50-m500" };
+        let solvers: Vec<String> = args
+            .solvers
+            .as_deref()
+            .unwrap_or(default_solvers)
+            .split(',')
+            .map(str::trim)
+            .filter(|s| !s.is_empty())
+            .map(String::from)
+            .collect();
+        for s in &solvers {
+            radiosity_solvers::solver_by_name(s)
+                .map_err(|e| crate::experiment::solver_error(s, &e, ""))
+                .context("--solvers names a solver that does not exist")?;
+        }
+        let backends = if quick {
+            ["analytic", "hemicube:res=32", "montecarlo:rays=2000"]
+        } else {
+            ["analytic", "hemicube", "montecarlo"]
+        };
+        Ok(Config {
+            quick,
+            scene: args.scene.clone().unwrap_or_else(|| if quick { "cornell:res=4" } else { "office" }.to_string()),
+            runs_cheap: args.runs.unwrap_or(if quick { 2 } else { 5 }),
+            runs_heavy: args.runs.unwrap_or(if quick { 1 } else { 3 }),
+            columns: args.columns.unwrap_or(if quick { 12 } else { 200 }),
+            backends: backends.iter().map(|s| s.to_string()).collect(),
+            assembly_rays: vec![1, 4],
+            group_sizes: if quick { vec![20, 50] } else { vec![20, 50, 100, 200, 500] },
+            solvers,
+            max_seconds: args.max_seconds.unwrap_or(if quick { 60.0 } else { 300.0 }),
+            min_seconds: if quick { 0.05 } else { 0.2 },
+        })
+    }
+}
+
+/// Which sections to run, from `--only`.
+fn sections(only: Option<&str>) -> Result<Vec<&'static str>> {
+    let Some(only) = only else { return Ok(SECTIONS.to_vec()) };
+    let mut chosen = Vec::new();
+    for name in only.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        let Some(section) = SECTIONS.iter().find(|s| **s == name || (name == "memory" && **s == "e2e")) else {
+            bail!("unknown bench section '{name}'; the sections are {}", SECTIONS.join(", "));
+        };
+        if !chosen.contains(section) {
+            chosen.push(*section);
+        }
+    }
+    if chosen.is_empty() {
+        bail!("--only names no section; the sections are {}", SECTIONS.join(", "));
+    }
+    Ok(SECTIONS.iter().copied().filter(|s| chosen.contains(s)).collect())
+}
+
+/// What the sections found that the performance targets are judged on.
+#[derive(Default)]
+pub(crate) struct Findings {
+    /// Analytic k = 1: pipeline rays/s ÷ raw obvhs rays/s, and ÷ raw `Visibility` rays/s, on
+    /// 2 threads.
+    analytic_ratio: Option<(f64, f64)>,
+    /// The fastest method to each e_rms threshold: (threshold, method, seconds).
+    fastest: Vec<(f64, String, Option<f64>)>,
+    /// The largest peak resident memory of an end-to-end run, and its method.
+    peak_memory: Option<(u64, String)>,
+}
+
+/// Runs `bench` (or, with the hidden child arguments, one end-to-end case).
+pub fn run(args: &Args) -> Result<()> {
+    if let Some(solver) = &args.child_solver {
+        let (Some(ff), Some(reference), Some(scene)) = (&args.child_ff, &args.child_reference, &args.scene) else {
+            bail!("an end-to-end child run needs --scene, --child-ff and --child-reference");
+        };
+        return e2e::child(scene, solver, ff, reference, args.max_seconds.unwrap_or(300.0));
+    }
+    let sections = sections(args.only.as_deref())?;
+    if let Some(out) = &args.out {
+        check_output_file(out)?;
+    }
+    let config = Config::new(args)?;
+    let prepared = prepare(&config.scene)?;
+    print_warnings(&prepared.report());
+    let mut report = header(&config, &prepared, &sections);
+    let mut findings = Findings::default();
+    for section in &sections {
+        let text = match *section {
+            "columns" => columns::run(&config, &prepared, &mut findings)?,
+            "assembly" => assembly::run(&config, &prepared)?,
+            "lu" => lu::run(&config)?,
+            _ => e2e::run(&config, &prepared, &mut findings)?,
+        };
+        report += &text;
+    }
+    report += &targets(&findings, &config.scene);
+    print!("{report}");
+    if let Some(out) = &args.out {
+        std::fs::write(out, &report).with_context(|| format!("cannot write {}", out.display()))?;
+    }
+    Ok(())
+}
+
+/// The title, the machine and how the figures were taken.
+fn header(config: &Config, prepared: &PreparedScene, sections: &[&str]) -> String {
+    let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
+    let mut out = String::from("# Benchmarks (`cargo xtask bench`)\n\n");
+    if config.quick {
+        out += "**Smoke test (`--quick`): small scene and backends, figures mean nothing.**\n\n";
+    }
+    let _ = writeln!(
+        out,
+        "Machine: {cores} cores available ({} rayon threads by default), {} {}, release build: {}. \
+         Scene `{}`: {} patches. Medians of {} runs (assembly and end-to-end: {}).\n",
+        rayon::current_num_threads(),
+        std::env::consts::OS,
+        std::env::consts::ARCH,
+        if cfg!(debug_assertions) { "no (debug assertions on)" } else { "yes" },
+        config.scene,
+        prepared.loaded.scene.len(),
+        config.runs_cheap,
+        config.runs_heavy,
+    );
+    let _ = writeln!(out, "Sections: {}.\n", sections.join(", "));
+    out
+}
+
+/// The performance targets beside the measurements.
+fn targets(findings: &Findings, scene: &str) -> String {
+    if findings.analytic_ratio.is_none() && findings.fastest.is_empty() && findings.peak_memory.is_none() {
+        return String::new();
+    }
+    let mut out = String::from("## Targets\n\n| target | measured | met |\n|---|---|---|\n");
+    let verdict = |ok: bool| if ok { "yes" } else { "**no**" };
+    if let Some((obvhs, vis)) = findings.analytic_ratio {
+        let _ = writeln!(
+            out,
+            "| `analytic` k = 1 reaches ≥ 80% of the raw ray-tracing rate on the same rays (2 threads) | {}% of \
+             raw obvhs, {}% of raw `Visibility` | {} |",
+            sig(100.0 * obvhs, 2),
+            sig(100.0 * vis, 2),
+            verdict(obvhs >= 0.8)
+        );
+    }
+    for (threshold, limit, what) in [(1e-3, 10.0, "e_rms ≤ 1e-3"), (1e-1, 1.0, "a first useful image (e_rms ≤ 1e-1)")]
+    {
+        if let Some((_, method, seconds)) = findings.fastest.iter().find(|(t, _, _)| *t == threshold) {
+            let measured = match seconds {
+                Some(s) => format!("{} (`{method}`, fastest)", duration(*s)),
+                None => "not reached by any method".to_string(),
+            };
+            let _ = writeln!(
+                out,
+                "| `{scene}`: {what} in ≤ {limit} s of wall time from scene load | {measured} | {} |",
+                verdict(seconds.is_some_and(|s| s <= limit))
+            );
+        }
+    }
+    if let Some((bytes, method)) = &findings.peak_memory {
+        let _ = writeln!(
+            out,
+            "| `{scene}`: peak memory ≤ 2 GB | {} (largest, `{method}`) | {} |",
+            human_bytes(*bytes),
+            verdict(*bytes <= 2_000_000_000)
+        );
+    }
+    out.push('\n');
+    out
+}
+
+/// The median of `values` (the mean of the middle two for an even count); NaN when empty.
+pub(crate) fn median(values: &[f64]) -> f64 {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| !x.is_nan()).collect();
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let k = v.len();
+    if k % 2 == 1 { v[k / 2] } else { 0.5 * (v[k / 2 - 1] + v[k / 2]) }
+}
+
+/// `x` with `digits` significant digits, without exponent for everyday magnitudes.
+pub(crate) fn sig(x: f64, digits: usize) -> String {
+    if !x.is_finite() {
+        return "—".to_string();
+    }
+    if x == 0.0 {
+        return "0".to_string();
+    }
+    let magnitude = x.abs().log10().floor() as i32;
+    if !(-4..=9).contains(&magnitude) {
+        return format!("{:.*e}", digits.saturating_sub(1), x);
+    }
+    let decimals = (digits as i32 - 1 - magnitude).max(0) as usize;
+    let text = format!("{x:.decimals$}");
+    // Thousands separators for large integers make tables easier to read.
+    if decimals == 0 && x.abs() >= 10_000.0 {
+        let digits: Vec<char> = text.trim_start_matches('-').chars().collect();
+        let mut grouped = String::new();
+        for (k, c) in digits.iter().enumerate() {
+            if k > 0 && (digits.len() - k) % 3 == 0 {
+                grouped.push(',');
+            }
+            grouped.push(*c);
+        }
+        return if x < 0.0 { format!("-{grouped}") } else { grouped };
+    }
+    text
+}
+
+/// `bytes` in kB, MB or GB (powers of ten, as the 2 GB target).
+pub(crate) fn human_bytes(bytes: u64) -> String {
+    let b = bytes as f64;
+    match bytes {
+        0..1_000_000 => format!("{} kB", sig(b / 1e3, 3)),
+        1_000_000..1_000_000_000 => format!("{} MB", sig(b / 1e6, 3)),
+        _ => format!("{} GB", sig(b / 1e9, 3)),
+    }
+}
+
+/// A progress bar on stderr over `len` steps, hidden when stderr is not a terminal.
+pub(crate) fn progress(len: u64, prefix: &str) -> ProgressBar {
+    let bar = if std::io::stderr().is_terminal() { ProgressBar::new(len) } else { ProgressBar::hidden() };
+    if let Ok(style) = ProgressStyle::with_template("{prefix:>12} [{bar:30}] {pos}/{len} {msg} {elapsed}") {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar.set_prefix(prefix.to_string());
+    bar
+}
+
+/// A rayon pool of `threads` threads.
+pub(crate) fn pool(threads: usize) -> Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .with_context(|| format!("cannot start a pool of {threads} threads"))
+}
+
+/// Seconds in µs, ms or s.
+pub(crate) fn duration(seconds: f64) -> String {
+    if seconds < 1e-3 {
+        format!("{} µs", sig(seconds * 1e6, 3))
+    } else if seconds < 1.0 {
+        format!("{} ms", sig(seconds * 1e3, 3))
+    } else {
+        format!("{} s", sig(seconds, 3))
+    }
+}

@@ -1,0 +1,286 @@
+//! Section 1: columns per second for each backend, on 1 and 2 threads, against the rate at
+//! which the same rays are traced straight through the BVH.
+
+use super::{Config, Findings, median, pool, sig};
+use crate::scene_report::PreparedScene;
+use anyhow::{Context, Result};
+use radiosity_core::ColumnSource;
+use radiosity_ff::{Backend, BackendSpec, ColumnRays, FormFactorInput, TracedRays};
+use radiosity_geom::Visibility;
+use radiosity_geom::visibility::RawTracer;
+use rayon::prelude::*;
+use std::fmt::Write as _;
+use std::hint::black_box;
+use std::time::Instant;
+
+/// Rays traced per timed chunk: enough to amortise starting the pool's threads, few enough
+/// to keep the rays of a chunk (under 200 MB) in memory.
+const CHUNK_RAYS: usize = 2_000_000;
+
+/// The seed of the column sample.
+const SAMPLE_SEED: u64 = 0x5EED;
+
+/// `count` distinct columns spread over `0..n`: one drawn (seeded) from each of `count`
+/// equal strata of the index range, in increasing order. Patches are numbered object by
+/// object, so every object of the scene is represented.
+pub(crate) fn sample(n: usize, count: usize, seed: u64) -> Vec<usize> {
+    if count >= n {
+        return (0..n).collect();
+    }
+    (0..count)
+        .map(|k| {
+            let (lo, hi) = (k * n / count, (k + 1) * n / count);
+            lo + (splitmix(seed ^ k as u64) % (hi - lo) as u64) as usize
+        })
+        .collect()
+}
+
+/// SplitMix64: one well-mixed number from `x`.
+fn splitmix(x: u64) -> u64 {
+    let mut z = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// Seconds of the fastest call of `work`, called until `min_seconds` have passed (once at
+/// least): short measurements are repeated, and the least disturbed pass is kept (on a busy
+/// machine another process can take a core for a few milliseconds, which only ever slows a
+/// pass down). Measurements longer than `min_seconds` are taken once.
+fn per_pass<T>(min_seconds: f64, mut work: impl FnMut() -> T) -> (f64, T) {
+    let start = Instant::now();
+    let mut fastest = f64::INFINITY;
+    loop {
+        let pass = Instant::now();
+        let out = black_box(work());
+        fastest = fastest.min(pass.elapsed().as_secs_f64());
+        if start.elapsed().as_secs_f64() >= min_seconds {
+            return (fastest, out);
+        }
+    }
+}
+
+/// Seconds to compute every column of `sample`, in parallel over the current pool.
+fn time_parallel(backend: &Backend<'_>, sample: &[usize], n: usize, min_seconds: f64) -> f64 {
+    per_pass(min_seconds, || {
+        sample.par_iter().with_max_len(1).for_each_init(
+            || vec![0.0; n],
+            |column, &j| {
+                backend.fill_column(j, column);
+                black_box(&column);
+            },
+        )
+    })
+    .0
+}
+
+/// Seconds to compute every column of `sample` one after another, as a solver asks for them
+/// (a backend may still use the pool inside a column).
+fn time_sequential(backend: &Backend<'_>, sample: &[usize], n: usize, min_seconds: f64) -> f64 {
+    let mut column = vec![0.0; n];
+    per_pass(min_seconds, || {
+        for &j in sample {
+            backend.fill_column(j, &mut column);
+            black_box(&column);
+        }
+    })
+    .0
+}
+
+/// Rays per task when tracing in parallel: a plain loop inside, so that the per-ray cost is
+/// the query's alone.
+const TASK_RAYS: usize = 1024;
+
+/// Traces `rays` over the current pool through `Visibility`: the seconds, and how many are
+/// clear (segments) or hit something (rays).
+fn trace_exact(vis: &Visibility, rays: &TracedRays, min_seconds: f64) -> (f64, usize) {
+    per_pass(min_seconds, || match rays {
+        TracedRays::Segments(s) => s
+            .par_chunks(TASK_RAYS)
+            .map(|c| c.iter().filter(|s| vis.unoccluded_between(s.p, s.from, s.q, s.to)).count())
+            .sum(),
+        TracedRays::Rays(r) => r
+            .par_chunks(TASK_RAYS)
+            .map(|c| c.iter().filter(|r| vis.first_hit(r.origin, r.direction, Some(r.skip)).is_some()).count())
+            .sum(),
+    })
+}
+
+/// Traces `rays` over the current pool with obvhs's `f32` test: the seconds and the count of
+/// clear segments or rays that hit something.
+fn trace_raw(raw: &RawTracer<'_>, rays: &TracedRays, min_seconds: f64) -> (f64, usize) {
+    per_pass(min_seconds, || match rays {
+        TracedRays::Segments(s) => s
+            .par_chunks(TASK_RAYS)
+            .map(|c| c.iter().filter(|s| raw.unoccluded_between(s.p, s.from, s.q, s.to)).count())
+            .sum(),
+        TracedRays::Rays(r) => r
+            .par_chunks(TASK_RAYS)
+            .map(|c| c.iter().filter(|r| raw.first_hit_patch(r.origin, r.direction, Some(r.skip)).is_some()).count())
+            .sum(),
+    })
+}
+
+/// One run's seconds for one backend.
+#[derive(Clone, Copy, Default)]
+struct Run {
+    /// Columns: 1 thread; 2 threads, columns in parallel; 2 threads, one column at a time.
+    columns: [f64; 3],
+    /// Raw rays: `Visibility` on 1 and 2 threads, obvhs `f32` on 1 and 2 threads.
+    raw: [f64; 4],
+    /// Listing the rays (analytic: the kernel, sampling and bookkeeping of the columns
+    /// without their tracing), on one thread.
+    listing: f64,
+    /// Rays in the sample.
+    rays: usize,
+    /// Segments found clear (or rays hitting a front) by `Visibility` and by obvhs.
+    agree: (usize, usize),
+}
+
+/// Measures one backend once.
+fn measure(
+    spec: &BackendSpec,
+    input: FormFactorInput<'_>,
+    raw: &RawTracer<'_>,
+    sample: &[usize],
+    pools: &[rayon::ThreadPool; 2],
+    min_seconds: f64,
+) -> Result<Run> {
+    let n = input.scene.len();
+    let backend = Backend::columns(spec, input);
+    // One column untimed first: the BVH and the backend's tables paged in and cached.
+    if let Some(&j) = sample.first() {
+        pools[1].install(|| time_sequential(&backend, &[j], n, 0.0));
+    }
+    let mut run = Run::default();
+    run.columns[0] = pools[0].install(|| time_parallel(&backend, sample, n, min_seconds));
+    run.columns[1] = pools[1].install(|| time_parallel(&backend, sample, n, min_seconds));
+    run.columns[2] = pools[1].install(|| time_sequential(&backend, sample, n, min_seconds));
+    let rays = ColumnRays::new(spec, input).context("a stored matrix traces no rays")?;
+    let mut chunk = rays.empty();
+    let flush = |chunk: &mut TracedRays, run: &mut Run| {
+        run.rays += chunk.len();
+        let (t, clear_exact) = pools[0].install(|| trace_exact(input.visibility, chunk, min_seconds));
+        run.raw[0] += t;
+        run.raw[1] += pools[1].install(|| trace_exact(input.visibility, chunk, min_seconds)).0;
+        let (t, clear_raw) = pools[0].install(|| trace_raw(raw, chunk, min_seconds));
+        run.raw[2] += t;
+        run.raw[3] += pools[1].install(|| trace_raw(raw, chunk, min_seconds)).0;
+        run.agree.0 += clear_exact;
+        run.agree.1 += clear_raw;
+        chunk.clear();
+    };
+    for &j in sample {
+        let start = Instant::now();
+        rays.rays(j, &mut chunk);
+        run.listing += start.elapsed().as_secs_f64();
+        if chunk.len() >= CHUNK_RAYS {
+            flush(&mut chunk, &mut run);
+        }
+    }
+    if !chunk.is_empty() {
+        flush(&mut chunk, &mut run);
+    }
+    Ok(run)
+}
+
+/// Runs section 1.
+pub(crate) fn run(config: &Config, prepared: &PreparedScene, findings: &mut Findings) -> Result<String> {
+    let scene = &prepared.loaded.scene;
+    let n = scene.len();
+    let input = FormFactorInput { scene, visibility: &prepared.visibility, analysis: &prepared.analysis };
+    let raw = prepared.visibility.raw_tracer();
+    let columns = sample(n, config.columns, SAMPLE_SEED);
+    let pools = [pool(1)?, pool(2)?];
+    let specs: Vec<BackendSpec> = config.backends.iter().map(|b| BackendSpec::parse(b)).collect::<Result<_, _>>()?;
+    let bar = super::progress((specs.len() * config.runs_cheap) as u64, "columns");
+    let mut runs: Vec<Vec<Run>> = vec![Vec::new(); specs.len()];
+    for r in 0..config.runs_cheap {
+        for (b, spec) in specs.iter().enumerate() {
+            bar.set_message(format!("{} (run {}/{})", spec.canonical(), r + 1, config.runs_cheap));
+            runs[b].push(measure(spec, input, &raw, &columns, &pools, config.min_seconds)?);
+            bar.inc(1);
+        }
+    }
+    bar.finish_and_clear();
+
+    let mut out = String::from("## 1. Columns per second against the ray-tracing limit\n\n");
+    let _ = writeln!(
+        out,
+        "{} columns of `{}` drawn one from each of {} equal index ranges (seed {SAMPLE_SEED:#x}). \"Pipeline\" \
+         is the backend computing those columns; \"raw\" traces the very rays those columns trace (listed by \
+         `radiosity_ff::ColumnRays`), straight through the BVH: through `Visibility` (the exact `f64` queries \
+         the backends call) and with obvhs's own `f32` triangle test on the same tree. The ratio is pipeline \
+         rays/s ÷ raw rays/s on the same threads. Dedicated rayon pools of 1 and 2 threads; \"one at a time\" \
+         computes the columns one after another on 2 threads, as a solver asks for them.\n",
+        columns.len(),
+        config.scene,
+        columns.len()
+    );
+    out += "| backend | threads | columns/s | rays/column | pipeline rays/s | raw `Visibility` rays/s | ratio | raw \
+            obvhs rays/s | ratio |\n|---|---|--:|--:|--:|--:|--:|--:|--:|\n";
+    let mut notes = String::new();
+    for (spec, runs) in specs.iter().zip(&runs) {
+        let rays = runs[0].rays as f64;
+        let per_column = rays / columns.len() as f64;
+        let rate = |f: &dyn Fn(&Run) -> f64| median(&runs.iter().map(f).collect::<Vec<_>>());
+        let kind = if matches!(spec, BackendSpec::Analytic(_)) { "segments" } else { "rays" };
+        for (row, label, raw_index) in [(0, "1", 0), (1, "2", 1), (2, "2, one at a time", 1)] {
+            let cps = rate(&|r| columns.len() as f64 / r.columns[row]);
+            let pipeline = rate(&|r| rays / r.columns[row]);
+            let exact = rate(&|r| rays / r.raw[raw_index]);
+            let obvhs = rate(&|r| rays / r.raw[raw_index + 2]);
+            let _ = writeln!(
+                out,
+                "| `{}` | {label} | {} | {} {kind} | {} | {} | {} | {} | {} |",
+                spec.canonical(),
+                sig(cps, 3),
+                sig(per_column, 4),
+                sig(pipeline, 3),
+                sig(exact, 3),
+                ratio(pipeline, exact),
+                sig(obvhs, 3),
+                ratio(pipeline, obvhs),
+            );
+            if row == 1 && matches!(spec, BackendSpec::Analytic(p) if p.rays == 1) && rays > 0.0 {
+                findings.analytic_ratio = Some((pipeline / obvhs, pipeline / exact));
+            }
+        }
+        let (exact, raw) = runs[0].agree;
+        if exact != raw {
+            let _ = writeln!(
+                notes,
+                "- `{}`: of {} {kind}, `Visibility` found {exact} {} and obvhs `f32` {raw} (grazing rays and shared \
+                 edges, where the exact test decides differently).",
+                spec.canonical(),
+                runs[0].rays,
+                if kind == "segments" { "clear" } else { "hitting a patch" },
+            );
+        }
+        if let BackendSpec::Analytic(_) = spec {
+            let column = rate(&|r| r.columns[0] / columns.len() as f64);
+            let listing = rate(&|r| r.listing / columns.len() as f64);
+            let tracing = rate(&|r| r.raw[0] / columns.len() as f64);
+            let _ = writeln!(
+                notes,
+                "- `{}` on 1 thread: a column takes {} ms; listing its segments, which runs the same code without \
+                 tracing them (kernel, quadrature, sampling), {} ms; tracing them through `Visibility` {} ms.",
+                spec.canonical(),
+                sig(1e3 * column, 3),
+                sig(1e3 * listing, 3),
+                sig(1e3 * tracing, 3),
+            );
+        }
+    }
+    out.push('\n');
+    if !notes.is_empty() {
+        out += &notes;
+        out.push('\n');
+    }
+    Ok(out)
+}
+
+/// `a / b` as a percentage.
+fn ratio(a: f64, b: f64) -> String {
+    if a.is_finite() && b.is_finite() && b > 0.0 { format!("{}%", sig(100.0 * a / b, 2)) } else { "—".to_string() }
+}

@@ -1,0 +1,108 @@
+//! `cargo xtask bench --quick`: every section is in the report, with sane figures. Nothing
+//! here asserts a time: a smoke run on a loaded machine proves nothing about speed.
+
+use super::{failure, xtask};
+
+/// The cells of the rows of the first table after the line starting with `heading`.
+fn table(report: &str, heading: &str) -> Vec<Vec<String>> {
+    let start = report.find(heading).unwrap_or_else(|| panic!("no '{heading}' in\n{report}"));
+    report[start..]
+        .lines()
+        .skip_while(|l| !l.starts_with('|'))
+        .take_while(|l| l.starts_with('|'))
+        .skip(2)
+        .map(|l| l.trim_matches('|').split(" | ").map(|c| c.trim().to_string()).collect())
+        .collect()
+}
+
+/// A number as the report prints it (thousands separators allowed).
+fn number(cell: &str) -> f64 {
+    let text: String = cell.split_whitespace().next().unwrap_or_default().replace(',', "");
+    text.trim_end_matches('%').parse().unwrap_or_else(|_| panic!("not a number: '{cell}'"))
+}
+
+/// A duration as the report prints it, in seconds.
+fn seconds(cell: &str) -> f64 {
+    let scale = if cell.ends_with(" µs") {
+        1e-6
+    } else if cell.ends_with(" ms") {
+        1e-3
+    } else if cell.ends_with(" s") {
+        1.0
+    } else {
+        panic!("not a duration: '{cell}'")
+    };
+    number(cell) * scale
+}
+
+#[test]
+fn quick_bench_reports_every_section_with_sane_figures() {
+    let out = std::env::temp_dir().join(format!("radiosity-bench-{}.md", std::process::id()));
+    let args = ["bench", "--quick", "--scene", "cornell:res=2", "--out", out.to_str().unwrap()];
+    let stdout = xtask(&args).success().get_output().stdout.clone();
+    let report = String::from_utf8(stdout).unwrap();
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), report);
+    std::fs::remove_file(&out).unwrap();
+    assert!(report.contains("Smoke test") && report.contains("cores available"), "{report}");
+
+    // 1. Three backends, each on 1 thread, 2 threads and 2 threads one column at a time. The
+    // pipeline traces the raw rays and does more, so its rate is below the raw one but for
+    // noise; two threads share the machine with whatever else runs, hence the wider bound.
+    let rows = table(&report, "## 1.");
+    assert_eq!(rows.len(), 9, "{report}");
+    for row in &rows {
+        assert!(number(&row[2]) > 0.0 && number(&row[4]) > 0.0, "{row:?}");
+        assert!(number(&row[5]) > 0.0 && number(&row[7]) > 0.0, "{row:?}");
+        let bound = if row[1] == "1" { 2.0 } else { 4.0 };
+        for ratio in [&row[6], &row[8]] {
+            let r = number(ratio) / 100.0;
+            assert!(r > 0.0 && r < bound, "ratio {ratio} in {row:?}");
+        }
+    }
+    assert!(rows[0][0].starts_with("`analytic") && rows[3][0].starts_with("`hemicube"), "{rows:?}");
+    assert!(report.contains("listing its segments"), "{report}");
+
+    // 2. Each pair once at k = 1 and 4, and column by column: exact reciprocity for the former.
+    let rows = table(&report, "## 2.");
+    assert_eq!(rows.len(), 3, "{report}");
+    for row in &rows {
+        assert!(number(&row[2]) > 0.0 && number(&row[3]) > 0.0, "{row:?}");
+        assert!(row[5].ends_with("kB") || row[5].ends_with("MB"), "{row:?}");
+    }
+    for row in &rows[..2] {
+        assert!(number(&row[8]) < 1e-5, "reciprocity of {row:?}");
+    }
+    assert_eq!((rows[0][1].as_str(), rows[1][1].as_str(), rows[2][1].as_str()), ("1", "4", "1"));
+
+    // 3. Both LU solvers at every group size.
+    let rows = table(&report, "## 3.");
+    assert_eq!(rows.iter().map(|r| r[0].as_str()).collect::<Vec<_>>(), ["20", "50"]);
+    for row in &rows {
+        assert!(seconds(&row[1]) > 0.0 && seconds(&row[2]) > 0.0, "{row:?}");
+    }
+
+    // 4 and 5. Every method reaches 1e-3 on this small scene, in order, with its memory.
+    let rows = table(&report, "## 4.");
+    let methods: Vec<&str> = rows.iter().map(|r| r[0].as_str()).collect();
+    assert_eq!(methods, ["`pr`", "`xu`", "`xu-g10-m40`", "`gauss-seidel`"], "{report}");
+    assert_eq!(rows[3][1], "`matrix`");
+    for row in &rows {
+        let (a, b, c) = (seconds(&row[2]), seconds(&row[3]), seconds(&row[4]));
+        assert!(0.0 < a && a <= b && b <= c, "{row:?}");
+        assert!(number(&row[7]) <= 1e-3, "{row:?}");
+        assert!(row[8].ends_with("MB") || row[8] == "n/a", "{row:?}");
+    }
+    assert!(report.contains("## Targets"), "{report}");
+}
+
+#[test]
+fn bench_refuses_bad_arguments() {
+    let e = failure(&["bench", "--only", "columns,speed"]);
+    assert!(e.contains("unknown bench section 'speed'") && e.contains("assembly"), "{e}");
+    let e = failure(&["bench", "--runs", "0"]);
+    assert!(e.contains("--runs must be at least 1"), "{e}");
+    let e = failure(&["bench", "--quick", "--solvers", "pr,magic"]);
+    assert!(e.contains("magic"), "{e}");
+    let e = failure(&["bench", "--quick", "--only", "lu", "--out", "/no/such/dir/bench.md"]);
+    assert!(e.contains("does not exist"), "{e}");
+}

@@ -15,10 +15,10 @@
 use crate::analytic::AnalyticColumns;
 use crate::backend::FormFactorInput;
 use crate::hemicube::HemicubeColumns;
-use crate::montecarlo::MAX_BATCH;
+use crate::montecarlo::{AreaSampler, MAX_BATCH};
 use crate::spec::{BackendSpec, MonteCarloParams};
 use radiosity_core::math::cosine_direction;
-use radiosity_core::{ColumnSource, Patch, Real, Scene, Vec3};
+use radiosity_core::{ColumnSource, Real, Scene, Vec3};
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -180,36 +180,6 @@ fn montecarlo_rays(scene: &Scene, params: MonteCarloParams, j: usize, out: &mut 
             let (u1, u2) = (jitter(strata[2][r], &mut rng), jitter(strata[3][r], &mut rng));
             HitRay { origin, direction: cosine_direction(n, u1, u2), skip: j }
         }));
-    }
-}
-
-/// Uniform sampling by area over a patch's fan triangles (as the Monte Carlo backend's).
-struct AreaSampler {
-    triangles: [[Vec3; 3]; 2],
-    split: Real,
-}
-
-impl AreaSampler {
-    fn new(patch: &Patch) -> AreaSampler {
-        let mut triangles = [[Vec3::ZERO; 3]; 2];
-        let mut areas = [0.0; 2];
-        for (k, tri) in patch.triangles().take(2).enumerate() {
-            triangles[k] = tri;
-            areas[k] = (tri[1] - tri[0]).cross(tri[2] - tri[0]).length();
-        }
-        let total = areas[0] + areas[1];
-        let split = if total > 0.0 && areas[1] > 0.0 { areas[0] / total } else { 1.0 };
-        AreaSampler { triangles, split }
-    }
-
-    fn point(&self, s: Real, t: Real) -> Vec3 {
-        let (tri, s) = if s < self.split || self.split >= 1.0 {
-            (&self.triangles[0], s / self.split)
-        } else {
-            (&self.triangles[1], ((s - self.split) / (1.0 - self.split)).min(1.0))
-        };
-        let r = s.sqrt();
-        tri[0] * (1.0 - r) + tri[1] * (r * (1.0 - t)) + tri[2] * (r * t)
     }
 }
 

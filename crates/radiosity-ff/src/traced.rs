@@ -6,7 +6,7 @@
 //!   ([`AnalyticColumns::shadow_segments`], which runs the backend's own code with each
 //!   segment recorded instead of traced);
 //! - `hemicube` and `montecarlo` trace **rays** to their first hit, skipping the shooter. Their
-//!   rays are generated here the way [`HemicubeColumns`] and [`MonteCarloColumns`] generate
+//!   rays are generated here the way [`HemicubeColumns`] and [`MonteCarloColumns`](crate::MonteCarloColumns) generate
 //!   them (same seeds, streams, strata and order); the tests below check, ray for ray, that
 //!   tracing them gives exactly the backends' rows, so the two cannot drift apart unnoticed.
 //!

@@ -245,20 +245,26 @@ impl<'a> HemicubeColumns<'a> {
         (0..self.table.pixel_count()).map(|p| self.table.pixel(p))
     }
 
-    /// Row `j` before reciprocity: `row[i] = F_ji` from the hemicube at `j`'s centroid.
-    fn row(&self, j: usize, row: &mut [Real]) {
-        row.fill(0.0);
-        let Some(patch) = self.scene.patches().get(j) else {
-            return;
-        };
+    /// The hemicube of shooter `j`: its origin (the centroid) and the frame `(t, b, n)` that
+    /// turns a pixel's local direction `d` into `t d.x + b d.y + n d.z`, randomly rotated about
+    /// the normal by the seeded stream of `j`. `None` for a `j` out of range.
+    pub(crate) fn frame(&self, j: usize) -> Option<(Vec3, [Vec3; 3])> {
+        let patch = self.scene.patches().get(j)?;
         let n = patch.normal();
         let (t0, b0) = n.any_orthonormal_pair();
         let mut rng = ChaCha8Rng::seed_from_u64(self.params.seed);
         rng.set_stream(j as u64);
         let (sin, cos) = (TAU * rng.random::<Real>()).sin_cos();
         let t = t0 * cos + b0 * sin;
-        let b = n.cross(t);
-        let origin = patch.centroid();
+        Some((patch.centroid(), [t, n.cross(t), n]))
+    }
+
+    /// Row `j` before reciprocity: `row[i] = F_ji` from the hemicube at `j`'s centroid.
+    fn row(&self, j: usize, row: &mut [Real]) {
+        row.fill(0.0);
+        let Some((origin, [t, b, n])) = self.frame(j) else {
+            return;
+        };
         let count = self.table.pixel_count();
         let mut hits: Vec<Option<(usize, Real)>> = Vec::new();
         for start in (0..count).step_by(BLOCK) {

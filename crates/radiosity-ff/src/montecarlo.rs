@@ -116,16 +116,15 @@ enum Outcome {
     Escaped,
 }
 
-/// Uniform sampling by area over a patch's fan triangles (also used by [`crate::traced`] to
-/// list the rays this backend traces).
-pub(crate) struct AreaSampler {
+/// Uniform sampling by area over a patch's fan triangles.
+struct AreaSampler {
     triangles: [[Vec3; 3]; 2],
     /// The fraction of the area in the first triangle (1 for a triangle patch).
     split: Real,
 }
 
 impl AreaSampler {
-    pub(crate) fn new(patch: &Patch) -> AreaSampler {
+    fn new(patch: &Patch) -> AreaSampler {
         let mut triangles = [[Vec3::ZERO; 3]; 2];
         let mut areas = [0.0; 2];
         for (k, tri) in patch.triangles().take(2).enumerate() {
@@ -138,7 +137,7 @@ impl AreaSampler {
     }
 
     /// The point at `(s, t)` in the unit square; uniform `(s, t)` give points uniform by area.
-    pub(crate) fn point(&self, s: Real, t: Real) -> Vec3 {
+    fn point(&self, s: Real, t: Real) -> Vec3 {
         let (tri, s) = if s < self.split || self.split >= 1.0 {
             (&self.triangles[0], s / self.split)
         } else {
@@ -150,12 +149,40 @@ impl AreaSampler {
 }
 
 /// The sizes of the batches `n` rays are split into: nearly equal, none above [`MAX_BATCH`].
-fn batch_sizes(n: usize) -> (usize, usize, usize) {
+pub(crate) fn batch_sizes(n: usize) -> (usize, usize, usize) {
     let count = n.div_ceil(MAX_BATCH);
     if count == 0 {
         return (0, 0, 0);
     }
     (count, n / count, n % count)
+}
+
+/// The rays `(origin, direction)` of batch `k` of shooter `j` (patch `patch`): `size` rays,
+/// one Latin hypercube over origin and direction, drawn from the stream of `j` at the batch's
+/// own position, so every batch is the same whichever thread draws it. [`crate::traced`]
+/// lists the same rays for benchmarks.
+pub(crate) fn batch_rays(
+    seed: u64,
+    j: usize,
+    patch: &Patch,
+    k: usize,
+    size: usize,
+) -> impl Iterator<Item = (Vec3, Vec3)> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(j as u64);
+    rng.set_word_pos((k as u128) << 32);
+    let mut strata: [Vec<u32>; 4] = std::array::from_fn(|_| (0..size as u32).collect());
+    for s in &mut strata {
+        s.shuffle(&mut rng);
+    }
+    let n = patch.normal();
+    let sampler = AreaSampler::new(patch);
+    let jitter = move |stratum: u32, rng: &mut ChaCha8Rng| (stratum as Real + rng.random::<Real>()) / size as Real;
+    (0..size).map(move |r| {
+        let origin = sampler.point(jitter(strata[0][r], &mut rng), jitter(strata[1][r], &mut rng));
+        let (u1, u2) = (jitter(strata[2][r], &mut rng), jitter(strata[3][r], &mut rng));
+        (origin, cosine_direction(n, u1, u2))
+    })
 }
 
 impl<'a> MonteCarloColumns<'a> {
@@ -205,26 +232,11 @@ impl<'a> MonteCarloColumns<'a> {
 
     /// Batch `k` of shooter `j`: `size` rays, one Latin hypercube.
     fn batch(&self, j: usize, patch: &Patch, k: usize, size: usize) -> Vec<Outcome> {
-        let mut rng = ChaCha8Rng::seed_from_u64(self.params.seed);
-        rng.set_stream(j as u64);
-        rng.set_word_pos((k as u128) << 32);
-        let mut strata: [Vec<u32>; 4] = std::array::from_fn(|_| (0..size as u32).collect());
-        for s in &mut strata {
-            s.shuffle(&mut rng);
-        }
-        let n = patch.normal();
-        let sampler = AreaSampler::new(patch);
-        let jitter = |stratum: u32, rng: &mut ChaCha8Rng| (stratum as Real + rng.random::<Real>()) / size as Real;
-        (0..size)
-            .map(|r| {
-                let origin = sampler.point(jitter(strata[0][r], &mut rng), jitter(strata[1][r], &mut rng));
-                let (u1, u2) = (jitter(strata[2][r], &mut rng), jitter(strata[3][r], &mut rng));
-                let direction = cosine_direction(n, u1, u2);
-                match self.visibility.first_hit(origin, direction, Some(j)) {
-                    Some(hit) if hit.front => Outcome::Front(hit.patch),
-                    Some(_) => Outcome::Back,
-                    None => Outcome::Escaped,
-                }
+        batch_rays(self.params.seed, j, patch, k, size)
+            .map(|(origin, direction)| match self.visibility.first_hit(origin, direction, Some(j)) {
+                Some(hit) if hit.front => Outcome::Front(hit.patch),
+                Some(_) => Outcome::Back,
+                None => Outcome::Escaped,
             })
             .collect()
     }

@@ -6,23 +6,18 @@
 //!   ([`AnalyticColumns::shadow_segments`], which runs the backend's own code with each
 //!   segment recorded instead of traced);
 //! - `hemicube` and `montecarlo` trace **rays** to their first hit, skipping the shooter. Their
-//!   rays are generated here the way [`HemicubeColumns`] and [`MonteCarloColumns`](crate::MonteCarloColumns) generate
-//!   them (same seeds, streams, strata and order); the tests below check, ray for ray, that
-//!   tracing them gives exactly the backends' rows, so the two cannot drift apart unnoticed.
+//!   rays come from the backends' own generators ([`HemicubeColumns`]'s frame and pixels, the
+//!   Monte Carlo batches), in the order the backends trace them; the tests below check that
+//!   tracing them gives exactly the backends' rows.
 //!
 //! A stored matrix traces nothing.
 
 use crate::analytic::AnalyticColumns;
 use crate::backend::FormFactorInput;
 use crate::hemicube::HemicubeColumns;
-use crate::montecarlo::{AreaSampler, MAX_BATCH};
+use crate::montecarlo::{batch_rays, batch_sizes};
 use crate::spec::{BackendSpec, MonteCarloParams};
-use radiosity_core::math::cosine_direction;
-use radiosity_core::{ColumnSource, Real, Scene, Vec3};
-use rand::seq::SliceRandom;
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-use std::f64::consts::TAU;
+use radiosity_core::{ColumnSource, Scene, Vec3};
 
 /// A shadow-ray segment: `p` on patch `from` to `q` on patch `to`, both patches ignored as
 /// occluders ([`radiosity_geom::Visibility::unoccluded_between`]).
@@ -91,7 +86,7 @@ pub struct ColumnRays<'a> {
 #[derive(Debug)]
 enum Kind<'a> {
     Analytic(AnalyticColumns<'a>),
-    Hemicube { scene: &'a Scene, columns: HemicubeColumns<'a>, seed: u64 },
+    Hemicube(HemicubeColumns<'a>),
     MonteCarlo { scene: &'a Scene, params: MonteCarloParams },
 }
 
@@ -103,11 +98,7 @@ impl<'a> ColumnRays<'a> {
             BackendSpec::Analytic(p) => {
                 Kind::Analytic(AnalyticColumns::new(input.scene, input.visibility, input.analysis, *p))
             }
-            BackendSpec::Hemicube(p) => Kind::Hemicube {
-                scene: input.scene,
-                columns: HemicubeColumns::new(input.scene, input.visibility, *p),
-                seed: p.seed,
-            },
+            BackendSpec::Hemicube(p) => Kind::Hemicube(HemicubeColumns::new(input.scene, input.visibility, *p)),
             BackendSpec::MonteCarlo(p) => Kind::MonteCarlo { scene: input.scene, params: *p },
             BackendSpec::Matrix { .. } => return None,
         };
@@ -127,9 +118,7 @@ impl<'a> ColumnRays<'a> {
     pub fn rays(&self, j: usize, out: &mut TracedRays) {
         match (&self.kind, out) {
             (Kind::Analytic(a), TracedRays::Segments(s)) if j < a.patch_count() => a.shadow_segments(j, s),
-            (Kind::Hemicube { scene, columns, seed }, TracedRays::Rays(r)) => {
-                hemicube_rays(scene, columns, *seed, j, r)
-            }
+            (Kind::Hemicube(columns), TracedRays::Rays(r)) => hemicube_rays(columns, j, r),
             (Kind::MonteCarlo { scene, params }, TracedRays::Rays(r)) => montecarlo_rays(scene, *params, j, r),
             _ => {}
         }
@@ -137,49 +126,22 @@ impl<'a> ColumnRays<'a> {
 }
 
 /// The rays of the hemicube at shooter `j`, in pixel order (as `HemicubeColumns::row`).
-fn hemicube_rays(scene: &Scene, columns: &HemicubeColumns<'_>, seed: u64, j: usize, out: &mut Vec<HitRay>) {
-    let Some(patch) = scene.patches().get(j) else {
+fn hemicube_rays(columns: &HemicubeColumns<'_>, j: usize, out: &mut Vec<HitRay>) {
+    let Some((origin, [t, b, n])) = columns.frame(j) else {
         return;
     };
-    let n = patch.normal();
-    let (t0, b0) = n.any_orthonormal_pair();
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    rng.set_stream(j as u64);
-    let (sin, cos) = (TAU * rng.random::<Real>()).sin_cos();
-    let t = t0 * cos + b0 * sin;
-    let b = n.cross(t);
-    let origin = patch.centroid();
     out.extend(columns.pixels().map(|(d, _)| HitRay { origin, direction: t * d.x + b * d.y + n * d.z, skip: j }));
 }
 
-/// The rays of Monte Carlo shooter `j`, batch by batch (as `MonteCarloColumns::batch`).
+/// The rays of Monte Carlo shooter `j`, batch by batch (as `MonteCarloColumns::tally`).
 fn montecarlo_rays(scene: &Scene, params: MonteCarloParams, j: usize, out: &mut Vec<HitRay>) {
     let Some(patch) = scene.patches().get(j) else {
         return;
     };
-    let rays = params.rays;
-    let count = rays.div_ceil(MAX_BATCH);
-    if count == 0 {
-        return;
-    }
-    let (base, extra) = (rays / count, rays % count);
-    let n = patch.normal();
-    let sampler = AreaSampler::new(patch);
+    let (count, base, extra) = batch_sizes(params.rays);
     for k in 0..count {
-        let size = base + usize::from(k < extra);
-        let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
-        rng.set_stream(j as u64);
-        rng.set_word_pos((k as u128) << 32);
-        let mut strata: [Vec<u32>; 4] = std::array::from_fn(|_| (0..size as u32).collect());
-        for s in &mut strata {
-            s.shuffle(&mut rng);
-        }
-        let jitter = |stratum: u32, rng: &mut ChaCha8Rng| (stratum as Real + rng.random::<Real>()) / size as Real;
-        out.extend((0..size).map(|r| {
-            let origin = sampler.point(jitter(strata[0][r], &mut rng), jitter(strata[1][r], &mut rng));
-            let (u1, u2) = (jitter(strata[2][r], &mut rng), jitter(strata[3][r], &mut rng));
-            HitRay { origin, direction: cosine_direction(n, u1, u2), skip: j }
-        }));
+        let rays = batch_rays(params.seed, j, patch, k, base + usize::from(k < extra));
+        out.extend(rays.map(|(origin, direction)| HitRay { origin, direction, skip: j }));
     }
 }
 
@@ -187,6 +149,7 @@ fn montecarlo_rays(scene: &Scene, params: MonteCarloParams, j: usize, out: &mut 
 mod tests {
     use super::*;
     use crate::MonteCarloColumns;
+    use radiosity_core::Real;
     use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
 
     fn setup(arg: &str) -> (Scene, Visibility) {

@@ -10,7 +10,7 @@ use crate::scene_report::PreparedScene;
 use anyhow::{Context, Result, bail};
 use radiosity_core::{LinearSystem, Real};
 use radiosity_eval::{FormFactors, ReferenceParams, ReferenceSolution};
-use radiosity_ff::{Backend, BackendSpec, FormFactorInput};
+use radiosity_ff::{Backend, BackendSpec};
 use radiosity_solvers::{Executor, NoObserver, Observer, Problem, Run, SolverError, State, StopRules, solver_by_name};
 use std::path::Path;
 use std::time::Instant;
@@ -123,10 +123,9 @@ impl<'p> Experiment<'p> {
     pub fn new(prepared: &'p PreparedScene, spec: BackendSpec) -> Result<Experiment<'p>> {
         let scene = &prepared.loaded.scene;
         let system = LinearSystem::from_scene(scene);
-        let input = FormFactorInput { scene, visibility: &prepared.visibility, analysis: &prepared.analysis };
         let backend = match spec {
             BackendSpec::Matrix { .. } => Backend::Matrix(obtain(prepared, &spec)?.matrix),
-            _ => Backend::columns(&spec, input),
+            _ => Backend::columns(&spec, prepared.ff_input()),
         };
         let params = ReferenceParams::default();
         let start = Instant::now();

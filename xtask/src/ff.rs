@@ -23,7 +23,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use radiosity_core::ColumnSource;
 use radiosity_ff::guard::MatrixFigures;
 use radiosity_ff::matrix::RebalanceReport;
-use radiosity_ff::{Backend, BackendSpec, FormFactorInput, StoredMatrix};
+use radiosity_ff::{Backend, BackendSpec, StoredMatrix};
 use radiosity_geom::Closure;
 use serde::Serialize;
 use serde::ser::{SerializeSeq, Serializer};
@@ -150,12 +150,7 @@ pub(crate) type Assembled = (StoredMatrix, u64, Option<(MatrixFigures, Rebalance
 /// it stores), and rebalances it when asked, without the cache: the matrix, the entries clamped, and the figures before
 /// rebalancing with what rebalancing did.
 pub(crate) fn assemble_stored(prepared: &PreparedScene, spec: &BackendSpec, rebalance: bool) -> Result<Assembled> {
-    let input = FormFactorInput {
-        scene: &prepared.loaded.scene,
-        visibility: &prepared.visibility,
-        analysis: &prepared.analysis,
-    };
-    let backend = Backend::columns(spec, input);
+    let backend = Backend::columns(spec, prepared.ff_input());
     let mut matrix = assemble(&backend);
     let rebalanced = if rebalance {
         let area = areas(prepared);
@@ -166,6 +161,15 @@ pub(crate) fn assemble_stored(prepared: &PreparedScene, spec: &BackendSpec, reba
         None
     };
     Ok((matrix, backend.clamped(), rebalanced))
+}
+
+/// The backend `spec` names, with a `matrix` assembled now (and rebalanced when asked), never
+/// read from the cache: what runs that time or stress the assembly itself need.
+pub(crate) fn fresh_backend<'p>(prepared: &'p PreparedScene, spec: &BackendSpec) -> Result<Backend<'p>> {
+    Ok(match spec {
+        BackendSpec::Matrix { rebalance, .. } => Backend::Matrix(assemble_stored(prepared, spec, *rebalance)?.0),
+        _ => Backend::columns(spec, prepared.ff_input()),
+    })
 }
 
 /// Assembles every column with a progress bar on stderr (hidden when stderr is not a

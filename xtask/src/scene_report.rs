@@ -3,6 +3,7 @@
 
 use anyhow::Result;
 use radiosity_core::{Channels, PatchShape};
+use radiosity_ff::FormFactorInput;
 use radiosity_geom::{Closure, LoadedScene, SceneAnalysis, Visibility, load_scene};
 use serde::Serialize;
 use std::time::Instant;
@@ -69,6 +70,11 @@ pub fn prepare(arg: &str) -> Result<PreparedScene> {
 }
 
 impl PreparedScene {
+    /// What form-factor backends are built from: the scene, its BVH and its analysis.
+    pub fn ff_input(&self) -> FormFactorInput<'_> {
+        FormFactorInput { scene: &self.loaded.scene, visibility: &self.visibility, analysis: &self.analysis }
+    }
+
     /// The report of this scene.
     pub fn report(&self) -> SceneReport {
         let scene = &self.loaded.scene;

@@ -37,16 +37,16 @@
 //! Everything written is deterministic (no timings), so the report is snapshot-tested.
 
 use crate::compare::default_out;
-use crate::ff::assemble_stored;
+use crate::ff::fresh_backend;
 use crate::scene_report::{PreparedScene, prepare};
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
-use radiosity_core::dense_lu::lu_solve;
+use radiosity_core::dense_lu::solve_m_matrix;
 use radiosity_core::{LinearSystem, Real};
 use radiosity_eval::metrics::errors_against;
 use radiosity_eval::table::round_significant;
 use radiosity_eval::{FormFactors, ReferenceParams, ReferenceSolution, Residual};
-use radiosity_ff::{Backend, BackendSpec, FormFactorInput};
+use radiosity_ff::BackendSpec;
 use radiosity_solvers::{
     BEYOND_PAPER_SOLVERS, Executor, GROUP_SOLVERS, Observer, POINT_SOLVERS, Problem, State, StopRule, StopRules,
     TerminationReason, solver_by_name,
@@ -355,21 +355,7 @@ fn run_backend(prepared: &PreparedScene, backend: SuiteBackend, solvers: &[Strin
 fn assemble(prepared: &PreparedScene, backend: SuiteBackend) -> Result<FormFactors> {
     let spec = BackendSpec::parse(backend.spec)?;
     let limit = ReferenceParams::default().max_matrix_bytes;
-    let matrix = match spec {
-        BackendSpec::Matrix { rebalance, .. } => {
-            let (stored, _, _) = assemble_stored(prepared, &spec, rebalance)?;
-            FormFactors::assemble(&Backend::Matrix(stored), limit)?
-        }
-        _ => {
-            let input = FormFactorInput {
-                scene: &prepared.loaded.scene,
-                visibility: &prepared.visibility,
-                analysis: &prepared.analysis,
-            };
-            FormFactors::assemble(&Backend::columns(&spec, input), limit)?
-        }
-    };
-    Ok(matrix)
+    Ok(FormFactors::assemble(&fresh_backend(prepared, &spec)?, limit)?)
 }
 
 /// `E / (1 − ρ)` per channel when every patch has the same reflectivity and emission.
@@ -380,19 +366,16 @@ fn furnace_identity(system: &LinearSystem) -> Option<Vec<Real>> {
     (uniform(rho) && uniform(e)).then(|| e.iter().zip(rho).map(|(e, r)| e / (1.0 - r)).collect())
 }
 
-/// `κ_∞(Φ) = ‖Φ‖_∞ · max(Φ⁻¹ 1)`, the largest over channels, or `None` when `Φ⁻¹ 1` has an
-/// entry that is not positive (`Φ` is not an M-matrix) or LU fails.
+/// `κ_∞(Φ)` of the whole system, the largest over channels
+/// ([`radiosity_core::dense_lu::solve_m_matrix`]), or `None` when `Φ` is not a nonsingular
+/// M-matrix.
 fn condition(system: &LinearSystem, matrix: &FormFactors) -> Option<Real> {
     let (n, k) = (system.len(), system.channels().count());
     let mut worst: Real = 0.0;
     for c in 0..k {
-        let phi = |i: usize, j: usize| Real::from(i == j) - system.rho(i, c) * matrix.get(i, j);
-        let z = lu_solve(n, false, phi, |_| 1.0).ok()?;
-        if !z.iter().all(|v| v.is_finite() && *v > 0.0) {
-            return None;
-        }
-        let norm = (0..n).map(|i| (0..n).map(|j| phi(i, j).abs()).sum::<Real>()).fold(0.0, Real::max);
-        worst = worst.max(norm * z.iter().copied().fold(0.0, Real::max));
+        let rho_f: Vec<Real> = (0..n * n).map(|idx| system.rho(idx / n, c) * matrix.get(idx / n, idx % n)).collect();
+        let (_, kappa) = solve_m_matrix(n, &rho_f, vec![1.0; n])?;
+        worst = worst.max(kappa);
     }
     Some(worst)
 }

@@ -71,3 +71,29 @@ pub fn lu_solve_columns(
     solve::solve_in_place_with_conj(a.as_ref(), a.as_ref(), perm, Conj::No, x.as_mut(), par, MemStack::new(&mut mem));
     Ok((0..columns).map(|r| (0..n).map(|i| x[(i, r)]).collect()).collect())
 }
+
+/// Solves `(I − N) y = b` for a non-negative `n × n` matrix `N` (row-major, `N_ab` at
+/// `a * n + b`) and returns `y` with the condition number `κ_∞(I − N)`, or `None` when
+/// `I − N` is not a nonsingular M-matrix (an entry of `N` negative or not finite, a zero
+/// pivot, or `(I − N)⁻¹ 1` not positive).
+///
+/// `I − N` with `N ≥ 0` is a nonsingular M-matrix exactly when the spectral radius of `N` is
+/// below 1, and then `(I − N)⁻¹ ≥ 0` entrywise, so `‖(I − N)⁻¹‖_∞ = max (I − N)⁻¹ 1`: one more
+/// right-hand side on the same factorisation gives `κ_∞` exactly (Berman & Plemmons 1994,
+/// ch. 6). A group step solves `Φ_rr y = s` with it, and `cargo xtask stress` measures the
+/// whole system's `κ_∞`.
+pub fn solve_m_matrix(n: usize, nonnegative: &[Real], b: Vec<Real>) -> Option<(Vec<Real>, Real)> {
+    if nonnegative.iter().any(|&v| !(v.is_finite() && v >= 0.0)) {
+        return None;
+    }
+    let phi = |a: usize, c: usize| Real::from(a == c) - nonnegative[a * n + c];
+    let norm = (0..n).map(|a| (0..n).map(|c| phi(a, c).abs()).sum::<Real>()).fold(0.0, Real::max);
+    let mut solved = lu_solve_columns(n, false, phi, &[b, vec![1.0; n]]).ok()?;
+    let z = solved.pop()?;
+    let y = solved.pop()?;
+    if z.iter().any(|&v| !(v.is_finite() && v > 0.0)) {
+        return None;
+    }
+    // Finite and positive factors: the product is never NaN (at worst it overflows to ∞).
+    Some((y, norm * z.iter().copied().fold(0.0, Real::max)))
+}

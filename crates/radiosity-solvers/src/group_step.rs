@@ -99,7 +99,7 @@ use crate::problem::Problem;
 use crate::shooting::{receive, set_unshot, shoot_column};
 use crate::state::State;
 use radiosity_core::Real;
-use radiosity_core::dense_lu::lu_solve_columns;
+use radiosity_core::dense_lu::solve_m_matrix;
 
 /// How a group system `Φ_rr y = s` is solved.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -153,20 +153,9 @@ fn group_matrix(problem: &Problem<'_>, group: &[usize], columns: &[&[Real]], c: 
 
 /// Solves `(I − N) y = s` by LU, with the M-matrix test and `κ_∞` of the module doc.
 fn solve_lu(m: usize, n_rr: &[Real], s: Vec<Real>) -> ChannelSolve {
-    let refused = ChannelSolve::Refused { condition: Real::INFINITY };
-    if n_rr.iter().any(|&v| !(v.is_finite() && v >= 0.0)) {
-        return refused;
-    }
-    let phi = |a: usize, b: usize| Real::from(a == b) - n_rr[a * m + b];
-    let norm = (0..m).map(|a| (0..m).map(|b| phi(a, b).abs()).sum::<Real>()).fold(0.0, Real::max);
-    let Ok(mut solved) = lu_solve_columns(m, false, phi, &[s, vec![1.0; m]]) else { return refused };
-    let z = solved.pop().expect("two right-hand sides");
-    let y = solved.pop().expect("two right-hand sides");
-    if z.iter().any(|&v| !(v.is_finite() && v > 0.0)) {
-        return refused;
-    }
-    // Finite and positive factors: the product is never NaN (at worst it overflows to ∞).
-    let condition = norm * z.iter().copied().fold(0.0, Real::max);
+    let Some((y, condition)) = solve_m_matrix(m, n_rr, s) else {
+        return ChannelSolve::Refused { condition: Real::INFINITY };
+    };
     if condition > CONDITION_LIMIT {
         return ChannelSolve::Refused { condition };
     }

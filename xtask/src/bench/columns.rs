@@ -188,7 +188,7 @@ fn measure(
 pub(crate) fn run(config: &Config, prepared: &PreparedScene, findings: &mut Findings) -> Result<String> {
     let scene = &prepared.loaded.scene;
     let n = scene.len();
-    let input = FormFactorInput { scene, visibility: &prepared.visibility, analysis: &prepared.analysis };
+    let input = prepared.ff_input();
     let raw = prepared.visibility.raw_tracer();
     let columns = sample(n, config.columns, SAMPLE_SEED);
     let pools = [pool(1)?, pool(2)?];

@@ -12,12 +12,12 @@
 
 use super::{Config, Findings, duration, human_bytes, median, progress, sig};
 use crate::experiment::{Experiment, require_emitters};
-use crate::ff::assemble_stored;
+use crate::ff::fresh_backend;
 use crate::scene_report::{PreparedScene, prepare};
 use anyhow::{Context, Result, bail};
 use radiosity_core::{LinearSystem, Real};
 use radiosity_eval::metrics::errors_against;
-use radiosity_ff::{Backend, BackendSpec, FormFactorInput};
+use radiosity_ff::BackendSpec;
 use radiosity_solvers::{Executor, Observer, Problem, State, StopRules, solver_by_name};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
@@ -114,17 +114,7 @@ pub(crate) fn child(scene: &str, solver: &str, ff: &str, reference: &Path, max_s
     if star.len() != system.len() * system.channels().count() {
         bail!("the reference in {} is not one of scene {scene}", reference.display());
     }
-    let backend = match &spec {
-        BackendSpec::Matrix { rebalance, .. } => Backend::Matrix(assemble_stored(&prepared, &spec, *rebalance)?.0),
-        _ => Backend::columns(
-            &spec,
-            FormFactorInput {
-                scene: &prepared.loaded.scene,
-                visibility: &prepared.visibility,
-                analysis: &prepared.analysis,
-            },
-        ),
-    };
+    let backend = fresh_backend(&prepared, &spec)?;
     let order = radiosity_geom::spatial_order(&prepared.loaded.scene);
     let backend_seconds = start.elapsed().as_secs_f64() - scene_seconds;
     let problem = Problem::new(&system, &backend)?.with_patch_order(&order)?;

@@ -45,18 +45,17 @@ fn quick_bench_reports_every_section_with_sane_figures() {
     std::fs::remove_file(&out).unwrap();
     assert!(report.contains("Smoke test") && report.contains("cores available"), "{report}");
 
-    // 1. Three backends, each on 1 thread, 2 threads and 2 threads one column at a time. The
-    // pipeline traces the raw rays and does more, so its rate is below the raw one but for
-    // noise; two threads share the machine with whatever else runs, hence the wider bound.
+    // 1. Three backends, each on 1 thread, 2 threads and 2 threads one column at a time.
+    // Rates are timings, so only their consistency is checked: each ratio is the pipeline's
+    // rate over the raw one, as printed (to the whole percent).
     let rows = table(&report, "## 1.");
     assert_eq!(rows.len(), 9, "{report}");
     for row in &rows {
         assert!(number(&row[2]) > 0.0 && number(&row[4]) > 0.0, "{row:?}");
         assert!(number(&row[5]) > 0.0 && number(&row[7]) > 0.0, "{row:?}");
-        let bound = if row[1] == "1" { 2.0 } else { 4.0 };
-        for ratio in [&row[6], &row[8]] {
-            let r = number(ratio) / 100.0;
-            assert!(r > 0.0 && r < bound, "ratio {ratio} in {row:?}");
+        for (raw, ratio) in [(&row[5], &row[6]), (&row[7], &row[8])] {
+            let expected = 100.0 * number(&row[4]) / number(raw);
+            assert!((number(ratio) - expected).abs() <= 1.0, "ratio {ratio} against {expected} in {row:?}");
         }
     }
     assert!(rows[0][0].starts_with("`analytic") && rows[3][0].starts_with("`hemicube"), "{rows:?}");

@@ -142,9 +142,7 @@ impl Config {
             .map(String::from)
             .collect();
         for s in &solvers {
-            radiosity_solvers::solver_by_name(s)
-                .map_err(|e| crate::experiment::solver_error(s, &e, ""))
-                .context("--solvers names a solver that does not exist")?;
+            radiosity_solvers::solver_by_name(s).context("--solvers names a solver that does not exist")?;
         }
         let backends = if quick {
             ["analytic", "hemicube:res=32", "montecarlo:rays=2000"]

@@ -12,7 +12,7 @@
 //! and the residual power (a product with F) only at about 100 points of each run. Its cost
 //! is reported apart as measurement overhead.
 
-use crate::experiment::{Experiment, require_emitters, solver_error};
+use crate::experiment::{Experiment, require_emitters};
 use crate::scene_report::{prepare, print_warnings};
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -193,7 +193,7 @@ impl Plan {
             bail!("--solvers names no solver");
         }
         for name in &names {
-            solver_by_name(name).map_err(|e| solver_error(name, &e, ""))?;
+            solver_by_name(name)?;
         }
         let rules = StopRules::parse(until)?;
         Ok(Plan { scene: scene.to_string(), names, spec, rules, until: until.to_string() })

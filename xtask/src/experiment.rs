@@ -42,27 +42,20 @@ impl SolveArgs {
     pub fn check(&self) -> Result<(BackendSpec, StopRules)> {
         let spec = BackendSpec::parse(&self.ff)?;
         if self.solver != "reference" {
-            solver_by_name(&self.solver)
-                .map_err(|e| solver_error(&self.solver, &e, "; or reference, the exact solution"))?;
+            solver_by_name(&self.solver).map_err(|e| solver_error(&e, "; or reference, the exact solution"))?;
         }
         Ok((spec, StopRules::parse(&self.until)?))
     }
 }
 
-/// The error for a solver name that `solver_by_name` refused, as one sentence that names the
-/// solver as written. `list_end` is appended to the list of known solvers when the name is
+/// The error for a solver name that `solver_by_name` refused (its message names the solver as
+/// written). `list_end` is appended to the list of known solvers when the name is
 /// unknown (`solve` also takes `reference`); other refusals (a parameter out of range) do not
 /// get it, since the list is not what is wrong.
-pub fn solver_error(name: &str, e: &SolverError, list_end: &str) -> anyhow::Error {
-    let message = e.to_string();
-    if message.starts_with("unknown solver") {
-        anyhow::anyhow!("{message}{list_end}")
-    } else if message.contains("solver '") {
-        anyhow::anyhow!("{message}")
-    } else if message.starts_with('\'') {
-        anyhow::anyhow!("solver {message}")
-    } else {
-        anyhow::anyhow!("solver '{name}': {message}")
+fn solver_error(e: &SolverError, list_end: &str) -> anyhow::Error {
+    match e {
+        SolverError::UnknownSolver { .. } => anyhow::anyhow!("{e}{list_end}"),
+        _ => anyhow::anyhow!("{e}"),
     }
 }
 

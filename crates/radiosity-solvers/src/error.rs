@@ -55,4 +55,12 @@ pub enum SolverError {
     /// Invalid solver parameters.
     #[error("{0}")]
     BadParams(String),
+    /// A solver name that names no solver.
+    #[error("unknown solver '{name}'; solvers are {valid}")]
+    UnknownSolver {
+        /// The name given.
+        name: String,
+        /// The solvers there are, as listed to users.
+        valid: &'static str,
+    },
 }

@@ -176,9 +176,20 @@ fn parse_accelerated(
     Ok(out)
 }
 
-/// The solver a command-line name designates.
+/// The solver a command-line name designates. Every refusal names the solver as written:
+/// [`SolverError::UnknownSolver`] for a name that designates none, [`SolverError::BadParams`]
+/// beginning `solver '…':` for parameters out of range.
 pub fn solver_by_name(name: &str) -> Result<Box<dyn Solver>, SolverError> {
-    let unknown = || SolverError::BadParams(format!("unknown solver '{name}'; solvers are {SOLVER_NAMES}"));
+    parse_solver(name).map_err(|e| match e {
+        SolverError::BadParams(reason) if !reason.starts_with("solver '") => {
+            SolverError::BadParams(format!("solver '{name}': {reason}"))
+        }
+        e => e,
+    })
+}
+
+fn parse_solver(name: &str) -> Result<Box<dyn Solver>, SolverError> {
+    let unknown = || SolverError::UnknownSolver { name: name.to_string(), valid: SOLVER_NAMES };
     let (head, params) = name.split_once(':').unwrap_or((name, ""));
     let no_params = || {
         if params.is_empty() {
@@ -225,7 +236,7 @@ pub fn solver_by_name(name: &str) -> Result<Box<dyn Solver>, SolverError> {
     let (rule, by_area) = shooting_rule(base).ok_or_else(unknown)??;
     if !by_area {
         return Err(SolverError::BadParams(format!(
-            "'{name}': group acceleration applies to PR and the overshooting methods, not to {base}"
+            "solver '{name}': group acceleration applies to PR and the overshooting methods, not to {base}"
         )));
     }
     let params = parse_accelerated(name, m, memory.unwrap_or(m), params)?;

@@ -252,6 +252,11 @@ fn stop_rules_parse_and_refuse_clearly() {
 
 #[test]
 fn errors_are_reported_not_panicked() {
+    assert!(matches!(solver_by_name("xu-q30").err(), Some(SolverError::UnknownSolver { .. })));
+    for bad in ["sor-2.5", "relax-2", "pr-g0", "southwell-g30", "pr-g30:f=0"] {
+        let e = solver_by_name(bad).err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(e.starts_with(&format!("solver '{bad}': ")), "{bad}: {e}");
+    }
     let names = solver_by_name("xu-q30").err().unwrap().to_string();
     assert!(names.contains("unknown solver 'xu-q30'") && names.contains("pr-g30"), "{names}");
     for (bad, words) in [

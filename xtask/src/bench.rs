@@ -43,9 +43,10 @@ mod e2e;
 mod lu;
 
 use crate::experiment::check_output_file;
-use crate::scene_report::{PreparedScene, prepare, print_warnings};
+use crate::experiment::prepare;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
+use radiosity_geom::PreparedScene;
 use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -142,7 +143,9 @@ impl Config {
             .map(String::from)
             .collect();
         for s in &solvers {
-            radiosity_solvers::solver_by_name(s).context("--solvers names a solver that does not exist")?;
+            radiosity_solvers::SolverRegistry::builtin()
+                .build(s)
+                .context("--solvers names a solver that does not exist")?;
         }
         let backends = if quick {
             ["analytic", "hemicube:res=32", "montecarlo:rays=2000"]
@@ -209,7 +212,6 @@ pub fn run(args: &Args) -> Result<()> {
     }
     let config = Config::new(args)?;
     let prepared = prepare(&config.scene)?;
-    print_warnings(&prepared.report());
     let mut report = header(&config, &prepared, &sections);
     let mut findings = Findings::default();
     for section in &sections {

@@ -1,31 +1,26 @@
-//! A scene set up for experiments: its linear system, form-factor backend, stored matrix and
-//! reference solution, and running solvers on it. Shared by `solve`, `compare`, `render` and
-//! `export`, so each measures and reports the same way.
-//!
-//! F is fetched once, outside every run, and serves both the reference and the metrics; a
-//! run's columns, steps and seconds are the solver's alone.
+//! What the subcommands share: the `--scene --solver --ff --until` arguments of `solve`,
+//! `render` and `export`, checked before any geometry is built; loading a scene with its
+//! warnings printed; the cache directory; and the checks on output paths.
 
-use crate::ff::obtain;
-use crate::scene_report::PreparedScene;
-use anyhow::{Context, Result, bail};
-use radiosity_core::{LinearSystem, Real};
-use radiosity_eval::{FormFactors, ReferenceParams, ReferenceSolution};
-use radiosity_ff::{Backend, BackendSpec};
-use radiosity_solvers::{Executor, NoObserver, Observer, Problem, Run, SolverError, State, StopRules, solver_by_name};
-use std::path::Path;
-use std::time::Instant;
+use crate::bars::Bars;
+use anyhow::{Result, bail};
+use radiosity_eval::{Cache, Lab, LabOptions};
+use radiosity_ff::BackendSpec;
+use radiosity_geom::PreparedScene;
+use radiosity_solvers::{Solver, SolverError, SolverRegistry, StopRules};
+use std::path::{Path, PathBuf};
+use std::time::SystemTime;
 
 /// The arguments that name one solved scene, shared by `solve`, `render` and `export`.
 #[derive(Debug, clap::Args)]
 pub struct SolveArgs {
-    /// The scene: a built-in name with `:key=value` parameters, or a .gltf/.glb path.
+    /// The scene: a built-in name with `:key=value` parameters, or a .gltf, .glb or .mgf path
+    /// (`cargo xtask scenes` lists them).
     #[arg(long, value_name = "SCENE")]
     pub scene: String,
-    /// The solver: jacobi, gauss-seidel, sor-ω, southwell, pr, feda, shao, xu, xu-direct,
-    /// xu-ambient, relax-ω; group-jacobi-gM, `group-gs-gM[:groups=spatial]` (group gathering);
-    /// group-S-gM (group shooting); `S-gM[-mK][:f=N|:f=auto]` (group accelerated); reference
-    /// (the exact solution).
-    #[arg(long, value_name = "SOLVER")]
+    /// The solver (`cargo xtask solve --help` lists every family), or reference for the exact
+    /// solution.
+    #[arg(long, value_name = "SOLVER", long_help = solver_help())]
     pub solver: String,
     /// The form-factor backend, with `:key=value` parameters.
     #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic")]
@@ -36,27 +31,55 @@ pub struct SolveArgs {
     pub until: String,
 }
 
+/// The `--solver` help: every family the registry builds.
+fn solver_help() -> String {
+    format!(
+        "The solver, or `reference` for the exact solution. Every family, with examples:\n{}",
+        SolverRegistry::builtin().help()
+    )
+}
+
+/// What [`SolveArgs::check`] gives: the backend, the solver (`None` for the reference) and
+/// the stop rules.
+pub type Checked = (BackendSpec, Option<Box<dyn Solver>>, StopRules);
+
 impl SolveArgs {
     /// Checks the backend, the solver (or `reference`) and the stop rules before any geometry
-    /// is built, so a typo fails at once.
-    pub fn check(&self) -> Result<(BackendSpec, StopRules)> {
+    /// is built, so a typo fails at once; gives the solver (`None` for the reference).
+    pub fn check(&self) -> Result<Checked> {
         let spec = BackendSpec::parse(&self.ff)?;
-        if self.solver != "reference" {
-            solver_by_name(&self.solver).map_err(|e| solver_error(&e, "; or reference, the exact solution"))?;
-        }
-        Ok((spec, StopRules::parse(&self.until)?))
+        let solver = match self.solver.as_str() {
+            "reference" => None,
+            name => Some(SolverRegistry::builtin().build(name).map_err(|e| match e {
+                // `reference` is no solver of the registry's, but these commands take it.
+                SolverError::UnknownSolver { .. } => anyhow::anyhow!("{e};\n  or reference, the exact solution"),
+                e => e.into(),
+            })?),
+        };
+        Ok((spec, solver, StopRules::parse(&self.until)?))
     }
 }
 
-/// The error for a solver name that `solver_by_name` refused (its message names the solver as
-/// written). `list_end` is appended to the list of known solvers when the name is
-/// unknown (`solve` also takes `reference`); other refusals (a parameter out of range) do not
-/// get it, since the list is not what is wrong.
-fn solver_error(e: &SolverError, list_end: &str) -> anyhow::Error {
-    match e {
-        SolverError::UnknownSolver { .. } => anyhow::anyhow!("{e}{list_end}"),
-        _ => anyhow::anyhow!("{e}"),
+/// Loads and prepares a scene, printing its load warnings (the loaders name the file).
+pub fn prepare(arg: &str) -> Result<PreparedScene> {
+    let prepared = PreparedScene::load(arg)?;
+    for w in &prepared.loaded.warnings {
+        eprintln!("warning: {w}");
     }
+    Ok(prepared)
+}
+
+/// The cache: `$RADIOSITY_CACHE_DIR`, or `target/ff-cache` of the workspace this binary was
+/// built from (found from the compile-time `CARGO_MANIFEST_DIR` of xtask, so it is the same
+/// whatever directory the command runs in).
+pub fn cache() -> Cache {
+    Cache::from_env(Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap_or(Path::new(".")).join("target/ff-cache"))
+}
+
+/// A lab on `prepared` with the backend `spec`, the cache, and F kept when `residuals`.
+pub fn lab<'p>(prepared: &'p PreparedScene, spec: &BackendSpec, residuals: bool) -> Result<Lab<'p>> {
+    let options = LabOptions::default().with_residuals(residuals).with_cache(Some(cache()));
+    Ok(Lab::new(prepared, spec, options, &Bars::new())?)
 }
 
 /// Checks, before any work, that `path` can be written as a file: it is not a directory and
@@ -76,116 +99,58 @@ pub fn check_output_file(path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Refuses a scene that emits nothing before any form factor is computed: its radiosity is
-/// zero everywhere, so there is no error relative to the reference to measure.
-pub fn require_emitters(prepared: &PreparedScene) -> Result<()> {
-    if prepared.analysis.emitters.value.is_empty() {
-        bail!(
-            "scene '{}' emits no light (no patch has an emission above 0), so its radiosity is zero everywhere and \
-             there is no error to measure",
-            prepared.loaded.scene.name()
-        );
+/// Checks, before any work, that `dir` is a directory or can be created as one: the nearest
+/// part of it that exists is a directory.
+pub fn check_out_dir(dir: &Path) -> Result<()> {
+    if let Some(existing) = dir.ancestors().find(|a| !a.as_os_str().is_empty() && a.exists()) {
+        if !existing.is_dir() {
+            bail!(
+                "cannot create the output folder {}: {} is a file, not a directory",
+                dir.display(),
+                existing.display()
+            );
+        }
     }
     Ok(())
 }
 
-/// A prepared scene with everything solvers are measured against.
-pub struct Experiment<'p> {
-    /// The scene, its BVH and analysis.
-    pub prepared: &'p PreparedScene,
-    /// The form-factor backend as the user named it.
-    pub spec: BackendSpec,
-    /// The linear system.
-    pub system: LinearSystem,
-    /// Where solvers get their columns.
-    pub backend: Backend<'p>,
-    /// F, stored once for the reference and the metrics.
-    pub matrix: FormFactors,
-    /// The exact solution of the same discrete system.
-    pub reference: ReferenceSolution,
-    /// Seconds to assemble F.
-    pub assembly_seconds: Real,
-    /// Seconds to solve the reference once F was assembled.
-    pub reference_seconds: Real,
-    /// A spatially coherent patch order, for group gathering by space.
-    order: Vec<usize>,
+/// The folder name for a run: scene name (without parameters or path) and UTC date-time,
+/// under `results/`.
+pub fn default_out(scene: &str) -> PathBuf {
+    let stem = Path::new(scene.split(':').next().unwrap_or(scene))
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    let stamp = humantime::format_rfc3339_seconds(SystemTime::now()).to_string().replace(':', "-");
+    PathBuf::from("results").join(format!("{stem}-{stamp}"))
 }
 
-impl<'p> Experiment<'p> {
-    /// Builds the backend `spec`, assembles F and solves the reference.
-    pub fn new(prepared: &'p PreparedScene, spec: BackendSpec) -> Result<Experiment<'p>> {
-        let scene = &prepared.loaded.scene;
-        let system = LinearSystem::from_scene(scene);
-        let backend = match spec {
-            BackendSpec::Matrix { .. } => Backend::Matrix(obtain(prepared, &spec)?.matrix),
-            _ => Backend::columns(&spec, prepared.ff_input()),
-        };
-        let params = ReferenceParams::default();
-        let start = Instant::now();
-        let matrix =
-            FormFactors::assemble(&backend, params.max_matrix_bytes).context("the reference solution failed")?;
-        let assembly_seconds = start.elapsed().as_secs_f64();
-        let reference =
-            ReferenceSolution::solve_matrix(&system, &matrix, params).context("the reference solution failed")?;
-        let reference_seconds = start.elapsed().as_secs_f64() - assembly_seconds;
-        let order = radiosity_geom::spatial_order::spatial_order(scene);
-        Ok(Experiment {
-            prepared,
-            spec,
-            system,
-            backend,
-            matrix,
-            reference,
-            assembly_seconds,
-            reference_seconds,
-            order,
-        })
-    }
-
-    /// Runs solver `name` under `rules`, calling `observer` between steps. Warns when a
-    /// gathering solver must take rows the backend cannot give exactly.
-    pub fn run(&self, name: &str, rules: StopRules, observer: &mut dyn Observer) -> Result<Run> {
-        let mut solver = solver_by_name(name)?;
-        if solver.gathers_rows() && !self.backend.serves_rows() {
+/// The RGB radiosity of every patch of `prepared` solved as `args` say (the reference for
+/// `reference`), and the backend's label: what `render` and export show. How the run ended
+/// goes to stderr; an `rms=` rule is measured against the reference, so it stops the run.
+pub fn solved_rgb(
+    args: &SolveArgs,
+    prepared: &PreparedScene,
+    spec: &BackendSpec,
+    solver: Option<Box<dyn Solver>>,
+    rules: &StopRules,
+) -> Result<(Vec<[radiosity_core::Real; 3]>, String)> {
+    let lab = lab(prepared, spec, false)?;
+    let rgb = match solver {
+        None => lab.radiosity_rgb(None, rules, &Bars::new())?,
+        Some(mut solver) => {
+            let o = lab.run(solver.as_mut(), rules, &radiosity_eval::RecordPlan::errors_only(), &Bars::new())?;
             eprintln!(
-                "warning: {} gathers along rows of F, which {} cannot give exactly; they are taken from its \
-                 columns by reciprocity, which these form factors do not satisfy, so the run converges to another \
-                 system's solution, off the reference by as much as their reciprocity error (`cargo xtask ff` \
-                 reports it)",
-                solver.name(),
-                self.spec.canonical()
+                "{}: {} after {} steps, {} columns, {:.3} s; e_rms {:.3e}",
+                args.solver,
+                o.termination,
+                o.state.step,
+                o.state.columns,
+                o.seconds(),
+                o.last.e_rms
             );
+            radiosity_eval::lab::rgb(&o.state)
         }
-        let problem = Problem::new(&self.system, &self.backend)?.with_patch_order(&self.order)?;
-        Ok(Executor::new(solver.as_mut(), rules).run(&problem, observer)?)
-    }
-
-    /// The reference as a final state: its cost is assembling F (form-factor time) and
-    /// solving it.
-    pub fn exact_state(&self) -> State {
-        let mut state = State::from_emission(self.system.emissions(), self.system.channels().count());
-        state.radiosity.copy_from_slice(self.reference.values());
-        state.unshot.fill(0.0);
-        state.columns = self.system.len() as u64;
-        state.ff_seconds = self.assembly_seconds;
-        state.solve_seconds = self.reference_seconds;
-        state
-    }
-
-    /// The RGB radiosity of every patch after running `solver` under `until` (`reference` for
-    /// the exact solution): what `render` and `export` show.
-    pub fn radiosity_rgb(&self, solver: &str, until: &str) -> Result<Vec<[Real; 3]>> {
-        let state = if solver == "reference" {
-            self.exact_state()
-        } else {
-            self.run(solver, StopRules::parse(until)?, &mut NoObserver)?.state
-        };
-        Ok(rgb(&state))
-    }
-}
-
-/// The radiosity of every patch of `state` as RGB (a grey channel repeated three times).
-pub fn rgb(state: &State) -> Vec<[Real; 3]> {
-    let k = state.channels;
-    state.radiosity.chunks_exact(k).map(|b| if k == 1 { [b[0]; 3] } else { [b[0], b[1], b[2]] }).collect()
+    };
+    Ok((rgb, lab.backend().to_string()))
 }

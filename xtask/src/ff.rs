@@ -5,38 +5,24 @@
 //! Assembling costs `n` column computations and `n²` entries of memory, so scenes of more than
 //! [`MAX_PATCHES`] patches are refused unless `--force` is given.
 //!
-//! ## Cache of the `matrix` backend
-//!
-//! With `--ff matrix…` the assembled (and, with `rebalance=true`, rebalanced) matrix is written
-//! to a cache file and loaded from it next time. The directory is `$RADIOSITY_CACHE_DIR` when
-//! set, otherwise `target/ff-cache/` of the workspace this binary was built from (found from
-//! the compile-time `CARGO_MANIFEST_DIR` of xtask, so it is the same whatever directory the
-//! command runs in). A file is named by the xxh3 hash of its key, and the key itself is stored
-//! inside the file and checked on load. The key holds the crate version, the scene name, the
-//! patch count, a fingerprint of every patch's vertices (a glTF file edited in place keeps its
-//! name, not its geometry) and the canonical backend argument. A file that is unreadable or
-//! has another key is reported as a warning and replaced.
+//! With `--ff matrix…` the assembled (and, with `rebalance=true`, rebalanced) matrix is kept in
+//! the cache ([`radiosity_eval::cache`], `target/ff-cache/` or `$RADIOSITY_CACHE_DIR`) and
+//! loaded from it next time; a file that is unreadable or has another key is reported as a
+//! warning and replaced.
 
-use crate::scene_report::{PreparedScene, prepare, print_warnings};
-use anyhow::{Context, Result, bail};
-use indicatif::{ProgressBar, ProgressStyle};
-use radiosity_core::ColumnSource;
+use crate::bars::Bars;
+use crate::experiment::{cache, prepare};
+use anyhow::{Result, bail};
+use radiosity_eval::backends::{ObtainedMatrix, obtain_matrix};
 use radiosity_ff::guard::MatrixFigures;
-use radiosity_ff::matrix::RebalanceReport;
-use radiosity_ff::{Backend, BackendSpec, StoredMatrix};
-use radiosity_geom::Closure;
+use radiosity_ff::{BackendSpec, StoredMatrix};
+use radiosity_geom::{Closure, PreparedScene};
 use serde::Serialize;
 use serde::ser::{SerializeSeq, Serializer};
-use std::io::{IsTerminal, Write};
-use std::path::{Path, PathBuf};
-use std::time::Instant;
-use xxhash_rust::xxh3::{Xxh3Default, xxh3_64};
+use std::io::Write;
 
 /// Scenes with more patches are assembled only with `--force`.
 pub const MAX_PATCHES: usize = 2000;
-
-/// The environment variable that overrides the cache directory.
-const CACHE_DIR_VAR: &str = "RADIOSITY_CACHE_DIR";
 
 /// Arguments of `ff`.
 #[derive(Debug, clap::Args)]
@@ -56,34 +42,10 @@ pub struct Args {
     force: bool,
 }
 
-/// Where the matrix came from.
-pub(crate) struct Obtained {
-    pub(crate) matrix: StoredMatrix,
-    /// Seconds to assemble (and rebalance) or load it.
-    seconds: f64,
-    /// Entries clamped while assembling; unknown when loaded from the cache.
-    clamped: Option<u64>,
-    /// Figures before rebalancing and what rebalancing did, when it was done now.
-    rebalanced: Option<(MatrixFigures, RebalanceReport)>,
-    cache: Option<CacheUse>,
-}
-
-/// How the cache was used.
-#[derive(Serialize)]
-struct CacheUse {
-    path: PathBuf,
-    /// Loaded from the file (otherwise assembled and written to it).
-    loaded: bool,
-    /// Why the file could not be written, if it could not.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    write_error: Option<String>,
-}
-
 /// Runs `ff`.
 pub fn run(args: &Args) -> Result<()> {
     let spec = BackendSpec::parse(&args.ff)?;
     let prepared = prepare(&args.scene)?;
-    print_warnings(&prepared.report());
     let n = prepared.loaded.scene.len();
     if n > MAX_PATCHES && !args.force {
         bail!(
@@ -94,7 +56,7 @@ pub fn run(args: &Args) -> Result<()> {
             human_bytes(4 * n * n)
         );
     }
-    let obtained = obtain(&prepared, &spec)?;
+    let obtained = obtain_matrix(&prepared, &spec, Some(&cache()), &Bars::new())?;
     let figures = obtained.matrix.figures(&areas(&prepared));
     if args.json {
         print_json(&prepared, &spec, &obtained, &figures)
@@ -106,124 +68,6 @@ pub fn run(args: &Args) -> Result<()> {
 
 fn areas(prepared: &PreparedScene) -> Vec<f64> {
     prepared.loaded.scene.patches().iter().map(|p| p.area()).collect()
-}
-
-/// Assembles the matrix, or for `matrix` loads it from the cache.
-pub(crate) fn obtain(prepared: &PreparedScene, spec: &BackendSpec) -> Result<Obtained> {
-    let BackendSpec::Matrix { rebalance, .. } = spec else {
-        let start = Instant::now();
-        let (matrix, clamped, _) = assemble_stored(prepared, spec, false)?;
-        let seconds = start.elapsed().as_secs_f64();
-        return Ok(Obtained { matrix, seconds, clamped: Some(clamped), rebalanced: None, cache: None });
-    };
-    let key = cache_key(prepared, spec);
-    let path = cache_dir().join(format!("ff-{:016x}.bin", xxh3_64(key.as_bytes())));
-    let start = Instant::now();
-    match std::fs::read(&path) {
-        Ok(bytes) => match StoredMatrix::from_bytes(&bytes, &key) {
-            Ok(matrix) => {
-                let seconds = start.elapsed().as_secs_f64();
-                let cache = Some(CacheUse { path, loaded: true, write_error: None });
-                return Ok(Obtained { matrix, seconds, clamped: None, rebalanced: None, cache });
-            }
-            Err(e) => eprintln!("warning: replacing cache file {}: {e}", path.display()),
-        },
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-        Err(e) => eprintln!("warning: cannot read cache file {}: {e}", path.display()),
-    }
-    let start = Instant::now();
-    let (matrix, clamped, rebalanced) = assemble_stored(prepared, spec, *rebalance)?;
-    let seconds = start.elapsed().as_secs_f64();
-    let write_error = write_atomically(&path, &matrix.to_bytes(&key)).err().map(|e| format!("{e:#}"));
-    if let Some(e) = &write_error {
-        eprintln!("warning: the matrix was not cached: {e}");
-    }
-    let cache = Some(CacheUse { path, loaded: false, write_error });
-    Ok(Obtained { matrix, seconds, clamped: Some(clamped), rebalanced, cache })
-}
-
-/// What [`assemble_stored`] gives: the matrix, the entries clamped, and the figures before
-/// rebalancing with what rebalancing did.
-pub(crate) type Assembled = (StoredMatrix, u64, Option<(MatrixFigures, RebalanceReport)>);
-
-/// Assembles the full matrix of the backend `spec` names (for `matrix:of=…`, of the backend
-/// it stores), and rebalances it when asked, without the cache: the matrix, the entries clamped, and the figures before
-/// rebalancing with what rebalancing did.
-pub(crate) fn assemble_stored(prepared: &PreparedScene, spec: &BackendSpec, rebalance: bool) -> Result<Assembled> {
-    let backend = Backend::columns(spec, prepared.ff_input());
-    let mut matrix = assemble(&backend);
-    let rebalanced = if rebalance {
-        let area = areas(prepared);
-        let before = matrix.figures(&area);
-        let report = matrix.rebalance(&area, prepared.analysis.closure.value.is_closed())?;
-        Some((before, report))
-    } else {
-        None
-    };
-    Ok((matrix, backend.clamped(), rebalanced))
-}
-
-/// The backend `spec` names, with a `matrix` assembled now (and rebalanced when asked), never
-/// read from the cache: what runs that time or stress the assembly itself need.
-pub(crate) fn fresh_backend<'p>(prepared: &'p PreparedScene, spec: &BackendSpec) -> Result<Backend<'p>> {
-    Ok(match spec {
-        BackendSpec::Matrix { rebalance, .. } => Backend::Matrix(assemble_stored(prepared, spec, *rebalance)?.0),
-        _ => Backend::columns(spec, prepared.ff_input()),
-    })
-}
-
-/// Assembles every column with a progress bar on stderr (hidden when stderr is not a
-/// terminal).
-fn assemble(source: &impl ColumnSource) -> StoredMatrix {
-    let n = source.patch_count() as u64;
-    let bar = if std::io::stderr().is_terminal() { ProgressBar::new(n) } else { ProgressBar::hidden() };
-    if let Ok(style) = ProgressStyle::with_template("{prefix} [{bar:40}] {pos}/{len} columns, {elapsed} (eta {eta})") {
-        bar.set_style(style.progress_chars("=> "));
-    }
-    bar.set_prefix("assembling");
-    let matrix = StoredMatrix::assemble(source, &|_| bar.inc(1));
-    bar.finish_and_clear();
-    matrix
-}
-
-/// The cache directory: `$RADIOSITY_CACHE_DIR`, or `target/ff-cache` of this workspace.
-fn cache_dir() -> PathBuf {
-    match std::env::var_os(CACHE_DIR_VAR) {
-        Some(dir) if !dir.is_empty() => PathBuf::from(dir),
-        _ => Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap_or(Path::new(".")).join("target").join("ff-cache"),
-    }
-}
-
-/// Everything a stored matrix depends on, as one string.
-fn cache_key(prepared: &PreparedScene, spec: &BackendSpec) -> String {
-    let scene = &prepared.loaded.scene;
-    let mut geometry = Xxh3Default::new();
-    for p in scene.patches() {
-        geometry.update(&(p.vertices().len() as u64).to_le_bytes());
-        for v in p.vertices() {
-            for c in v.to_array() {
-                geometry.update(&c.to_bits().to_le_bytes());
-            }
-        }
-    }
-    format!(
-        "radiosity {}; scene {}; {} patches; geometry {:016x}; backend {}",
-        env!("CARGO_PKG_VERSION"),
-        scene.name(),
-        scene.len(),
-        geometry.digest(),
-        spec.canonical()
-    )
-}
-
-/// Writes `bytes` to a temporary file beside `path`, then renames it, so that an interrupted
-/// or concurrent run never leaves half a file under the final name.
-fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
-    let dir = path.parent().unwrap_or(Path::new("."));
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let tmp = path.with_extension(format!("tmp{}", std::process::id()));
-    std::fs::write(&tmp, bytes).with_context(|| format!("cannot write {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("cannot rename {} to {}", tmp.display(), path.display()))
 }
 
 /// One patch in the JSON output.
@@ -248,7 +92,7 @@ struct FfJson<'a> {
     storage: &'static str,
     clamped: Option<u64>,
     seconds: f64,
-    cache: Option<&'a CacheUse>,
+    cache: Option<&'a radiosity_eval::backends::CacheUse>,
 }
 
 /// The matrix as rows of `f32` (the stored precision), written without building them.
@@ -280,7 +124,7 @@ impl Serialize for Row<'_> {
 fn print_json(
     prepared: &PreparedScene,
     spec: &BackendSpec,
-    obtained: &Obtained,
+    obtained: &ObtainedMatrix,
     figures: &MatrixFigures,
 ) -> Result<()> {
     let scene = &prepared.loaded.scene;
@@ -319,7 +163,7 @@ fn summary(
     arg: &str,
     prepared: &PreparedScene,
     spec: &BackendSpec,
-    obtained: &Obtained,
+    obtained: &ObtainedMatrix,
     figures: &MatrixFigures,
 ) -> String {
     let m = &obtained.matrix;

@@ -3,6 +3,7 @@
 //! Each subcommand lives in its own module. Errors reach the user as one sentence on stderr
 //! with a non-zero exit code; nothing here panics on bad input.
 
+mod bars;
 mod bench;
 mod compare;
 mod experiment;
@@ -10,9 +11,7 @@ mod export;
 mod ff;
 mod paper;
 mod render;
-mod scene_report;
 mod scenes;
-mod shading;
 mod solve;
 mod stress;
 

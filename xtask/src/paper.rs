@@ -7,9 +7,11 @@
 //! plots); `report.md` at the top shows the step plots and the claims. The office takes
 //! several minutes: its reference alone assembles all 10,990 columns.
 
-use crate::compare::{Comparison, Plan, execute, print_summary};
+use crate::compare::Plan;
+use crate::experiment::default_out;
 use anyhow::{Context, Result, bail};
 use radiosity_core::Real;
+use radiosity_eval::Comparison;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -39,7 +41,7 @@ const FIGURES: [Figure; 3] = [
 
 /// A claim of the paper: `better` ends below `worse` at n steps.
 fn beats(c: &Comparison, better: &str, worse: &str) -> (String, String, bool) {
-    let e = |name: &str| c.outcomes.iter().find(|o| o.solver == name).and_then(|o| o.at_step(c.n));
+    let e = |name: &str| c.outcome(name).and_then(|o| o.at_step(c.n));
     let (b, w) = (e(better), e(worse));
     let holds = matches!((b, w), (Some(b), Some(w)) if b < w);
     (format!("`{better}` beats `{worse}` at n steps"), format!("{} against {}", sci(b), sci(w)), holds)
@@ -60,8 +62,7 @@ fn claims(figure: &Figure, c: &Comparison) -> Vec<(String, String, bool)> {
             beats(c, "xu-g30-m480", "xu-g30"),
         ],
         "labyrinth" => {
-            let o = c.outcomes.iter().find(|o| o.solver == "xu-g50-m500");
-            let within = o.and_then(|o| o.reached_at(1e-2)).map(|(columns, _)| columns);
+            let within = c.outcome("xu-g50-m500").and_then(|o| o.reached(1e-2)).map(|p| p.columns);
             vec![
                 (
                     "`xu-g50-m500` reaches e_rms ≤ 1e-2 within n columns".into(),
@@ -76,7 +77,7 @@ fn claims(figure: &Figure, c: &Comparison) -> Vec<(String, String, bool)> {
             // "Group accelerated PR converges faster than PR, but the difference appears to
             // be very small"; "group accelerated Xu does not provide any acceleration".
             // "Little" is read as less than a factor 2 in e_rms at n steps.
-            let e = |name: &str| c.outcomes.iter().find(|o| o.solver == name).and_then(|o| o.at_step(c.n));
+            let e = |name: &str| c.outcome(name).and_then(|o| o.at_step(c.n));
             let gain = |claim: &str, a: &str, b: &str| match (e(a), e(b)) {
                 (Some(x), Some(y)) => (
                     claim.to_string(),
@@ -105,7 +106,7 @@ pub fn run(args: &Args) -> Result<()> {
     }
     let plans =
         figures.iter().map(|f| Plan::new(f.scene, f.solvers, "analytic", "steps=n")).collect::<Result<Vec<_>>>()?;
-    let out = args.out.clone().unwrap_or_else(|| crate::compare::default_out("paper"));
+    let out = args.out.clone().unwrap_or_else(|| default_out("paper"));
     let mut md = String::from("# The paper's figures and claims, measured\n\n");
     let _ = writeln!(
         md,
@@ -113,16 +114,16 @@ pub fn run(args: &Args) -> Result<()> {
          steps with analytic form factors at their defaults and the paper's automatic group frequency (group solving \
          held near 5% of the column time). Each scene's folder holds its full comparison report.\n"
     );
-    for (figure, plan) in figures.iter().zip(&plans) {
+    for (figure, plan) in figures.iter().zip(plans) {
         let dir = out.join(figure.scene);
-        let comparison = execute(plan, &dir)?;
-        print_summary(&comparison.outcomes, comparison.n);
+        let comparison = plan.execute(&dir)?;
+        print!("{}", comparison.summary());
         let _ = writeln!(md, "## {} ({}, n = {})\n", figure.scene, figure.figure, comparison.n);
         let _ = writeln!(md, "![e_rms against shooting steps]({}/e_rms-steps.png)\n", figure.scene);
         let _ = writeln!(md, "| method | e_rms at n steps | columns | to 1e-2 | to 1e-3 | group share |");
         let _ = writeln!(md, "|---|--:|--:|--:|--:|--:|");
         for o in &comparison.outcomes {
-            let reach = |t: Real| o.reached_at(t).map_or("—".into(), |(k, s)| format!("{k} / {s:.2} s"));
+            let reach = |t: Real| o.reached(t).map_or("—".into(), |p| format!("{} / {:.2} s", p.columns, p.seconds));
             let _ = writeln!(
                 md,
                 "| `{}` | {} | {} | {} | {} | {:.1}% |",

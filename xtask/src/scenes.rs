@@ -1,13 +1,15 @@
 //! `cargo xtask scenes [--json] [--explain SCENE]`: the built-in scenes, or one scene in detail.
 
-use crate::scene_report::{SceneReport, prepare, print_warnings};
+use crate::experiment::prepare;
 use anyhow::Result;
+use radiosity_geom::SceneReport;
 use radiosity_geom::builtin_scenes;
 
 /// Arguments of `scenes`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Explain one scene (a built-in name with `:key=value` parameters, or a .gltf/.glb path):
+    /// Explain one scene (a built-in name with `:key=value` parameters, or a .gltf, .glb or
+    /// .mgf path):
     /// its figures, every pipeline decision and the reason for it.
     #[arg(long, value_name = "SCENE")]
     explain: Option<String>,
@@ -21,7 +23,6 @@ pub fn run(args: &Args) -> Result<()> {
     match &args.explain {
         Some(arg) => {
             let report = prepare(arg)?.report();
-            print_warnings(&report);
             if args.json {
                 println!("{}", serde_json::to_string_pretty(&report)?);
             } else {
@@ -66,7 +67,8 @@ fn list_text(reports: &[SceneReport]) -> String {
             out += &format!("  {:<12}   {:<16} {}\n", "", format!("{}={}", p.key, p.default), p.doc);
         }
     }
-    out += "\nFiles: PATH.gltf or PATH.glb, with :size=F to cut triangles to F times the scene diagonal.\n";
+    out += "\nFiles: PATH.gltf or PATH.glb (glTF 2.0), or PATH.mgf (MGF 2.0, with :div=N for curved primitives);\n";
+    out += "both take :size=F to cut patches to edges of at most F times the scene diagonal.\n";
     out += "Run `cargo xtask scenes --explain SCENE` for the reasons behind each decision.\n";
     out
 }

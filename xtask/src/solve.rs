@@ -2,19 +2,21 @@
 //! [--json | --out FILE]`: runs one solver and reports its error against the reference
 //! solution of the same discrete system (DESIGN §7).
 //!
-//! Order of work: every argument is parsed before any geometry is built, so a typo fails at
-//! once. Then the scene is prepared, F fetched once (every column, outside the run's
-//! accounting) to solve the reference and later to measure the final residual, and the
-//! solver run under the stop rules. The run's columns, steps and seconds are the solver's
+//! Every argument is parsed before any geometry is built, so a typo fails at once. The
+//! reference comes from the cache when it is there (then F is not assembled and the residual
+//! reported is the solver's own), otherwise F is assembled once, outside the run, for the
+//! reference and the final residual. The run's columns, steps and seconds are the solver's
 //! alone.
 
-use crate::experiment::{Experiment, SolveArgs, check_output_file, require_emitters, rgb};
-use crate::scene_report::{prepare, print_warnings};
+use crate::bars::Bars;
+use crate::experiment::{SolveArgs, check_output_file, lab, prepare};
 use anyhow::{Context, Result};
-use radiosity_core::{LinearSystem, Real};
-use radiosity_eval::metrics::errors;
-use radiosity_eval::{Evaluator, ReferenceSolution};
-use radiosity_solvers::{Observer, State};
+use radiosity_core::Real;
+use radiosity_eval::compare::value_cell;
+use radiosity_eval::lab::rgb;
+use radiosity_eval::{FinalMetrics, RecordPlan};
+use radiosity_solvers::State;
+use radiosity_solvers::{Record, Value};
 use serde::Serialize;
 use std::path::PathBuf;
 
@@ -31,15 +33,6 @@ pub struct Args {
     out: Option<PathBuf>,
 }
 
-/// Computes `e_rms` against the reference between steps, when a rule needs it, and records
-/// when it first fell to each power of ten.
-struct RmsObserver<'a> {
-    system: &'a LinearSystem,
-    reference: &'a ReferenceSolution,
-    needed: bool,
-    reached: Vec<ReachedJson>,
-}
-
 /// Where a run stood when its `e_rms` first fell to `e_rms`.
 #[derive(Serialize)]
 struct ReachedJson {
@@ -47,23 +40,6 @@ struct ReachedJson {
     steps: u64,
     columns: u64,
     seconds: Real,
-}
-
-impl Observer for RmsObserver<'_> {
-    fn observe(&mut self, state: &State) -> Option<Real> {
-        if !self.needed {
-            return None;
-        }
-        let e_rms = errors(self.system, self.reference, &state.radiosity).ok()?.e_rms;
-        // Powers of ten from 1e-1 down to 1e-15, each recorded once, in order.
-        let power = |k: usize| 10f64.powi(-(k as i32) - 1);
-        while self.reached.len() < 15 && e_rms <= power(self.reached.len()) {
-            let seconds = state.ff_seconds + state.solve_seconds;
-            let e_rms = power(self.reached.len());
-            self.reached.push(ReachedJson { e_rms, steps: state.step, columns: state.columns, seconds });
-        }
-        Some(e_rms)
-    }
 }
 
 #[derive(Serialize)]
@@ -87,10 +63,17 @@ struct StatsJson {
     group_seconds: Real,
     e_rms: Real,
     e_max: Real,
-    residual: Real,
+    /// The residual power of the displayed radiosity, or else the solver's own.
+    residual: Option<Real>,
+    /// Which vector `residual` is the residual of.
+    residual_of: &'static str,
+    /// The certified bound on the area-weighted L1 error of the displayed radiosity.
+    bound: Option<Real>,
     termination: String,
     /// With an `rms=` rule: the first step at which `e_rms` fell to each power of ten.
     reached: Vec<ReachedJson>,
+    /// The solver's own figures (group steps, sizes, condition numbers, fallbacks).
+    record: serde_json::Map<String, serde_json::Value>,
     reference: String,
     certificate: String,
 }
@@ -104,63 +87,95 @@ struct SolveJson<'a> {
     stats: StatsJson,
 }
 
+/// What a run left, for the report.
+struct Outcome {
+    solver: String,
+    state: State,
+    termination: String,
+    last: FinalMetrics,
+    reached: Vec<ReachedJson>,
+    record: Record,
+}
+
+/// A record value as JSON: counts and finite reals as numbers, anything else as text.
+fn json_value(v: &Value) -> serde_json::Value {
+    match v {
+        Value::Count(c) => (*c).into(),
+        Value::Real(r) if r.is_finite() => (*r).into(),
+        other => other.to_string().into(),
+    }
+}
+
 /// Runs `solve`.
 pub fn run(args: &Args) -> Result<()> {
-    let (spec, rules) = args.run.check()?;
+    let (spec, solver, rules) = args.run.check()?;
     if let Some(out) = &args.out {
         check_output_file(out)?;
     }
-    // `reference` is the exact solution itself: its cost is assembling F and solving it.
-    let exact = args.run.solver == "reference";
     let prepared = prepare(&args.run.scene)?;
-    print_warnings(&prepared.report());
-    require_emitters(&prepared)?;
-    let experiment = Experiment::new(&prepared, spec)?;
-    if exact {
-        let run = Outcome { state: experiment.exact_state(), termination: None, solver: "reference".into() };
-        return report(args, &experiment, run, Vec::new());
-    }
-    let mut observer = RmsObserver {
-        system: &experiment.system,
-        reference: &experiment.reference,
-        needed: rules.needs_error(),
-        reached: Vec::new(),
+    let lab = lab(&prepared, &spec, false)?;
+    let outcome = match solver {
+        // `reference` is the exact solution itself: its cost is assembling F and solving it.
+        None => Outcome {
+            solver: "reference".into(),
+            state: lab.reference_state(),
+            termination: format!("solved exactly: {}", lab.reference().method()),
+            last: lab.reference_metrics()?,
+            reached: Vec::new(),
+            record: Record::default(),
+        },
+        Some(mut solver) => {
+            let plan = RecordPlan::errors_only();
+            let o = lab.run(solver.as_mut(), &rules, &plan, &Bars::new())?;
+            let reached = if rules.needs_error() {
+                o.reached_powers()
+                    .into_iter()
+                    .map(|(e_rms, p)| ReachedJson { e_rms, steps: p.step, columns: p.columns, seconds: p.seconds })
+                    .collect()
+            } else {
+                Vec::new()
+            };
+            Outcome {
+                solver: o.solver,
+                state: o.state,
+                termination: o.termination,
+                last: o.last,
+                reached,
+                record: o.record,
+            }
+        }
     };
-    let run = experiment.run(&args.run.solver, rules, &mut observer)?;
-    let run = Outcome { state: run.state, termination: Some(run.termination.to_string()), solver: run.solver };
-    report(args, &experiment, run, observer.reached)
-}
-
-/// What a run left, for the report: the exact reference has no termination.
-struct Outcome {
-    state: State,
-    termination: Option<String>,
-    solver: String,
-}
-
-/// Prints the summary or writes the JSON of a run.
-fn report(args: &Args, experiment: &Experiment<'_>, run: Outcome, reached: Vec<ReachedJson>) -> Result<()> {
-    let (system, reference, spec) = (&experiment.system, &experiment.reference, &experiment.spec);
-    let scene = &experiment.prepared.loaded.scene;
-    let metrics = Evaluator::new(system, &experiment.matrix, reference)?.evaluate(&run.state.radiosity)?;
+    let (method, certificate) = (lab.reference().method().to_string(), lab.reference().certificate().to_string());
+    let (residual, residual_of) = match (outcome.last.residual, outcome.last.solver_residual) {
+        (Some(r), _) => (Some(r), "displayed radiosity"),
+        (None, Some(r)) => {
+            (Some(r), "the solver's own (shot radiosity); F was not assembled, the reference came from the cache")
+        }
+        (None, None) => (None, "not known: F was not assembled, the reference came from the cache"),
+    };
+    let s = &outcome.state;
     let stats = StatsJson {
-        columns: run.state.columns,
-        columns_reused: run.state.columns_reused,
-        steps: run.state.step,
-        seconds: run.state.ff_seconds + run.state.solve_seconds,
-        ff_seconds: run.state.ff_seconds,
-        group_seconds: run.state.group_seconds,
-        e_rms: metrics.e_rms,
-        e_max: metrics.e_max,
-        residual: metrics.residual,
-        termination: run.termination.unwrap_or_else(|| format!("solved exactly: {}", reference.method())),
-        reached,
-        reference: reference.method().to_string(),
-        certificate: reference.certificate().to_string(),
+        columns: s.columns,
+        columns_reused: s.columns_reused,
+        steps: s.step,
+        seconds: s.ff_seconds + s.solve_seconds,
+        ff_seconds: s.ff_seconds,
+        group_seconds: s.group_seconds,
+        e_rms: outcome.last.e_rms,
+        e_max: outcome.last.e_max,
+        residual,
+        residual_of,
+        bound: outcome.last.bound,
+        termination: outcome.termination.clone(),
+        reached: outcome.reached,
+        record: outcome.record.iter().map(|(k, v)| (k.to_string(), json_value(v))).collect(),
+        reference: method,
+        certificate,
     };
+    let scene = prepared.scene();
     if !args.json && args.out.is_none() {
         println!("scene        {}: {} patches", args.run.scene, scene.len());
-        println!("solver       {} with {}", run.solver, spec.canonical());
+        println!("solver       {} with {}", outcome.solver, lab.backend());
         println!("stopped      {}", stats.termination);
         let reused = match stats.columns_reused {
             0 => String::new(),
@@ -177,15 +192,23 @@ fn report(args: &Args, experiment: &Experiment<'_>, run: Outcome, reached: Vec<R
                 100.0 * stats.group_seconds / stats.seconds
             );
         }
-        println!(
-            "error        e_rms {:.4e}, e_max {:.4e}, residual power {:.4e}",
-            stats.e_rms, stats.e_max, stats.residual
-        );
+        let residual = match (stats.residual, residual_of) {
+            (Some(r), "displayed radiosity") => format!("residual power {r:.4e}"),
+            (Some(r), _) => format!(
+                "residual power of the shot radiosity {r:.4e} (the solver's own: the reference came from the cache)"
+            ),
+            (None, _) => "residual not measured (the reference came from the cache)".into(),
+        };
+        println!("error        e_rms {:.4e}, e_max {:.4e}, {residual}", stats.e_rms, stats.e_max);
         for r in &stats.reached {
             println!(
                 "reached      e_rms {:.0e} after {} steps, {} columns, {:.3} s",
                 r.e_rms, r.steps, r.columns, r.seconds
             );
+        }
+        if !outcome.record.is_empty() {
+            let items: Vec<String> = outcome.record.iter().map(|(k, v)| format!("{k} {}", value_cell(v))).collect();
+            println!("recorded     {}", items.join(", "));
         }
         println!("reference    {}; {}", stats.reference, stats.certificate);
         return Ok(());
@@ -193,7 +216,7 @@ fn report(args: &Args, experiment: &Experiment<'_>, run: Outcome, reached: Vec<R
     let patches = scene
         .patches()
         .iter()
-        .zip(rgb(&run.state))
+        .zip(rgb(&outcome.state))
         .enumerate()
         .map(|(i, (p, radiosity))| PatchJson {
             id: i,
@@ -205,7 +228,8 @@ fn report(args: &Args, experiment: &Experiment<'_>, run: Outcome, reached: Vec<R
             radiosity,
         })
         .collect();
-    let json = SolveJson { scene: &args.run.scene, solver: run.solver.clone(), ff: spec.canonical(), patches, stats };
+    let json =
+        SolveJson { scene: &args.run.scene, solver: outcome.solver, ff: lab.backend().to_string(), patches, stats };
     let text = serde_json::to_string(&json)?;
     match &args.out {
         Some(path) => std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))?,

@@ -273,7 +273,7 @@ fn bad_solvers_are_refused() {
     solve("xu-g0", &["solver 'xu-g0'", "at least one patch"]);
     solve("group-pr-g0", &["solver 'group-pr-g0'", "at least one patch"]);
     solve("pr-g30-m10", &["solver 'pr-g30-m10'", "memory (m10)", "group (g30)"]);
-    solve("pr-g30:f=0", &["solver 'pr-g30:f=0'", "'f=0'", "f=auto or f ≥ 1"]);
+    solve("pr-g30:f=0", &["solver 'pr-g30:f=0'", "'f=0'", "f=auto, f=timed or f ≥ 1"]);
     solve("pr-g30:groups=bogus", &["solver 'pr-g30:groups=bogus'", "'groups=bogus'", "unshot", "interaction"]);
     solve("group-gs-g30:groups=bogus", &["solver 'group-gs-g30'", "'groups=bogus'", "index", "spatial"]);
     solve("xu-g30:bogus=1", &["'bogus=1' is not a parameter"]);

@@ -1,7 +1,8 @@
 //! `export`: the binary glTF it writes reads back with the scene's patches, normals facing the
-//! way triangles wind, colours in `[0, 1]` brightest on the light, and an unlit material.
+//! way triangles wind, colours in `[0, 1]` brightest on the light, and unlit materials, and it
+//! loads back as a scene with the same patches.
 
-use super::{failure, xtask};
+use super::{failure, stdout_json, xtask};
 use std::path::PathBuf;
 
 /// A file in the temporary directory, removed when dropped.
@@ -40,20 +41,29 @@ fn cornell_round_trips_with_one_vertex_set_per_patch() {
     assert!(line.contains(file.path()) && line.contains("exposure"), "{line}");
 
     let scene = radiosity_geom::load_scene("cornell:res=2").unwrap().scene;
-    let corners: Vec<usize> = scene.patches().iter().map(|p| p.vertices().len()).collect();
+    // Patches material by material (in the scene's material order), each material's in the
+    // scene's order: one primitive per material used.
+    let mut order: Vec<usize> = (0..scene.len()).collect();
+    order.sort_by_key(|&i| scene.patches()[i].material);
+    let corners: Vec<usize> = order.iter().map(|&i| scene.patches()[i].vertices().len()).collect();
     let (document, buffers, _) = gltf::import(&file.0).unwrap();
     assert_eq!(document.meshes().count(), 1);
     assert_eq!(document.nodes().count(), 1);
     let mesh = document.meshes().next().unwrap();
     let primitives: Vec<_> = mesh.primitives().collect();
-    assert_eq!(primitives.len(), 1);
-    let primitive = &primitives[0];
-    assert_eq!(primitive.mode(), gltf::mesh::Mode::Triangles);
-    let reader = primitive.reader(|b| Some(&buffers[b.index()]));
-    let positions: Vec<[f32; 3]> = reader.read_positions().expect("POSITION").collect();
-    let normals: Vec<[f32; 3]> = reader.read_normals().expect("NORMAL").collect();
-    let colours: Vec<[f32; 3]> = reader.read_colors(0).expect("COLOR_0").into_rgb_f32().collect();
-    let indices: Vec<u32> = reader.read_indices().expect("indices").into_u32().collect();
+    let used: std::collections::BTreeSet<_> = scene.patches().iter().map(|p| p.material).collect();
+    assert_eq!(primitives.len(), used.len());
+    // The primitives' vertices one after the other, indices offset to match.
+    let (mut positions, mut normals, mut colours, mut indices) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for primitive in &primitives {
+        assert_eq!(primitive.mode(), gltf::mesh::Mode::Triangles);
+        let reader = primitive.reader(|b| Some(&buffers[b.index()]));
+        let first = positions.len() as u32;
+        indices.extend(reader.read_indices().expect("indices").into_u32().map(|i| first + i));
+        positions.extend(reader.read_positions().expect("POSITION"));
+        normals.extend(reader.read_normals().expect("NORMAL"));
+        colours.extend(reader.read_colors(0).expect("COLOR_0").into_rgb_f32());
+    }
 
     // One vertex per patch corner, patch after patch; corners − 2 triangles per patch.
     assert_eq!(positions.len(), corners.iter().sum::<usize>());
@@ -63,7 +73,7 @@ fn cornell_round_trips_with_one_vertex_set_per_patch() {
     assert_eq!(indices.len() % 3, 0);
     // (patch, corner) of every vertex.
     let owner: Vec<(usize, usize)> =
-        corners.iter().enumerate().flat_map(|(i, &k)| (0..k).map(move |c| (i, c))).collect();
+        order.iter().zip(&corners).flat_map(|(&i, &k)| (0..k).map(move |c| (i, c))).collect();
     let patch_of: Vec<usize> = owner.iter().map(|&(i, _)| i).collect();
     for (v, p) in positions.iter().enumerate() {
         let patch = &scene.patches()[owner[v].0];
@@ -97,17 +107,20 @@ fn cornell_round_trips_with_one_vertex_set_per_patch() {
         }
     }
 
-    // The material is unlit, white and single-sided.
-    let material = primitive.material();
-    assert!(!material.double_sided());
-    assert_eq!(material.pbr_metallic_roughness().base_color_factor(), [1.0; 4]);
-    assert!(document.extensions_used().any(|e| e == "KHR_materials_unlit"));
+    // The materials are unlit, white and single-sided, one per primitive.
     let bytes = std::fs::read(&file.0).unwrap();
     let glb = gltf::binary::Glb::from_slice(&bytes).unwrap();
     assert_eq!(bytes.len() % 4, 0);
     assert_eq!(glb.header.length as usize, bytes.len());
     let json: serde_json::Value = serde_json::from_slice(&glb.json).unwrap();
-    assert!(json["materials"][0]["extensions"]["KHR_materials_unlit"].is_object(), "{}", json["materials"]);
+    assert!(document.extensions_used().any(|e| e == "KHR_materials_unlit"));
+    for primitive in &primitives {
+        let material = primitive.material();
+        assert!(!material.double_sided());
+        assert_eq!(material.pbr_metallic_roughness().base_color_factor(), [1.0; 4]);
+        let k = material.index().unwrap();
+        assert!(json["materials"][k]["extensions"]["KHR_materials_unlit"].is_object(), "{}", json["materials"]);
+    }
     // The exposure is stored, and the light's colour times the exposure is its radiosity,
     // which is at least its emission.
     let exposure = json["asset"]["extras"]["radiosity_exposure"].as_f64().unwrap();
@@ -139,4 +152,19 @@ fn bad_export_arguments_fail_cleanly() {
     assert!(e.contains("'often'"), "{e}");
     let e = failure(&["export", "--scene", "nowhere", "--solver", "reference", "--out", "/tmp/never.glb"]);
     assert!(e.contains("unknown scene 'nowhere'"), "{e}");
+}
+
+#[test]
+fn an_exported_scene_loads_back_with_the_same_patches() {
+    let file = TempFile::new("explain.glb");
+    xtask(&["export", "--scene", "cornell:res=2", "--solver", "reference", "--out", file.path()]).success();
+    let original = stdout_json(&["scenes", "--explain", "cornell:res=2", "--json"]);
+    let back = stdout_json(&["scenes", "--explain", file.path(), "--json"]);
+    for key in ["patches", "quads", "triangles", "emitters", "channels"] {
+        assert_eq!(back[key], original[key], "{key}");
+    }
+    for key in ["total_area", "mean_reflectivity", "max_reflectivity"] {
+        let (a, b) = (original[key].as_f64().unwrap(), back[key].as_f64().unwrap());
+        assert!((a - b).abs() <= 1e-6 * a, "{key}: {b} against {a}");
+    }
 }

@@ -1,5 +1,6 @@
 //! Typed errors of the evaluation crate: mismatched sizes, invalid form factors, matrices too
-//! large to hold, and reference solves that fail.
+//! large to hold, reference solves that fail, and pictures, plots and files that cannot be
+//! made or written.
 
 use radiosity_core::Real;
 use thiserror::Error;
@@ -78,7 +79,48 @@ pub enum EvalError {
         /// What is required of it.
         reason: &'static str,
     },
+    /// A stored reference solution that cannot be used.
+    #[error("the stored reference solution cannot be used: {0}")]
+    StoredReference(String),
     /// A plot could not be drawn or written.
     #[error("cannot draw the plot: {0}")]
     Plot(String),
+    /// A radiosity value that is NaN or infinite, which cannot be shown or exported.
+    #[error("the radiosity of patch {patch} is not finite, so there is nothing to show")]
+    NonFiniteRadiosity {
+        /// The first patch with a non-finite channel.
+        patch: usize,
+    },
+    /// A camera that cannot be parsed or looks nowhere.
+    #[error("invalid camera '{camera}': {reason}")]
+    InvalidCamera {
+        /// The camera as written (`x,y,z:tx,ty,tz[:fov]`), or as given in numbers.
+        camera: String,
+        /// What is wrong with it.
+        reason: &'static str,
+    },
+    /// A scene larger than binary glTF's 32-bit sizes and indices can describe.
+    #[error("binary glTF can hold at most {limit} {what}, and this scene needs {needed}")]
+    GltfTooLarge {
+        /// What overflows (`vertices`, `bytes`).
+        what: &'static str,
+        /// How many the scene needs.
+        needed: u64,
+        /// The most glTF can hold.
+        limit: u64,
+    },
+    /// The glTF JSON or container could not be serialised.
+    #[error("cannot write the binary glTF: {0}")]
+    Gltf(String),
+    /// An image could not be encoded.
+    #[error("cannot encode the image: {0}")]
+    Image(String),
+    /// A file could not be written.
+    #[error("cannot write {}: {message}", path.display())]
+    Write {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Why, as the operating system says it.
+        message: String,
+    },
 }

@@ -12,7 +12,11 @@
 //!   with floats rounded to fixed significant digits;
 //! - [`FormFactors`] ([`matrix`]): the form-factor matrix fetched once from any
 //!   [`ColumnSource`](radiosity_core::ColumnSource) and held in memory;
-//! - [`plot`]: e_rms against steps, columns or seconds, as SVG and PNG.
+//! - [`plot`]: e_rms against steps, columns or seconds, as SVG and PNG;
+//! - [`render`]: a picture of a solved scene (ray-cast, smoothly shaded with [`shading`],
+//!   tone mapped), as PNG;
+//! - [`gltf_export`]: a solved scene as binary glTF with its radiosity as vertex colours and
+//!   its materials in the extras, so it loads back as the same system.
 //!
 //! With `xtask`, it is the only crate that will write files; it writes to any
 //! [`std::io::Write`] and leaves opening files to its callers.
@@ -35,15 +39,28 @@
 //! assert!((m.e_rms - 0.25).abs() < 1e-12);
 //! ```
 
+pub mod backends;
+pub mod cache;
+pub mod compare;
 pub mod error;
+pub mod gltf_export;
+pub mod lab;
 pub mod matrix;
 pub mod metrics;
 pub mod plot;
+pub mod progress;
 pub mod reference;
+pub mod render;
+pub mod shading;
+pub mod stress;
 pub mod table;
 
+pub use cache::Cache;
+pub use compare::Comparison;
 pub use error::EvalError;
+pub use lab::{FinalMetrics, Lab, LabError, LabOptions, Outcome, Point, RecordPlan, ReferenceOrigin};
 pub use matrix::FormFactors;
 pub use metrics::{Contraction, ErrorBound, Errors, Evaluator, Metrics, Residual};
+pub use progress::{NoProgress, Progress};
 pub use reference::{Certificate, Method, ReferenceParams, ReferenceSolution};
 pub use table::{ConvergenceTable, TableRow};

@@ -233,6 +233,8 @@ pub struct Errors {
     pub e_max: Real,
     /// The true area-weighted L1 error `Σ_c Σ_i A_i |B_ic − B*_ic|`.
     pub l1: Real,
+    /// The area-weighted L1 norm of the exact answer, `Σ_c Σ_i A_i |B*_ic|`.
+    pub reference_l1: Real,
 }
 
 /// `e_rms`, `e_max` and the area-weighted L1 error of `b` against `reference`.
@@ -253,20 +255,21 @@ pub fn errors_against(system: &LinearSystem, star: &[Real], b: &[Real]) -> Resul
     check_vector(system, Some(star))?;
     let k = system.channels().count();
     let area = system.areas();
-    let (mut num, mut den, mut l1, mut max_diff, mut max_ref) = (0.0, 0.0, 0.0, 0.0_f64, 0.0_f64);
+    let (mut num, mut den, mut l1, mut norm, mut max_diff, mut max_ref) = (0.0, 0.0, 0.0, 0.0, 0.0_f64, 0.0_f64);
     for (idx, (&x, &s)) in b.iter().zip(star).enumerate() {
         let a = area[idx / k];
         let d = x - s;
         num += a * d * d;
         den += a * s * s;
         l1 += a * d.abs();
+        norm += a * s.abs();
         max_diff = max_diff.max(d.abs());
         max_ref = max_ref.max(s);
     }
     if den == 0.0 || max_ref <= 0.0 {
         return Err(EvalError::ZeroReference);
     }
-    Ok(Errors { e_rms: (num / den).sqrt(), e_max: max_diff / max_ref, l1 })
+    Ok(Errors { e_rms: (num / den).sqrt(), e_max: max_diff / max_ref, l1, reference_l1: norm })
 }
 
 fn check_reference(system: &LinearSystem, reference: &ReferenceSolution) -> Result<(), EvalError> {
@@ -292,6 +295,9 @@ pub struct Metrics {
     pub l1_error: Real,
     /// The certified bound on `l1_error`.
     pub bound: ErrorBound,
+    /// The certified bound relative to the reference's L1 norm, `bound / Σ A |B*|`
+    /// (infinite where the bound is not certified).
+    pub relative_bound: Real,
 }
 
 impl Metrics {
@@ -302,6 +308,16 @@ impl Metrics {
             residual: residual.power(),
             l1_error: errors.l1,
             bound: residual.bound(),
+            relative_bound: {
+                let b = residual.bound();
+                if !b.certified {
+                    Real::INFINITY
+                } else if b.bound == 0.0 {
+                    0.0
+                } else {
+                    b.bound / errors.reference_l1
+                }
+            },
         }
     }
 }

@@ -340,3 +340,96 @@ fn gauss_seidel(
     }
     Err(EvalError::NotConverged { sweeps: params.max_sweeps, reached, target: params.certified })
 }
+
+/// The magic string at the start of a stored reference.
+const STORED_MAGIC: &[u8; 20] = b"radiosity-reference\0";
+/// The format of a stored reference; a file of another version is refused.
+pub const STORED_FORMAT_VERSION: u32 = 1;
+
+impl ReferenceSolution {
+    /// The reference as bytes for the on-disk cache, with `key` (what it was computed from)
+    /// inside, and a checksum: magic, version, key, channels, patches, method, certificate
+    /// and contraction, the values, all little-endian, then the xxh3 of everything before.
+    pub fn to_bytes(&self, key: &str) -> Vec<u8> {
+        let mut out = Vec::with_capacity(8 * self.values.len() + key.len() + 128);
+        out.extend_from_slice(STORED_MAGIC);
+        out.extend_from_slice(&STORED_FORMAT_VERSION.to_le_bytes());
+        out.extend_from_slice(&(key.len() as u64).to_le_bytes());
+        out.extend_from_slice(key.as_bytes());
+        out.extend_from_slice(&(self.channels.count() as u64).to_le_bytes());
+        out.extend_from_slice(&(self.n as u64).to_le_bytes());
+        let (tag, sweeps) = match self.method {
+            Method::DenseLu => (0u64, 0u64),
+            Method::GaussSeidel { sweeps } => (1, sweeps as u64),
+        };
+        out.extend_from_slice(&tag.to_le_bytes());
+        out.extend_from_slice(&sweeps.to_le_bytes());
+        let c = &self.certificate;
+        for v in [c.residual_norm, c.bound, c.relative_bound, Real::from(u8::from(c.certified))] {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        out.extend_from_slice(&c.contraction.max_row_sum.to_le_bytes());
+        for v in c.contraction.rho_max.iter().chain(&c.contraction.kappa).chain(&self.values) {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        let sum = xxhash_rust::xxh3::xxh3_64(&out);
+        out.extend_from_slice(&sum.to_le_bytes());
+        out
+    }
+
+    /// Decodes a reference written by [`ReferenceSolution::to_bytes`] with the same `key`, for
+    /// `system`; refuses anything else with the reason.
+    pub fn from_bytes(bytes: &[u8], key: &str, system: &LinearSystem) -> Result<ReferenceSolution, EvalError> {
+        let refuse = |why: &str| EvalError::StoredReference(why.to_string());
+        if bytes.len() < STORED_MAGIC.len() + 12 || &bytes[..STORED_MAGIC.len()] != STORED_MAGIC {
+            return Err(refuse("not a stored reference solution"));
+        }
+        let (body, sum) = bytes.split_at(bytes.len() - 8);
+        if xxhash_rust::xxh3::xxh3_64(body).to_le_bytes() != sum {
+            return Err(refuse("its checksum does not match (truncated or damaged file)"));
+        }
+        let mut at = STORED_MAGIC.len();
+        let mut take = |len: usize| -> Result<&[u8], EvalError> {
+            let piece = body.get(at..at + len).ok_or_else(|| refuse("truncated file"))?;
+            at += len;
+            Ok(piece)
+        };
+        let version = u32::from_le_bytes(take(4)?.try_into().expect("4 bytes"));
+        if version != STORED_FORMAT_VERSION {
+            return Err(refuse(&format!(
+                "written in format version {version}, this build reads version {STORED_FORMAT_VERSION}"
+            )));
+        }
+        let mut word = || -> Result<u64, EvalError> { Ok(u64::from_le_bytes(take(8)?.try_into().expect("8 bytes"))) };
+        let key_len = word()? as usize;
+        let stored_key = take(key_len)?;
+        if stored_key != key.as_bytes() {
+            return Err(refuse(&format!(
+                "it was computed for '{}', not for '{key}'",
+                String::from_utf8_lossy(stored_key)
+            )));
+        }
+        let mut word = || -> Result<u64, EvalError> { Ok(u64::from_le_bytes(take(8)?.try_into().expect("8 bytes"))) };
+        let (k, n) = (word()? as usize, word()? as usize);
+        if k != system.channels().count() || n != system.len() {
+            return Err(refuse("its size is not this system's"));
+        }
+        let method = match (word()?, word()?) {
+            (0, _) => Method::DenseLu,
+            (1, sweeps) => Method::GaussSeidel { sweeps: sweeps as usize },
+            _ => return Err(refuse("unknown method")),
+        };
+        let mut real = || -> Result<Real, EvalError> { Ok(Real::from_bits(word()?)) };
+        let (residual_norm, bound, relative_bound, certified) = (real()?, real()?, real()?, real()? != 0.0);
+        let max_row_sum = real()?;
+        let rho_max = (0..k).map(|_| real()).collect::<Result<Vec<_>, _>>()?;
+        let kappa = (0..k).map(|_| real()).collect::<Result<Vec<_>, _>>()?;
+        let values = (0..n * k).map(|_| real()).collect::<Result<Vec<_>, _>>()?;
+        if at != body.len() {
+            return Err(refuse("trailing bytes after the values"));
+        }
+        let contraction = Contraction { max_row_sum, rho_max, kappa };
+        let certificate = Certificate { residual_norm, bound, relative_bound, certified, contraction };
+        Ok(ReferenceSolution { channels: system.channels(), n, values, method, certificate })
+    }
+}

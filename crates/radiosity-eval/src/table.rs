@@ -11,7 +11,8 @@ use radiosity_core::Real;
 use std::io::{self, Write};
 
 /// The columns of a table, in order.
-pub const HEADER: [&str; 8] = ["solver", "step", "columns", "seconds", "ff_seconds", "e_rms", "e_max", "residual"];
+pub const HEADER: [&str; 9] =
+    ["solver", "step", "columns", "seconds", "ff_seconds", "e_rms", "e_max", "residual", "bound"];
 
 /// The positions in [`HEADER`] of the timing columns, `seconds` and `ff_seconds`.
 const TIMING_COLUMNS: [usize; 2] = [3, 4];
@@ -35,6 +36,9 @@ pub struct TableRow {
     pub e_max: Real,
     /// Residual power `R`.
     pub residual: Real,
+    /// The certified bound on the area-weighted L1 error, relative to `Σ A |B|` of the reference
+    /// (infinite where the system is not certifiable; NaN where F was not available).
+    pub bound: Real,
 }
 
 /// Rows of convergence data, the precision they are written with, and whether their timings
@@ -87,7 +91,7 @@ impl ConvergenceTable {
     }
 
     /// The entries of `all` (one per column of [`HEADER`]) that are written.
-    fn written<T>(&self, all: [T; 8]) -> Vec<T> {
+    fn written<T>(&self, all: [T; 9]) -> Vec<T> {
         let keep = |i: &usize| self.timings || !TIMING_COLUMNS.contains(i);
         all.into_iter().enumerate().filter(|(i, _)| keep(i)).map(|(_, cell)| cell).collect()
     }
@@ -103,6 +107,7 @@ impl ConvergenceTable {
             round_significant(row.e_rms, d),
             round_significant(row.e_max, d),
             round_significant(row.residual, d),
+            round_significant(row.bound, d),
         ])
     }
 

@@ -1,11 +1,16 @@
 //! Integration tests of radiosity-eval: reference solutions against closed forms (furnace,
 //! two facing patches, the unit cube), the certified bound against true errors, metrics on
-//! hand-made vectors, and tables under snapshot tests.
+//! hand-made vectors, tables under snapshot tests, and pictures and glTF files of solved
+//! scenes.
 
+mod examples;
+mod gltf_export;
 mod metrics;
 mod plot;
 mod reference;
+mod render;
 mod scenes;
+mod shading;
 mod table;
 
 use radiosity_core::{Channels, DenseColumns, LinearSystem};

@@ -1,11 +1,17 @@
-//! Convergence plots: SVG with the solvers' names, PNG of the right size with lines drawn,
-//! and a clear error when nothing can go on a log scale.
+//! Convergence plots: SVG with the solvers' names and what e_rms is, PNG of the right size
+//! with lines drawn and the legend beside the data, one style per solver name whatever else
+//! is plotted, axes that start where the data starts, and a clear error when nothing can go
+//! on a log scale.
 
 use radiosity_eval::EvalError;
-use radiosity_eval::plot::{Curve, PlotSpec, write_png, write_svg};
+use radiosity_eval::plot::{Curve, Marker, PlotSpec, Variant, Y_LABEL, Y_LABEL_SHORT, style_of, write_png, write_svg};
+use std::collections::HashSet;
+
+fn decay(rate: f64) -> Vec<(f64, f64)> {
+    (0..=100).map(|s| (s as f64, (-rate * s as f64).exp())).collect()
+}
 
 fn curves() -> Vec<Curve> {
-    let decay = |rate: f64| (0..=100).map(|s| (s as f64, (-rate * s as f64).exp())).collect();
     vec![Curve { label: "pr".into(), points: decay(0.05) }, Curve { label: "xu-g30-m480".into(), points: decay(0.12) }]
 }
 
@@ -13,25 +19,189 @@ fn spec() -> PlotSpec {
     PlotSpec { title: "multi-cubes".into(), x_label: "shooting steps".into(), size: (480, 320) }
 }
 
+fn png(curves: &[Curve], spec: &PlotSpec) -> image::RgbImage {
+    let mut out = Vec::new();
+    write_png(curves, spec, &mut out).unwrap();
+    image::load_from_memory(&out).unwrap().to_rgb8()
+}
+
 #[test]
 fn svg_names_every_solver_and_the_axes() {
     let mut out = Vec::new();
     write_svg(&curves(), &spec(), &mut out).unwrap();
     let svg = String::from_utf8(out).unwrap();
-    for text in ["<svg", "pr", "xu-g30-m480", "shooting steps", "e_rms", "multi-cubes", "1e-5"] {
+    for text in ["<svg", "pr", "xu-g30-m480", "shooting steps", "multi-cubes", "1e-5", "e_rms"] {
         assert!(svg.contains(text), "missing {text}");
     }
+    // The full y label on a plot of the size `compare` draws, the short one on a small plot.
+    assert!(svg.contains(Y_LABEL_SHORT) && !svg.contains(Y_LABEL), "the long label does not fit 320 pixels");
+    let mut out = Vec::new();
+    write_svg(&curves(), &PlotSpec { size: (800, 500), ..spec() }, &mut out).unwrap();
+    assert!(String::from_utf8(out).unwrap().contains(Y_LABEL));
+    assert!(Y_LABEL.contains("e_rms") && Y_LABEL.contains("area-weighted relative RMS error"));
 }
 
 #[test]
 fn png_has_the_size_and_draws_in_colour() {
-    let mut out = Vec::new();
-    write_png(&curves(), &spec(), &mut out).unwrap();
-    let img = image::load_from_memory(&out).unwrap().to_rgb8();
+    let img = png(&curves(), &spec());
     assert_eq!(img.dimensions(), (480, 320));
     // Lines and text: some pixels are neither white nor grey.
     let coloured = img.pixels().filter(|p| p.0.iter().max().unwrap() - p.0.iter().min().unwrap() > 60).count();
     assert!(coloured > 200, "{coloured} coloured pixels");
+}
+
+/// The pixels of `colour` right of the widest gap between columns holding that colour (the
+/// legend sample, when one curve has the colour), relative to their top left corner.
+fn legend_sample(img: &image::RgbImage, colour: [u8; 3]) -> HashSet<(u32, u32)> {
+    let pixels: Vec<(u32, u32)> =
+        img.enumerate_pixels().filter(|(_, _, p)| p.0 == colour).map(|(x, y, _)| (x, y)).collect();
+    let mut columns: Vec<u32> = pixels.iter().map(|&(x, _)| x).collect();
+    columns.sort_unstable();
+    columns.dedup();
+    let (_, at) = columns.windows(2).map(|w| (w[1] - w[0], w[1])).max().unwrap();
+    let sample: Vec<(u32, u32)> = pixels.into_iter().filter(|&(x, _)| x >= at).collect();
+    let (x0, y0) = (sample.iter().map(|p| p.0).min().unwrap(), sample.iter().map(|p| p.1).min().unwrap());
+    sample.into_iter().map(|(x, y)| (x - x0, y - y0)).collect()
+}
+
+#[test]
+fn a_name_has_the_same_style_whatever_else_is_plotted() {
+    // pr drawn alone, and fourth after three others: its legend sample (colour, dashes and
+    // marker) is drawn pixel for pixel the same.
+    let alone = vec![Curve { label: "pr".into(), points: decay(0.05) }];
+    let mut crowded: Vec<Curve> =
+        ["xu", "feda", "xu-g30"].iter().map(|&l| Curve { label: l.into(), points: decay(0.2) }).collect();
+    crowded.push(alone[0].clone());
+    let pr = style_of("pr").colour;
+    let (a, b) = (legend_sample(&png(&alone, &spec()), pr), legend_sample(&png(&crowded, &spec()), pr));
+    assert!(a.len() > 40, "{} pixels", a.len());
+    assert_eq!(a, b);
+    // The others are drawn in other colours.
+    for other in ["xu", "feda", "xu-g30"] {
+        assert_ne!(style_of(other).colour, pr, "{other}");
+    }
+}
+
+#[test]
+fn the_default_and_the_paper_solvers_have_distinct_styles_in_grey_too() {
+    for names in [
+        &["pr", "xu", "pr-g30", "xu-g30", "pr-g30-m480", "xu-g30-m480"][..],
+        &["pr-g50", "pr-g50-m500", "xu-g50", "xu-g50-m500"][..],
+    ] {
+        let styles: Vec<_> = names.iter().map(|n| style_of(n)).collect();
+        assert_eq!(styles.iter().collect::<HashSet<_>>().len(), names.len(), "{names:?}");
+        // Without colour: marker and dash pattern alone tell them apart.
+        let grey: HashSet<_> = styles.iter().map(|s| (s.marker, s.filled, s.variant)).collect();
+        assert_eq!(grey.len(), names.len(), "{names:?}");
+    }
+}
+
+#[test]
+fn the_method_picks_the_colour_and_marker_and_the_variant_the_dashes() {
+    let pr = style_of("pr");
+    for (name, variant) in [
+        ("pr", Variant::Point),
+        ("pr-g30", Variant::GroupAccelerated),
+        ("pr-g50-m500", Variant::GroupAcceleratedMemory),
+        ("group-pr-g30", Variant::Group),
+    ] {
+        let s = style_of(name);
+        assert_eq!((s.colour, s.marker, s.filled, s.variant), (pr.colour, pr.marker, pr.filled, variant), "{name}");
+    }
+    let dashes: HashSet<_> =
+        [Variant::Point, Variant::GroupAccelerated, Variant::GroupAcceleratedMemory, Variant::Group]
+            .iter()
+            .map(|v| v.dashes())
+            .collect();
+    assert_eq!(dashes.len(), 4);
+    assert!(Variant::Point.dashes().is_empty());
+    // gs is Gauss-Seidel; a numeric parameter is not a method; parameters after ':' swap the
+    // marker's fill.
+    assert_eq!(style_of("group-gs-g30").colour, style_of("gauss-seidel").colour);
+    assert_eq!(style_of("group-gs-g30").marker, style_of("gauss-seidel").marker);
+    assert_eq!(style_of("sor-1.2"), style_of("sor-1.8"));
+    assert_eq!(style_of("relax-1.5").variant, Variant::Point);
+    let tuned = style_of("pr-g30:f=auto");
+    assert_eq!((tuned.colour, tuned.variant), (pr.colour, Variant::GroupAccelerated));
+    assert_ne!(tuned.filled, pr.filled);
+    assert_ne!(style_of("relax-1.5:x=1").marker, Marker::Cross);
+}
+
+#[test]
+fn unknown_names_get_a_stable_style_of_their_own() {
+    // The hash is FNV-1a, fixed: the same name gives the same style on every machine.
+    let mine = style_of("chebyshev-jacobi");
+    assert_eq!(style_of("chebyshev-jacobi"), mine);
+    assert_eq!(style_of("chebyshev-jacobi-g30").colour, mine.colour);
+    let others: HashSet<_> =
+        ["chebyshev", "my-solver", "jacobi-chebyshev", "krylov"].iter().map(|n| style_of(n)).collect();
+    assert!(others.len() >= 3, "{others:?}");
+}
+
+#[test]
+fn the_legend_sits_right_of_the_data_and_covers_none_of_it() {
+    // A solid curve that runs across the whole data area near its top, where a legend inside
+    // the plot would go.
+    let flat =
+        vec![Curve { label: "xu".into(), points: (0..=50).map(|s| (s as f64, 1.0 - 1e-3 * s as f64)).collect() }];
+    let img = png(&flat, &spec());
+    let xu = style_of("xu").colour;
+    let mut columns: Vec<u32> = img.enumerate_pixels().filter(|(_, _, p)| p.0 == xu).map(|(x, _, _)| x).collect();
+    columns.sort_unstable();
+    columns.dedup();
+    // Two groups of columns in xu's colour: the curve, and right of a gap the legend's sample.
+    let (gap, at) = columns.windows(2).map(|w| (w[1] - w[0], w[1])).max().unwrap();
+    assert!(gap > 10, "no gap between the data and the legend: {columns:?}");
+    let (data, legend): (Vec<u32>, Vec<u32>) = columns.iter().partition(|&&x| x < at);
+    let (first, last) = (data[0], data[data.len() - 1]);
+    assert!(last - first > 250, "the curve spans {first}..{last}");
+    // Every column of the curve holds some of it: nothing covers it.
+    assert_eq!(data.len() as u32, last - first + 1, "the curve is hidden in places");
+    // The legend sample is short, and entirely right of the data.
+    assert!(legend.len() <= 48 && legend[0] > last, "{legend:?}");
+    let rows: Vec<u32> = img.enumerate_pixels().filter(|(x, _, p)| p.0 == xu && *x >= at).map(|(_, y, _)| y).collect();
+    assert!(rows.iter().max().unwrap() - rows.iter().min().unwrap() <= 10, "the legend sample is one row");
+}
+
+#[test]
+fn a_legend_too_wide_for_the_side_goes_below_the_data() {
+    let label = "xu with a label far too long to sit beside a plot of this width".to_string();
+    let xu = style_of(&label).colour;
+    let curve = vec![Curve { label, points: (0..=50).map(|s| (s as f64, 1.0 - 1e-3 * s as f64)).collect() }];
+    let img = png(&curve, &spec());
+    // The curve in the data area, and below a gap the legend sample, one row near the bottom.
+    let mut rows: Vec<u32> = img.enumerate_pixels().filter(|(_, _, p)| p.0 == xu).map(|(_, y, _)| y).collect();
+    rows.sort_unstable();
+    rows.dedup();
+    let (gap, at) = rows.windows(2).map(|w| (w[1] - w[0], w[1])).max().unwrap();
+    assert!(gap > 20, "no gap between the data and the legend: {rows:?}");
+    let legend: Vec<u32> = rows.iter().copied().filter(|&y| y >= at).collect();
+    assert!(legend[0] > 320 * 4 / 5 && legend[legend.len() - 1] - legend[0] <= 10, "{legend:?}");
+}
+
+/// The texts of an SVG, trimmed.
+fn svg_texts(svg: &str) -> Vec<String> {
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| Some(t.split_once('>')?.1.split_once("</text>")?.0.trim().to_string()))
+        .collect()
+}
+
+#[test]
+fn the_axes_start_where_the_data_starts() {
+    // x from 1000 to 2000 and e_rms from 1e-3 to 1e-2: with the axis at 0 or at whole decades
+    // beyond the data, the labels would show 0 or 1e-4.
+    let curve = vec![Curve {
+        label: "pr".into(),
+        points: (0..=10).map(|k| (1000.0 + 100.0 * k as f64, 1e-2 * 10f64.powf(-0.1 * k as f64))).collect(),
+    }];
+    let mut out = Vec::new();
+    write_svg(&curve, &spec(), &mut out).unwrap();
+    let texts = svg_texts(&String::from_utf8(out).unwrap());
+    let has = |t: &str| texts.iter().any(|x| x == t);
+    assert!(has("1000") && has("2000"), "x labels: {texts:?}");
+    assert!(!has("0") && !has("1e-4") && !has("1e-1") && !has("3000"), "the axes reach beyond the data: {texts:?}");
+    assert!(has("1e-2") && has("1e-3") && has("5e-3"), "y labels: {texts:?}");
 }
 
 #[test]

@@ -91,8 +91,12 @@ fn fixture(arg: &str) -> &'static Fixture {
 struct RmsObserver<'a>(&'a Fixture);
 
 impl Observer for RmsObserver<'_> {
-    fn observe(&mut self, state: &State) -> Option<Real> {
+    fn observe_step(&mut self, state: &State) -> Option<Real> {
         Some(errors(&self.0.system, &self.0.reference, &state.radiosity).unwrap().e_rms)
+    }
+
+    fn measures_error(&self) -> bool {
+        true
     }
 }
 
@@ -155,7 +159,7 @@ struct ColumnRecorder {
 }
 
 impl Observer for ColumnRecorder {
-    fn observe(&mut self, state: &State) -> Option<Real> {
+    fn observe_step(&mut self, state: &State) -> Option<Real> {
         for (target, slot) in self.targets.iter().zip(&mut self.recorded) {
             if slot.is_none() && state.columns == *target {
                 *slot = Some(Recorded { step: state.step, columns: state.columns, radiosity: state.radiosity.clone() });
@@ -193,6 +197,7 @@ fn convergence_table(scene: &str) -> String {
                 e_rms: m.e_rms,
                 e_max: m.e_max,
                 residual: m.residual,
+                bound: m.relative_bound,
             });
         }
     }
@@ -219,7 +224,7 @@ struct ResidualRecorder<'a> {
 }
 
 impl Observer for ResidualRecorder<'_> {
-    fn observe(&mut self, state: &State) -> Option<Real> {
+    fn observe_step(&mut self, state: &State) -> Option<Real> {
         if state.step % self.every == 0 {
             self.residuals.push(self.evaluator.evaluate(&state.radiosity).unwrap().residual);
         }
@@ -289,6 +294,7 @@ fn end_table(scene: &str, names: &[&'static str], rule: &str, title: &str) -> (S
             e_rms: m.e_rms,
             e_max: m.e_max,
             residual: m.residual,
+            bound: m.relative_bound,
         });
     }
     let mut out = format!("{title}\n\n").into_bytes();

@@ -6,7 +6,7 @@ use radiosity_eval::{ConvergenceTable, TableRow};
 
 fn table() -> ConvergenceTable {
     let mut t = ConvergenceTable::new();
-    let row = |solver: &str, step, columns, seconds, ff_seconds, e_rms, e_max, residual| TableRow {
+    let row = |solver: &str, step, columns, seconds, ff_seconds, e_rms, e_max, residual: f64| TableRow {
         solver: solver.to_string(),
         step,
         columns,
@@ -15,6 +15,7 @@ fn table() -> ConvergenceTable {
         e_rms,
         e_max,
         residual,
+        bound: residual * 10.0,
     };
     t.push(row("pr", 0, 0, 0.0, 0.0, 1.0, 1.0, 0.6123456));
     t.push(row("pr", 480, 480, 1.23456789, 1.19876543, 4.7123456e-3, 2.0987654e-2, 1.5e-3));
@@ -52,7 +53,7 @@ fn without_timings() {
     t.write_csv(&mut csv).unwrap();
     t.write_markdown(&mut markdown).unwrap();
     let (csv, markdown) = (String::from_utf8(csv).unwrap(), String::from_utf8(markdown).unwrap());
-    assert!(csv.starts_with("solver,step,columns,e_rms,e_max,residual\n"), "{csv}");
+    assert!(csv.starts_with("solver,step,columns,e_rms,e_max,residual,bound\n"), "{csv}");
     insta::assert_snapshot!(format!("{csv}\n{markdown}"));
 }
 

@@ -25,6 +25,16 @@ pub struct FormFactorInput<'a> {
     pub analysis: &'a SceneAnalysis,
 }
 
+impl<'a> From<&'a radiosity_geom::PreparedScene> for FormFactorInput<'a> {
+    fn from(prepared: &'a radiosity_geom::PreparedScene) -> Self {
+        FormFactorInput {
+            scene: &prepared.loaded.scene,
+            visibility: &prepared.visibility,
+            analysis: &prepared.analysis,
+        }
+    }
+}
+
 /// A form-factor backend of any kind.
 #[derive(Debug)]
 pub enum Backend<'a> {

@@ -1,5 +1,5 @@
 //! glTF 2.0 input: the triangles of a `.gltf` or `.glb` file as patches, with diffuse
-//! materials read from the PBR factors.
+//! materials read from the PBR factors or from the radiosity `extras` of a solved export.
 //!
 //! What is read, and how it maps to a [`Scene`](radiosity_core::Scene):
 //!
@@ -13,18 +13,34 @@
 //! - **Primitives.** `TRIANGLES` with or without indices, and `TRIANGLE_STRIP` and
 //!   `TRIANGLE_FAN`, which are converted to triangles in the winding the glTF specification
 //!   gives them. Points and lines have no area and are refused with an error naming the mesh.
+//! - **Quads.** A `TRIANGLES` primitive marked with the extension `FB_ngon_encoding` (what
+//!   `radiosity-eval`'s glTF export writes) lists each polygon as a fan of consecutive
+//!   triangles sharing their first vertex index, and consecutive polygons never share it. Two
+//!   such triangles `(a, b, c)`, `(a, c, d)` are read back as the quad `a b c d`, one patch,
+//!   when it is planar to the precision of the file's `f32` coordinates (each vertex within
+//!   `8 ε_f32` of the largest coordinate magnitude from the mean plane; the vertices are then
+//!   projected onto that plane) and convex. Anything else, polygons of five or more vertices
+//!   included, stays one patch per triangle, as without the extension.
 //! - **Orientation.** Patches are one-sided, and their front is glTF's front face: the side
 //!   from which the vertices run counter-clockwise. A node whose world transform mirrors
 //!   space (negative determinant) has its triangles' winding reversed, as glTF requires, so
 //!   the front stays on the same side of the surface.
 //! - **Materials.** `baseColorFactor` (red, green, blue) is the diffuse reflectivity and
-//!   `emissiveFactor` times `KHR_materials_emissive_strength` (default 1) the emission. Each
-//!   glTF material actually used becomes one scene material with its name (or `material N`).
-//!   A primitive without a material gets glTF's default material, whose base colour is white:
-//!   reflectivity 1 makes the radiosity system singular, so that is an error saying so, as is
-//!   any material with a reflectivity of 1 or more in a channel. Textures are ignored (one
-//!   warning counts the materials whose base colour texture is dropped): radiosity needs one
-//!   reflectivity per patch, and averaging a texture is a choice the user should make.
+//!   `emissiveFactor` times `KHR_materials_emissive_strength` (default 1) the emission, unless
+//!   the material's `extras` say otherwise: an object `extras` with
+//!   `"radiosity_reflectivity": [r, g, b]` gives the reflectivity and one with
+//!   `"radiosity_emission": [r, g, b]` the emission, each in preference to the PBR factor.
+//!   This is how `radiosity-eval`'s glTF export keeps a solved scene's physics while its
+//!   base colour stays white, for viewers showing vertex colours unlit. Extras that are not
+//!   an object, and other keys, are someone else's and ignored; either key holding anything
+//!   but three numbers is an error naming the material. Each glTF material actually used
+//!   becomes one scene material with its name (or `material N`). A primitive without a
+//!   material gets glTF's default material, whose base colour is white: reflectivity 1 makes
+//!   the radiosity system singular, so that is an error saying so, as is any material with a
+//!   reflectivity of 1 or more in a channel. Textures are ignored (one warning counts the
+//!   materials whose base colour texture is dropped, unless their reflectivity comes from the
+//!   extras): radiosity needs one reflectivity per patch, and averaging a texture is a choice
+//!   the user should make.
 //! - **Objects.** One object per node with a mesh, named after the node, else the mesh, else
 //!   `node N`.
 //! - **Meshing.** Each triangle is one patch, unless the parameter `size` is positive: then
@@ -68,6 +84,23 @@ pub const PARAMS: &[ParamDoc] = &[ParamDoc {
     default: "0",
     doc: "largest patch edge as a fraction of the scene's bounding-box diagonal; 0 keeps each triangle as one patch",
 }];
+
+/// The key of a material's `extras` that holds its diffuse reflectivity, three numbers in
+/// `[0, 1)`, read in preference to `baseColorFactor`.
+pub const REFLECTIVITY_EXTRA: &str = "radiosity_reflectivity";
+
+/// The key of a material's `extras` that holds its emission, three finite numbers at least 0,
+/// read in preference to `emissiveFactor` (and its strength).
+pub const EMISSION_EXTRA: &str = "radiosity_emission";
+
+/// The primitive extension marking triangle lists whose consecutive triangles sharing their
+/// first index are fans of one polygon (Facebook's vendor extension, no data of its own).
+pub const NGON_ENCODING: &str = "FB_ngon_encoding";
+
+/// How far from their mean plane (in units of `f32::EPSILON` times the largest coordinate
+/// magnitude) the corners of a fan-encoded quad may lie and still be read as one planar patch:
+/// rounding each coordinate to `f32` moves a corner by at most `√3 ε/2` of that magnitude.
+const NGON_PLANARITY_ULPS: Real = 8.0;
 
 /// Extensions a file may list in `extensionsRequired` and still be loaded.
 const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &["KHR_materials_emissive_strength"];
@@ -114,7 +147,7 @@ fn load_bytes(
         builder: SceneBuilder::new(name),
         materials: HashMap::new(),
         textured: 0,
-        triangles: Vec::new(),
+        faces: Vec::new(),
         read: 0,
         degenerate: 0,
         meshes: 0,
@@ -282,11 +315,36 @@ fn read_buffers(document: &Document, base: Option<&Path>, mut blob: Option<Vec<u
     Ok(buffers)
 }
 
-/// A triangle ready to become patches, in world space and front-side counter-clockwise.
-struct Triangle {
-    v: [Vec3; 3],
+/// A triangle or quad ready to become patches, in world space and front-side
+/// counter-clockwise.
+struct Face {
+    /// The corners; only the first `corners` are used.
+    v: [Vec3; 4],
+    /// 3 or 4.
+    corners: usize,
     material: MaterialId,
     object: ObjectId,
+}
+
+impl Face {
+    fn vertices(&self) -> &[Vec3] {
+        &self.v[..self.corners]
+    }
+}
+
+/// A material's reflectivity and emission as its `extras` give them, each `None` where they
+/// give none ([`REFLECTIVITY_EXTRA`], [`EMISSION_EXTRA`]).
+#[derive(Clone, Copy, Debug, Default)]
+struct MaterialExtras {
+    reflectivity: Option<[Real; 3]>,
+    emission: Option<[Real; 3]>,
+}
+
+/// A polygon of a primitive, in the mesh's own space and the primitive's winding.
+#[derive(Clone, Copy, Debug)]
+enum Polygon {
+    Triangle([Vec3; 3]),
+    Quad([Vec3; 4]),
 }
 
 /// How far the walk of the node hierarchy has gone through a node.
@@ -300,7 +358,7 @@ enum Reached {
     Done,
 }
 
-/// The state of one load: materials and objects so far, the triangles kept and counters for
+/// The state of one load: materials and objects so far, the faces kept and counters for
 /// warnings and for explaining an empty result.
 struct Loader<'a> {
     path: &'a Path,
@@ -310,7 +368,7 @@ struct Loader<'a> {
     materials: HashMap<Option<usize>, MaterialId>,
     /// Materials used whose base colour texture is ignored.
     textured: usize,
-    triangles: Vec<Triangle>,
+    faces: Vec<Face>,
     /// Triangles read, degenerate or not.
     read: usize,
     degenerate: usize,
@@ -417,26 +475,61 @@ impl<'a> Loader<'a> {
         let mirrored = world.determinant() < 0.0;
         for primitive in mesh.primitives() {
             let context = format!("{mesh_label} primitive {}", primitive.index());
-            let corners = self.primitive_triangles(&primitive, &context)?;
+            let polygons = self.primitive_polygons(&primitive, &context)?;
             let material = self.material(&primitive, &context)?;
-            for [a, b, c] in corners {
-                self.read += 1;
-                let [a, b, c] = [a, b, c].map(|p| world.transform_point3(p));
-                let v = if mirrored { [a, c, b] } else { [a, b, c] };
-                match Patch::triangle(v, material, object) {
-                    Ok(_) => self.triangles.push(Triangle { v, material, object }),
-                    Err(CoreError::DegeneratePatch { .. }) => self.degenerate += 1,
-                    Err(CoreError::NonFiniteVertex) => {
-                        return Err(self.error(format!(
-                            "{} maps {context} to non-finite coordinates (its transform overflows)",
-                            node_label(node)
-                        )));
+            for polygon in polygons {
+                match polygon {
+                    Polygon::Quad(v) => {
+                        let [a, b, c, d] = v.map(|p| world.transform_point3(p));
+                        let v = if mirrored { [a, d, c, b] } else { [a, b, c, d] };
+                        if Patch::quad(v, material, object).is_ok() {
+                            self.read += 2;
+                            self.faces.push(Face { v, corners: 4, material, object });
+                        } else {
+                            // Not a patch in world space after all: its two triangles, as
+                            // without the encoding.
+                            for t in [[v[0], v[1], v[2]], [v[0], v[2], v[3]]] {
+                                self.add_triangle(t, material, object, node, &context)?;
+                            }
+                        }
                     }
-                    Err(e) => return Err(GeomError::core(format!("{}: {context}", self.path.display()), e)),
+                    Polygon::Triangle(v) => {
+                        let [a, b, c] = v.map(|p| world.transform_point3(p));
+                        let v = if mirrored { [a, c, b] } else { [a, b, c] };
+                        self.add_triangle(v, material, object, node, &context)?;
+                    }
                 }
             }
         }
         Ok(())
+    }
+
+    /// Keeps the world-space triangle `v`, front side counter-clockwise, as a face, or counts
+    /// it as degenerate.
+    fn add_triangle(
+        &mut self,
+        v: [Vec3; 3],
+        material: MaterialId,
+        object: ObjectId,
+        node: &Node<'_>,
+        context: &str,
+    ) -> Result<(), GeomError> {
+        self.read += 1;
+        match Patch::triangle(v, material, object) {
+            Ok(_) => {
+                self.faces.push(Face { v: [v[0], v[1], v[2], Vec3::ZERO], corners: 3, material, object });
+                Ok(())
+            }
+            Err(CoreError::DegeneratePatch { .. }) => {
+                self.degenerate += 1;
+                Ok(())
+            }
+            Err(CoreError::NonFiniteVertex) => Err(self.error(format!(
+                "{} maps {context} to non-finite coordinates (its transform overflows)",
+                node_label(node)
+            ))),
+            Err(e) => Err(GeomError::core(format!("{}: {context}", self.path.display()), e)),
+        }
     }
 
     /// The scene material of a primitive's glTF material, created and checked on first use.
@@ -451,11 +544,14 @@ impl<'a> Loader<'a> {
             (Some(_), Some(name)) => name.to_string(),
             (Some(i), None) => format!("material {i}"),
         };
+        let extras = self.material_extras(&gltf_material, &name)?;
         let pbr = gltf_material.pbr_metallic_roughness();
         let [r, g, b, _alpha] = pbr.base_color_factor().map(f64::from);
+        let reflectivity = extras.reflectivity.unwrap_or([r, g, b]);
         let strength = f64::from(gltf_material.emissive_strength().unwrap_or(1.0));
-        let [er, eg, eb] = gltf_material.emissive_factor().map(|e| f64::from(e) * strength);
-        let material = Material::new(name, Spectrum::rgb(r, g, b), Spectrum::rgb(er, eg, eb));
+        let emission =
+            extras.emission.unwrap_or_else(|| gltf_material.emissive_factor().map(|e| f64::from(e) * strength));
+        let material = Material::new(name, Spectrum(reflectivity), Spectrum(emission));
         if let Err(e) = material.validate() {
             let context = match key {
                 None => format!(
@@ -466,7 +562,7 @@ impl<'a> Loader<'a> {
             };
             return Err(GeomError::core(context, e));
         }
-        if pbr.base_color_texture().is_some() {
+        if pbr.base_color_texture().is_some() && extras.reflectivity.is_none() {
             self.textured += 1;
         }
         let id = self.builder.material(material)?;
@@ -474,9 +570,70 @@ impl<'a> Loader<'a> {
         Ok(id)
     }
 
-    /// The triangles of a primitive as vertex positions in the mesh's own space, in the
-    /// primitive's winding.
-    fn primitive_triangles(&self, primitive: &Primitive<'_>, context: &str) -> Result<Vec<[Vec3; 3]>, GeomError> {
+    /// What the `extras` of the material called `name` say about its physics.
+    fn material_extras(&self, material: &gltf::Material<'_>, name: &str) -> Result<MaterialExtras, GeomError> {
+        let Some(raw) = material.extras() else {
+            return Ok(MaterialExtras::default());
+        };
+        // The gltf crate has checked that this is JSON; nesting too deep for serde_json is an
+        // error of its own, not a panic.
+        let value: serde_json::Value = serde_json::from_str(raw.get())
+            .map_err(|e| self.error(format!("material '{name}' has extras that cannot be read ({e})")))?;
+        let Some(object) = value.as_object() else {
+            return Ok(MaterialExtras::default());
+        };
+        let read = |key: &str| -> Result<Option<[Real; 3]>, GeomError> {
+            let Some(entry) = object.get(key) else {
+                return Ok(None);
+            };
+            let numbers: Option<Vec<Real>> =
+                entry.as_array().and_then(|a| a.iter().map(serde_json::Value::as_f64).collect());
+            match numbers.as_deref() {
+                Some(&[r, g, b]) => Ok(Some([r, g, b])),
+                _ => Err(self.error(format!(
+                    "material '{name}' has extras.{key} = {entry}, but it must be a list of three numbers (red, green, blue)"
+                ))),
+            }
+        };
+        Ok(MaterialExtras { reflectivity: read(REFLECTIVITY_EXTRA)?, emission: read(EMISSION_EXTRA)? })
+    }
+
+    /// The polygons of a primitive in the mesh's own space, in the primitive's winding: its
+    /// triangles, with the fans of two triangles of an `FB_ngon_encoding` primitive that make a
+    /// planar convex quad read as that quad (see the module documentation).
+    fn primitive_polygons(&self, primitive: &Primitive<'_>, context: &str) -> Result<Vec<Polygon>, GeomError> {
+        let (positions, corners) = self.primitive_triangles(primitive, context)?;
+        let triangle = |t: [u32; 3]| Polygon::Triangle(t.map(|i| positions[i as usize]));
+        let fans = primitive.mode() == Mode::Triangles && primitive.extension_value(NGON_ENCODING).is_some();
+        if !fans {
+            return Ok(corners.into_iter().map(triangle).collect());
+        }
+        let mut polygons = Vec::with_capacity(corners.len());
+        let mut k = 0;
+        while k < corners.len() {
+            // The fan of one polygon: the triangles from k on that share its first index.
+            let anchor = corners[k][0];
+            let end = k + corners[k..].iter().take_while(|t| t[0] == anchor).count();
+            let quad = match corners[k..end] {
+                [[a, b, c], [_, c2, d]] if c2 == c => planar_quad([a, b, c, d].map(|i| positions[i as usize])),
+                _ => None,
+            };
+            match quad {
+                Some(v) => polygons.push(Polygon::Quad(v)),
+                None => polygons.extend(corners[k..end].iter().copied().map(triangle)),
+            }
+            k = end;
+        }
+        Ok(polygons)
+    }
+
+    /// The positions of a primitive in the mesh's own space, and its triangles as indices into
+    /// them, in the primitive's winding.
+    fn primitive_triangles(
+        &self,
+        primitive: &Primitive<'_>,
+        context: &str,
+    ) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), GeomError> {
         let mode = primitive.mode();
         if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
             return Err(self.error(format!(
@@ -535,7 +692,7 @@ impl<'a> Loader<'a> {
             // Triangle i of a fan is (v_{i+1}, v_{i+2}, v_0).
             _ => (0..n.saturating_sub(2)).map(|i| [indices[i + 1], indices[i + 2], indices[0]]).collect(),
         };
-        Ok(corners.into_iter().map(|t| t.map(|i| positions[i as usize])).collect())
+        Ok((positions, corners))
     }
 
     /// Checks an accessor's element type and that every byte it reads lies inside its buffer
@@ -612,9 +769,9 @@ impl<'a> Loader<'a> {
         Ok(())
     }
 
-    /// Meshes the triangles kept and builds the scene, with the warnings.
+    /// Meshes the faces kept and builds the scene, with the warnings.
     fn finish(mut self, size: Real) -> Result<LoadedScene, GeomError> {
-        if self.triangles.is_empty() {
+        if self.faces.is_empty() {
             let detail = if self.degenerate > 0 {
                 format!("; all {} of its triangles are degenerate", self.degenerate)
             } else if self.meshes == 0 {
@@ -624,13 +781,13 @@ impl<'a> Loader<'a> {
             };
             return Err(GeomError::EmptyFile { path: self.path.to_path_buf(), detail });
         }
-        let diagonal = bounding_diagonal(self.triangles.iter().flat_map(|t| t.v));
+        let diagonal = bounding_diagonal(self.faces.iter().flat_map(|f| f.vertices().iter().copied()));
         let target = size * diagonal;
-        for t in std::mem::take(&mut self.triangles) {
-            let added = if size > 0.0 {
-                self.builder.triangle_sized(t.v, target, t.material, t.object)
-            } else {
-                self.builder.polygon(&t.v, t.material, t.object)
+        for f in std::mem::take(&mut self.faces) {
+            let added = match *f.vertices() {
+                [a, b, c] if size > 0.0 => self.builder.triangle_sized([a, b, c], target, f.material, f.object),
+                [a, b, c, d] if size > 0.0 => self.builder.quad_sized([a, b, c, d], target, f.material, f.object),
+                _ => self.builder.polygon(f.vertices(), f.material, f.object),
             };
             added.map_err(|e| with_file(self.path, e))?;
         }
@@ -655,6 +812,23 @@ impl<'a> Loader<'a> {
         let scene = self.builder.build().map_err(|e| with_file(self.path, e))?;
         Ok(LoadedScene { scene, warnings })
     }
+}
+
+/// The quad `v` (from `f32` coordinates) projected onto its mean plane, when its corners lie
+/// within `f32` rounding of that plane ([`NGON_PLANARITY_ULPS`]); `None` when they do not, or
+/// it has no area.
+fn planar_quad(v: [Vec3; 4]) -> Option<[Vec3; 4]> {
+    let mean = (v[0] + v[1] + v[2] + v[3]) * 0.25;
+    // Newell's normal, relative to the first corner.
+    let twice_area = (v[1] - v[0]).cross(v[2] - v[0]) + (v[2] - v[0]).cross(v[3] - v[0]);
+    let normal = twice_area.normalize_or_zero();
+    if normal == Vec3::ZERO {
+        return None;
+    }
+    let magnitude = v.iter().map(|p| p.abs().max_element()).fold(0.0, Real::max);
+    let tolerance = NGON_PLANARITY_ULPS * Real::from(f32::EPSILON) * magnitude;
+    let offsets = v.map(|p| (p - mean).dot(normal));
+    offsets.iter().all(|o| o.abs() <= tolerance).then(|| std::array::from_fn(|k| v[k] - normal * offsets[k]))
 }
 
 /// Adds the file to the context of a core error from the builder.

@@ -3,7 +3,7 @@
 //! and one fixture per bad input checks the error says what is wrong; the real Cornell box
 //! export in `shared/scenes/` checks a file written by someone else loads upright.
 
-use radiosity_core::{Patch, Real, Spectrum, Vec3};
+use radiosity_core::{Patch, PatchShape, Real, Spectrum, Vec3};
 use radiosity_geom::gltf_input::{self, PARAMS};
 use radiosity_geom::{GeomError, KeyValueParams, LoadedScene};
 use std::path::Path;
@@ -472,23 +472,139 @@ fn damaged_files_give_errors_not_panics() {
             assert!(!load_bytes(&dir, "cut.glb", &cut, &format!("emissive.glb cut to {len} bytes, length patched")));
         }
     }
-    // Every digit of a text file (indices, counts, offsets, strides, base64 data) set to 9
-    // and to 0: out-of-range references and lengths must be caught before reading.
-    let mut loaded = 0;
-    let text = std::fs::read(fixture("emissive.gltf")).unwrap();
-    for i in (0..text.len()).filter(|&i| text[i].is_ascii_digit()) {
-        for digit in [b'9', b'0'] {
-            let mut damaged = text.clone();
-            damaged[i] = digit;
-            loaded += usize::from(load_bytes(
-                &dir,
-                "damaged.gltf",
-                &damaged,
-                &format!("emissive.gltf byte {i} set to '{}'", digit as char),
-            ));
+    // Every digit of a text file (indices, counts, offsets, strides, base64 data, fan
+    // indices, material extras) set to 9 and to 0: out-of-range references and lengths must
+    // be caught before reading.
+    for name in ["emissive.gltf", "ngon_extras.gltf"] {
+        let mut loaded = 0;
+        let text = std::fs::read(fixture(name)).unwrap();
+        for i in (0..text.len()).filter(|&i| text[i].is_ascii_digit()) {
+            for digit in [b'9', b'0'] {
+                let mut damaged = text.clone();
+                damaged[i] = digit;
+                loaded += usize::from(load_bytes(
+                    &dir,
+                    "damaged.gltf",
+                    &damaged,
+                    &format!("{name} byte {i} set to '{}'", digit as char),
+                ));
+            }
         }
+        // Some changes are harmless (a vertex coordinate in the base64 data, say).
+        assert!(loaded > 0, "{name}");
     }
-    // Some changes are harmless (a vertex coordinate in the base64 data, say).
-    assert!(loaded > 0);
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The patches of `ngon_extras.gltf`, loaded without refinement.
+fn ngon_extras() -> LoadedScene {
+    load(&fixture("ngon_extras.gltf"))
+}
+
+#[test]
+fn ngon_encoded_fans_of_planar_convex_quads_are_one_patch_each() {
+    let loaded = ngon_extras();
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    // The unit square at z = 0, written as the fan (0, 1, 2), (0, 2, 3): one quad, its corners
+    // in fan order.
+    let square = object_patches(&loaded, "ngon")[0];
+    assert_eq!(square.shape(), PatchShape::Quad);
+    assert_eq!(square.vertices(), &[v(0., 0., 0.), v(1., 0., 0.), v(1., 1., 0.), v(0., 1., 0.)]);
+    assert!(close(square.normal(), Vec3::Z, 1e-15) && (square.area() - 1.0).abs() < 1e-15);
+    // The same square under a mirroring node (x ↦ 10 − x): still one quad, still facing +z.
+    let mirrored = object_patches(&loaded, "mirrored");
+    assert_eq!(mirrored.len(), 1);
+    assert_eq!(mirrored[0].shape(), PatchShape::Quad);
+    assert!(close(mirrored[0].normal(), Vec3::Z, 1e-15) && (mirrored[0].area() - 1.0).abs() < 1e-15);
+    assert!(close(mirrored[0].centroid(), v(9.5, 0.5, 0.0), 1e-15));
+}
+
+#[test]
+fn ngon_quads_from_f32_coordinates_of_a_tilted_plane_are_planar_patches() {
+    // The parallelogram o, o + w, o + u + w, o + u with o = (552.8, 300.3, 280.7),
+    // u = (−0.32, 0.01, 5.592), w = (0.31, 5.488, 0.02): planar in exact arithmetic, but its
+    // f32 corners lie 5.5e-8 diagonals off their mean plane, beyond the 1e-9 a patch allows.
+    let loaded = ngon_extras();
+    let (o, u, w) = (v(552.8, 300.3, 280.7), v(-0.32, 0.01, 5.592), v(0.31, 5.488, 0.02));
+    let wall: Vec<&Patch> = object_patches(&loaded, "ngon").into_iter().filter(|p| p.centroid().x > 500.0).collect();
+    assert_eq!(wall.len(), 1);
+    assert_eq!(wall[0].shape(), PatchShape::Quad);
+    // Rounding to f32 moves each coordinate near 553 by at most 3.05e-5, so each corner by at
+    // most 5.3e-5: 1e-5 of the 5.5-long sides, 2e-5 of the area.
+    for (corner, exact) in wall[0].vertices().iter().zip([o, o + w, o + u + w, o + u]) {
+        assert!(close(*corner, exact, 5.3e-5), "{corner} against {exact}");
+    }
+    let area = w.cross(u).length();
+    assert!((wall[0].area() - area).abs() < 2e-5 * area, "{} against {area}", wall[0].area());
+    assert!(close(wall[0].normal(), w.cross(u).normalize(), 2e-5));
+}
+
+#[test]
+fn ngon_fans_that_are_not_planar_quads_stay_one_patch_per_triangle() {
+    let loaded = ngon_extras();
+    let patches = object_patches(&loaded, "ngon");
+    // The square, the bent quad (a corner 0.1 off the plane) as 2 triangles, the pentagon as 3,
+    // and the tilted wall.
+    assert_eq!(patches.len(), 1 + 2 + 3 + 1);
+    let triangles: Vec<&&Patch> = patches.iter().filter(|p| p.shape() == PatchShape::Triangle).collect();
+    assert_eq!(triangles.len(), 5);
+    let bent = triangles.iter().filter(|p| p.centroid().x < 3.5).count();
+    assert_eq!(bent, 2);
+    let pentagon: Real = triangles.iter().filter(|p| p.centroid().x > 3.5).map(|p| p.area()).sum();
+    assert!((pentagon - 1.25).abs() < 1e-12, "{pentagon}");
+}
+
+#[test]
+fn ngon_quads_are_refined_as_quad_grids() {
+    // `quad.gltf`'s triangles (0, 1, 2), (0, 2, 3) are the fan of its square. With edges of at
+    // most 0.3 diagonals (0.42), each side is cut in 3.
+    let mut json: serde_json::Value = serde_json::from_slice(&std::fs::read(fixture("quad.gltf")).unwrap()).unwrap();
+    json["meshes"][0]["primitives"][0]["extensions"] = serde_json::json!({ "FB_ngon_encoding": {} });
+    let bytes = serde_json::to_vec(&json).unwrap();
+    let params = KeyValueParams::parse("test", ["size=0.3"], PARAMS).unwrap();
+    let scene = gltf_input::load_slice(&bytes, Path::new("ngon.gltf"), &params).unwrap().scene;
+    assert_eq!(scene.len(), 9);
+    assert!(scene.patches().iter().all(|p| p.shape() == PatchShape::Quad));
+    assert!(scene.patches().iter().all(|p| (p.area() - 1.0 / 9.0).abs() < 1e-15));
+}
+
+#[test]
+fn radiosity_extras_give_reflectivity_and_emission_before_the_pbr_factors() {
+    let loaded = ngon_extras();
+    let scene = &loaded.scene;
+    let material = |name: &str| scene.materials().iter().find(|m| m.name == name).unwrap().clone();
+    // "painted" is white with emissive factor 1: its extras say otherwise, and win.
+    let painted = material("painted");
+    assert_eq!(painted.reflectivity, Spectrum::rgb(0.5, 0.25, 0.125));
+    assert_eq!(painted.emission, Spectrum::rgb(3.0, 2.0, 1.0));
+    // "grey" has extras that are not an object: someone else's, ignored.
+    let grey = material("grey");
+    assert_eq!(grey.reflectivity, Spectrum::grey(0.5));
+    assert_eq!(grey.emission, Spectrum::ZERO);
+}
+
+#[test]
+fn radiosity_extras_that_are_not_three_numbers_are_errors_naming_the_material() {
+    for bad in [
+        serde_json::json!({ "radiosity_reflectivity": [0.5, 0.5] }),
+        serde_json::json!({ "radiosity_reflectivity": "red" }),
+        serde_json::json!({ "radiosity_emission": [1, null, 1] }),
+    ] {
+        let mut json: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(fixture("quad.gltf")).unwrap()).unwrap();
+        json["materials"][0]["extras"] = bad.clone();
+        let bytes = serde_json::to_vec(&json).unwrap();
+        let e = gltf_input::load_slice(&bytes, Path::new("extras.gltf"), &KeyValueParams::default()).unwrap_err();
+        let message = e.to_string();
+        assert!(matches!(e, GeomError::Gltf { .. }), "{message}");
+        assert!(message.contains("extras.gltf") && message.contains("material 'grey'"), "{bad}: {message}");
+        assert!(message.contains("three numbers"), "{bad}: {message}");
+    }
+    // Reflectivity 1 from the extras is refused like a white base colour.
+    let mut json: serde_json::Value = serde_json::from_slice(&std::fs::read(fixture("quad.gltf")).unwrap()).unwrap();
+    json["materials"][0]["extras"] = serde_json::json!({ "radiosity_reflectivity": [1, 0.5, 0.5] });
+    let bytes = serde_json::to_vec(&json).unwrap();
+    let message =
+        gltf_input::load_slice(&bytes, Path::new("extras.gltf"), &KeyValueParams::default()).unwrap_err().to_string();
+    assert!(message.contains("'grey'") && message.contains("reflectivity 1"), "{message}");
 }

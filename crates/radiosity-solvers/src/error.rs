@@ -55,12 +55,62 @@ pub enum SolverError {
     /// Invalid solver parameters.
     #[error("{0}")]
     BadParams(String),
-    /// A solver name that names no solver.
-    #[error("unknown solver '{name}'; solvers are {valid}")]
+    /// A solver name that names no solver ([`crate::SolverRegistry::build`]). Its message is
+    /// one sentence over several lines: the name, the nearest known name when one is close,
+    /// and the solvers there are, wrapped to [`MESSAGE_WIDTH`] characters.
+    #[error("{}", unknown_solver(name, suggestion.as_deref(), valid))]
     UnknownSolver {
         /// The name given.
         name: String,
-        /// The solvers there are, as listed to users.
-        valid: &'static str,
+        /// The solvers there are, as listed to users ([`crate::SolverRegistry::names`]).
+        valid: String,
+        /// The known name nearest to the one given, when one is near enough to be a typo.
+        suggestion: Option<String>,
     },
+    /// A stop rule that needs the error against a reference (`rms=`) in a run whose observer
+    /// does not measure it ([`crate::Observer::measures_error`]): the rule could never hold.
+    #[error("the stop rule {rule} needs e_rms against a reference solution, which this run does not measure")]
+    ErrorNotMeasured {
+        /// The rule, as the stop rules show it (`rms=0.001`).
+        rule: String,
+    },
+}
+
+/// The longest line of a multi-line error message ([`SolverError::UnknownSolver`]), in
+/// characters; continuation lines are indented by two spaces within it.
+pub const MESSAGE_WIDTH: usize = 100;
+
+/// The message of [`SolverError::UnknownSolver`].
+fn unknown_solver(name: &str, suggestion: Option<&str>, valid: &str) -> String {
+    let mut text = format!("unknown solver '{name}'");
+    if let Some(s) = suggestion {
+        text.push_str(&format!(" (did you mean '{s}'?)"));
+    }
+    text.push_str("; solvers are ");
+    text.push_str(valid);
+    wrap(&text, MESSAGE_WIDTH, "  ")
+}
+
+/// `text` broken at spaces into lines of at most `width` characters, every line after the
+/// first starting with `indent`; a word longer than a line stands alone on its own.
+pub(crate) fn wrap(text: &str, width: usize, indent: &str) -> String {
+    let mut out = String::new();
+    let mut line = 0;
+    for word in text.split(' ').filter(|w| !w.is_empty()) {
+        let length = word.chars().count();
+        if line == 0 && out.is_empty() {
+            out.push_str(word);
+            line = length;
+        } else if line + 1 + length <= width {
+            out.push(' ');
+            out.push_str(word);
+            line += 1 + length;
+        } else {
+            out.push('\n');
+            out.push_str(indent);
+            out.push_str(word);
+            line = indent.chars().count() + length;
+        }
+    }
+    out
 }

@@ -5,6 +5,18 @@
 //! every column) and solve seconds (the rest of each step). Observers run between steps,
 //! outside both, so computing metrics against a reference never counts as solver time.
 //!
+//! ## Observers
+//!
+//! As in argmin, an [`Observer`] is called once on the initial state
+//! ([`Observer::observe_init`], after [`Solver::init`]), after every step
+//! ([`Observer::observe_step`]) and once with the finished [`Run`]
+//! ([`Observer::observe_final`]). [`Every`] (or [`Observer::every`]) passes on only the steps
+//! that are multiples of `n`. The `rms=` rule stops on the e_rms an observer returns; a run
+//! with such a rule and an observer that does not measure it ([`Observer::measures_error`]
+//! false) is refused before its first step ([`SolverError::ErrorNotMeasured`]), since the
+//! rule could never hold and the run would go on to the step cap. At the end the executor
+//! stores the solver's own figures ([`Solver::record`]) in [`Run::record`].
+//!
 //! ## Divergence and values that are not finite
 //!
 //! Before every step the executor reads the solver's residual power `R`
@@ -30,6 +42,7 @@
 
 use crate::error::SolverError;
 use crate::problem::Problem;
+use crate::record::Record;
 use crate::state::State;
 use crate::stop::{StopRule, StopRules, TerminationReason};
 use radiosity_core::Real;
@@ -109,13 +122,82 @@ pub trait Solver {
     fn gathers_rows(&self) -> bool {
         false
     }
+
+    /// The solver's own figures so far (group steps, condition numbers, fallbacks; see
+    /// [`crate::record`]); the executor stores them in [`Run::record`] at the end of a run.
+    /// Empty by default.
+    fn record(&self) -> Record {
+        Record::new()
+    }
 }
 
-/// Watches a run between steps.
+/// Watches a run: called between steps, outside the timed region (module doc).
 pub trait Observer {
-    /// Called on the initial state and after every step. May return the current `e_rms`
-    /// (needed by the `rms=` rule).
-    fn observe(&mut self, state: &State) -> Option<Real>;
+    /// Called once on the initial state (`B = ΔB = E`) after [`Solver::init`], with the
+    /// solver's name; returns the e_rms when it measures one.
+    fn observe_init(&mut self, solver: &str, state: &State) -> Option<Real> {
+        let _ = solver;
+        self.observe_step(state)
+    }
+
+    /// Called after every step; returns the e_rms when it measures one (needed by `rms=`
+    /// rules).
+    fn observe_step(&mut self, state: &State) -> Option<Real>;
+
+    /// Called once with the finished run, before the executor returns it.
+    fn observe_final(&mut self, run: &Run) {
+        let _ = run;
+    }
+
+    /// Whether `observe_*` return the e_rms; an `rms=` rule with an observer that does not
+    /// measure it is an error ([`SolverError::ErrorNotMeasured`]).
+    fn measures_error(&self) -> bool {
+        false
+    }
+
+    /// This observer, called after every `n`-th step only ([`Every`]).
+    fn every(self, n: u64) -> Every<Self>
+    where
+        Self: Sized,
+    {
+        Every::new(n, self)
+    }
+}
+
+impl<O: Observer + ?Sized> Observer for &mut O {
+    fn observe_init(&mut self, solver: &str, state: &State) -> Option<Real> {
+        (**self).observe_init(solver, state)
+    }
+
+    fn observe_step(&mut self, state: &State) -> Option<Real> {
+        (**self).observe_step(state)
+    }
+
+    fn observe_final(&mut self, run: &Run) {
+        (**self).observe_final(run)
+    }
+
+    fn measures_error(&self) -> bool {
+        (**self).measures_error()
+    }
+}
+
+impl<O: Observer + ?Sized> Observer for Box<O> {
+    fn observe_init(&mut self, solver: &str, state: &State) -> Option<Real> {
+        (**self).observe_init(solver, state)
+    }
+
+    fn observe_step(&mut self, state: &State) -> Option<Real> {
+        (**self).observe_step(state)
+    }
+
+    fn observe_final(&mut self, run: &Run) {
+        (**self).observe_final(run)
+    }
+
+    fn measures_error(&self) -> bool {
+        (**self).measures_error()
+    }
 }
 
 /// An observer that watches nothing.
@@ -123,8 +205,52 @@ pub trait Observer {
 pub struct NoObserver;
 
 impl Observer for NoObserver {
-    fn observe(&mut self, _state: &State) -> Option<Real> {
+    fn observe_step(&mut self, _state: &State) -> Option<Real> {
         None
+    }
+}
+
+/// An observer called only after the steps that are multiples of `n` (and always on the
+/// initial state and the finished run). Between them it returns no e_rms, so an `rms=` rule
+/// is checked at those steps only.
+#[derive(Clone, Debug)]
+pub struct Every<O> {
+    n: u64,
+    inner: O,
+}
+
+impl<O> Every<O> {
+    /// `inner`, called after every `n`-th step (`n = 0` is taken as 1).
+    pub fn new(n: u64, inner: O) -> Every<O> {
+        Every { n: n.max(1), inner }
+    }
+
+    /// The observer inside.
+    pub fn into_inner(self) -> O {
+        self.inner
+    }
+
+    /// The observer inside.
+    pub fn inner(&self) -> &O {
+        &self.inner
+    }
+}
+
+impl<O: Observer> Observer for Every<O> {
+    fn observe_init(&mut self, solver: &str, state: &State) -> Option<Real> {
+        self.inner.observe_init(solver, state)
+    }
+
+    fn observe_step(&mut self, state: &State) -> Option<Real> {
+        if state.step % self.n == 0 { self.inner.observe_step(state) } else { None }
+    }
+
+    fn observe_final(&mut self, run: &Run) {
+        self.inner.observe_final(run)
+    }
+
+    fn measures_error(&self) -> bool {
+        self.inner.measures_error()
     }
 }
 
@@ -137,6 +263,9 @@ pub struct Run {
     pub termination: TerminationReason,
     /// The solver's name.
     pub solver: String,
+    /// The solver's own figures at the end ([`Solver::record`]; empty for most point
+    /// solvers).
+    pub record: Record,
 }
 
 /// Runs a solver under stop rules.
@@ -152,15 +281,20 @@ impl<'s> Executor<'s> {
     }
 
     /// Runs from `B = ΔB = E` until a rule holds, round-off, the step cap, or a divergence
-    /// (module doc).
+    /// (module doc). Refuses, before anything runs, an `rms=` rule with an `observer` that does
+    /// not measure the error.
     pub fn run(&mut self, problem: &Problem<'_>, observer: &mut dyn Observer) -> Result<Run, SolverError> {
+        if self.rules.needs_error() && !observer.measures_error() {
+            let rule = self.rules.rules.iter().find(|r| matches!(r, StopRule::Rms(_)));
+            return Err(SolverError::ErrorNotMeasured { rule: rule.map(ToString::to_string).unwrap_or_default() });
+        }
         let n = problem.n();
         let mut state = State::from_emission(problem.system().emissions(), problem.channels());
         let start_ff = problem.ff_seconds();
         let start = Instant::now();
         self.solver.init(problem, &mut state)?;
         self.account(problem, &mut state, start.elapsed().as_secs_f64(), start_ff);
-        let mut error = observer.observe(&state);
+        let mut error = observer.observe_init(&self.solver.name(), &state);
         let mut watch = Watch::new();
         // The cap guards runs whose rules cannot be met; an explicit `steps=` or `columns=`
         // beyond it raises it (one step costs at least one column or none).
@@ -181,9 +315,11 @@ impl<'s> Executor<'s> {
             self.solver.next_step(problem, &mut state)?;
             state.step += 1;
             self.account(problem, &mut state, step_start.elapsed().as_secs_f64(), ff_before);
-            error = observer.observe(&state);
+            error = observer.observe_step(&state);
         };
-        Ok(Run { state, termination, solver: self.solver.name() })
+        let run = Run { state, termination, solver: self.solver.name(), record: self.solver.record() };
+        observer.observe_final(&run);
+        Ok(run)
     }
 
     /// Adds a step's columns and seconds to the state.

@@ -15,8 +15,49 @@ use crate::error::SolverError;
 use crate::executor::Solver;
 use crate::gathering::{SweepResidual, gather, relax};
 use crate::problem::Problem;
+use crate::registry::{ParseSolverError, SolverParams, no_params, split_params, validated};
 use crate::state::State;
 use radiosity_core::Real;
+use std::str::FromStr;
+
+/// The names `gauss-seidel` (`ω = 1`) and `sor-ω`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GaussSeidelParams {
+    /// The over-relaxation factor, in `(0, 2)`.
+    pub omega: Real,
+}
+
+impl Default for GaussSeidelParams {
+    /// Plain Gauss–Seidel.
+    fn default() -> GaussSeidelParams {
+        GaussSeidelParams { omega: 1.0 }
+    }
+}
+
+impl FromStr for GaussSeidelParams {
+    type Err = ParseSolverError;
+
+    fn from_str(name: &str) -> Result<GaussSeidelParams, ParseSolverError> {
+        let (head, params) = split_params(name);
+        let omega = if head == "gauss-seidel" {
+            1.0
+        } else {
+            head.strip_prefix("sor-").and_then(|w| w.parse::<Real>().ok()).ok_or(ParseSolverError::OtherFamily)?
+        };
+        no_params(head, params)?;
+        validated(name, GaussSeidelParams { omega })
+    }
+}
+
+impl SolverParams for GaussSeidelParams {
+    const SYNTAX: &'static str = "gauss-seidel, sor-ω";
+    const HELP: &'static str = "point Gauss–Seidel gathering, over-relaxed by 0 < ω < 2 (SOR)";
+    const EXAMPLES: &'static [&'static str] = &["gauss-seidel", "sor-1.2"];
+
+    fn build(&self) -> Result<Box<dyn Solver>, SolverError> {
+        Ok(Box::new(GaussSeidel::new(self.omega)?))
+    }
+}
 
 /// Point Gauss–Seidel with over-relaxation factor `omega` (1 for plain Gauss–Seidel).
 #[derive(Debug)]

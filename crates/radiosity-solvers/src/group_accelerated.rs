@@ -15,11 +15,15 @@
 //! - **Emitters first.** The first shots are the emitters', each once, in order of selection
 //!   value; group steps start after them, and emitters' columns are not stored: an emitter
 //!   usually reflects little, and a group of emitters exchanges almost nothing (paper §4.1).
-//! - **Frequency.** Fixed (`:f=N`, deterministic), or automatic (`:f=auto`, the default; the
-//!   paper's rule): after each group step, `f = ⌈t_group / (target · t_column)⌉` with `t_group`
-//!   the measured seconds of that group step, `t_column` the mean seconds of a column so far
-//!   and `target` the allowed overhead (`:target=0.05`). The first group step runs as soon as
-//!   `m` columns are stored.
+//! - **Frequency.** Fixed (`:f=N`), modelled (`:f=auto`, the default) or measured
+//!   (`:f=timed`, the paper's rule). After each group step the next one is due `f` point steps
+//!   later, `f = max(1, ⌈c_group / (target · c_column)⌉)`, with `target` the allowed overhead
+//!   (`:target=0.05`): a group step then costs at most about `target` of the columns of the
+//!   `f` point steps after it. The first group step runs as soon as `m` columns are stored.
+//!   - `auto`: `c_group = ops_group`, the operations the group step counted, and
+//!     `c_column = n ·` [`PAIR_OPERATIONS`], the modelled cost of one form-factor column.
+//!   - `timed`: `c_group` the measured seconds of that group step and `c_column` the mean
+//!     seconds of a column so far.
 //! - **Steps are shooting steps.** A step is one point shot, followed by a group step when one
 //!   is due, so the group holds the newest shooter; `steps=` counts shots, the paper's axis.
 //!   A group step costs no column. Its seconds are reported apart ([`State::group_seconds`]).
@@ -27,6 +31,37 @@
 //!   overshoot of [`crate::overshooting`]; making it exact for the stored patches (their rows
 //!   are known) costs `O(n K)` a step and, measured on multi-cubes with `xu-g30-m480`,
 //!   changed no choice in `n` steps. Group selection is over stored patches only, and exact.
+//!
+//! ## The cost model of `:f=auto`
+//!
+//! Measured times make the steps depend on the machine: the same problem run twice, or beside
+//! another job, takes its group steps at other points and ends at another radiosity. The
+//! model counts instead, so that two runs take the same steps. `ops_group` is, with `n`
+//! patches, `k` channels, `K` stored columns and a group of `m`:
+//!
+//! - choosing the group: the exact overshoot of every stored patch, `K n k` when the rule has
+//!   a row term (`K k` without one, [`OvershootTracker::exact_operations`]), `m K` more for
+//!   the interaction scores (`:groups=interaction`), and the members' overshoots without the
+//!   group, `m n k` (`m k`);
+//! - building `Φ_rr`: `m² k`;
+//! - solving it: `(⌊2m³/3⌋ + 4m²) k` for the LU with its two right-hand sides, as
+//!   [`radiosity_core::dense_lu::solve_m_matrix`] does it, or the inner Gauss–Seidel's counted
+//!   sweeps, `m²` each ([`crate::group_step`]);
+//! - shooting `y` to every patch: `n m k`.
+//!
+//! Work linear in `n k` (the ambient sums, the selection values) is left out. An operation is
+//! about one floating-point operation of these loops; a column's cost is a pair's for every
+//! patch, whether or not the point step computed a column (as in the timed rule, which also
+//! takes the mean column time). [`PAIR_OPERATIONS`] is calibrated for analytic form factors
+//! on these machines (2 cores, release builds), so that the group share of the time stays near
+//! `target`: on `multi-cubes` (n = 480) an analytic column takes about 0.7 ms, 1.5 µs a pair,
+//! and a counted operation of a group step took 0.75–1.25 ns with groups of 30 on a 480-patch
+//! RGB system (`pr-g30`, `xu-g30`, `pr-g30-m480`, `xu-g30-m480`), so 1500 operations cost
+//! about one pair, and the share stays near the 4–5% that the timed rule gave for
+//! `pr-g30-m480` and `xu-g30-m480` on multi-cubes at target 0.05. Larger groups are cheaper
+//! per operation (0.45–0.5 ns at m = 120, where the LU's dense loops dominate), so their share
+//! falls below the target; cheaper columns (a stored matrix) give a larger share of the time,
+//! costlier ones (more shadow rays) a smaller one.
 //!
 //! ## Beyond the paper
 //!
@@ -42,30 +77,64 @@
 //!
 //! ## References
 //!
-//! - Rousselle & Renaud, "Group accelerated shooting methods for radiosity", §4.
+//! - Rousselle & Renaud, "Group accelerated shooting methods for radiosity", §4 (the timed
+//!   frequency rule, §4.1).
+//!
+//! ## Record
+//!
+//! The solver records its group steps ([`crate::group_step::GroupStats`]: `group_steps`,
+//! `group_size_mean`, `group_size_max`, `group_condition`, `group_fallbacks`), the counted
+//! operations of them all (`group_operations`, the model's `ops_group` summed) and the point
+//! steps between the last group step and the next (`group_period`, 0 before the first).
 
 use crate::error::SolverError;
 use crate::executor::Solver;
 use crate::group_shooting::shoot_group;
-use crate::group_step::InnerSolve;
+use crate::group_step::{GroupStats, InnerSolve};
 use crate::memory::ColumnMemory;
-use crate::overshooting::{Ambient, Overshoot, OvershootTracker, argmax, shoot_with_overshoot, top};
+use crate::overshooting::{Ambient, OvershootTracker, ShootingMethod, argmax, shoot_with_overshoot, top};
 use crate::problem::Problem;
+use crate::record::Record;
+use crate::registry::{ParseSolverError, SolverParams, named, split_params, split_size, validated};
 use crate::shooting::unshot_power;
 use crate::state::State;
 use radiosity_core::Real;
+use std::str::FromStr;
 use std::time::Instant;
 
-/// How often group steps run.
+/// The modelled cost of one pair of a form-factor column, in counted operations of a group
+/// step: a column of `n` patches costs `n · PAIR_OPERATIONS` (the cost model of the module
+/// doc). Calibrated as about 1.5 µs a pair for analytic form factors on `multi-cubes` over
+/// about 1 ns an operation (measured 0.75–1.25 ns with groups of 30).
+pub const PAIR_OPERATIONS: u64 = 1500;
+
+/// The allowed overhead of the automatic frequencies when none is given (the paper's 5%).
+pub const DEFAULT_TARGET: Real = 0.05;
+
+/// How often group steps run (module doc).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Frequency {
     /// After every `f` point steps.
     Fixed(u64),
-    /// From measured times, keeping group solving near `target` of the form-factor time.
+    /// From counted operations, keeping the modelled group cost near `target` of the modelled
+    /// column cost: reproducible.
     Auto {
+        /// The allowed overhead, a fraction of the column cost (the paper's 5%: 0.05).
+        target: Real,
+    },
+    /// From measured times, keeping group solving near `target` of the form-factor time (the
+    /// paper's rule): runs differ with the machine's load.
+    Timed {
         /// The allowed overhead, a fraction of the column time (the paper's 5%: 0.05).
         target: Real,
     },
+}
+
+impl Default for Frequency {
+    /// `Auto` at the paper's 5%.
+    fn default() -> Frequency {
+        Frequency::Auto { target: DEFAULT_TARGET }
+    }
 }
 
 /// How the group is chosen among the stored patches.
@@ -80,9 +149,13 @@ pub enum GroupBuilding {
     Interaction,
 }
 
-/// Parameters of a group-accelerated method.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Parameters of a group-accelerated method, and its names `S-gM` and `S-gM-mK` with
+/// `:f=N|auto|timed`, `:target=X`, `:groups=unshot|interaction`, `:inner=lu|gs` and
+/// `:adaptive=X`.
+#[derive(Clone, Debug, PartialEq)]
 pub struct GroupAcceleratedParams {
+    /// The point shooting method (PR or an overshooting variant; not Southwell).
+    pub method: ShootingMethod,
     /// Group size `m` (the largest size when `adaptive` is set).
     pub group: usize,
     /// Columns kept in memory, `K ≥ m`.
@@ -96,21 +169,149 @@ pub struct GroupAcceleratedParams {
     pub adaptive: Option<Real>,
     /// How group systems are solved.
     pub inner: InnerSolve,
+    /// The name the solver reports: as written on the command line when parsed (parameters
+    /// may come in any order, defaults spelled out), [`GroupAcceleratedParams::canonical_name`]
+    /// when `None`.
+    pub name: Option<String>,
+}
+
+impl Default for GroupAcceleratedParams {
+    /// `pr-g30`: the paper's method with PR, groups of 30 from the last 30 shooters, automatic
+    /// frequency.
+    fn default() -> GroupAcceleratedParams {
+        GroupAcceleratedParams::paper(ShootingMethod::Pr, 30, 30, Frequency::default())
+    }
 }
 
 impl GroupAcceleratedParams {
-    /// The paper's method: groups of `group` from a memory of `memory` columns, by unshot
-    /// energy, solved by LU.
-    pub fn paper(group: usize, memory: usize, frequency: Frequency) -> GroupAcceleratedParams {
+    /// The paper's method: `method` with groups of `group` from a memory of `memory` columns,
+    /// by unshot energy, solved by LU.
+    pub fn paper(method: ShootingMethod, group: usize, memory: usize, frequency: Frequency) -> GroupAcceleratedParams {
         GroupAcceleratedParams {
+            method,
             group,
             memory,
             frequency,
             building: GroupBuilding::Unshot,
             adaptive: None,
             inner: InnerSolve::Lu,
+            name: None,
         }
     }
+
+    /// The name with the parameters that differ from the defaults, in a fixed order:
+    /// `xu-g30-m480:f=10:groups=interaction`.
+    pub fn canonical_name(&self) -> String {
+        let mut name = format!("{}-g{}", self.method.name(), self.group);
+        if self.memory != self.group {
+            name.push_str(&format!("-m{}", self.memory));
+        }
+        let target = |t: Real| if t == DEFAULT_TARGET { String::new() } else { format!(":target={t}") };
+        match self.frequency {
+            Frequency::Fixed(f) => name.push_str(&format!(":f={f}")),
+            Frequency::Auto { target: t } => name.push_str(&target(t)),
+            Frequency::Timed { target: t } => name.push_str(&format!(":f=timed{}", target(t))),
+        }
+        if self.building == GroupBuilding::Interaction {
+            name.push_str(":groups=interaction");
+        }
+        if self.inner == InnerSolve::GaussSeidel {
+            name.push_str(":inner=gs");
+        }
+        if let Some(fraction) = self.adaptive {
+            name.push_str(&format!(":adaptive={fraction}"));
+        }
+        name
+    }
+
+    /// The name the solver reports: `name`, or the canonical one.
+    pub fn solver_name(&self) -> String {
+        self.name.clone().unwrap_or_else(|| self.canonical_name())
+    }
+
+    /// Reads the `:key=value` parameters of `name` (`params`, without the head) into `self`.
+    fn parse_params(&mut self, name: &str, params: &str) -> Result<(), SolverError> {
+        #[derive(Clone, Copy)]
+        enum Kind {
+            Fixed(u64),
+            Auto,
+            Timed,
+        }
+        let (mut kind, mut target) = (Kind::Auto, DEFAULT_TARGET);
+        for pair in params.split(':').filter(|p| !p.is_empty()) {
+            let bad = |why: &str| SolverError::BadParams(format!("solver '{name}': '{pair}' {why}"));
+            let fraction = |v: &str| v.parse::<Real>().ok().filter(|t| *t > 0.0 && t.is_finite());
+            match pair.split_once('=') {
+                Some(("f", "auto")) => kind = Kind::Auto,
+                Some(("f", "timed")) => kind = Kind::Timed,
+                Some(("f", v)) => {
+                    let f = v.parse::<u64>().ok().filter(|&f| f > 0);
+                    kind = Kind::Fixed(f.ok_or_else(|| bad("needs f=auto, f=timed or f ≥ 1"))?);
+                }
+                Some(("target", v)) => target = fraction(v).ok_or_else(|| bad("needs a positive number"))?,
+                Some(("groups", "unshot")) => self.building = GroupBuilding::Unshot,
+                Some(("groups", "interaction")) => self.building = GroupBuilding::Interaction,
+                Some(("groups", _)) => return Err(bad("needs groups=unshot or groups=interaction")),
+                Some(("inner", "lu")) => self.inner = InnerSolve::Lu,
+                Some(("inner", "gs")) => self.inner = InnerSolve::GaussSeidel,
+                Some(("inner", _)) => return Err(bad("needs inner=lu or inner=gs")),
+                Some(("adaptive", v)) => {
+                    let adaptive = fraction(v).filter(|t| *t <= 1.0);
+                    self.adaptive = Some(adaptive.ok_or_else(|| bad("needs a fraction in (0, 1]"))?);
+                }
+                _ => {
+                    return Err(bad(
+                        "is not a parameter; group-accelerated solvers take f=N, f=auto, f=timed, target=X, \
+                         groups=unshot|interaction, inner=lu|gs and adaptive=X",
+                    ));
+                }
+            }
+        }
+        self.frequency = match kind {
+            Kind::Fixed(f) => Frequency::Fixed(f),
+            Kind::Auto => Frequency::Auto { target },
+            Kind::Timed => Frequency::Timed { target },
+        };
+        Ok(())
+    }
+}
+
+impl FromStr for GroupAcceleratedParams {
+    type Err = ParseSolverError;
+
+    fn from_str(name: &str) -> Result<GroupAcceleratedParams, ParseSolverError> {
+        let (head, params) = split_params(name);
+        if head.starts_with("group-") {
+            return Err(ParseSolverError::OtherFamily);
+        }
+        let (grouped, memory) = match split_size(head, "-m") {
+            Some((grouped, k)) if grouped.contains("-g") => (grouped, Some(k)),
+            _ => (head, None),
+        };
+        let (base, group) = split_size(grouped, "-g").ok_or(ParseSolverError::OtherFamily)?;
+        let method = ShootingMethod::parse(base).ok_or(ParseSolverError::OtherFamily)?.map_err(|e| named(name, e))?;
+        let mut out = GroupAcceleratedParams::paper(method, group, memory.unwrap_or(group), Frequency::default());
+        out.parse_params(name, params)?;
+        out.name = Some(name.to_string());
+        validated(name, out)
+    }
+}
+
+impl SolverParams for GroupAcceleratedParams {
+    const SYNTAX: &'static str =
+        "S-gM[-mK][:f=N|auto|timed][:target=X][:groups=unshot|interaction][:inner=lu|gs][:adaptive=X]";
+    const HELP: &'static str = "group-accelerated shooting, the paper's method: S shoots keeping K columns (default M), \
+                                a group step over M stored patches every f shots (f=auto: from modelled costs)";
+    const EXAMPLES: &'static [&'static str] = &["pr-g30", "xu-g30", "xu-g30-m480:f=10"];
+
+    fn build(&self) -> Result<Box<dyn Solver>, SolverError> {
+        Ok(Box::new(GroupAccelerated::new(self.clone())?))
+    }
+}
+
+/// `⌈ratio⌉`, at least 1 (and at most 10¹²): the point steps until the next group step.
+fn period(ratio: Real) -> u64 {
+    ratio.ceil().clamp(1.0, 1e12) as u64
 }
 
 /// The smallest group an adaptive size gives.
@@ -131,15 +332,21 @@ pub struct GroupAccelerated {
     since_group: u64,
     /// Point steps between group steps (0 before the first).
     period: u64,
+    /// What the group steps did.
+    stats: GroupStats,
+    /// Their counted operations, summed.
+    operations: u64,
 }
 
 impl GroupAccelerated {
-    /// A group-accelerated method named `name`, shooting with `rule`.
-    pub fn new(
-        name: impl Into<String>,
-        rule: Overshoot,
-        params: GroupAcceleratedParams,
-    ) -> Result<GroupAccelerated, SolverError> {
+    /// A group-accelerated method with `params`, named [`GroupAcceleratedParams::solver_name`].
+    pub fn new(params: GroupAcceleratedParams) -> Result<GroupAccelerated, SolverError> {
+        if !params.method.by_area() {
+            return Err(SolverError::BadParams(format!(
+                "group acceleration applies to PR and the overshooting methods, not to {}",
+                params.method.name()
+            )));
+        }
         if params.group == 0 {
             return Err(SolverError::BadParams("a group needs at least one patch (g ≥ 1)".into()));
         }
@@ -153,21 +360,24 @@ impl GroupAccelerated {
             Frequency::Fixed(0) => {
                 return Err(SolverError::BadParams("the group frequency f must be at least 1".into()));
             }
-            Frequency::Auto { target } if !(target > 0.0 && target.is_finite()) => {
+            Frequency::Auto { target } | Frequency::Timed { target } if !(target > 0.0 && target.is_finite()) => {
                 return Err(SolverError::BadParams(format!("the target overhead must be positive, not {target}")));
             }
             _ => {}
         }
+        let tracker = OvershootTracker::new(params.method.overshoot(), true)?;
         Ok(GroupAccelerated {
-            name: name.into(),
+            name: params.solver_name(),
             params,
-            tracker: OvershootTracker::new(rule, true)?,
+            tracker,
             memory: ColumnMemory::new(0, 0),
             scratch: Vec::new(),
             emitters_left: Vec::new(),
             emitters_count: 0,
             since_group: 0,
             period: 0,
+            stats: GroupStats::default(),
+            operations: 0,
         })
     }
 
@@ -188,30 +398,40 @@ impl GroupAccelerated {
     }
 
     fn group_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
-        // Everything here is the group step's cost: choosing the group (exact overshoots of
-        // every stored patch, `O(n K)`) as well as solving it.
+        // Everything here is the group step's cost, in seconds and in counted operations (the
+        // cost model of the module doc): choosing the group (exact overshoots of every stored
+        // patch, `O(n K)`) as well as solving it.
         let start = Instant::now();
+        let (n, k, stored) = (problem.n(), problem.channels(), self.memory.len());
         let ambient = Ambient::measure(problem, state);
-        let mut values = vec![0.0; problem.n()];
+        let mut values = vec![0.0; n];
         self.exact_values(problem, state, &ambient, &mut values);
         let group = self.choose_group(problem, &values);
+        let mut operations = stored as u64 * self.tracker.exact_operations(n, k);
+        if self.params.building == GroupBuilding::Interaction {
+            operations += (group.len() * stored) as u64;
+        }
         if !group.is_empty() {
-            shoot_group(problem, state, &mut self.tracker, &self.memory, &group, self.params.inner)?;
+            let (shot, _) = shoot_group(problem, state, &mut self.tracker, &self.memory, &group, self.params.inner)?;
+            operations += shot.operations;
+            self.stats.add(&shot);
         }
         let seconds = start.elapsed().as_secs_f64();
         state.group_seconds += seconds;
+        self.operations += operations;
         self.since_group = 0;
-        if let Frequency::Fixed(f) = self.params.frequency {
-            self.period = f;
-        } else if let Frequency::Auto { target } = self.params.frequency {
-            let columns = problem.columns_fetched().max(1) as Real;
-            let column_seconds = problem.ff_seconds() / columns;
-            self.period = if column_seconds > 0.0 {
-                (seconds / (target * column_seconds)).ceil().clamp(1.0, 1e12) as u64
-            } else {
-                u64::MAX
-            };
-        }
+        self.period = match self.params.frequency {
+            Frequency::Fixed(f) => f,
+            Frequency::Auto { target } => {
+                let column = n as Real * PAIR_OPERATIONS as Real;
+                period(operations as Real / (target * column))
+            }
+            Frequency::Timed { target } => {
+                let columns = problem.columns_fetched().max(1) as Real;
+                let column_seconds = problem.ff_seconds() / columns;
+                if column_seconds > 0.0 { period(seconds / (target * column_seconds)) } else { u64::MAX }
+            }
+        };
         Ok(())
     }
 
@@ -313,6 +533,8 @@ impl Solver for GroupAccelerated {
         self.emitters_count = self.emitters_left.iter().filter(|&&e| e).count();
         self.since_group = 0;
         self.period = 0;
+        self.stats = GroupStats::default();
+        self.operations = 0;
         Ok(())
     }
 
@@ -326,5 +548,12 @@ impl Solver for GroupAccelerated {
 
     fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real> {
         Some(unshot_power(problem, state))
+    }
+
+    fn record(&self) -> Record {
+        let mut record = Record::new();
+        self.stats.record(&mut record);
+        record.set("group_operations", self.operations).set("group_period", self.period);
+        record
     }
 }

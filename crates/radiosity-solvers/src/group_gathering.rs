@@ -16,7 +16,12 @@
 //! - `group-gs-gM`: groups in order, each gathering from the latest radiosity (eq. 4), as
 //!   [`crate::gauss_seidel`] does for patches.
 //!
-//! `state.unshot` keeps the last change of each patch. The residual reported is the sum over
+//! `state.unshot` keeps the last change of each patch. The solver records its group steps
+//! ([`crate::group_step::GroupStats`]): `group_steps`, `group_size_mean`, `group_size_max`,
+//! `group_condition` (`κ_∞(Φ_rr)`, the largest met, from a factorisation of its own that
+//! leaves the solve untouched; infinite for a group whose `Φ_rr` is not a nonsingular
+//! M-matrix) and `group_fallbacks` (always 0: a singular group system is an error here,
+//! [`SolverError::SingularGroup`]). The residual reported is the sum over
 //! the last sweep of each patch's residual in the vector its group gathered from (exact for
 //! group Jacobi; for group Gauss–Seidel, of a vector that changes during the sweep, so an
 //! estimate), relative to the emitted power; none before the first sweep ends.
@@ -35,7 +40,8 @@
 //! ## Cost
 //!
 //! A step gathers one group: `m` rows, so `m` columns ([`Problem::row`]), and one `m × m` LU
-//! per channel (`O(m³)`, the paper's "`m³` operations"; its time is `state.group_seconds`). A
+//! per channel (`O(m³)`, the paper's "`m³` operations"), with a second for the recorded
+//! condition number; their time is `state.group_seconds`. A
 //! sweep is `⌈n/m⌉` steps and `n` columns, as for point Jacobi and Gauss–Seidel. With `m ≥ n`
 //! the one group is the whole system: one step solves it exactly.
 //!
@@ -49,11 +55,54 @@
 use crate::error::SolverError;
 use crate::executor::Solver;
 use crate::gathering::{SweepResidual, gather, relax};
+use crate::group_step::{GroupShot, GroupStats};
 use crate::problem::Problem;
+use crate::record::Record;
+use crate::registry::{ParseSolverError, SolverParams, split_params, split_size, validated};
 use crate::state::State;
 use radiosity_core::Real;
-use radiosity_core::dense_lu::{SingularPivot, lu_solve};
+use radiosity_core::dense_lu::{SingularPivot, lu_solve, solve_m_matrix};
+use std::str::FromStr;
 use std::time::Instant;
+
+/// The names `group-jacobi-gM` and `group-gs-gM`, with `:groups=index` (the default) or
+/// `:groups=spatial`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GroupGatheringParams {
+    /// Group Jacobi or group Gauss–Seidel.
+    pub sweep: Sweep,
+    /// Patches a group, `m ≥ 1`.
+    pub group: usize,
+    /// How the patches are cut into groups.
+    pub partition: Partition,
+}
+
+impl FromStr for GroupGatheringParams {
+    type Err = ParseSolverError;
+
+    fn from_str(name: &str) -> Result<GroupGatheringParams, ParseSolverError> {
+        let (head, params) = split_params(name);
+        let (base, group) =
+            head.strip_prefix("group-").and_then(|rest| split_size(rest, "-g")).ok_or(ParseSolverError::OtherFamily)?;
+        let sweep = match base {
+            "jacobi" => Sweep::Jacobi,
+            "gs" => Sweep::GaussSeidel,
+            _ => return Err(ParseSolverError::OtherFamily),
+        };
+        let partition = Partition::parse(head, params)?;
+        validated(name, GroupGatheringParams { sweep, group, partition })
+    }
+}
+
+impl SolverParams for GroupGatheringParams {
+    const SYNTAX: &'static str = "group-jacobi-gM, group-gs-gM[:groups=index|spatial]";
+    const HELP: &'static str = "group Jacobi and Gauss–Seidel gathering over fixed groups of M, by index or in space";
+    const EXAMPLES: &'static [&'static str] = &["group-gs-g30", "group-jacobi-g30:groups=spatial"];
+
+    fn build(&self) -> Result<Box<dyn Solver>, SolverError> {
+        Ok(Box::new(GroupGathering::new(self.sweep, self.group, self.partition)?))
+    }
+}
 
 /// Which radiosity the groups of a sweep gather from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -113,6 +162,7 @@ pub struct GroupGathering {
     residual: Vec<Real>,
     delta: Vec<Real>,
     residuals: SweepResidual,
+    stats: GroupStats,
 }
 
 impl GroupGathering {
@@ -133,7 +183,18 @@ impl GroupGathering {
             residual: Vec::new(),
             delta: Vec::new(),
             residuals: SweepResidual::default(),
+            stats: GroupStats::default(),
         })
+    }
+
+    /// `κ_∞(Φ_rr)` of the group's system in channel `c`, from `F_rr` in `self.block`: exact
+    /// when `Φ_rr` is a nonsingular M-matrix, infinite otherwise
+    /// ([`radiosity_core::dense_lu::solve_m_matrix`]). Its own factorisation, so that the
+    /// solve itself is untouched.
+    fn condition(&self, group: &[usize], c: usize, system: &radiosity_core::LinearSystem) -> Real {
+        let size = group.len();
+        let n_rr: Vec<Real> = (0..size * size).map(|ab| system.rho(group[ab / size], c) * self.block[ab]).collect();
+        solve_m_matrix(size, &n_rr, vec![0.0; size]).map_or(Real::INFINITY, |(_, condition)| condition)
     }
 
     /// The name without parameters (`group-gs-g30`).
@@ -169,6 +230,7 @@ impl Solver for GroupGathering {
         };
         self.next = 0;
         self.residuals = SweepResidual::default();
+        self.stats = GroupStats::default();
         Ok(())
     }
 
@@ -197,6 +259,7 @@ impl Solver for GroupGathering {
         let timer = Instant::now();
         let system = problem.system();
         self.delta.resize(size * k, 0.0);
+        let mut condition: Real = 0.0;
         for c in 0..k {
             let phi = |a: usize, b: usize| Real::from(a == b) - system.rho(group[a], c) * self.block[a * size + b];
             let solved = lu_solve(size, false, phi, |a| self.residual[a * k + c]).map_err(
@@ -211,8 +274,10 @@ impl Solver for GroupGathering {
             for (a, v) in solved.into_iter().enumerate() {
                 self.delta[a * k + c] = v;
             }
+            condition = condition.max(self.condition(group, c, system));
         }
         state.group_seconds += timer.elapsed().as_secs_f64();
+        self.stats.add(&GroupShot { size, condition, fell_back: false, operations: 0 });
         // For group Jacobi the group's B is still its value at the start of the sweep: no
         // other group of the sweep changes it.
         for (a, &i) in group.iter().enumerate() {
@@ -229,5 +294,11 @@ impl Solver for GroupGathering {
 
     fn gathers_rows(&self) -> bool {
         true
+    }
+
+    fn record(&self) -> Record {
+        let mut record = Record::new();
+        self.stats.record(&mut record);
+        record
     }
 }

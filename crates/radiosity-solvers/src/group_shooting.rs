@@ -10,6 +10,9 @@
 //! columns, fewer when a member's column is still held from the previous step (the last `m`
 //! columns are kept, and a column served again is counted as reused).
 //!
+//! The solver records its group steps ([`crate::group_step::GroupStats`]: `group_steps`,
+//! `group_size_mean`, `group_size_max`, `group_condition`, `group_fallbacks`).
+//!
 //! ## References
 //!
 //! - Rousselle & Renaud, "Group accelerated shooting methods for radiosity", §3.2–3.3 (group
@@ -17,14 +20,52 @@
 
 use crate::error::SolverError;
 use crate::executor::Solver;
-use crate::group_step::{InnerSolve, group_shot};
+use crate::group_step::{GroupShot, GroupStats, InnerSolve, group_shot};
 use crate::memory::ColumnMemory;
-use crate::overshooting::{Ambient, Overshoot, OvershootTracker, top};
+use crate::overshooting::{Ambient, Overshoot, OvershootTracker, ShootingMethod, top};
 use crate::problem::Problem;
+use crate::record::Record;
+use crate::registry::{ParseSolverError, SolverParams, named, no_params, split_params, split_size, validated};
 use crate::shooting::unshot_power;
 use crate::state::State;
 use radiosity_core::Real;
+use std::str::FromStr;
 use std::time::Instant;
+
+/// The names `group-S-gM`: group shooting with method `S` (any point shooting method) and
+/// groups of `M`; no parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GroupShootingParams {
+    /// The shooting method.
+    pub method: ShootingMethod,
+    /// Patches a group, `m ≥ 1`.
+    pub group: usize,
+}
+
+impl FromStr for GroupShootingParams {
+    type Err = ParseSolverError;
+
+    fn from_str(name: &str) -> Result<GroupShootingParams, ParseSolverError> {
+        let (head, params) = split_params(name);
+        let (base, group) =
+            head.strip_prefix("group-").and_then(|rest| split_size(rest, "-g")).ok_or(ParseSolverError::OtherFamily)?;
+        let method = ShootingMethod::parse(base).ok_or(ParseSolverError::OtherFamily)?.map_err(|e| named(name, e))?;
+        no_params(head, params)?;
+        validated(name, GroupShootingParams { method, group })
+    }
+}
+
+impl SolverParams for GroupShootingParams {
+    const SYNTAX: &'static str = "group-S-gM";
+    const HELP: &'static str = "group shooting: the M patches with the most unshot power shoot together (S a point \
+                                shooting method)";
+    const EXAMPLES: &'static [&'static str] = &["group-pr-g30", "group-xu-g30"];
+
+    fn build(&self) -> Result<Box<dyn Solver>, SolverError> {
+        let name = format!("group-{}-g{}", self.method.name(), self.group);
+        Ok(Box::new(GroupShooting::new(name, self.group, self.method.overshoot(), self.method.by_area())?))
+    }
+}
 
 /// Group shooting with groups of `m` patches.
 #[derive(Debug)]
@@ -33,6 +74,7 @@ pub struct GroupShooting {
     m: usize,
     tracker: OvershootTracker,
     memory: ColumnMemory,
+    stats: GroupStats,
 }
 
 impl GroupShooting {
@@ -48,12 +90,19 @@ impl GroupShooting {
             return Err(SolverError::BadParams("a group needs at least one patch (g ≥ 1)".into()));
         }
         let tracker = OvershootTracker::new(rule, by_area)?;
-        Ok(GroupShooting { name: name.into(), m, tracker, memory: ColumnMemory::new(0, 0) })
+        Ok(GroupShooting {
+            name: name.into(),
+            m,
+            tracker,
+            memory: ColumnMemory::new(0, 0),
+            stats: GroupStats::default(),
+        })
     }
 }
 
 /// Runs a group step on `group`, whose columns `memory` holds: exact overshoots from the
-/// stored columns, the group shot, and the tracker told. Returns the seconds it took.
+/// stored columns, the group shot, and the tracker told. Returns what the group shot did, its
+/// operations including the members' exact overshoots, and the seconds it took.
 ///
 /// The overshoot of a group member anticipates only the light from outside the group (our
 /// correction of the paper's rule, which applies the point overshoot unchanged): its row term
@@ -74,7 +123,7 @@ pub(crate) fn shoot_group(
     memory: &ColumnMemory,
     group: &[usize],
     inner: InnerSolve,
-) -> Result<f64, SolverError> {
+) -> Result<(GroupShot, f64), SolverError> {
     let start = Instant::now();
     let k = state.channels;
     let mut sorted = group.to_vec();
@@ -86,12 +135,13 @@ pub(crate) fn shoot_group(
         let (row, p) = (&mut rows[a * k..(a + 1) * k], &mut plus[a * k..(a + 1) * k]);
         tracker.exact(problem, state, &ambient, g, columns[a], &sorted, row, p);
     }
-    group_shot(problem, state, group, &columns, &plus, inner)?;
+    let mut shot = group_shot(problem, state, group, &columns, &plus, inner)?;
+    shot.operations += group.len() as u64 * tracker.exact_operations(problem.n(), k);
     let power = Ambient::measure(problem, state).power();
     for (a, &g) in group.iter().enumerate() {
         tracker.record(g, &rows[a * k..(a + 1) * k], power);
     }
-    Ok(start.elapsed().as_secs_f64())
+    Ok((shot, start.elapsed().as_secs_f64()))
 }
 
 impl Solver for GroupShooting {
@@ -102,6 +152,7 @@ impl Solver for GroupShooting {
     fn init(&mut self, problem: &Problem<'_>, _state: &mut State) -> Result<(), SolverError> {
         self.tracker.init(problem);
         self.memory = ColumnMemory::new(problem.n(), self.m);
+        self.stats = GroupStats::default();
         Ok(())
     }
 
@@ -116,11 +167,19 @@ impl Solver for GroupShooting {
         for &g in &group {
             self.memory.column(problem, g, &mut scratch);
         }
-        state.group_seconds += shoot_group(problem, state, &mut self.tracker, &self.memory, &group, InnerSolve::Lu)?;
+        let (shot, seconds) = shoot_group(problem, state, &mut self.tracker, &self.memory, &group, InnerSolve::Lu)?;
+        state.group_seconds += seconds;
+        self.stats.add(&shot);
         Ok(())
     }
 
     fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real> {
         Some(unshot_power(problem, state))
+    }
+
+    fn record(&self) -> Record {
+        let mut record = Record::new();
+        self.stats.record(&mut record);
+        record
     }
 }

@@ -18,13 +18,25 @@
 //! this is the consistent one (it gives `B_r = x_r + y_r` and zero unshot).
 //!
 //! Cost: one `m × m` LU per channel (`O(m³)`), and `O(n m)` per channel for the update. The
-//! columns must already be in hand: this step computes none.
+//! columns must already be in hand: this step computes none. The step counts its operations
+//! ([`GroupShot::operations`]), for a frequency rule that must not depend on the clock
+//! ([`crate::group_accelerated`]): per channel `m²` to build `Φ_rr`, `⌊2m³/3⌋ + 4m²` for the
+//! LU with its two right-hand sides (as [`radiosity_core::dense_lu::solve_m_matrix`] does
+//! it), or for the inner Gauss–Seidel `m²` for the bound and `m²` per sweep and per residual
+//! check, and `n m` to shoot `y` to every patch (the fallback's point shots cost the same).
+//!
+//! ## What the solvers record
+//!
+//! Every solver that runs group steps (group shooting, group-accelerated shooting, group
+//! gathering) keeps a [`GroupStats`] and records it ([`crate::Record`]): `group_steps`,
+//! `group_size_mean`, `group_size_max`, `group_condition` and `group_fallbacks`.
 //!
 //! ## When the group system is trusted
 //!
 //! A group system is solved, and its solution amplified through the shot to every patch, only
 //! when it is well posed; otherwise the step falls back (below). The test per channel, and the
-//! estimate it records ([`State::group_condition`], the largest over channels and steps):
+//! estimate it reports ([`GroupShot::condition`], the largest over channels; the solvers
+//! record the largest over their steps as `group_condition`, [`GroupStats`]):
 //!
 //! - **LU.** Form factors and reflectivities are non-negative, so `N ≥ 0` entrywise and
 //!   `Φ_rr = I − N` is a Z-matrix. A Z-matrix is a nonsingular M-matrix exactly when the
@@ -58,8 +70,9 @@
 //! `δ_i = ρ_i F_ik s_k` for every `i`, `B_i += δ_i`, `ΔB_i += δ_i`, then `ΔB_k −= s_k` (zero
 //! for planar patches, `F_kk = 0`; the subtraction keeps the invariant when `F_kk ≠ 0`). The
 //! overshoots are not used. This costs no column, keeps `ΔB` exactly the residual of
-//! `x = B − ΔB`, and cannot amplify anything that a point method would not. The step counts
-//! in [`State::group_fallbacks`]. A system whose groups are not M-matrices is not physical as
+//! `x = B − ΔB`, and cannot amplify anything that a point method would not. The step reports
+//! it ([`GroupShot::fell_back`]), and the solvers count it as `group_fallbacks` in their record
+//! ([`GroupStats`]). A system whose groups are not M-matrices is not physical as
 //! a whole either (the spectral radius of `ρ F` is at least that of any principal block): its
 //! runs end as diverged ([`crate::executor`]).
 //!
@@ -96,6 +109,7 @@
 
 use crate::error::SolverError;
 use crate::problem::Problem;
+use crate::record::Record;
 use crate::shooting::{receive, set_unshot, shoot_column};
 use crate::state::State;
 use radiosity_core::Real;
@@ -127,6 +141,68 @@ pub const MAX_INNER_SWEEPS: usize = 10_000;
 /// The inner Gauss–Seidel's tolerance: the residual `Σ |s − Φ_rr y|` relative to `Σ |y|`.
 const INNER_TOLERANCE: Real = 1e-13;
 
+/// What one group step did ([`group_shot`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GroupShot {
+    /// Patches in the group (0: there was no group, and nothing happened).
+    pub size: usize,
+    /// The condition estimate `κ_∞(Φ_rr)` (or, for the inner Gauss–Seidel, its bound), the
+    /// largest over channels: infinite when a channel's system is singular, not an M-matrix,
+    /// or without a bound (module doc).
+    pub condition: Real,
+    /// Whether the step fell back to point shots (module doc).
+    pub fell_back: bool,
+    /// The operations the step counted: building, solving and shooting (module doc).
+    pub operations: u64,
+}
+
+/// What a solver's group steps did so far, recorded as `group_steps` (count),
+/// `group_size_mean` and `group_size_max`, `group_condition` (the largest condition estimate
+/// met: 0 before any group step, infinite once a group system was singular or not an
+/// M-matrix) and `group_fallbacks` (count), module doc.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GroupStats {
+    /// Group steps run.
+    pub steps: u64,
+    /// Patches over all of them.
+    pub patches: u64,
+    /// The largest group.
+    pub largest: usize,
+    /// The largest condition estimate (0 before any step).
+    pub condition: Real,
+    /// Steps that fell back to point shots.
+    pub fallbacks: u64,
+}
+
+impl GroupStats {
+    /// Counts one group step (one with an empty group is no step).
+    pub fn add(&mut self, shot: &GroupShot) {
+        if shot.size == 0 {
+            return;
+        }
+        self.steps += 1;
+        self.patches += shot.size as u64;
+        self.largest = self.largest.max(shot.size);
+        self.condition = self.condition.max(shot.condition);
+        self.fallbacks += u64::from(shot.fell_back);
+    }
+
+    /// The mean group size (0 before any step).
+    pub fn mean_size(&self) -> Real {
+        if self.steps == 0 { 0.0 } else { self.patches as Real / self.steps as Real }
+    }
+
+    /// Writes the figures into `record`, under the keys of the type's doc.
+    pub fn record(&self, record: &mut Record) {
+        record
+            .set("group_steps", self.steps)
+            .set("group_size_mean", self.mean_size())
+            .set("group_size_max", self.largest)
+            .set("group_condition", self.condition)
+            .set("group_fallbacks", self.fallbacks);
+    }
+}
+
 /// What a group system gave in one channel.
 enum ChannelSolve {
     /// Trusted: the solution, the residual the group keeps (zero for LU) and `κ_∞` (or its
@@ -135,6 +211,11 @@ enum ChannelSolve {
     /// Not trusted: the condition estimate that refused it (infinite when the system is
     /// singular, not an M-matrix, or without a bound).
     Refused { condition: Real },
+}
+
+/// The operations of an `m × m` LU with two right-hand sides (module doc).
+fn lu_operations(m: u64) -> u64 {
+    2 * m * m * m / 3 + 4 * m * m
 }
 
 /// `N = diag(ρ_r) F_rr` for channel `c`, row-major.
@@ -163,8 +244,11 @@ fn solve_lu(m: usize, n_rr: &[Real], s: Vec<Real>) -> ChannelSolve {
 }
 
 /// Solves `(I − N) y = s` by Gauss–Seidel, with the bound and the residual stopping rule of
-/// the module doc.
-fn solve_gauss_seidel(m: usize, n_rr: &[Real], s: Vec<Real>) -> ChannelSolve {
+/// the module doc; adds its operations to `operations` (`m²` for the bound, `m²` a sweep and a
+/// residual check).
+fn solve_gauss_seidel(m: usize, n_rr: &[Real], s: Vec<Real>, operations: &mut u64) -> ChannelSolve {
+    let square = (m * m) as u64;
+    *operations += square;
     if n_rr.iter().any(|v| !v.is_finite()) {
         return ChannelSolve::Refused { condition: Real::INFINITY };
     }
@@ -181,6 +265,7 @@ fn solve_gauss_seidel(m: usize, n_rr: &[Real], s: Vec<Real>) -> ChannelSolve {
     let mut y = s.clone();
     let mut left = vec![0.0; m];
     for _ in 0..MAX_INNER_SWEEPS {
+        *operations += square;
         let (mut change, mut norm) = (0.0, 0.0);
         for a in 0..m {
             let row = &n_rr[a * m..(a + 1) * m];
@@ -195,6 +280,7 @@ fn solve_gauss_seidel(m: usize, n_rr: &[Real], s: Vec<Real>) -> ChannelSolve {
         }
         if change <= INNER_TOLERANCE * norm {
             // The true residual of the group system, s − (I − N) y, decides.
+            *operations += square;
             let mut residual = 0.0;
             for a in 0..m {
                 let row = &n_rr[a * m..(a + 1) * m];
@@ -212,7 +298,7 @@ fn solve_gauss_seidel(m: usize, n_rr: &[Real], s: Vec<Real>) -> ChannelSolve {
 /// Runs one group step on `group` (patch indices) with `columns[a][i] = F_{i, group[a]}` and
 /// overshoots `plus[a * k + c]` (all zero for group PR and Southwell): the group solve and
 /// shot, or the point-shot fallback when the group system is not trusted (module doc). Either
-/// way it records the condition estimate in `state`.
+/// way it reports the condition estimate, whether it fell back, and its operations.
 pub fn group_shot(
     problem: &Problem<'_>,
     state: &mut State,
@@ -220,11 +306,14 @@ pub fn group_shot(
     columns: &[&[Real]],
     plus: &[Real],
     inner: InnerSolve,
-) -> Result<(), SolverError> {
+) -> Result<GroupShot, SolverError> {
     let (m, k, n) = (group.len(), state.channels, problem.n());
     if m == 0 {
-        return Ok(());
+        return Ok(GroupShot { size: 0, condition: 0.0, fell_back: false, operations: 0 });
     }
+    let (m64, k64) = (m as u64, k as u64);
+    // Building Φ_rr and shooting y (or the fallback's point shots) to every patch.
+    let mut operations = k64 * (m64 * m64 + n as u64 * m64);
     let system = problem.system();
     // y[a * k + c], and what the group keeps unshot beyond −ΔB⁺ (zero for LU).
     let mut y = vec![0.0; m * k];
@@ -234,8 +323,11 @@ pub fn group_shot(
         let n_rr = group_matrix(problem, group, columns, c);
         let s: Vec<Real> = (0..m).map(|a| state.unshot[group[a] * k + c] + plus[a * k + c]).collect();
         let solved = match inner {
-            InnerSolve::Lu => solve_lu(m, &n_rr, s),
-            InnerSolve::GaussSeidel => solve_gauss_seidel(m, &n_rr, s),
+            InnerSolve::Lu => {
+                operations += lu_operations(m64);
+                solve_lu(m, &n_rr, s)
+            }
+            InnerSolve::GaussSeidel => solve_gauss_seidel(m, &n_rr, s, &mut operations),
         };
         match solved {
             ChannelSolve::Solved { y: yc, left: lc, condition: kc } => {
@@ -251,10 +343,10 @@ pub fn group_shot(
             }
         }
     }
-    state.group_condition = state.group_condition.max(condition);
+    let shot = GroupShot { size: m, condition, fell_back: !trusted, operations };
     if !trusted {
-        state.group_fallbacks += 1;
-        return point_shots(problem, state, group, columns);
+        point_shots(problem, state, group, columns)?;
+        return Ok(shot);
     }
     let mut delta = vec![0.0; k];
     for i in 0..n {
@@ -276,7 +368,7 @@ pub fn group_shot(
             set_unshot(state, g * k + c, left[a * k + c] - plus[a * k + c])?;
         }
     }
-    Ok(())
+    Ok(shot)
 }
 
 /// The fallback: the group's members shot one after another, in group order, as plain

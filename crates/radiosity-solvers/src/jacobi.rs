@@ -14,8 +14,37 @@ use crate::error::SolverError;
 use crate::executor::Solver;
 use crate::gathering::{SweepResidual, gather, relax};
 use crate::problem::Problem;
+use crate::registry::{ParseSolverError, SolverParams, no_params, split_params};
 use crate::state::State;
 use radiosity_core::Real;
+use std::str::FromStr;
+
+/// The name `jacobi`: point Jacobi takes no parameters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct JacobiParams;
+
+impl FromStr for JacobiParams {
+    type Err = ParseSolverError;
+
+    fn from_str(name: &str) -> Result<JacobiParams, ParseSolverError> {
+        let (head, params) = split_params(name);
+        if head != "jacobi" {
+            return Err(ParseSolverError::OtherFamily);
+        }
+        no_params(head, params)?;
+        Ok(JacobiParams)
+    }
+}
+
+impl SolverParams for JacobiParams {
+    const SYNTAX: &'static str = "jacobi";
+    const HELP: &'static str = "point Jacobi gathering: a sweep gathers every patch from the sweep before";
+    const EXAMPLES: &'static [&'static str] = &["jacobi"];
+
+    fn build(&self) -> Result<Box<dyn Solver>, SolverError> {
+        Ok(Box::new(Jacobi::default()))
+    }
+}
 
 /// Point Jacobi.
 #[derive(Debug, Default)]

@@ -52,9 +52,121 @@
 use crate::error::SolverError;
 use crate::executor::Solver;
 use crate::problem::Problem;
+use crate::progressive::ProgressiveRefinement;
+use crate::registry::{ParseSolverError, SolverParams, named, no_params, split_params, validated};
 use crate::shooting::{set_unshot, shoot_column, unshot_power};
+use crate::southwell::Southwell;
 use crate::state::State;
+use crate::xu::XuParts;
+use crate::{feda, relax, shao, xu};
 use radiosity_core::Real;
+use std::str::FromStr;
+
+/// A point shooting method by its command-line name (`southwell`, `pr`, `feda`, `shao`, `xu`,
+/// `xu-direct`, `xu-ambient`, `relax-ω`): what a point, group or group-accelerated shooting
+/// name builds on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum ShootingMethod {
+    /// Southwell: the largest `|ΔB|`, no overshoot ([`crate::southwell`]).
+    Southwell,
+    /// Progressive refinement: the largest `A |ΔB|`, no overshoot ([`crate::progressive`]).
+    Pr,
+    /// Feda's ambient overshoot ([`crate::feda`]).
+    Feda,
+    /// Shao's positive gather ([`crate::shao`]).
+    Shao,
+    /// Xu's overshoot with the parts chosen ([`crate::xu`]).
+    Xu(XuParts),
+    /// Over-relaxation by `ω` in `(0, 2)` ([`crate::relax`]).
+    Relax(Real),
+}
+
+impl ShootingMethod {
+    /// The method a name designates: `None` when it names none, an error for `relax-ω` with
+    /// `ω` outside `(0, 2)`.
+    pub fn parse(name: &str) -> Option<Result<ShootingMethod, SolverError>> {
+        let method = match name {
+            "southwell" => ShootingMethod::Southwell,
+            "pr" => ShootingMethod::Pr,
+            "feda" => ShootingMethod::Feda,
+            "shao" => ShootingMethod::Shao,
+            "xu" => ShootingMethod::Xu(XuParts::BOTH),
+            "xu-direct" => ShootingMethod::Xu(XuParts { direct: true, ambient: false }),
+            "xu-ambient" => ShootingMethod::Xu(XuParts { direct: false, ambient: true }),
+            _ => {
+                let omega = name.strip_prefix("relax-")?.parse::<Real>().ok()?;
+                if !(omega > 0.0 && omega < 2.0) {
+                    return Some(Err(SolverError::BadParams(format!("relaxation needs 0 < ω < 2, not {omega}"))));
+                }
+                ShootingMethod::Relax(omega)
+            }
+        };
+        Some(Ok(method))
+    }
+
+    /// The command-line name (`relax-1.5`).
+    pub fn name(self) -> String {
+        match self {
+            ShootingMethod::Southwell => "southwell".into(),
+            ShootingMethod::Pr => "pr".into(),
+            ShootingMethod::Feda => "feda".into(),
+            ShootingMethod::Shao => "shao".into(),
+            ShootingMethod::Xu(parts) => parts.name().into(),
+            ShootingMethod::Relax(omega) => format!("relax-{omega}"),
+        }
+    }
+
+    /// The overshoot it shoots with (none for Southwell and PR).
+    pub fn overshoot(self) -> Overshoot {
+        match self {
+            ShootingMethod::Southwell | ShootingMethod::Pr => Overshoot::NONE,
+            ShootingMethod::Feda => feda::RULE,
+            ShootingMethod::Shao => shao::RULE,
+            ShootingMethod::Xu(parts) => xu::rule(parts),
+            ShootingMethod::Relax(omega) => relax::rule(omega),
+        }
+    }
+
+    /// Whether selection weighs by area (every method but Southwell).
+    pub fn by_area(self) -> bool {
+        self != ShootingMethod::Southwell
+    }
+}
+
+/// The point shooting names: `southwell`, `pr`, and the overshooting variants; none takes
+/// parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointShootingParams {
+    /// The method.
+    pub method: ShootingMethod,
+}
+
+impl FromStr for PointShootingParams {
+    type Err = ParseSolverError;
+
+    fn from_str(name: &str) -> Result<PointShootingParams, ParseSolverError> {
+        let (head, params) = split_params(name);
+        let method = ShootingMethod::parse(head).ok_or(ParseSolverError::OtherFamily)?;
+        no_params(head, params)?;
+        let method = method.map_err(|e| named(name, e))?;
+        validated(name, PointShootingParams { method })
+    }
+}
+
+impl SolverParams for PointShootingParams {
+    const SYNTAX: &'static str = "southwell, pr, feda, shao, xu, xu-direct, xu-ambient, relax-ω";
+    const HELP: &'static str = "point shooting: southwell by |ΔB|, pr by A|ΔB|, the others overshoot (0 < ω < 2)";
+    const EXAMPLES: &'static [&'static str] = &["pr", "xu", "xu-direct", "relax-1.5"];
+
+    fn build(&self) -> Result<Box<dyn Solver>, SolverError> {
+        Ok(match self.method {
+            ShootingMethod::Southwell => Box::new(Southwell::default()),
+            ShootingMethod::Pr => Box::new(ProgressiveRefinement::default()),
+            method => Box::new(Overshooting::new(method.name(), method.overshoot())?),
+        })
+    }
+}
 
 /// A sum along the shooter's own row.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -266,6 +378,12 @@ impl OvershootTracker {
             }
         }
         self.overshoot(problem, state, ambient, j, row, plus);
+    }
+
+    /// The operations [`OvershootTracker::exact`] counts for one patch of `n` patches and `k`
+    /// channels: `n k` for the sum along its row when the rule has a row term, `k` otherwise.
+    pub fn exact_operations(&self, n: usize, k: usize) -> u64 {
+        if self.rule.row.is_some() { (n * k) as u64 } else { k as u64 }
     }
 
     /// The selection value of patch `j` shooting with overshoot `plus`:

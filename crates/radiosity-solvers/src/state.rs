@@ -4,6 +4,10 @@
 //! patch-major (`[i * channels + c]`); for shooting methods the shot radiosity is
 //! `x = B − ΔB`, and the residual of `x` is exactly `ΔB` (DESIGN §5). Gathering methods keep
 //! `unshot` as the last change of each patch.
+//!
+//! The state is what every solver has: the iterate and its cost. Figures that only some
+//! solvers have (group steps, condition numbers, fallbacks) are in their
+//! [`crate::Record`].
 
 use radiosity_core::Real;
 
@@ -26,17 +30,11 @@ pub struct State {
     pub ff_seconds: f64,
     /// Seconds spent in the solver outside column computations.
     pub solve_seconds: f64,
-    /// Of `solve_seconds`, the seconds spent building and solving group systems.
+    /// Of `solve_seconds`, the seconds of the group steps' own work: building and solving
+    /// group systems and shooting their solution, and for group-accelerated shooting choosing
+    /// the group too. Time accounting, shown beside the form-factor time; what the group steps
+    /// did is in the solver's record ([`crate::Run::record`]).
     pub group_seconds: f64,
-    /// Group shooting steps that did not solve their group system and shot its patches one
-    /// after another instead ([`crate::group_step`]): the system was singular, not an
-    /// M-matrix, or worse conditioned than [`crate::group_step::CONDITION_LIMIT`].
-    pub group_fallbacks: u64,
-    /// The largest estimate of the condition number `κ_∞(Φ_rr)` over the group shooting steps
-    /// so far, the largest over channels in each step ([`crate::group_step`]): 0 while no
-    /// group step has run, infinite once a step found a singular group system or one that is
-    /// not an M-matrix.
-    pub group_condition: Real,
 }
 
 impl State {
@@ -52,8 +50,6 @@ impl State {
             ff_seconds: 0.0,
             solve_seconds: 0.0,
             group_seconds: 0.0,
-            group_fallbacks: 0,
-            group_condition: 0.0,
         }
     }
 

@@ -45,6 +45,37 @@ pub enum StopRule {
     Time(Duration),
 }
 
+/// The shorter of a number's plain and exponent forms (`0.05`, `1e-3`), plain on a tie.
+fn short(v: f64) -> String {
+    let (plain, exponent) = (format!("{v}"), format!("{v:e}"));
+    if exponent.len() < plain.len() { exponent } else { plain }
+}
+
+/// As written in a rule: `480`, `2n`, `n`.
+impl std::fmt::Display for Count {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Count::Absolute(k) => write!(f, "{k}"),
+            Count::PerPatch(1.0) => write!(f, "n"),
+            Count::PerPatch(m) => write!(f, "{}n", short(m)),
+        }
+    }
+}
+
+/// As written in a rule list, in a form [`StopRules::parse`] reads back: `columns=2n`,
+/// `rms=1e-3`, `time=30s`.
+impl std::fmt::Display for StopRule {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            StopRule::Columns(c) => write!(f, "columns={c}"),
+            StopRule::Steps(c) => write!(f, "steps={c}"),
+            StopRule::Rms(e) => write!(f, "rms={}", short(e)),
+            StopRule::Residual(r) => write!(f, "residual={}", short(r)),
+            StopRule::Time(t) => write!(f, "time={}s", short(t.as_secs_f64())),
+        }
+    }
+}
+
 /// A list of stop rules; the first that holds stops the run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StopRules {

@@ -205,10 +205,14 @@ fn pr_shoots_by_area_and_southwell_by_value() {
 struct Rms(Vec<Real>);
 
 impl Observer for Rms {
-    fn observe(&mut self, state: &State) -> Option<Real> {
+    fn observe_step(&mut self, state: &State) -> Option<Real> {
         let num: Real = state.radiosity.iter().zip(&self.0).map(|(b, x)| (b - x).powi(2)).sum();
         let den: Real = self.0.iter().map(|x| x * x).sum();
         Some((num / den).sqrt())
+    }
+
+    fn measures_error(&self) -> bool {
+        true
     }
 }
 
@@ -602,9 +606,9 @@ fn the_condition_estimate_is_exact_on_a_closed_furnace() {
         let (system, f) = furnace(vec![1.0; 6], rho, |i, j| if i == j { 0.0 } else { 0.2 });
         let run = solve("group-pr-g6", &system, &f, "steps=1");
         let exact = (1.0 + rho) / (1.0 - rho);
-        let got = run.state.group_condition;
+        let got = run.record.real("group_condition").unwrap();
         assert!((got / exact - 1.0).abs() < 1e-9, "ρ = {rho}: κ_∞ {got} against {exact}");
-        assert_eq!(run.state.group_fallbacks, 0);
+        assert_eq!(run.record.count("group_fallbacks"), Some(0));
         // The one group is the whole system: one step solves it, B = E/(1 − ρ).
         for b in &run.state.radiosity {
             assert!((b * (1.0 - rho) - 1.0).abs() < 1e-10, "ρ = {rho}: {b}");
@@ -617,7 +621,7 @@ fn the_condition_estimate_is_exact_on_a_closed_furnace() {
         let (system, f) = furnace(area.clone(), rho, |_, j| weights[j]);
         let run = solve("group-pr-g6", &system, &f, "steps=1");
         let exact = (1.0 + rho - 2.0 * rho * weights[0]) / (1.0 - rho);
-        let got = run.state.group_condition;
+        let got = run.record.real("group_condition").unwrap();
         assert!((got / exact - 1.0).abs() < 1e-9, "ρ = {rho}, F_ij = A_j/ΣA: κ_∞ {got} against {exact}");
         for b in &run.state.radiosity {
             assert!((b * (1.0 - rho) - 1.0).abs() < 1e-10, "ρ = {rho}: {b}");
@@ -630,11 +634,14 @@ fn the_condition_estimate_is_exact_on_a_closed_furnace() {
     let columns: Vec<&[Real]> = group.iter().map(|&g| f.column(g)).collect();
     for inner in [InnerSolve::Lu, InnerSolve::GaussSeidel] {
         let mut state = State::from_emission(system.emissions(), 1);
-        group_shot(&problem, &mut state, &group, &columns, &[0.0; 6], inner).unwrap();
-        assert!((state.group_condition / 3.0 - 1.0).abs() < 1e-12, "{inner:?}: {}", state.group_condition);
+        let shot = group_shot(&problem, &mut state, &group, &columns, &[0.0; 6], inner).unwrap();
+        assert!((shot.condition / 3.0 - 1.0).abs() < 1e-12, "{inner:?}: {}", shot.condition);
     }
-    // No group step: no estimate.
-    assert_eq!(solve("pr", &system, &f, "steps=3").state.group_condition, 0.0);
+    // No group step: no estimate, 0 for a group solver before its first group step (the
+    // emitters shoot first) and nothing at all for a point solver.
+    let run = solve("pr-g2:f=1", &system, &f, "steps=1");
+    assert_eq!((run.record.real("group_condition"), run.record.count("group_steps")), (Some(0.0), Some(0)));
+    assert!(solve("pr", &system, &f, "steps=3").record.is_empty());
     assert_eq!(CONDITION_LIMIT, 1e10);
 }
 
@@ -675,9 +682,9 @@ fn a_group_that_is_singular_or_not_an_m_matrix_falls_back_to_point_shots() {
         let columns: Vec<&[Real]> = group.iter().map(|&g| f.column(g)).collect();
         for inner in [InnerSolve::Lu, InnerSolve::GaussSeidel] {
             let mut state = State::from_emission(system.emissions(), 3);
-            group_shot(&problem, &mut state, &group, &columns, &[0.0; 9], inner).unwrap();
-            assert_eq!(state.group_fallbacks, 1, "{inside}, {inner:?}");
-            assert_eq!(state.group_condition, Real::INFINITY, "{inside}, {inner:?}");
+            let shot = group_shot(&problem, &mut state, &group, &columns, &[0.0; 9], inner).unwrap();
+            assert!(shot.fell_back, "{inside}, {inner:?}");
+            assert_eq!(shot.condition, Real::INFINITY, "{inside}, {inner:?}");
             // The fallback shot each member in turn: the last one holds nothing.
             assert!(state.unshot[6..9].iter().all(|&u| u == 0.0), "{:?}", state.unshot);
             assert_unshot_is_the_residual(&format!("{inside}, {inner:?}"), &system, &f, &state);
@@ -693,8 +700,8 @@ fn a_group_that_is_singular_or_not_an_m_matrix_falls_back_to_point_shots() {
         }
         for (name, system, f) in cases {
             let run = solve(name, system, f, "steps=8");
-            assert!(run.state.group_fallbacks > 0, "{name}, {inside}: {}", run.state.group_condition);
-            assert_eq!(run.state.group_condition, Real::INFINITY, "{name}, {inside}");
+            assert!(run.record.count("group_fallbacks").unwrap() > 0, "{name}, {inside}: {}", run.record);
+            assert_eq!(run.record.real("group_condition"), Some(Real::INFINITY), "{name}, {inside}");
             assert_unshot_is_the_residual(&format!("{name}, {inside}"), system, f, &run.state);
         }
     }
@@ -705,8 +712,8 @@ fn a_well_posed_group_does_not_fall_back() {
     let (system, f) = twelve();
     for name in SHOOTING.iter().filter(|s| s.contains("-g")) {
         let run = solve(name, &system, &f, "steps=17");
-        assert_eq!(run.state.group_fallbacks, 0, "{name}");
-        let kappa = run.state.group_condition;
+        assert_eq!(run.record.count("group_fallbacks"), Some(0), "{name}");
+        let kappa = run.record.real("group_condition").unwrap();
         assert!((1.0..1e3).contains(&kappa), "{name}: κ_∞ {kappa}");
     }
 }
@@ -721,8 +728,8 @@ fn inner_gauss_seidel_stops_on_the_residual_of_the_group_system() {
     let group: Vec<usize> = (0..12).collect();
     let columns: Vec<&[Real]> = group.iter().map(|&g| f.column(g)).collect();
     let mut state = State::from_emission(system.emissions(), k);
-    group_shot(&problem, &mut state, &group, &columns, &[0.0; 36], InnerSolve::GaussSeidel).unwrap();
-    assert_eq!(state.group_fallbacks, 0);
+    let shot = group_shot(&problem, &mut state, &group, &columns, &[0.0; 36], InnerSolve::GaussSeidel).unwrap();
+    assert!(!shot.fell_back);
     for c in 0..k {
         // The shot radiosity started at 0, so y = x = B − ΔB.
         let y: Vec<Real> = (0..12).map(|i| state.radiosity[i * k + c] - state.unshot[i * k + c]).collect();
@@ -912,4 +919,417 @@ fn the_divergence_rule_measures_rises_from_a_floor_under_the_minimum() {
     assert_eq!(run.termination, TerminationReason::Steps(4));
     let run = run_rogue(&mut rogue(vec![1.0, 0.1, 1001.0]), "steps=4").unwrap();
     assert_eq!(run.termination, TerminationReason::Diverged { step: 2, residual: 1001.0, minimum: 0.1 });
+}
+
+// The registry: families of names, typed parameters, a user's own solver, suggestions.
+
+use radiosity_solvers::group_accelerated::DEFAULT_TARGET;
+use std::str::FromStr;
+
+#[test]
+fn every_listed_name_builds_and_keeps_its_name() {
+    let registry = SolverRegistry::builtin();
+    for name in POINT_SOLVERS.iter().chain(&GROUP_SOLVERS).chain(&BEYOND_PAPER_SOLVERS) {
+        assert_eq!(solver_by_name(name).unwrap().name(), *name);
+        assert_eq!(registry.build(name).unwrap().name(), *name);
+    }
+    // And every family's examples.
+    for entry in registry.entries() {
+        for example in entry.examples() {
+            assert!(registry.build(example).is_ok(), "{}: {example}", entry.syntax());
+        }
+    }
+}
+
+#[test]
+fn typed_parameters_parse_their_family_and_no_other() {
+    assert_eq!("sor-1.2".parse::<GaussSeidelParams>(), Ok(GaussSeidelParams { omega: 1.2 }));
+    assert_eq!("gauss-seidel".parse::<GaussSeidelParams>(), Ok(GaussSeidelParams::default()));
+    assert_eq!("pr".parse::<GaussSeidelParams>(), Err(ParseSolverError::OtherFamily));
+    assert_eq!("sor-abc".parse::<GaussSeidelParams>(), Err(ParseSolverError::OtherFamily));
+    let Err(ParseSolverError::Refused(e)) = "sor-2.5".parse::<GaussSeidelParams>() else { panic!("sor-2.5") };
+    assert_eq!(e.to_string(), "solver 'sor-2.5': SOR needs 0 < ω < 2, not 2.5");
+    assert_eq!("jacobi".parse::<JacobiParams>(), Ok(JacobiParams));
+    assert_eq!(
+        "relax-1.5".parse::<PointShootingParams>(),
+        Ok(PointShootingParams { method: ShootingMethod::Relax(1.5) })
+    );
+    assert_eq!("group-gs-g30".parse::<PointShootingParams>(), Err(ParseSolverError::OtherFamily));
+    assert_eq!(
+        "group-xu-g4".parse::<GroupShootingParams>(),
+        Ok(GroupShootingParams { method: ShootingMethod::Xu(xu::XuParts::BOTH), group: 4 })
+    );
+    assert_eq!("group-gs-g4".parse::<GroupShootingParams>(), Err(ParseSolverError::OtherFamily));
+    let gathering = "group-gs-g8:groups=spatial".parse::<GroupGatheringParams>().unwrap();
+    assert_eq!((gathering.group, gathering.partition), (8, group_gathering::Partition::Spatial));
+    // Group acceleration: the parameters, the name as written and the canonical one.
+    let p = GroupAcceleratedParams::from_str("xu-g30-m480:f=10:groups=interaction").unwrap();
+    assert_eq!(p.method, ShootingMethod::Xu(xu::XuParts::BOTH));
+    assert_eq!((p.group, p.memory, p.frequency), (30, 480, Frequency::Fixed(10)));
+    assert_eq!(p.building, GroupBuilding::Interaction);
+    assert_eq!(p.canonical_name(), "xu-g30-m480:f=10:groups=interaction");
+    let p = GroupAcceleratedParams::from_str("pr-g30:f=auto:target=0.1").unwrap();
+    assert_eq!(p.frequency, Frequency::Auto { target: 0.1 });
+    assert_eq!((p.solver_name(), p.canonical_name()), ("pr-g30:f=auto:target=0.1".into(), "pr-g30:target=0.1".into()));
+    let p = GroupAcceleratedParams::from_str("pr-g30:target=0.2:f=timed").unwrap();
+    assert_eq!(p.frequency, Frequency::Timed { target: 0.2 });
+    assert_eq!(p.canonical_name(), "pr-g30:f=timed:target=0.2");
+    assert_eq!(
+        GroupAcceleratedParams::from_str("pr-g30").unwrap().frequency,
+        Frequency::Auto { target: DEFAULT_TARGET }
+    );
+    assert_eq!(GroupAcceleratedParams::from_str("group-pr-g30"), Err(ParseSolverError::OtherFamily));
+    // Built without a name: the canonical one.
+    let typed = GroupAcceleratedParams { memory: 480, inner: InnerSolve::GaussSeidel, ..Default::default() };
+    assert_eq!(typed.build().unwrap().name(), "pr-g30-m480:inner=gs");
+    let southwell = GroupAcceleratedParams { method: ShootingMethod::Southwell, ..Default::default() };
+    assert!(southwell.build().err().unwrap().to_string().contains("not to southwell"));
+}
+
+#[test]
+fn bad_parameters_of_the_new_frequency_are_refused_like_the_others() {
+    for (bad, words) in [
+        ("pr-g30:f=timed:target=0", "positive number"),
+        ("pr-g30:f=sometimes", "needs f=auto, f=timed or f ≥ 1"),
+        ("pr-g30:f=timed:speed=2", "f=timed"),
+        ("xu-g30:f=timed:inner=cg", "inner=lu or inner=gs"),
+    ] {
+        let e = solver_by_name(bad).err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(e.starts_with(&format!("solver '{bad}': ")) && e.contains(words), "{bad}: {e}");
+    }
+    assert_eq!(solver_by_name("xu-g30-m480:f=timed").unwrap().name(), "xu-g30-m480:f=timed");
+}
+
+/// A user's solver: shoots nothing, for `lazy-N` steps at most (checked by its stop rule).
+struct Lazy(u64);
+
+impl Solver for Lazy {
+    fn name(&self) -> String {
+        format!("lazy-{}", self.0)
+    }
+
+    fn next_step(&mut self, _problem: &Problem<'_>, _state: &mut State) -> Result<(), SolverError> {
+        Ok(())
+    }
+
+    fn residual_power(&self, _problem: &Problem<'_>, _state: &State) -> Option<Real> {
+        None
+    }
+
+    fn record(&self) -> Record {
+        Record::new().with("laziness", self.0)
+    }
+}
+
+/// The typed family of [`Lazy`]: `lazy-N`, `N ≥ 1`.
+#[derive(Debug, PartialEq)]
+struct LazyParams(u64);
+
+impl FromStr for LazyParams {
+    type Err = ParseSolverError;
+
+    fn from_str(name: &str) -> Result<LazyParams, ParseSolverError> {
+        let n = name.strip_prefix("lazy-").ok_or(ParseSolverError::OtherFamily)?;
+        match n.parse::<u64>() {
+            Ok(n) if n > 0 => Ok(LazyParams(n)),
+            _ => Err(SolverError::BadParams(format!("solver '{name}': needs lazy-N with N ≥ 1")).into()),
+        }
+    }
+}
+
+impl SolverParams for LazyParams {
+    const SYNTAX: &'static str = "lazy-N";
+    const HELP: &'static str = "does nothing for N steps";
+    const EXAMPLES: &'static [&'static str] = &["lazy-3"];
+
+    fn build(&self) -> Result<Box<dyn Solver>, SolverError> {
+        Ok(Box::new(Lazy(self.0)))
+    }
+}
+
+#[test]
+fn a_users_solver_builds_through_the_registry() {
+    let mut registry = SolverRegistry::builtin();
+    registry.register::<LazyParams>().register_fn("idle", "does nothing at all", ["idle"], |name| {
+        Ok((name == "idle").then(|| Box::new(Lazy(0)) as Box<dyn Solver>))
+    });
+    let mut lazy = registry.build("lazy-3").unwrap();
+    assert_eq!(lazy.name(), "lazy-3");
+    assert_eq!(registry.build("idle").unwrap().name(), "lazy-0");
+    // Its run, and its record, through the executor.
+    let system = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![1.0; 6]).unwrap();
+    let f = cube();
+    let problem = Problem::new(&system, &f).unwrap();
+    let run =
+        Executor::new(lazy.as_mut(), StopRules::parse("steps=3").unwrap()).run(&problem, &mut NoObserver).unwrap();
+    assert_eq!((run.termination, run.state.columns), (TerminationReason::Steps(3), 0));
+    assert_eq!(run.record.count("laziness"), Some(3));
+    // Its refusals name it; the built-in names keep their meaning; the lists show it.
+    assert_eq!(registry.build("lazy-0").err().unwrap().to_string(), "solver 'lazy-0': needs lazy-N with N ≥ 1");
+    assert_eq!(registry.build("pr").unwrap().name(), "pr");
+    assert!(registry.names().ends_with("; lazy-N (e.g. lazy-3); idle"), "{}", registry.names());
+    assert!(
+        registry.help().lines().any(|l| l.starts_with("lazy-N") && l.contains("lazy-3") && l.ends_with("for N steps"))
+    );
+    assert_eq!(registry.suggest("lazzy-3").as_deref(), Some("lazy-3"));
+    // Without the built-in families, only its own.
+    let mut own = SolverRegistry::empty();
+    own.register::<LazyParams>();
+    assert_eq!(own.build("lazy-2").unwrap().name(), "lazy-2");
+    let Err(SolverError::UnknownSolver { valid, .. }) = own.build("pr") else { panic!("pr without built-ins") };
+    assert_eq!(valid, "lazy-N (e.g. lazy-3)");
+}
+
+#[test]
+fn unknown_names_get_the_nearest_name_and_the_wrapped_list() {
+    let registry = SolverRegistry::builtin();
+    for (typo, nearest) in [
+        ("gaus-seidel", Some("gauss-seidel")),
+        ("xu-g30-m48O", Some("xu-g30-m480")),
+        ("xu-g30-m48O:f=10", Some("xu-g30-m480:f=10")),
+        ("xu-q30", Some("xu-g30")),
+        ("jacobbi", Some("jacobi")),
+        ("group-pr-g3O", Some("group-pr-g30")),
+        ("magic", None),
+        ("sor-abc", None),
+    ] {
+        let Err(SolverError::UnknownSolver { name, valid, suggestion }) = registry.build(typo) else {
+            panic!("{typo} is not unknown")
+        };
+        assert_eq!((name.as_str(), suggestion.as_deref()), (typo, nearest), "{typo}");
+        assert_eq!(valid, registry.names());
+        assert_eq!(solver_by_name(typo).err().unwrap().to_string(), registry.build(typo).err().unwrap().to_string());
+    }
+    let message = solver_by_name("gaus-seidel").err().unwrap().to_string();
+    assert!(message.starts_with("unknown solver 'gaus-seidel' (did you mean 'gauss-seidel'?); solvers are jacobi; "));
+    // One sentence over several lines of at most 100 characters, continuation lines indented by
+    // two spaces; joined, it is the unwrapped sentence.
+    let lines: Vec<&str> = message.lines().collect();
+    assert!(lines.len() > 2, "{message}");
+    for line in &lines {
+        assert!(line.chars().count() <= 100, "{} characters: {line}", line.chars().count());
+    }
+    assert!(lines[1..].iter().all(|l| l.starts_with("  ") && !l.starts_with("   ")), "{message}");
+    let joined = lines.iter().map(|l| l.trim_start()).collect::<Vec<_>>().join(" ");
+    let sentence =
+        format!("unknown solver 'gaus-seidel' (did you mean 'gauss-seidel'?); solvers are {}", registry.names());
+    assert_eq!(joined, sentence);
+    let no_guess = solver_by_name("magic").err().unwrap().to_string();
+    assert!(no_guess.starts_with("unknown solver 'magic'; solvers are jacobi; ") && !no_guess.contains("did you mean"));
+    // The list names every family, with placeholders and examples.
+    for words in ["sor-ω (e.g. sor-1.2)", "relax-ω (e.g. relax-1.5)", "group-S-gM", "pr-g30", "xu-g30-m480:f=10"] {
+        assert!(registry.names().contains(words), "{words}: {}", registry.names());
+    }
+}
+
+#[test]
+fn the_help_has_one_line_per_family() {
+    let registry = SolverRegistry::builtin();
+    let help = registry.help();
+    let lines: Vec<&str> = help.lines().collect();
+    assert_eq!(lines.len(), registry.entries().len());
+    for (line, entry) in lines.iter().zip(registry.entries()) {
+        assert!(line.starts_with(entry.syntax()), "{line}");
+        assert!(line.contains(&format!("e.g. {}", entry.examples().join(", "))), "{line}");
+        assert!(line.ends_with(entry.help()), "{line}");
+    }
+}
+
+// Observers: when they are called, every N steps, and rules they cannot feed.
+
+/// Counts its calls and the steps it saw.
+#[derive(Default)]
+struct Calls {
+    init: Vec<String>,
+    steps: Vec<u64>,
+    last: Option<(u64, TerminationReason)>,
+    measures: bool,
+}
+
+impl Observer for Calls {
+    fn observe_init(&mut self, solver: &str, state: &State) -> Option<Real> {
+        assert_eq!(state.step, 0);
+        self.init.push(solver.to_string());
+        None
+    }
+
+    fn observe_step(&mut self, state: &State) -> Option<Real> {
+        self.steps.push(state.step);
+        self.measures.then_some(1.0 / state.step as Real)
+    }
+
+    fn observe_final(&mut self, run: &Run) {
+        self.last = Some((run.state.step, run.termination));
+    }
+
+    fn measures_error(&self) -> bool {
+        self.measures
+    }
+}
+
+#[test]
+fn observers_see_the_start_every_step_and_the_end() {
+    let system = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![1.0; 6]).unwrap();
+    let f = cube();
+    let problem = Problem::new(&system, &f).unwrap();
+    let run = |observer: &mut dyn Observer, rules: &str| {
+        let mut solver = solver_by_name("pr").unwrap();
+        Executor::new(solver.as_mut(), StopRules::parse(rules).unwrap()).run(&problem, observer)
+    };
+    let mut calls = Calls::default();
+    run(&mut calls, "steps=7").unwrap();
+    assert_eq!(calls.init, ["pr"]);
+    assert_eq!(calls.steps, (1..=7).collect::<Vec<_>>());
+    assert_eq!(calls.last, Some((7, TerminationReason::Steps(7))));
+    // Every third step; the start and the end always.
+    let mut every = Calls::default().every(3);
+    run(&mut every, "steps=7").unwrap();
+    let inner = every.into_inner();
+    assert_eq!((inner.init.len(), inner.steps, inner.last), (1, vec![3, 6], Some((7, TerminationReason::Steps(7)))));
+    // The rms rule holds only where the observer measures: e_rms = 1/step ≤ 0.2 from step 5,
+    // seen at step 6.
+    let mut every = Every::new(3, Calls { measures: true, ..Calls::default() });
+    let done = run(&mut every, "rms=0.2").unwrap();
+    assert_eq!((done.state.step, done.termination), (6, TerminationReason::Rms(1.0 / 6.0)));
+    // Through a reference, and every 0 steps taken as every step.
+    let mut calls = Calls::default();
+    let mut by_ref = Every::new(0, &mut calls);
+    run(&mut by_ref, "steps=2").unwrap();
+    assert_eq!(calls.steps, [1, 2]);
+}
+
+#[test]
+fn an_rms_rule_that_no_observer_feeds_is_refused_before_the_run() {
+    let system = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![1.0; 6]).unwrap();
+    let f = cube();
+    let problem = Problem::new(&system, &f).unwrap();
+    for observer in [&mut NoObserver as &mut dyn Observer, &mut Calls::default(), &mut Calls::default().every(2)] {
+        let mut solver = solver_by_name("pr").unwrap();
+        let rules = StopRules::parse("steps=100,rms=0.1").unwrap();
+        let err = Executor::new(solver.as_mut(), rules).run(&problem, observer).unwrap_err();
+        assert_eq!(err, SolverError::ErrorNotMeasured { rule: "rms=0.1".into() });
+        assert_eq!(
+            err.to_string(),
+            "the stop rule rms=0.1 needs e_rms against a reference solution, which this run does not measure"
+        );
+    }
+    // Nothing ran: the observer was not even called on the initial state.
+    let mut calls = Calls::default();
+    let mut solver = solver_by_name("pr").unwrap();
+    let rules = StopRules::parse("rms=1e-3").unwrap();
+    let err = Executor::new(solver.as_mut(), rules).run(&problem, &mut calls).unwrap_err();
+    assert!(err.to_string().starts_with("the stop rule rms=1e-3 needs"), "{err}");
+    assert!(calls.init.is_empty() && calls.steps.is_empty() && calls.last.is_none());
+}
+
+#[test]
+fn stop_rules_show_as_written() {
+    let list = "columns=2n, steps=100, rms=1e-3, residual=1e-4, time=30s, steps=n, rms=0.05, time=0.25s";
+    let rules = StopRules::parse(list).unwrap();
+    let shown: Vec<String> = rules.rules.iter().map(ToString::to_string).collect();
+    assert_eq!(shown.join(", "), list);
+    assert_eq!(StopRules::parse(&shown.join(",")).unwrap(), rules);
+}
+
+// The solver's record.
+
+#[test]
+fn a_record_keeps_its_keys_in_order_and_typed() {
+    let mut record = Record::new().with("group_steps", 3u64).with("group_condition", 12.5);
+    record.set("note", "fine").set("group_steps", 4u64);
+    assert_eq!(record.len(), 3);
+    assert_eq!(record.iter().map(|(k, _)| k).collect::<Vec<_>>(), ["group_steps", "group_condition", "note"]);
+    assert_eq!((record.count("group_steps"), record.real("group_condition")), (Some(4), Some(12.5)));
+    assert_eq!((record.text("note"), record.get("note")), (Some("fine"), Some(&Value::Text("fine".into()))));
+    assert_eq!((record.real("group_steps"), record.count("missing")), (None, None));
+    assert_eq!(record.to_string(), "group_steps=4, group_condition=12.5, note=fine");
+    assert_eq!((&record).into_iter().len(), 3);
+    assert!(Record::new().is_empty());
+}
+
+#[test]
+fn group_solvers_record_their_group_steps() {
+    let (system, f) = twelve();
+    // Group PR: every step a group step; the first group is the 3 emitters, the next ones 4.
+    let run = solve("group-pr-g4", &system, &f, "steps=5");
+    let r = &run.record;
+    assert_eq!(
+        (r.count("group_steps"), r.count("group_size_max"), r.count("group_fallbacks")),
+        (Some(5), Some(4), Some(0))
+    );
+    assert_eq!(r.real("group_size_mean"), Some((3.0 + 4.0 * 4.0) / 5.0));
+    assert!(r.real("group_condition").is_some_and(|k| (1.0..1e3).contains(&k)), "{r}");
+    let keys: Vec<&str> = r.iter().map(|(k, _)| k).collect();
+    assert_eq!(keys, ["group_steps", "group_size_mean", "group_size_max", "group_condition", "group_fallbacks"]);
+    // Group Gauss–Seidel with groups of 5 over 12 patches: 5, 5, 2.
+    let run = solve("group-gs-g5", &system, &f, "steps=3");
+    let r = &run.record;
+    assert_eq!(
+        (r.count("group_steps"), r.count("group_size_max"), r.real("group_size_mean")),
+        (Some(3), Some(5), Some(4.0))
+    );
+    assert_eq!(r.count("group_fallbacks"), Some(0));
+    assert!(r.real("group_condition").is_some_and(|k| (1.0..1e3).contains(&k)), "{r}");
+    // The whole cube in one group: κ_∞ of Φ = I − ρ F, exact as for group shooting.
+    let furnace = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![1.0; 6]).unwrap();
+    let uniform = DenseColumns::from_fn(6, |i, j| if i == j { 0.0 } else { 0.2 });
+    let kappa = solve("group-jacobi-g6", &furnace, &uniform, "steps=1").record.real("group_condition").unwrap();
+    assert!((kappa / 3.0 - 1.0).abs() < 1e-12, "{kappa}");
+    // Group acceleration adds its counted operations and its period.
+    let run = solve("pr-g4-m12:f=3", &system, &f, "steps=30");
+    assert!(run.record.count("group_steps").unwrap() > 0);
+    assert!(run.record.count("group_operations").unwrap() > 0);
+    assert_eq!(run.record.count("group_period"), Some(3));
+}
+
+#[test]
+fn automatic_group_frequency_is_reproducible_and_follows_the_cost_model() {
+    let (system, f) = twelve();
+    let (n, k, m_stored) = (12u64, 3u64, 8u64);
+    let name = "pr-g8-m16";
+    // Two runs of the same problem take the same steps.
+    let first = solve(name, &system, &f, "steps=60");
+    let second = solve(name, &system, &f, "steps=60");
+    assert_eq!(first.state.radiosity, second.state.radiosity);
+    assert_eq!(first.state.unshot, second.state.unshot);
+    assert_eq!(
+        (first.state.step, first.state.columns, first.state.columns_reused),
+        (second.state.step, second.state.columns, second.state.columns_reused)
+    );
+    assert_eq!(first.record, second.record);
+    // The runs are deterministic, so a run of s steps is the first s steps of a longer one:
+    // read off where group steps happen and what each counted.
+    let at: Vec<(u64, u64, u64)> = (0..=60)
+        .map(|s| {
+            let r = if s == 0 { Record::new() } else { solve(name, &system, &f, &format!("steps={s}")).record };
+            (
+                r.count("group_steps").unwrap_or(0),
+                r.count("group_operations").unwrap_or(0),
+                r.count("group_period").unwrap_or(0),
+            )
+        })
+        .collect();
+    let group_steps: Vec<usize> = (1..=60).filter(|&s| at[s].0 > at[s - 1].0).collect();
+    assert!(group_steps.len() >= 5, "{group_steps:?}");
+    let column = DEFAULT_TARGET * n as Real * PAIR_OPERATIONS as Real;
+    let mut longer = false;
+    for pair in group_steps.windows(2) {
+        let (s, next) = (pair[0], pair[1]);
+        let operations = at[s].1 - at[s - 1].1;
+        let predicted = (operations as Real / column).ceil().max(1.0) as usize;
+        assert_eq!(next - s, predicted, "group steps at {group_steps:?}: {operations} operations at step {s}");
+        assert_eq!(at[s].2 as usize, predicted);
+        longer |= predicted > 1;
+    }
+    assert!(longer, "the model must space some group steps apart: {group_steps:?}");
+    // The first group step runs as soon as m = 8 columns are stored (K = 8), and counts, for
+    // PR (no row term) and its group of size m': K k to choose, m'² k to build Φ_rr,
+    // (⌊2m'³/3⌋ + 4m'²) k for the LU, n m' k to shoot, and m' k for the members' overshoots.
+    let s = group_steps[0];
+    let m = solve(name, &system, &f, &format!("steps={s}")).record.count("group_size_max").unwrap();
+    let model = m_stored * k + m * m * k + (2 * m * m * m / 3 + 4 * m * m) * k + n * m * k + m * k;
+    assert_eq!(at[s].1, model, "first group step at {s}, group of {m}");
+    // A smaller target spaces them further apart.
+    let sparse = solve("pr-g8-m16:target=0.01", &system, &f, "steps=60").record;
+    assert!(sparse.count("group_steps").unwrap() < first.record.count("group_steps").unwrap());
 }

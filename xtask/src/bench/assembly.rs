@@ -2,12 +2,12 @@
 //! at k = 1 and k = 4 shadow rays per pair, beside column-by-column assembly.
 
 use super::{Config, human_bytes, median, progress, sig};
-use crate::scene_report::PreparedScene;
 use anyhow::{Result, bail};
 use radiosity_core::Real;
 use radiosity_ff::guard::MatrixFigures;
 use radiosity_ff::matrix::Storage;
 use radiosity_ff::{AnalyticColumns, BackendSpec, StoredMatrix};
+use radiosity_geom::PreparedScene;
 use std::fmt::Write as _;
 use std::time::Instant;
 

@@ -2,10 +2,10 @@
 //! which the same rays are traced straight through the BVH.
 
 use super::{Config, Findings, median, pool, sig};
-use crate::scene_report::PreparedScene;
 use anyhow::{Context, Result};
 use radiosity_core::ColumnSource;
 use radiosity_ff::{Backend, BackendSpec, ColumnRays, FormFactorInput, TracedRays};
+use radiosity_geom::PreparedScene;
 use radiosity_geom::Visibility;
 use radiosity_geom::visibility::RawTracer;
 use rayon::prelude::*;
@@ -188,7 +188,7 @@ fn measure(
 pub(crate) fn run(config: &Config, prepared: &PreparedScene, findings: &mut Findings) -> Result<String> {
     let scene = &prepared.loaded.scene;
     let n = scene.len();
-    let input = prepared.ff_input();
+    let input = prepared.into();
     let raw = prepared.visibility.raw_tracer();
     let columns = sample(n, config.columns, SAMPLE_SEED);
     let pools = [pool(1)?, pool(2)?];

@@ -11,14 +11,16 @@
 //! (the high-water mark of its resident memory; absent where `/proc` is not).
 
 use super::{Config, Findings, duration, human_bytes, median, progress, sig};
-use crate::experiment::{Experiment, require_emitters};
-use crate::ff::fresh_backend;
-use crate::scene_report::{PreparedScene, prepare};
+use crate::bars::Bars;
+use crate::experiment::prepare;
 use anyhow::{Context, Result, bail};
 use radiosity_core::{LinearSystem, Real};
+use radiosity_eval::backends::fresh_backend;
 use radiosity_eval::metrics::errors_against;
+use radiosity_eval::{Lab, LabOptions};
 use radiosity_ff::BackendSpec;
-use radiosity_solvers::{Executor, Observer, Problem, State, StopRules, solver_by_name};
+use radiosity_geom::PreparedScene;
+use radiosity_solvers::{Executor, Observer, Problem, SolverRegistry, State, StopRules};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -74,7 +76,7 @@ struct WallObserver<'a> {
 }
 
 impl Observer for WallObserver<'_> {
-    fn observe(&mut self, state: &State) -> Option<Real> {
+    fn observe_step(&mut self, state: &State) -> Option<Real> {
         let now = Instant::now();
         let seconds = (now - self.start).as_secs_f64() - self.measurement;
         let e_rms = errors_against(self.system, self.star, &state.radiosity).ok().map(|e| e.e_rms);
@@ -88,6 +90,10 @@ impl Observer for WallObserver<'_> {
         }
         self.measurement += now.elapsed().as_secs_f64();
         e_rms
+    }
+
+    fn measures_error(&self) -> bool {
+        true
     }
 }
 
@@ -103,7 +109,7 @@ fn peak_rss() -> Option<u64> {
 pub(crate) fn child(scene: &str, solver: &str, ff: &str, reference: &Path, max_seconds: Real) -> Result<()> {
     let spec = BackendSpec::parse(ff)?;
     let rules = StopRules::parse(&format!("rms={},time={}ms", THRESHOLDS[2], (max_seconds * 1e3).ceil() as u64))?;
-    let mut solver = solver_by_name(solver)?;
+    let mut solver = SolverRegistry::builtin().build(solver)?;
     let bytes = std::fs::read(reference).with_context(|| format!("cannot read {}", reference.display()))?;
     let star: Vec<Real> =
         bytes.chunks_exact(8).map(|c| Real::from_le_bytes(c.try_into().expect("chunks of 8 bytes"))).collect();
@@ -114,7 +120,7 @@ pub(crate) fn child(scene: &str, solver: &str, ff: &str, reference: &Path, max_s
     if star.len() != system.len() * system.channels().count() {
         bail!("the reference in {} is not one of scene {scene}", reference.display());
     }
-    let backend = fresh_backend(&prepared, &spec)?;
+    let backend = fresh_backend(&prepared, &spec, &Bars::new())?;
     let order = radiosity_geom::spatial_order(&prepared.loaded.scene);
     let backend_seconds = start.elapsed().as_secs_f64() - scene_seconds;
     let problem = Problem::new(&system, &backend)?.with_patch_order(&order)?;
@@ -167,16 +173,15 @@ fn spawn(config: &Config, solver: &str, ff: &str, reference: &Path) -> Result<Ch
 
 /// Runs sections 4 and 5.
 pub(crate) fn run(config: &Config, prepared: &PreparedScene, findings: &mut Findings) -> Result<String> {
-    require_emitters(prepared)?;
     let spinner = progress(1, "reference");
     spinner.set_message("solved once, outside every timed run");
     let start = Instant::now();
-    let experiment = Experiment::new(prepared, BackendSpec::parse("analytic")?)?;
+    let experiment = Lab::new(prepared, &BackendSpec::parse("analytic")?, LabOptions::default(), &Bars::new())?;
     let reference_seconds = start.elapsed().as_secs_f64();
-    let method = experiment.reference.method().to_string();
-    let certificate = experiment.reference.certificate().to_string();
+    let method = experiment.reference().method().to_string();
+    let certificate = experiment.reference().certificate().to_string();
     let file = TempFile(std::env::temp_dir().join(format!("radiosity-bench-reference-{}.bin", std::process::id())));
-    let bytes: Vec<u8> = experiment.reference.values().iter().flat_map(|v| v.to_le_bytes()).collect();
+    let bytes: Vec<u8> = experiment.reference().values().iter().flat_map(|v| v.to_le_bytes()).collect();
     std::fs::write(&file.0, bytes).with_context(|| format!("cannot write {}", file.0.display()))?;
     // The dense reference matrix (8 n² bytes) is not kept while the runs are timed.
     drop(experiment);

@@ -1,0 +1,234 @@
+//! A comparison of solvers on one lab, and what a researcher reads and shows of it:
+//! `convergence.csv` (every metric at the recorded steps), `report.md` (e_rms at n/4, n/2, n
+//! and 2n columns; columns and seconds to reach e_rms 1e-2 and 1e-3; where the time went;
+//! what the scene analysis left out; the reference and its certificate) and plots of e_rms
+//! against shooting steps (the paper's axis), columns and wall seconds, as SVG and PNG, and a
+//! summary table for the terminal.
+//!
+//! Measurement never counts as solver time: it is reported apart (see [`crate::lab`]).
+
+use crate::lab::{Lab, LabError, Outcome, Point, ReferenceOrigin};
+use crate::plot::{Curve, PlotSpec, write_png, write_svg};
+use crate::table::{ConvergenceTable, round_significant};
+use radiosity_core::Real;
+use radiosity_geom::SceneReport;
+use radiosity_solvers::{StopRules, Value};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// What a comparison measured, with what it needs to report it.
+#[derive(Clone, Debug)]
+pub struct Comparison {
+    /// The scene's report.
+    pub scene: SceneReport,
+    /// Patches.
+    pub n: u64,
+    /// The backend's label.
+    pub backend: String,
+    /// The stop rules every solver ran under, as written.
+    pub rules: String,
+    /// The reference's method.
+    pub reference_method: String,
+    /// The reference's certificate.
+    pub reference_certificate: String,
+    /// Where the reference came from.
+    pub reference_origin: ReferenceOrigin,
+    /// One per solver, in order.
+    pub outcomes: Vec<Outcome>,
+}
+
+/// The files a comparison wrote.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Written {
+    /// The folder.
+    pub dir: PathBuf,
+    /// Every file, in the order written.
+    pub files: Vec<PathBuf>,
+}
+
+impl Comparison {
+    /// The comparison of `outcomes`, run on `lab` under `rules`.
+    pub fn new(lab: &Lab<'_>, rules: &StopRules, outcomes: Vec<Outcome>) -> Comparison {
+        Comparison {
+            scene: lab.report().clone(),
+            n: lab.n() as u64,
+            backend: lab.backend().to_string(),
+            rules: rules.rules.iter().map(|r| r.to_string()).collect::<Vec<_>>().join(","),
+            reference_method: lab.reference().method().to_string(),
+            reference_certificate: lab.reference().certificate().to_string(),
+            reference_origin: lab.origin().clone(),
+            outcomes,
+        }
+    }
+
+    /// The outcome of `solver`, by name.
+    pub fn outcome(&self, solver: &str) -> Option<&Outcome> {
+        self.outcomes.iter().find(|o| o.solver == solver)
+    }
+
+    /// Every recorded row of every run.
+    pub fn table(&self) -> ConvergenceTable {
+        let mut table = ConvergenceTable::new();
+        for row in self.outcomes.iter().flat_map(|o| &o.rows) {
+            table.push(row.clone());
+        }
+        table
+    }
+
+    /// Writes `convergence.csv`, `report.md` and the plots into `dir` (created if needed).
+    pub fn write(&self, dir: &Path) -> Result<Written, LabError> {
+        std::fs::create_dir_all(dir).map_err(|e| LabError::write(dir, e))?;
+        let mut files = Vec::new();
+        let csv = dir.join("convergence.csv");
+        self.table().write_csv(create(&csv)?).map_err(|e| LabError::write(&csv, e))?;
+        files.push(csv);
+        let plots = self.write_plots(dir, &mut files)?;
+        let md = dir.join("report.md");
+        std::fs::write(&md, self.report_markdown(&plots)).map_err(|e| LabError::write(&md, e))?;
+        files.push(md);
+        Ok(Written { dir: dir.to_path_buf(), files })
+    }
+
+    /// Writes the three plots as SVG and PNG; returns their file stems and titles.
+    fn write_plots(&self, dir: &Path, files: &mut Vec<PathBuf>) -> Result<Vec<(String, String)>, LabError> {
+        type Axis = fn(&Point) -> Real;
+        let axes: [(&str, &str, Axis); 3] = [
+            ("e_rms-steps", "shooting steps", |p| p.step as Real),
+            ("e_rms-columns", "form-factor columns computed", |p| p.columns as Real),
+            ("e_rms-seconds", "wall seconds (form factors and solving)", |p| p.seconds),
+        ];
+        let mut written = Vec::new();
+        for (stem, x_label, x) in axes {
+            let curves: Vec<Curve> = self
+                .outcomes
+                .iter()
+                .map(|o| Curve { label: o.solver.clone(), points: o.points.iter().map(|p| (x(p), p.e_rms)).collect() })
+                .collect();
+            let spec = PlotSpec {
+                title: format!("{}: e_rms against {x_label}", self.scene.scene),
+                x_label: x_label.into(),
+                size: (800, 500),
+            };
+            let svg = dir.join(format!("{stem}.svg"));
+            write_svg(&curves, &spec, create(&svg)?)?;
+            let png = dir.join(format!("{stem}.png"));
+            write_png(&curves, &spec, create(&png)?)?;
+            files.extend([svg, png]);
+            written.push((stem.to_string(), spec.title));
+        }
+        Ok(written)
+    }
+
+    /// The Markdown report, linking the plots `plots` (file stems and titles).
+    pub fn report_markdown(&self, plots: &[(String, String)]) -> String {
+        let n = self.n;
+        let mut md = String::new();
+        let _ = writeln!(md, "# Solver comparison on `{}`\n", self.scene.scene);
+        let _ = writeln!(
+            md,
+            "{} patches, mean reflectivity {:.3}; form factors `{}`; every solver run until `{}`.\n",
+            n, self.scene.mean_reflectivity, self.backend, self.rules
+        );
+        let _ = writeln!(md, "- Left out by the scene analysis: {}.", self.scene.left_out_phrase());
+        let origin = match &self.reference_origin {
+            ReferenceOrigin::Solved { assembly_seconds, solve_seconds } => {
+                format!("F assembled in {assembly_seconds:.2} s, solved in {solve_seconds:.2} s")
+            }
+            ReferenceOrigin::Cached { seconds, .. } => format!("read from the cache in {seconds:.2} s"),
+        };
+        let _ = writeln!(md, "- Reference: {}; {} ({origin}).\n", self.reference_method, self.reference_certificate);
+        let _ = writeln!(md, "## e_rms at n/4, n/2, n and 2n columns\n");
+        let _ = writeln!(md, "| solver | n/4 | n/2 | n | 2n |\n|---|--:|--:|--:|--:|");
+        for o in &self.outcomes {
+            let at = |c: u64| cell(o.at_columns(c));
+            let _ = writeln!(md, "| `{}` | {} | {} | {} | {} |", o.solver, at(n / 4), at(n / 2), at(n), at(2 * n));
+        }
+        let _ = writeln!(md, "\n## Columns and seconds to reach e_rms 1e-2 and 1e-3\n");
+        let _ = writeln!(md, "| solver | 1e-2 | 1e-3 |\n|---|--:|--:|");
+        for o in &self.outcomes {
+            let _ = writeln!(md, "| `{}` | {} | {} |", o.solver, reached_cell(o, 1e-2), reached_cell(o, 1e-3));
+        }
+        let _ = writeln!(md, "\n## Where the time went\n");
+        let _ = writeln!(
+            md,
+            "Form factors and solving are the run's own time; group solving is part of solving; \
+             measurement (e_rms every step, all metrics at about 100 points) is outside the run.\n"
+        );
+        let _ = writeln!(
+            md,
+            "| solver | steps | columns (reused) | form factors | solving | of which groups | measurement | stopped |\n\
+             |---|--:|--:|--:|--:|--:|--:|---|"
+        );
+        for o in &self.outcomes {
+            let s = &o.state;
+            let _ = writeln!(
+                md,
+                "| `{}` | {} | {} ({}) | {:.3} s | {:.3} s | {:.3} s | {:.3} s | {} |",
+                o.solver,
+                s.step,
+                s.columns,
+                s.columns_reused,
+                s.ff_seconds,
+                s.solve_seconds,
+                s.group_seconds,
+                o.overhead,
+                o.termination
+            );
+        }
+        let records: Vec<&Outcome> = self.outcomes.iter().filter(|o| !o.record.is_empty()).collect();
+        if !records.is_empty() {
+            let _ = writeln!(md, "\n## What the solvers recorded\n");
+            for o in records {
+                let items: Vec<String> = o.record.iter().map(|(k, v)| format!("{k} {}", value_cell(v))).collect();
+                let _ = writeln!(md, "- `{}`: {}", o.solver, items.join(", "));
+            }
+        }
+        let _ = writeln!(md, "\n## Plots\n");
+        for (stem, title) in plots {
+            let _ = writeln!(md, "![{title}]({stem}.png)\n");
+        }
+        md
+    }
+
+    /// The compact table for the terminal.
+    pub fn summary(&self) -> String {
+        let mut out = format!(
+            "{:<24} {:>8} {:>8} {:>10} {:>10} {:>10} {:>9}\n",
+            "solver", "steps", "columns", "e_rms @n", "e_rms end", "1e-3 at", "seconds"
+        );
+        for o in &self.outcomes {
+            let _ = writeln!(
+                out,
+                "{:<24} {:>8} {:>8} {:>10} {:>10} {:>10} {:>9.3}",
+                o.solver,
+                o.state.step,
+                o.state.columns,
+                cell(o.at_columns(self.n)),
+                cell(o.points.last().map(|p| p.e_rms)),
+                o.reached(1e-3).map_or("—".into(), |p| p.columns.to_string()),
+                o.seconds()
+            );
+        }
+        out
+    }
+}
+
+fn create(path: &Path) -> Result<std::fs::File, LabError> {
+    std::fs::File::create(path).map_err(|e| LabError::write(path, e))
+}
+
+/// A recorded value: reals to 4 significant digits, everything else as it is.
+pub fn value_cell(value: &Value) -> String {
+    match value {
+        Value::Real(v) => round_significant(*v, 4),
+        other => other.to_string(),
+    }
+}
+
+fn cell(value: Option<Real>) -> String {
+    value.map_or("—".into(), |v| round_significant(v, 3))
+}
+
+fn reached_cell(o: &Outcome, target: Real) -> String {
+    o.reached(target).map_or("—".into(), |p| format!("{} / {:.3} s", p.columns, p.seconds))
+}

@@ -1,0 +1,667 @@
+//! The laboratory: a prepared scene set up for measurement (its linear system, a form-factor
+//! backend, F and the reference solution), running any [`Solver`] value under stop rules with
+//! one recorder, and comparing many.
+//!
+//! ```no_run
+//! use radiosity_eval::{Lab, LabOptions, NoProgress};
+//! use radiosity_ff::BackendSpec;
+//! use radiosity_solvers::{SolverRegistry, StopRules};
+//!
+//! let scene = radiosity_geom::PreparedScene::load("cornell:res=4")?;
+//! let lab = Lab::new(&scene, &BackendSpec::parse("analytic")?, LabOptions::default(), &NoProgress)?;
+//! let registry = SolverRegistry::builtin();
+//! let solvers = vec![registry.build("pr")?, registry.build("xu-g30-m480")?];
+//! let comparison = lab.compare(solvers, &StopRules::parse("columns=2n")?, &NoProgress)?;
+//! comparison.write("results/my-study".as_ref())?;
+//! print!("{}", comparison.summary());
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! ## What is measured, and when
+//!
+//! F is fetched once, outside every run, and serves the reference and the residuals; a run's
+//! columns, steps and seconds are the solver's alone. The [`Recorder`] is an observer: the
+//! executor calls it between steps, outside the timed region. It computes e_rms against the
+//! reference after every step (`O(n)`), and every metric (e_rms, e_max, the residual power and
+//! the certified bound, DESIGN §5; a product with F, `O(n²)`) at about 100 points of a run and
+//! at `n/4`, `n/2`, `n` and `2n` columns. Its own time is reported apart, as measurement.
+//!
+//! ## The reference cache
+//!
+//! With a [`Cache`], the reference solution is stored on disk under a key of the scene
+//! ([`crate::cache::scene_key`]), the backend's canonical argument, the reference parameters
+//! and the format version, and read back next time. A lab that does not keep residuals
+//! ([`LabOptions::residuals`] false: `solve`, `render`, `export`) then assembles no F at all
+//! when the reference is in the cache, so a second run on a large scene starts at once; its
+//! final residual is then the solver's own (for shooting methods that of the shot radiosity
+//! `B − ΔB`, whose residual is `ΔB`), and [`FinalMetrics`] says which it has. Comparisons
+//! always keep F, so their residual columns never depend on the cache.
+
+use crate::cache::{Cache, Lookup, scene_key};
+use crate::compare::Comparison;
+use crate::error::EvalError;
+use crate::matrix::FormFactors;
+use crate::metrics::{Evaluator, errors};
+use crate::progress::Progress;
+use crate::reference::{ReferenceParams, ReferenceSolution};
+use crate::table::TableRow;
+use radiosity_core::{ColumnSource, LinearSystem, Real};
+use radiosity_ff::{BackendSpec, FfError};
+use radiosity_geom::{GeomError, PreparedScene, SceneReport};
+use radiosity_solvers::{Executor, Observer, Problem, Record, Solver, SolverError, State, StopRule, StopRules};
+use std::time::Instant;
+use thiserror::Error;
+
+/// What can stop an experiment: bad input at any layer, or a file that cannot be written.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum LabError {
+    /// The scene could not be loaded.
+    #[error(transparent)]
+    Scene(#[from] GeomError),
+    /// The form factors could not be computed.
+    #[error(transparent)]
+    FormFactors(#[from] FfError),
+    /// A solver refused its input or stopped with an error.
+    #[error(transparent)]
+    Solver(#[from] SolverError),
+    /// A reference or a metric could not be computed.
+    #[error(transparent)]
+    Eval(#[from] EvalError),
+    /// The scene emits nothing, so there is no error to measure.
+    #[error(
+        "scene '{0}' emits no light (no patch has an emission above 0), so its radiosity is zero everywhere and \
+         there is no error to measure"
+    )]
+    NoEmitters(String),
+    /// A file or folder could not be written.
+    #[error("cannot write {path}: {message}")]
+    Write {
+        /// The file or folder.
+        path: String,
+        /// Why.
+        message: String,
+    },
+    /// Arguments that make no sense together.
+    #[error("{0}")]
+    Invalid(String),
+}
+
+impl LabError {
+    /// The error for writing `path`.
+    pub fn write(path: &std::path::Path, e: impl std::fmt::Display) -> LabError {
+        LabError::Write { path: path.display().to_string(), message: e.to_string() }
+    }
+}
+
+/// How a lab is set up.
+#[derive(Clone, Debug)]
+#[non_exhaustive]
+pub struct LabOptions {
+    /// Always assemble F, so that recorded steps carry the residual and the certified bound of
+    /// the displayed radiosity (default). Without it, F is assembled only when the reference
+    /// is not in the cache (and then kept, since it is there).
+    pub residuals: bool,
+    /// Where reference solutions (and stored matrices) are cached; none by default.
+    pub cache: Option<Cache>,
+    /// How the reference is solved.
+    pub reference: ReferenceParams,
+}
+
+impl Default for LabOptions {
+    fn default() -> Self {
+        LabOptions { residuals: true, cache: None, reference: ReferenceParams::default() }
+    }
+}
+
+impl LabOptions {
+    /// Sets [`LabOptions::residuals`].
+    pub fn with_residuals(mut self, residuals: bool) -> Self {
+        self.residuals = residuals;
+        self
+    }
+
+    /// Sets [`LabOptions::cache`].
+    pub fn with_cache(mut self, cache: Option<Cache>) -> Self {
+        self.cache = cache;
+        self
+    }
+}
+
+/// Where the reference came from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ReferenceOrigin {
+    /// Solved now, after assembling F.
+    Solved {
+        /// Seconds to assemble F.
+        assembly_seconds: Real,
+        /// Seconds to solve once F was assembled.
+        solve_seconds: Real,
+    },
+    /// Read from the cache.
+    Cached {
+        /// The cache file.
+        path: String,
+        /// Seconds to read it.
+        seconds: Real,
+    },
+}
+
+/// A prepared scene with everything solvers are measured against.
+pub struct Lab<'p> {
+    prepared: &'p PreparedScene,
+    report: SceneReport,
+    backend: String,
+    system: LinearSystem,
+    source: Box<dyn ColumnSource + 'p>,
+    serves_rows: bool,
+    matrix: Option<FormFactors>,
+    reference: ReferenceSolution,
+    origin: ReferenceOrigin,
+    order: Vec<usize>,
+}
+
+impl<'p> Lab<'p> {
+    /// Builds the backend `spec` (a stored matrix from the options' cache when it is there),
+    /// and sets the lab up with it.
+    pub fn new(
+        prepared: &'p PreparedScene,
+        spec: &BackendSpec,
+        options: LabOptions,
+        progress: &dyn Progress,
+    ) -> Result<Lab<'p>, LabError> {
+        require_emitters(prepared)?;
+        let backend = crate::backends::backend(prepared, spec, options.cache.as_ref(), progress)?;
+        let serves_rows = backend.serves_rows();
+        Lab::with_source(prepared, &spec.canonical(), Box::new(backend), serves_rows, options, progress)
+    }
+
+    /// Sets a lab up with any column source, labelled `backend` in reports (and in cache keys:
+    /// give a new label whenever the source computes something else). `serves_rows` says
+    /// whether [`ColumnSource::fill_row`] gives exact rows of the matrix its columns assemble.
+    pub fn with_source(
+        prepared: &'p PreparedScene,
+        backend: &str,
+        source: Box<dyn ColumnSource + 'p>,
+        serves_rows: bool,
+        options: LabOptions,
+        progress: &dyn Progress,
+    ) -> Result<Lab<'p>, LabError> {
+        require_emitters(prepared)?;
+        let scene = prepared.scene();
+        if source.patch_count() != scene.len() {
+            return Err(LabError::Invalid(format!(
+                "the form factors of '{backend}' have {} patches, the scene {}",
+                source.patch_count(),
+                scene.len()
+            )));
+        }
+        let system = LinearSystem::from_scene(scene);
+        let params = options.reference.clone();
+        let key = format!("{}; backend {backend}; reference {params:?}", scene_key(scene));
+        let start = Instant::now();
+        let mut cached = None;
+        if let Some(cache) = &options.cache {
+            match cache.read("reference", &key) {
+                Lookup::Hit(bytes) => match ReferenceSolution::from_bytes(&bytes, &key, &system) {
+                    Ok(r) => cached = Some(r),
+                    Err(e) => progress.warn(&format!("replacing {}: {e}", cache.path("reference", &key).display())),
+                },
+                Lookup::Miss => {}
+                Lookup::Unreadable(why) => progress.warn(&why),
+            }
+        }
+        let (matrix, reference, origin) = match cached {
+            Some(reference) => {
+                let origin = ReferenceOrigin::Cached {
+                    path: options
+                        .cache
+                        .as_ref()
+                        .map(|c| c.path("reference", &key).display().to_string())
+                        .unwrap_or_default(),
+                    seconds: start.elapsed().as_secs_f64(),
+                };
+                let matrix = match options.residuals {
+                    true => Some(assemble(&*source, &params, progress)?),
+                    false => None,
+                };
+                (matrix, reference, origin)
+            }
+            None => {
+                let start = Instant::now();
+                let matrix = assemble(&*source, &params, progress)?;
+                let assembly_seconds = start.elapsed().as_secs_f64();
+                progress.begin("reference", 0, "");
+                let reference = ReferenceSolution::solve_matrix(&system, &matrix, params)?;
+                progress.end();
+                let solve_seconds = start.elapsed().as_secs_f64() - assembly_seconds;
+                if let Some(cache) = &options.cache {
+                    if let Err(e) = cache.write("reference", &key, &reference.to_bytes(&key)) {
+                        progress.warn(&format!("the reference was not cached: {e}"));
+                    }
+                }
+                let origin = ReferenceOrigin::Solved { assembly_seconds, solve_seconds };
+                (Some(matrix), reference, origin)
+            }
+        };
+        let order = radiosity_geom::spatial_order(scene);
+        Ok(Lab {
+            prepared,
+            report: prepared.report(),
+            backend: backend.to_string(),
+            system,
+            source,
+            serves_rows,
+            matrix,
+            reference,
+            origin,
+            order,
+        })
+    }
+
+    /// The prepared scene.
+    pub fn prepared(&self) -> &'p PreparedScene {
+        self.prepared
+    }
+
+    /// The report of the scene.
+    pub fn report(&self) -> &SceneReport {
+        &self.report
+    }
+
+    /// The backend's label (for built-in backends, the canonical argument).
+    pub fn backend(&self) -> &str {
+        &self.backend
+    }
+
+    /// The linear system.
+    pub fn system(&self) -> &LinearSystem {
+        &self.system
+    }
+
+    /// The column source solvers read.
+    pub fn source(&self) -> &dyn ColumnSource {
+        &*self.source
+    }
+
+    /// F, when it is kept ([`LabOptions::residuals`], or assembled for the reference).
+    pub fn matrix(&self) -> Option<&FormFactors> {
+        self.matrix.as_ref()
+    }
+
+    /// The exact solution of the same discrete system.
+    pub fn reference(&self) -> &ReferenceSolution {
+        &self.reference
+    }
+
+    /// Where the reference came from.
+    pub fn origin(&self) -> &ReferenceOrigin {
+        &self.origin
+    }
+
+    /// The number of patches.
+    pub fn n(&self) -> usize {
+        self.system.len()
+    }
+
+    /// Why `solver` will not converge to the reference on this source, if it will not: it
+    /// gathers along rows the source cannot give exactly.
+    pub fn row_warning(&self, solver: &dyn Solver) -> Option<String> {
+        (solver.gathers_rows() && !self.serves_rows).then(|| {
+            format!(
+                "{} gathers along rows of F, which {} cannot give exactly; they are taken from its columns by \
+                 reciprocity, which these form factors do not satisfy, so the run converges to another system's \
+                 solution, off the reference by as much as their reciprocity error (`cargo xtask ff` reports it)",
+                solver.name(),
+                self.backend
+            )
+        })
+    }
+
+    /// Runs `solver` under `rules`, recording as `plan` says, reporting to `progress`.
+    pub fn run(
+        &self,
+        solver: &mut dyn Solver,
+        rules: &StopRules,
+        plan: &RecordPlan,
+        progress: &dyn Progress,
+    ) -> Result<Outcome, LabError> {
+        if let Some(w) = self.row_warning(solver) {
+            progress.warn(&w);
+        }
+        let name = solver.name();
+        let evaluator = match &self.matrix {
+            Some(m) => Some(Evaluator::new(&self.system, m, &self.reference)?),
+            None => None,
+        };
+        let (target, unit) = progress_target(rules, self.n());
+        let n = self.n() as u64;
+        let mut recorder = Recorder {
+            lab: self,
+            evaluator: evaluator.as_ref(),
+            solver: name.clone(),
+            every: plan.every.unwrap_or((target / 100).max(1)),
+            marks: if plan.marks { vec![n / 4, n / 2, n, 2 * n] } else { Vec::new() },
+            points: Vec::new(),
+            rows: Vec::new(),
+            overhead: 0.0,
+            progress,
+            by_columns: unit == "columns",
+        };
+        progress.begin(&name, target, unit);
+        let problem = Problem::new(&self.system, &*self.source)?.with_patch_order(&self.order)?;
+        let run = Executor::new(solver, rules.clone()).run(&problem, &mut recorder);
+        progress.end();
+        let run = run?;
+        let solver_residual = solver.residual_power(&problem, &run.state);
+        let last = match &evaluator {
+            Some(e) => {
+                let m = e.evaluate(&run.state.radiosity)?;
+                FinalMetrics {
+                    e_rms: m.e_rms,
+                    e_max: m.e_max,
+                    residual: Some(m.residual),
+                    bound: m.bound.certified.then_some(m.relative_bound),
+                    solver_residual,
+                }
+            }
+            None => {
+                let e = errors(&self.system, &self.reference, &run.state.radiosity)?;
+                FinalMetrics { e_rms: e.e_rms, e_max: e.e_max, residual: None, bound: None, solver_residual }
+            }
+        };
+        Ok(Outcome {
+            solver: run.solver,
+            points: recorder.points,
+            rows: recorder.rows,
+            termination: run.termination.to_string(),
+            record: run.record,
+            overhead: recorder.overhead,
+            last,
+            state: run.state,
+        })
+    }
+
+    /// The reference as a final state: its cost is assembling F (form-factor time) and
+    /// solving it, or reading it from the cache.
+    pub fn reference_state(&self) -> State {
+        let mut state = State::from_emission(self.system.emissions(), self.system.channels().count());
+        state.radiosity.copy_from_slice(self.reference.values());
+        state.unshot.fill(0.0);
+        state.columns = self.system.len() as u64;
+        match self.origin {
+            ReferenceOrigin::Solved { assembly_seconds, solve_seconds } => {
+                state.ff_seconds = assembly_seconds;
+                state.solve_seconds = solve_seconds;
+            }
+            ReferenceOrigin::Cached { seconds, .. } => state.solve_seconds = seconds,
+        }
+        state
+    }
+
+    /// The metrics of the reference itself (zero error; its residual when F is kept).
+    pub fn reference_metrics(&self) -> Result<FinalMetrics, LabError> {
+        let residual = match &self.matrix {
+            Some(m) => Some(Evaluator::new(&self.system, m, &self.reference)?.evaluate(self.reference.values())?),
+            None => None,
+        };
+        Ok(FinalMetrics {
+            e_rms: 0.0,
+            e_max: 0.0,
+            residual: residual.map(|m| m.residual),
+            bound: residual.and_then(|m| m.bound.certified.then_some(m.relative_bound)),
+            solver_residual: None,
+        })
+    }
+
+    /// Runs every solver in turn under the same rules and recording: the comparison that
+    /// [`Comparison::write`] reports.
+    pub fn compare(
+        &self,
+        solvers: Vec<Box<dyn Solver>>,
+        rules: &StopRules,
+        progress: &dyn Progress,
+    ) -> Result<Comparison, LabError> {
+        let mut outcomes = Vec::with_capacity(solvers.len());
+        for mut solver in solvers {
+            outcomes.push(self.run(solver.as_mut(), rules, &RecordPlan::default(), progress)?);
+        }
+        Ok(Comparison::new(self, rules, outcomes))
+    }
+
+    /// The RGB radiosity of every patch after running `solver` under `rules` (the reference
+    /// when `solver` is `None`): what renders and exports show. An `rms=` rule is measured.
+    pub fn radiosity_rgb(
+        &self,
+        solver: Option<&mut dyn Solver>,
+        rules: &StopRules,
+        progress: &dyn Progress,
+    ) -> Result<Vec<[Real; 3]>, LabError> {
+        let state = match solver {
+            None => self.reference_state(),
+            Some(solver) => self.run(solver, rules, &RecordPlan::errors_only(), progress)?.state,
+        };
+        Ok(rgb(&state))
+    }
+}
+
+/// Refuses a scene that emits nothing: its radiosity is zero everywhere, so there is no error
+/// relative to the reference to measure.
+pub fn require_emitters(prepared: &PreparedScene) -> Result<(), LabError> {
+    if prepared.analysis.emitters.value.is_empty() {
+        return Err(LabError::NoEmitters(prepared.scene().name().to_string()));
+    }
+    Ok(())
+}
+
+fn assemble(
+    source: &dyn ColumnSource,
+    params: &ReferenceParams,
+    progress: &dyn Progress,
+) -> Result<FormFactors, LabError> {
+    progress.begin("F and the reference", 0, "");
+    let matrix = FormFactors::assemble(source, params.max_matrix_bytes);
+    progress.end();
+    Ok(matrix?)
+}
+
+/// The radiosity of every patch of `state` as RGB (a grey channel repeated three times).
+pub fn rgb(state: &State) -> Vec<[Real; 3]> {
+    let k = state.channels;
+    state.radiosity.chunks_exact(k).map(|b| if k == 1 { [b[0]; 3] } else { [b[0], b[1], b[2]] }).collect()
+}
+
+/// The count a run's progress is measured against: its first `columns=` or `steps=` rule
+/// (`2n` columns otherwise), and its unit.
+fn progress_target(rules: &StopRules, n: usize) -> (u64, &'static str) {
+    rules
+        .rules
+        .iter()
+        .find_map(|r| match r {
+            StopRule::Columns(c) => Some((c.resolve(n), "columns")),
+            StopRule::Steps(c) => Some((c.resolve(n), "steps")),
+            _ => None,
+        })
+        .unwrap_or((2 * n as u64, "columns"))
+}
+
+/// How often a run's metrics are recorded.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct RecordPlan {
+    /// Every metric every this many steps (`None`: about 100 points over the run's budget).
+    /// e_rms is recorded after every step regardless.
+    pub every: Option<u64>,
+    /// Also record every metric at `n/4`, `n/2`, `n` and `2n` columns.
+    pub marks: bool,
+}
+
+impl Default for RecordPlan {
+    fn default() -> Self {
+        RecordPlan { every: None, marks: true }
+    }
+}
+
+impl RecordPlan {
+    /// Every metric every `steps` steps, and at the marks.
+    pub fn every(steps: u64) -> RecordPlan {
+        RecordPlan { every: Some(steps.max(1)), marks: true }
+    }
+
+    /// e_rms after every step, and every metric only on the initial state: the cheapest
+    /// recording that still serves an `rms=` rule.
+    pub fn errors_only() -> RecordPlan {
+        RecordPlan { every: Some(u64::MAX), marks: false }
+    }
+}
+
+/// One step of a run: where it stood and its e_rms.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Point {
+    /// Steps done.
+    pub step: u64,
+    /// Columns computed.
+    pub columns: u64,
+    /// The run's seconds so far (form factors and solving; measurement excluded).
+    pub seconds: Real,
+    /// e_rms against the reference.
+    pub e_rms: Real,
+}
+
+/// The metrics of a run's final radiosity.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FinalMetrics {
+    /// e_rms against the reference.
+    pub e_rms: Real,
+    /// e_max against the reference.
+    pub e_max: Real,
+    /// The residual power of the displayed radiosity, when F is kept.
+    pub residual: Option<Real>,
+    /// The certified bound on its area-weighted L1 error relative to the reference's L1 norm,
+    /// when F is kept and certifiable.
+    pub bound: Option<Real>,
+    /// The residual power the solver knows without F (for shooting methods, that of the shot
+    /// radiosity), when it knows one.
+    pub solver_residual: Option<Real>,
+}
+
+/// Records e_rms after every step and every metric at planned steps (module doc).
+pub struct Recorder<'a> {
+    lab: &'a Lab<'a>,
+    evaluator: Option<&'a Evaluator<'a>>,
+    solver: String,
+    every: u64,
+    marks: Vec<u64>,
+    points: Vec<Point>,
+    rows: Vec<TableRow>,
+    overhead: Real,
+    progress: &'a dyn Progress,
+    by_columns: bool,
+}
+
+impl Observer for Recorder<'_> {
+    fn observe_step(&mut self, state: &State) -> Option<Real> {
+        let start = Instant::now();
+        let e_rms = errors(&self.lab.system, &self.lab.reference, &state.radiosity).ok()?.e_rms;
+        let seconds = state.ff_seconds + state.solve_seconds;
+        let new_mark =
+            self.marks.contains(&state.columns) && self.points.last().is_none_or(|p| p.columns != state.columns);
+        if state.step % self.every == 0 || new_mark {
+            let row = |e_max, residual, bound| TableRow {
+                solver: self.solver.clone(),
+                step: state.step,
+                columns: state.columns,
+                seconds,
+                ff_seconds: state.ff_seconds,
+                e_rms,
+                e_max,
+                residual,
+                bound,
+            };
+            match self.evaluator.map(|e| e.evaluate(&state.radiosity)) {
+                Some(Ok(m)) => self.rows.push(row(m.e_max, m.residual, m.relative_bound)),
+                Some(Err(_)) => {}
+                None => {
+                    if let Ok(e) = errors(&self.lab.system, &self.lab.reference, &state.radiosity) {
+                        self.rows.push(row(e.e_max, Real::NAN, Real::NAN));
+                    }
+                }
+            }
+        }
+        self.points.push(Point { step: state.step, columns: state.columns, seconds, e_rms });
+        self.progress.advance(if self.by_columns { state.columns } else { state.step }, &format!("e_rms {e_rms:.2e}"));
+        self.overhead += start.elapsed().as_secs_f64();
+        Some(e_rms)
+    }
+
+    fn measures_error(&self) -> bool {
+        true
+    }
+}
+
+/// What one run did and measured.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// The solver's name.
+    pub solver: String,
+    /// e_rms after every step.
+    pub points: Vec<Point>,
+    /// Every metric at the planned steps.
+    pub rows: Vec<TableRow>,
+    /// The final state.
+    pub state: State,
+    /// Why the run ended.
+    pub termination: String,
+    /// The solver's own figures (group sizes, condition numbers, fallbacks).
+    pub record: Record,
+    /// Seconds spent measuring, outside the run.
+    pub overhead: Real,
+    /// The final radiosity's metrics.
+    pub last: FinalMetrics,
+}
+
+impl Outcome {
+    /// e_rms after `step` steps (the last point if the run ended before).
+    pub fn at_step(&self, step: u64) -> Option<Real> {
+        self.points.iter().take_while(|p| p.step <= step).last().map(|p| p.e_rms)
+    }
+
+    /// The columns computed after `step` steps.
+    pub fn columns_at_step(&self, step: u64) -> Option<u64> {
+        self.points.iter().take_while(|p| p.step <= step).last().map(|p| p.columns)
+    }
+
+    /// e_rms when `columns` columns had been computed (the first step there).
+    pub fn at_columns(&self, columns: u64) -> Option<Real> {
+        self.points.iter().find(|p| p.columns >= columns).filter(|p| p.columns == columns).map(|p| p.e_rms)
+    }
+
+    /// The first point at or below `target`.
+    pub fn reached(&self, target: Real) -> Option<&Point> {
+        self.points.iter().find(|p| p.e_rms <= target)
+    }
+
+    /// The points where e_rms first fell to each power of ten from 1e-1 down.
+    pub fn reached_powers(&self) -> Vec<(Real, Point)> {
+        let mut out = Vec::new();
+        for k in 1..=15 {
+            let target = 10f64.powi(-k);
+            match self.reached(target) {
+                Some(p) => out.push((target, *p)),
+                None => break,
+            }
+        }
+        out
+    }
+
+    /// The group-solve share of the run's time.
+    pub fn group_share(&self) -> Real {
+        let total = self.state.ff_seconds + self.state.solve_seconds;
+        if total > 0.0 { self.state.group_seconds / total } else { 0.0 }
+    }
+
+    /// The run's own seconds: form factors and solving.
+    pub fn seconds(&self) -> Real {
+        self.state.ff_seconds + self.state.solve_seconds
+    }
+}

@@ -1,0 +1,91 @@
+//! The examples in `examples/` run and write what `cargo xtask compare` writes; and a
+//! comparison with the automatic group frequency gives the same table twice.
+
+#[allow(dead_code)]
+#[path = "../examples/custom_solver.rs"]
+mod custom_solver;
+
+#[allow(dead_code)]
+#[path = "../examples/custom_backend.rs"]
+mod custom_backend;
+
+use radiosity_eval::{Lab, LabOptions, NoProgress};
+use radiosity_ff::BackendSpec;
+use radiosity_geom::PreparedScene;
+use radiosity_solvers::{SolverRegistry, StopRules};
+use std::path::{Path, PathBuf};
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("radiosity-example-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+/// The files `compare` writes, each non-empty, and the CSV naming every solver.
+fn check_report(dir: &Path, solvers: &[&str]) {
+    let csv = std::fs::read_to_string(dir.join("convergence.csv")).unwrap();
+    assert!(csv.starts_with("solver,step,columns,seconds,ff_seconds,e_rms,e_max,residual,bound\n"), "{csv}");
+    for solver in solvers {
+        assert!(csv.lines().any(|l| l.starts_with(&format!("{solver},"))), "{solver} missing from\n{csv}");
+    }
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    for section in ["n/4", "1e-3", "Where the time went", "Left out", "e_rms-steps.png"] {
+        assert!(report.contains(section), "missing {section} in\n{report}");
+    }
+    for plot in ["e_rms-steps", "e_rms-columns", "e_rms-seconds"] {
+        assert!(std::fs::read(dir.join(format!("{plot}.png"))).unwrap().starts_with(b"\x89PNG"), "{plot}");
+        assert!(std::fs::read_to_string(dir.join(format!("{plot}.svg"))).unwrap().contains("<svg"), "{plot}");
+    }
+}
+
+#[test]
+fn custom_solver_is_compared_with_pr_and_xu() {
+    let dir = scratch("solver");
+    let summary = custom_solver::compare("cornell:res=2", &dir).unwrap();
+    for solver in ["pr", "xu", "damped-jacobi-0.9"] {
+        assert!(summary.contains(solver), "{summary}");
+    }
+    check_report(&dir, &["pr", "xu", "damped-jacobi-0.9"]);
+    // Damped Jacobi converges to the same reference: its e_rms after 2n columns is far below
+    // the emission's (1 at step 0).
+    let csv = std::fs::read_to_string(dir.join("convergence.csv")).unwrap();
+    let last = csv.lines().rfind(|l| l.starts_with("damped-jacobi-0.9,")).unwrap();
+    let e_rms: f64 = last.split(',').nth(5).unwrap().parse().unwrap();
+    assert!(e_rms < 0.1, "{last}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn custom_backend_runs_under_the_built_in_solvers() {
+    let dir = scratch("backend");
+    let summary = custom_backend::compare("cornell:res=2", &dir).unwrap();
+    check_report(&dir, &["pr", "xu", "xu-g30-m480"]);
+    assert!(summary.contains("xu-g30-m480"), "{summary}");
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(report.contains("form factors `centroid-disc`"), "{report}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Two comparisons with the automatic group frequency give the same table, timings aside:
+/// the frequency comes from counted operations, not from the clock.
+#[test]
+fn automatic_frequency_is_reproducible() {
+    let table = || {
+        let scene = PreparedScene::load("cornell:res=2").unwrap();
+        let lab =
+            Lab::new(&scene, &BackendSpec::parse("analytic").unwrap(), LabOptions::default(), &NoProgress).unwrap();
+        let registry = SolverRegistry::builtin();
+        let names = ["pr-g8", "xu-g8", "pr-g8-m40", "xu-g8-m40"];
+        let solvers = names.iter().map(|s| registry.build(s).unwrap()).collect();
+        let comparison = lab.compare(solvers, &StopRules::parse("columns=2n").unwrap(), &NoProgress).unwrap();
+        let mut csv = Vec::new();
+        comparison.table().without_timings().write_csv(&mut csv).unwrap();
+        let steps: Vec<u64> = comparison.outcomes.iter().map(|o| o.state.step).collect();
+        (String::from_utf8(csv).unwrap(), steps)
+    };
+    let (first, second) = (table(), table());
+    assert_eq!(first.1, second.1);
+    assert_eq!(first.0, second.0);
+    // The memory variants run past n on stored columns, so group steps happened.
+    assert!(first.0.lines().count() > 20, "{}", first.0);
+}

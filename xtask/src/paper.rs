@@ -1,18 +1,13 @@
 //! `cargo xtask paper [--out DIR] [--scenes S1,S2,…]`: the equivalents of Rousselle &
-//! Renaud's figures 1–3, and each of their claims set beside our measurement.
-//!
-//! Multi-cubes with groups of 30 and a memory of 480; the labyrinth and the office with groups
-//! of 50 and a memory of 500; every run to n shooting steps (the paper's axis), with the
-//! paper's automatic frequency. Each scene gets its own `compare` folder (table, report,
-//! plots); `report.md` at the top shows the step plots and the claims. The office takes
-//! several minutes: its reference alone assembles all 10,990 columns.
+//! Renaud's figures 1–3 ([`radiosity_eval::paper`]), each of their claims set beside our
+//! measurement. Each scene gets its own `compare` folder (table, report, plots); `report.md`
+//! at the top shows the step plots and the claims. The office takes several minutes: its
+//! reference alone assembles all 10,990 columns (once; later runs read it from the cache).
 
 use crate::compare::Plan;
 use crate::experiment::default_out;
 use anyhow::{Context, Result, bail};
-use radiosity_core::Real;
-use radiosity_eval::Comparison;
-use std::fmt::Write as _;
+use radiosity_eval::paper::{FIGURES, HEADER, RULES, section};
 use std::path::PathBuf;
 
 /// Arguments of `paper`.
@@ -26,120 +21,23 @@ pub struct Args {
     scenes: String,
 }
 
-/// One of the paper's figures: the scene and its six methods.
-struct Figure {
-    scene: &'static str,
-    figure: &'static str,
-    solvers: &'static str,
-}
-
-const FIGURES: [Figure; 3] = [
-    Figure { scene: "multi-cubes", figure: "Fig. 1", solvers: "pr,pr-g30,pr-g30-m480,xu,xu-g30,xu-g30-m480" },
-    Figure { scene: "labyrinth", figure: "Fig. 2", solvers: "pr,pr-g50,pr-g50-m500,xu,xu-g50,xu-g50-m500" },
-    Figure { scene: "office", figure: "Fig. 3", solvers: "pr,pr-g50,pr-g50-m500,xu,xu-g50,xu-g50-m500" },
-];
-
-/// A claim of the paper: `better` ends below `worse` at n steps.
-fn beats(c: &Comparison, better: &str, worse: &str) -> (String, String, bool) {
-    let e = |name: &str| c.outcome(name).and_then(|o| o.at_step(c.n));
-    let (b, w) = (e(better), e(worse));
-    let holds = matches!((b, w), (Some(b), Some(w)) if b < w);
-    (format!("`{better}` beats `{worse}` at n steps"), format!("{} against {}", sci(b), sci(w)), holds)
-}
-
-fn sci(v: Option<Real>) -> String {
-    v.map_or("—".into(), |v| format!("{v:.2e}"))
-}
-
-/// The paper's claims about `figure`, with our measurement and whether it holds.
-fn claims(figure: &Figure, c: &Comparison) -> Vec<(String, String, bool)> {
-    match figure.scene {
-        "multi-cubes" => vec![
-            beats(c, "pr-g30", "pr"),
-            beats(c, "pr-g30-m480", "pr-g30"),
-            beats(c, "xu", "pr"),
-            beats(c, "xu-g30", "xu"),
-            beats(c, "xu-g30-m480", "xu-g30"),
-        ],
-        "labyrinth" => {
-            let within = c.outcome("xu-g50-m500").and_then(|o| o.reached(1e-2)).map(|p| p.columns);
-            vec![
-                (
-                    "`xu-g50-m500` reaches e_rms ≤ 1e-2 within n columns".into(),
-                    within.map_or("not reached".into(), |k| format!("after {k} of {} columns", c.n)),
-                    within.is_some_and(|k| k <= c.n),
-                ),
-                beats(c, "xu-g50-m500", "xu"),
-                beats(c, "pr-g50-m500", "pr"),
-            ]
-        }
-        _ => {
-            // "Group accelerated PR converges faster than PR, but the difference appears to
-            // be very small"; "group accelerated Xu does not provide any acceleration".
-            // "Little" is read as less than a factor 2 in e_rms at n steps.
-            let e = |name: &str| c.outcome(name).and_then(|o| o.at_step(c.n));
-            let gain = |claim: &str, a: &str, b: &str| match (e(a), e(b)) {
-                (Some(x), Some(y)) => (
-                    claim.to_string(),
-                    format!("{:.2}× lower e_rms ({} against {})", y / x, sci(Some(x)), sci(Some(y))),
-                    y / x < 2.0,
-                ),
-                _ => (claim.to_string(), "—".into(), false),
-            };
-            vec![
-                gain("`pr-g50-m500` gains little (< 2×) over `pr`", "pr-g50-m500", "pr"),
-                gain("`xu-g50-m500` gains little or nothing (< 2×) over `xu`", "xu-g50-m500", "xu"),
-            ]
-        }
-    }
-}
-
 /// Runs `paper`.
 pub fn run(args: &Args) -> Result<()> {
     let chosen: Vec<&str> = args.scenes.split(',').map(str::trim).filter(|s| !s.is_empty()).collect();
-    let figures: Vec<&Figure> = FIGURES.iter().filter(|f| chosen.contains(&f.scene)).collect();
     if let Some(bad) = chosen.iter().find(|s| !FIGURES.iter().any(|f| f.scene == **s)) {
         bail!("'{bad}' is not one of the paper's scenes; they are multi-cubes, labyrinth and office");
     }
+    let figures: Vec<_> = FIGURES.iter().filter(|f| chosen.contains(&f.scene)).collect();
     if figures.is_empty() {
         bail!("--scenes names no scene");
     }
-    let plans =
-        figures.iter().map(|f| Plan::new(f.scene, f.solvers, "analytic", "steps=n")).collect::<Result<Vec<_>>>()?;
+    let plans = figures.iter().map(|f| Plan::new(f.scene, f.solvers, "analytic", RULES)).collect::<Result<Vec<_>>>()?;
     let out = args.out.clone().unwrap_or_else(|| default_out("paper"));
-    let mut md = String::from("# The paper's figures and claims, measured\n\n");
-    let _ = writeln!(
-        md,
-        "Rousselle & Renaud, *Group Accelerated Shooting Methods for Radiosity*, §5. Every method runs to n shooting \
-         steps with analytic form factors at their defaults and the paper's automatic group frequency (group solving \
-         held near 5% of the column time). Each scene's folder holds its full comparison report.\n"
-    );
+    let mut md = String::from(HEADER);
     for (figure, plan) in figures.iter().zip(plans) {
-        let dir = out.join(figure.scene);
-        let comparison = plan.execute(&dir)?;
+        let comparison = plan.execute(&out.join(figure.scene))?;
         print!("{}", comparison.summary());
-        let _ = writeln!(md, "## {} ({}, n = {})\n", figure.scene, figure.figure, comparison.n);
-        let _ = writeln!(md, "![e_rms against shooting steps]({}/e_rms-steps.png)\n", figure.scene);
-        let _ = writeln!(md, "| method | e_rms at n steps | columns | to 1e-2 | to 1e-3 | group share |");
-        let _ = writeln!(md, "|---|--:|--:|--:|--:|--:|");
-        for o in &comparison.outcomes {
-            let reach = |t: Real| o.reached(t).map_or("—".into(), |p| format!("{} / {:.2} s", p.columns, p.seconds));
-            let _ = writeln!(
-                md,
-                "| `{}` | {} | {} | {} | {} | {:.1}% |",
-                o.solver,
-                sci(o.at_step(comparison.n)),
-                o.columns_at_step(comparison.n).map_or("—".into(), |k| k.to_string()),
-                reach(1e-2),
-                reach(1e-3),
-                100.0 * o.group_share()
-            );
-        }
-        let _ = writeln!(md, "\n| the paper says | we measure | holds |\n|---|---|---|");
-        for (claim, measured, holds) in claims(figure, &comparison) {
-            let _ = writeln!(md, "| {claim} | {measured} | {} |", if holds { "yes" } else { "**no**" });
-        }
-        let _ = writeln!(md);
+        md += &section(figure, &comparison);
     }
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
     let path = out.join("report.md");

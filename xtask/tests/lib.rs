@@ -455,3 +455,58 @@ fn solve_refuses_bad_arguments_before_any_work() {
     let e = failure(&["solve", "--scene", "multicubes", "--solver", "pr"]);
     assert!(e.contains("unknown scene"), "{e}");
 }
+
+/// Runs `args` with the cache in `cache`; returns (stdout, stderr).
+fn run_cached(cache: &std::path::Path, args: &[&str]) -> (String, String) {
+    let out = Command::cargo_bin("xtask")
+        .unwrap()
+        .args(args)
+        .env("RADIOSITY_CACHE_DIR", cache)
+        .assert()
+        .success()
+        .get_output()
+        .clone();
+    (String::from_utf8(out.stdout).unwrap(), String::from_utf8(out.stderr).unwrap())
+}
+
+#[test]
+fn the_reference_is_cached_and_a_second_solve_assembles_nothing() {
+    let cache = std::env::temp_dir().join(format!("radiosity-reference-cache-test-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&cache);
+    let args = ["solve", "--scene", "cornell:res=2", "--solver", "xu", "--json"];
+    let first: Value = serde_json::from_str(&run_cached(&cache, &args).0).unwrap();
+    let files: Vec<_> = std::fs::read_dir(&cache).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert!(files.len() == 1 && files[0].to_string_lossy().starts_with("reference-"), "{files:?}");
+    let second: Value = serde_json::from_str(&run_cached(&cache, &args).0).unwrap();
+    let (a, b) = (&first["stats"], &second["stats"]);
+    // The same reference, so the same errors; F was assembled only the first time.
+    assert_eq!(a["e_rms"], b["e_rms"]);
+    assert_eq!(a["reference"], b["reference"]);
+    assert_eq!(a["residual_of"], "displayed radiosity");
+    assert!(b["residual_of"].as_str().unwrap().contains("cache"), "{b}");
+    // The solver's own residual (of the shot radiosity) is there instead, and small.
+    assert!(b["residual"].as_f64().unwrap() < a["residual"].as_f64().unwrap() * 100.0, "{a} {b}");
+    // A damaged entry is replaced with a warning, and the run goes on.
+    let entry = std::fs::read_dir(&cache).unwrap().next().unwrap().unwrap().path();
+    std::fs::write(&entry, b"not a reference").unwrap();
+    let (_, stderr) = run_cached(&cache, &args);
+    assert!(stderr.contains("warning: replacing") && stderr.contains("not a stored reference"), "{stderr}");
+    std::fs::remove_dir_all(&cache).unwrap();
+}
+
+#[test]
+fn render_and_export_stop_at_an_rms_rule() {
+    let dir = std::env::temp_dir().join(format!("radiosity-rms-rule-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (command, file) in [("render", "rms.png"), ("export", "rms.glb")] {
+        let out = dir.join(file);
+        let args =
+            ["--scene", "cornell:res=2", "--solver", "pr", "--until", "rms=1e-1", "--out", out.to_str().unwrap()];
+        let output = xtask(&[&[command][..], &args].concat()).success().get_output().clone();
+        let stderr = String::from_utf8(output.stderr).unwrap();
+        assert!(stderr.contains("pr: e_rms reached"), "{command}: {stderr}");
+        let steps: u64 = stderr.split(" after ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+        assert!(steps < 40, "{command} ran {steps} steps for e_rms 1e-1: {stderr}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

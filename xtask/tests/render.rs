@@ -5,9 +5,9 @@ use super::{failure, xtask};
 
 /// The 8-bit RGB pixels of `path`, with its width and height.
 fn read_png(path: &std::path::Path) -> (u32, u32, Vec<[f64; 3]>) {
-    let image = image::open(path).unwrap().to_rgb8();
-    let pixels = image.pixels().map(|p| p.0.map(f64::from)).collect();
-    (image.width(), image.height(), pixels)
+    let image = radiosity_eval::png_image::Rgb8::decode(&std::fs::read(path).unwrap()).unwrap();
+    let pixels = image.enumerate().map(|(_, _, p)| p.map(f64::from)).collect();
+    (image.width, image.height, pixels)
 }
 
 fn luminance(p: &[f64; 3]) -> f64 {

@@ -515,7 +515,5 @@ pub fn write_png(curves: &[Curve], spec: &PlotSpec, out: impl Write) -> Result<(
     let (w, h) = spec.size;
     let mut pixels = vec![0u8; (w * h * 3) as usize];
     draw(BitMapBackend::with_buffer(&mut pixels, spec.size).into_drawing_area(), curves, spec)?;
-    let encoder = image::codecs::png::PngEncoder::new(out);
-    image::ImageEncoder::write_image(encoder, &pixels, w, h, image::ExtendedColorType::Rgb8)
-        .map_err(|e| EvalError::Plot(e.to_string()))
+    crate::png_image::write_rgb8(out, &pixels, w, h)
 }

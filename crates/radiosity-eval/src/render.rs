@@ -269,13 +269,7 @@ pub struct Image {
 impl Image {
     /// Writes the image as PNG to `out`.
     pub fn write_png(&self, out: impl Write) -> Result<(), EvalError> {
-        let expected = self.width as usize * self.height as usize * 3;
-        if self.pixels.len() != expected {
-            return Err(EvalError::SizeMismatch { what: "the pixel buffer", expected, found: self.pixels.len() });
-        }
-        let encoder = image::codecs::png::PngEncoder::new(out);
-        image::ImageEncoder::write_image(encoder, &self.pixels, self.width, self.height, image::ExtendedColorType::Rgb8)
-            .map_err(|e| EvalError::Image(e.to_string()))
+        crate::png_image::write_rgb8(out, &self.pixels, self.width, self.height)
     }
 
     /// Writes the image as PNG to the file `path`, creating or replacing it.

@@ -121,7 +121,8 @@ fn every_built_in_kind_of_patch_survives_the_round_trip() {
 fn the_file_has_one_unlit_white_material_and_one_primitive_per_scene_material() {
     let (scene, rgb) = solved("cornell:res=2");
     let glb = export_glb(&scene, &rgb, &about("cornell:res=2")).unwrap();
-    let (document, buffers, _) = gltf::import_slice(&glb.bytes).unwrap();
+    let file = gltf::Gltf::from_slice(&glb.bytes).unwrap();
+    let (document, buffers) = (file.document, [file.blob.expect("the binary chunk")]);
     assert_eq!((document.meshes().count(), document.nodes().count()), (1, 1));
     let mesh = document.meshes().next().unwrap();
     let used: Vec<usize> =
@@ -142,7 +143,7 @@ fn the_file_has_one_unlit_white_material_and_one_primitive_per_scene_material() 
         assert_eq!(extras["radiosity_reflectivity"], serde_json::json!(expected.reflectivity.0));
         assert_eq!(extras["radiosity_emission"], serde_json::json!(expected.emission.0));
         assert!(primitive.extension_value("FB_ngon_encoding").is_some());
-        let reader = primitive.reader(|b| Some(&buffers[b.index()]));
+        let reader = primitive.reader(|b| Some(&buffers[b.index()][..]));
         let colours: Vec<[f32; 3]> = reader.read_colors(0).unwrap().into_rgb_f32().collect();
         assert!(colours.iter().flatten().all(|c| (0.0..=1.0).contains(c)));
         vertices += colours.len();

@@ -5,6 +5,7 @@
 
 use radiosity_eval::EvalError;
 use radiosity_eval::plot::{Curve, Marker, PlotSpec, Variant, Y_LABEL, Y_LABEL_SHORT, style_of, write_png, write_svg};
+use radiosity_eval::png_image::Rgb8;
 use std::collections::HashSet;
 
 fn decay(rate: f64) -> Vec<(f64, f64)> {
@@ -19,10 +20,10 @@ fn spec() -> PlotSpec {
     PlotSpec { title: "multi-cubes".into(), x_label: "shooting steps".into(), size: (480, 320) }
 }
 
-fn png(curves: &[Curve], spec: &PlotSpec) -> image::RgbImage {
+fn png(curves: &[Curve], spec: &PlotSpec) -> Rgb8 {
     let mut out = Vec::new();
     write_png(curves, spec, &mut out).unwrap();
-    image::load_from_memory(&out).unwrap().to_rgb8()
+    Rgb8::decode(&out).unwrap()
 }
 
 #[test]
@@ -44,17 +45,16 @@ fn svg_names_every_solver_and_the_axes() {
 #[test]
 fn png_has_the_size_and_draws_in_colour() {
     let img = png(&curves(), &spec());
-    assert_eq!(img.dimensions(), (480, 320));
+    assert_eq!((img.width, img.height), (480, 320));
     // Lines and text: some pixels are neither white nor grey.
-    let coloured = img.pixels().filter(|p| p.0.iter().max().unwrap() - p.0.iter().min().unwrap() > 60).count();
+    let coloured = img.enumerate().filter(|(_, _, p)| p.iter().max().unwrap() - p.iter().min().unwrap() > 60).count();
     assert!(coloured > 200, "{coloured} coloured pixels");
 }
 
 /// The pixels of `colour` right of the widest gap between columns holding that colour (the
 /// legend sample, when one curve has the colour), relative to their top left corner.
-fn legend_sample(img: &image::RgbImage, colour: [u8; 3]) -> HashSet<(u32, u32)> {
-    let pixels: Vec<(u32, u32)> =
-        img.enumerate_pixels().filter(|(_, _, p)| p.0 == colour).map(|(x, y, _)| (x, y)).collect();
+fn legend_sample(img: &Rgb8, colour: [u8; 3]) -> HashSet<(u32, u32)> {
+    let pixels: Vec<(u32, u32)> = img.enumerate().filter(|(_, _, p)| *p == colour).map(|(x, y, _)| (x, y)).collect();
     let mut columns: Vec<u32> = pixels.iter().map(|&(x, _)| x).collect();
     columns.sort_unstable();
     columns.dedup();
@@ -146,7 +146,7 @@ fn the_legend_sits_right_of_the_data_and_covers_none_of_it() {
         vec![Curve { label: "xu".into(), points: (0..=50).map(|s| (s as f64, 1.0 - 1e-3 * s as f64)).collect() }];
     let img = png(&flat, &spec());
     let xu = style_of("xu").colour;
-    let mut columns: Vec<u32> = img.enumerate_pixels().filter(|(_, _, p)| p.0 == xu).map(|(x, _, _)| x).collect();
+    let mut columns: Vec<u32> = img.enumerate().filter(|(_, _, p)| *p == xu).map(|(x, _, _)| x).collect();
     columns.sort_unstable();
     columns.dedup();
     // Two groups of columns in xu's colour: the curve, and right of a gap the legend's sample.
@@ -159,7 +159,7 @@ fn the_legend_sits_right_of_the_data_and_covers_none_of_it() {
     assert_eq!(data.len() as u32, last - first + 1, "the curve is hidden in places");
     // The legend sample is short, and entirely right of the data.
     assert!(legend.len() <= 48 && legend[0] > last, "{legend:?}");
-    let rows: Vec<u32> = img.enumerate_pixels().filter(|(x, _, p)| p.0 == xu && *x >= at).map(|(_, y, _)| y).collect();
+    let rows: Vec<u32> = img.enumerate().filter(|(x, _, p)| *p == xu && *x >= at).map(|(_, y, _)| y).collect();
     assert!(rows.iter().max().unwrap() - rows.iter().min().unwrap() <= 10, "the legend sample is one row");
 }
 
@@ -170,7 +170,7 @@ fn a_legend_too_wide_for_the_side_goes_below_the_data() {
     let curve = vec![Curve { label, points: (0..=50).map(|s| (s as f64, 1.0 - 1e-3 * s as f64)).collect() }];
     let img = png(&curve, &spec());
     // The curve in the data area, and below a gap the legend sample, one row near the bottom.
-    let mut rows: Vec<u32> = img.enumerate_pixels().filter(|(_, _, p)| p.0 == xu).map(|(_, y, _)| y).collect();
+    let mut rows: Vec<u32> = img.enumerate().filter(|(_, _, p)| *p == xu).map(|(_, y, _)| y).collect();
     rows.sort_unstable();
     rows.dedup();
     let (gap, at) = rows.windows(2).map(|w| (w[1] - w[0], w[1])).max().unwrap();

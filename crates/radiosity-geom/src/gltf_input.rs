@@ -294,25 +294,54 @@ fn read_buffers(document: &Document, base: Option<&Path>, mut blob: Option<Vec<u
             gltf::buffer::Source::Uri(uri) => format!("'{uri}'"),
             gltf::buffer::Source::Bin => "the binary chunk".to_string(),
         };
-        let data = gltf::buffer::Data::from_source_and_blob(buffer.source(), base, &mut blob).map_err(|e| match e {
-            gltf::Error::Base64(e) => format!("buffer {i} has an invalid base64 data URI ({e})"),
-            gltf::Error::MissingBlob => format!("buffer {i} refers to the binary chunk, but there is none"),
-            gltf::Error::UnsupportedScheme => format!("buffer {i} has a URI scheme that is not supported"),
-            gltf::Error::ExternalReferenceInSliceImport => {
-                format!("buffer {i} is stored in {source}, and glTF loaded from memory cannot read other files")
+        let data = match buffer.source() {
+            gltf::buffer::Source::Bin => {
+                blob.take().ok_or_else(|| format!("buffer {i} refers to the binary chunk, but there is none"))?
             }
-            e => format!("buffer {i} cannot be read from {source}: {e}"),
-        })?;
-        if data.0.len() < buffer.length() {
+            gltf::buffer::Source::Uri(uri) => read_uri(uri, base).map_err(|why| format!("buffer {i} {why}"))?,
+        };
+        if data.len() < buffer.length() {
             return Err(format!(
                 "buffer {i} is truncated: it declares {} bytes, but {source} holds {}",
                 buffer.length(),
-                data.0.len()
+                data.len()
             ));
         }
-        buffers.push(data.0);
+        buffers.push(data);
     }
     Ok(buffers)
+}
+
+/// The bytes a buffer URI names, as glTF 2.0 allows them (§3.6.1.2): a base64 data URI
+/// (`data:[<media type>];base64,<data>`), or a path relative to the file's folder
+/// (percent-encoded, RFC 3986), or a `file:` URI. Files loaded from memory have no folder.
+fn read_uri(uri: &str, base: Option<&Path>) -> Result<Vec<u8>, String> {
+    use base64::Engine as _;
+    if let Some(rest) = uri.strip_prefix("data:") {
+        let (_, data) = rest.split_once(";base64,").unwrap_or(("", rest));
+        return base64::engine::general_purpose::STANDARD
+            .decode(data)
+            .map_err(|e| format!("has an invalid base64 data URI ({e})"));
+    }
+    let path = match uri.strip_prefix("file://").or_else(|| uri.strip_prefix("file:")) {
+        Some(path) => std::path::PathBuf::from(path),
+        None if uri.contains(':') => return Err(format!("has a URI scheme that is not supported ('{uri}')")),
+        None => {
+            let decoded = percent_encoding::percent_decode_str(uri)
+                .decode_utf8()
+                .map_err(|_| format!("has a URI that does not decode to UTF-8 ('{uri}')"))?;
+            match base {
+                Some(base) => base.join(&*decoded),
+                None => {
+                    return Err(format!("is stored in '{uri}', and glTF loaded from memory cannot read other files"));
+                }
+            }
+        }
+    };
+    if base.is_none() {
+        return Err(format!("is stored in '{uri}', and glTF loaded from memory cannot read other files"));
+    }
+    std::fs::read(&path).map_err(|e| format!("cannot be read from '{}': {e}", path.display()))
 }
 
 /// A triangle or quad ready to become patches, in world space and front-side

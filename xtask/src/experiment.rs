@@ -83,18 +83,17 @@ pub fn lab<'p>(prepared: &'p PreparedScene, spec: &BackendSpec, residuals: bool)
 }
 
 /// Checks, before any work, that `path` can be written as a file: it is not a directory and
-/// the directory it goes into exists.
+/// nothing above it is a file; creates the folders it goes into (as `compare` creates its
+/// output folder).
 pub fn check_output_file(path: &Path) -> Result<()> {
     if path.is_dir() {
         bail!("cannot write {}: it is a directory; --out names the file to write", path.display());
     }
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
-        if parent.exists() && !parent.is_dir() {
-            bail!("cannot write {}: {} is not a directory", path.display(), parent.display());
+        if let Some(file) = parent.ancestors().find(|a| !a.as_os_str().is_empty() && a.exists() && !a.is_dir()) {
+            bail!("cannot write {}: {} is not a directory", path.display(), file.display());
         }
-        if !parent.exists() {
-            bail!("cannot write {}: the directory {} does not exist", path.display(), parent.display());
-        }
+        std::fs::create_dir_all(parent).map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
     }
     Ok(())
 }

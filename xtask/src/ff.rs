@@ -27,7 +27,7 @@ pub const MAX_PATCHES: usize = 2000;
 /// Arguments of `ff`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The scene: a built-in name with `:key=value` parameters, or a .gltf/.glb path.
+    /// The scene: a built-in name with `:key=value` parameters, or a .gltf, .glb or .mgf path.
     #[arg(long, value_name = "SCENE")]
     scene: String,
     /// The backend: analytic, hemicube, montecarlo or matrix, with `:key=value` parameters

@@ -311,11 +311,11 @@ fn outputs_that_cannot_be_written_are_refused_before_solving() {
         vec![command, "--scene", "furnace:res=2", "--solver", "pr", "--until", "steps=1", "--out", out]
     }
 
-    // Into a directory that does not exist.
+    // Into folders that do not exist yet: they are created, as compare creates its own.
     for (command, file) in [("solve", "run.json"), ("render", "image.png"), ("export", "solved.glb")] {
-        let missing = dir.path("no-such-dir");
-        let out = format!("{missing}/{file}");
-        refused(&run(command, &out), &[&format!("cannot write {out}"), &format!("directory {missing} does not exist")]);
+        let out = format!("{}/{command}/{file}", dir.path("new/folders"));
+        super::xtask(&run(command, &out)).success();
+        assert!(std::path::Path::new(&out).is_file(), "{command} did not write {out}");
     }
     // Onto an existing directory.
     for (command, name) in [("solve", "run.json"), ("render", "image.png"), ("export", "solved.glb")] {
@@ -327,6 +327,8 @@ fn outputs_that_cannot_be_written_are_refused_before_solving() {
     let file = dir.path("file");
     std::fs::write(&file, b"").unwrap();
     let out = format!("{file}/run.json");
+    refused(&run("solve", &out), &[&format!("cannot write {out}"), &format!("{file} is not a directory")]);
+    let out = format!("{file}/deeper/run.json");
     refused(&run("solve", &out), &[&format!("cannot write {out}"), &format!("{file} is not a directory")]);
 
     // compare creates its folder, however deep...

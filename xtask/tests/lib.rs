@@ -303,16 +303,7 @@ fn ff_refuses_bad_backends_and_large_scenes() {
 
 /// Runs `ff` with `RADIOSITY_CACHE_DIR` set; returns (stdout, stderr).
 fn ff_cached(cache: &std::path::Path, args: &[&str]) -> (String, String) {
-    let out = Command::cargo_bin("xtask")
-        .unwrap()
-        .arg("ff")
-        .args(args)
-        .env("RADIOSITY_CACHE_DIR", cache)
-        .assert()
-        .success()
-        .get_output()
-        .clone();
-    (String::from_utf8(out.stdout).unwrap(), String::from_utf8(out.stderr).unwrap())
+    run_cached(cache, &[&["ff"][..], args].concat())
 }
 
 #[test]

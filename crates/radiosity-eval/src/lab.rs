@@ -29,8 +29,10 @@
 //! ## The reference cache
 //!
 //! With a [`Cache`], the reference solution is stored on disk under a key of the scene
-//! ([`crate::cache::scene_key`]), the backend's canonical argument, the reference parameters
-//! and the format version, and read back next time. A lab that does not keep residuals
+//! ([`crate::cache::scene_key`]), the backend's label (for built-in backends, the canonical
+//! argument with every parameter), a fingerprint of three of its columns (so that a backend
+//! whose numbers change never reads an old entry), the reference parameters and the format
+//! version, and read back next time. A lab that does not keep residuals
 //! ([`LabOptions::residuals`] false: `solve`, `render`, `export`) then assembles no F at all
 //! when the reference is in the cache, so a second run on a large scene starts at once; its
 //! final residual is then the solver's own (for shooting methods that of the shot radiosity
@@ -198,7 +200,11 @@ impl<'p> Lab<'p> {
         }
         let system = LinearSystem::from_scene(scene);
         let params = options.reference.clone();
-        let key = format!("{}; backend {backend}; reference {params:?}", scene_key(scene));
+        let key = format!(
+            "{}; backend {backend}; columns {:016x}; reference {params:?}",
+            scene_key(scene),
+            source_fingerprint(&*source)
+        );
         let start = Instant::now();
         let mut cached = None;
         if let Some(cache) = &options.cache {
@@ -443,6 +449,20 @@ impl<'p> Lab<'p> {
         };
         Ok(rgb(&state))
     }
+}
+
+/// The xxh3 of three columns of `source` (the first, the middle and the last), bit for bit:
+/// part of the reference's cache key, so that a backend whose numbers change (another build,
+/// an edited source of one's own) never reads an entry computed by the old one.
+fn source_fingerprint(source: &dyn ColumnSource) -> u64 {
+    let n = source.patch_count();
+    let mut column = vec![0.0; n];
+    let mut bytes = Vec::with_capacity(3 * 8 * n);
+    for j in [0, n / 2, n.saturating_sub(1)] {
+        source.fill_column(j, &mut column);
+        bytes.extend(column.iter().flat_map(|v| v.to_bits().to_le_bytes()));
+    }
+    crate::cache::checksum(&bytes)
 }
 
 /// Refuses a scene that emits nothing: its radiosity is zero everywhere, so there is no error

@@ -21,7 +21,7 @@
 //!   (`:target=0.05`): a group step then costs at most about `target` of the columns of the
 //!   `f` point steps after it. The first group step runs as soon as `m` columns are stored.
 //!   - `auto`: `c_group = ops_group`, the operations the group step counted, and
-//!     `c_column = n ·` [`PAIR_OPERATIONS`], the modelled cost of one form-factor column.
+//!     `c_column =` [`column_operations`]`(n)`, the modelled cost of one form-factor column.
 //!   - `timed`: `c_group` the measured seconds of that group step and `c_column` the mean
 //!     seconds of a column so far.
 //! - **Steps are shooting steps.** A step is one point shot, followed by a group step when one
@@ -50,18 +50,23 @@
 //! - shooting `y` to every patch: `n m k`.
 //!
 //! Work linear in `n k` (the ambient sums, the selection values) is left out. An operation is
-//! about one floating-point operation of these loops; a column's cost is a pair's for every
-//! patch, whether or not the point step computed a column (as in the timed rule, which also
-//! takes the mean column time). [`PAIR_OPERATIONS`] is calibrated for analytic form factors
-//! on these machines (2 cores, release builds), so that the group share of the time stays near
-//! `target`: on `multi-cubes` (n = 480) an analytic column takes about 0.7 ms, 1.5 µs a pair,
-//! and a counted operation of a group step took 0.75–1.25 ns with groups of 30 on a 480-patch
-//! RGB system (`pr-g30`, `xu-g30`, `pr-g30-m480`, `xu-g30-m480`), so 1500 operations cost
-//! about one pair, and the share stays near the 4–5% that the timed rule gave for
-//! `pr-g30-m480` and `xu-g30-m480` on multi-cubes at target 0.05. Larger groups are cheaper
-//! per operation (0.45–0.5 ns at m = 120, where the LU's dense loops dominate), so their share
-//! falls below the target; cheaper columns (a stored matrix) give a larger share of the time,
-//! costlier ones (more shadow rays) a smaller one.
+//! about one floating-point operation of these loops; a counted operation of a group step
+//! took 0.75–1.25 ns with groups of 30 on a 480-patch RGB system (`pr-g30`, `xu-g30`,
+//! `pr-g30-m480`, `xu-g30-m480`; release build, 2 cores), and 0.45–0.5 ns at m = 120, where
+//! the LU's dense loops dominate.
+//!
+//! A column's modelled cost, [`column_operations`]`(n) =` [`COLUMN_OPERATIONS_PER_ROOT_PATCH`]
+//! `· √n`, is fitted to analytic columns at their defaults on the paper's three scenes (2
+//! threads, release build): 0.44 ms on `multi-cubes` (n = 480), 1.2 ms on `labyrinth`
+//! (3364) and 2.2 ms on `office` (10 990). A column does not cost `n` times a pair: most
+//! pairs of a large scene face away or are far enough for the centroid rule, so the time per
+//! pair falls from 0.92 µs to 0.2 µs over these scenes, about as `1/√n`. At 1 ns an
+//! operation, `20 000 √n` operations is within 10% of all three. It is charged for every
+//! point step, whether or not the step computed a column (as in the timed rule, which also
+//! takes the mean column time). Other backends cost otherwise (a stored matrix serves a
+//! column for `n` reads, a hemicube traces 49 152 rays whatever `n`): with them the share of
+//! the time spent in group steps drifts from `target`, and `:f=timed` or a fixed `:f=N` fits
+//! better.
 //!
 //! ## Beyond the paper
 //!
@@ -102,11 +107,16 @@ use radiosity_core::Real;
 use std::str::FromStr;
 use std::time::Instant;
 
-/// The modelled cost of one pair of a form-factor column, in counted operations of a group
-/// step: a column of `n` patches costs `n · PAIR_OPERATIONS` (the cost model of the module
-/// doc). Calibrated as about 1.5 µs a pair for analytic form factors on `multi-cubes` over
-/// about 1 ns an operation (measured 0.75–1.25 ns with groups of 30).
-pub const PAIR_OPERATIONS: u64 = 1500;
+/// The modelled cost of one form-factor column of `n` patches, over `√n`, in counted
+/// operations of a group step: fitted to analytic columns on the paper's three scenes at about
+/// 1 ns an operation (the cost model of the module doc).
+pub const COLUMN_OPERATIONS_PER_ROOT_PATCH: u64 = 20_000;
+
+/// The modelled cost of one form-factor column of `n` patches, in counted operations:
+/// [`COLUMN_OPERATIONS_PER_ROOT_PATCH`]` · √n`.
+pub fn column_operations(n: usize) -> Real {
+    COLUMN_OPERATIONS_PER_ROOT_PATCH as Real * (n as Real).sqrt()
+}
 
 /// The allowed overhead of the automatic frequencies when none is given (the paper's 5%).
 pub const DEFAULT_TARGET: Real = 0.05;
@@ -423,7 +433,7 @@ impl GroupAccelerated {
         self.period = match self.params.frequency {
             Frequency::Fixed(f) => f,
             Frequency::Auto { target } => {
-                let column = n as Real * PAIR_OPERATIONS as Real;
+                let column = column_operations(n);
                 period(operations as Real / (target * column))
             }
             Frequency::Timed { target } => {

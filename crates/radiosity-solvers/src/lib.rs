@@ -98,7 +98,10 @@ pub mod xu;
 pub use error::SolverError;
 pub use executor::{Every, Executor, NoObserver, Observer, Run, Solver};
 pub use gauss_seidel::GaussSeidelParams;
-pub use group_accelerated::{Frequency, GroupAccelerated, GroupAcceleratedParams, GroupBuilding, PAIR_OPERATIONS};
+pub use group_accelerated::{
+    COLUMN_OPERATIONS_PER_ROOT_PATCH, Frequency, GroupAccelerated, GroupAcceleratedParams, GroupBuilding,
+    column_operations,
+};
 pub use group_gathering::{GroupGathering, GroupGatheringParams};
 pub use group_shooting::{GroupShooting, GroupShootingParams};
 pub use group_step::{GroupStats, InnerSolve};

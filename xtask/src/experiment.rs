@@ -140,7 +140,7 @@ pub fn solved_rgb(
         Some(mut solver) => {
             let o = lab.run(solver.as_mut(), rules, &radiosity_eval::RecordPlan::errors_only(), &Bars::new())?;
             eprintln!(
-                "{}: {} after {} steps, {} columns, {:.3} s; e_rms {:.3e}",
+                "{} stopped: {}; {} steps, {} columns, {:.3} s, e_rms {:.3e}",
                 args.solver,
                 o.termination,
                 o.state.step,

@@ -495,8 +495,8 @@ fn render_and_export_stop_at_an_rms_rule() {
             ["--scene", "cornell:res=2", "--solver", "pr", "--until", "rms=1e-1", "--out", out.to_str().unwrap()];
         let output = xtask(&[&[command][..], &args].concat()).success().get_output().clone();
         let stderr = String::from_utf8(output.stderr).unwrap();
-        assert!(stderr.contains("pr: e_rms reached"), "{command}: {stderr}");
-        let steps: u64 = stderr.split(" after ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+        assert!(stderr.contains("pr stopped: e_rms reached"), "{command}: {stderr}");
+        let steps: u64 = stderr.split("; ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
         assert!(steps < 40, "{command} ran {steps} steps for e_rms 1e-1: {stderr}");
     }
     std::fs::remove_dir_all(&dir).unwrap();

@@ -200,11 +200,15 @@ impl<'p> Lab<'p> {
         }
         let system = LinearSystem::from_scene(scene);
         let params = options.reference.clone();
-        let key = format!(
-            "{}; backend {backend}; columns {:016x}; reference {params:?}",
-            scene_key(scene),
-            source_fingerprint(&*source)
-        );
+        // The key costs three columns: only worked out when there is a cache to look in.
+        let key = match &options.cache {
+            Some(_) => format!(
+                "{}; backend {backend}; columns {:016x}; reference {params:?}",
+                scene_key(scene),
+                source_fingerprint(&*source)
+            ),
+            None => String::new(),
+        };
         let start = Instant::now();
         let mut cached = None;
         if let Some(cache) = &options.cache {

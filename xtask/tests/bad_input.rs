@@ -77,7 +77,7 @@ fn bad_gltf_files_are_refused_by_every_command() {
 fn bad_mgf_files_are_refused() {
     // (fixture, words the sentence must contain besides the file's name and line)
     let cases: [(&str, &[&str]); 6] = [
-        ("mgf/unknown.mgf", &["unknown MGF entity 'bogus'"]),
+        ("mgf/not_a_name.mgf", &["'3' is not an MGF entity"]),
         ("mgf/undefined_vertex.mgf", &["undefined vertex 'v12'"]),
         ("mgf/undefined_material.mgf", &["undefined material 'nowhere'"]),
         ("mgf/cycle_a.mgf", &["cycle_a.mgf", "include cycle"]),
@@ -89,8 +89,8 @@ fn bad_mgf_files_are_refused() {
         assert!(e.contains(".mgf:"), "{file}: the sentence names the file and line: {e}");
     }
     refused(
-        &["compare", "--scene", &fixture("mgf/unknown.mgf"), "--solvers", "pr"],
-        &["unknown.mgf:3", "unknown MGF entity 'bogus'"],
+        &["compare", "--scene", &fixture("mgf/not_a_name.mgf"), "--solvers", "pr"],
+        &["not_a_name.mgf:3", "'3' is not an MGF entity"],
     );
 }
 

@@ -81,8 +81,9 @@ pub enum GeomError {
         /// Why nothing was usable, starting with "; " or empty.
         detail: String,
     },
-    /// An MGF entity this loader does not know.
-    #[error("{path}:{line}: unknown MGF entity '{entity}'")]
+    /// A line of an MGF file whose first word is not an entity name (names begin with a
+    /// letter; entities with names this loader does not know are ignored with a warning).
+    #[error("{path}:{line}: '{entity}' is not an MGF entity (entity names begin with a letter)")]
     MgfUnknownEntity {
         /// The file.
         path: PathBuf,

@@ -156,9 +156,9 @@ fn zero_area_faces_are_dropped_with_one_warning() {
 
 #[test]
 fn bad_inputs_name_file_and_line() {
-    let (e, m) = load_err(&mgf("unknown.mgf"));
+    let (e, m) = load_err(&mgf("not_a_name.mgf"));
     assert!(matches!(e, GeomError::MgfUnknownEntity { line: 3, .. }), "{e:?}");
-    assert!(m.ends_with("unknown.mgf:3: unknown MGF entity 'bogus'"), "{m}");
+    assert!(m.ends_with("not_a_name.mgf:3: '3' is not an MGF entity (entity names begin with a letter)"), "{m}");
 
     let (e, m) = load_err(&mgf("undefined_vertex.mgf"));
     assert!(matches!(e, GeomError::MgfUndefined { line: 5, kind: "vertex", .. }), "{e:?}");
@@ -243,4 +243,17 @@ fn real_scenes_load() {
         assert_eq!(scene.emitters().len(), emitters, "{file}");
         assert!(scene.mean_reflectivity() > 0.2 && scene.mean_reflectivity() < 0.7, "{file}");
     }
+}
+
+#[test]
+fn unknown_entities_are_ignored_with_one_warning_and_vertices_default_to_the_origin() {
+    let loaded = load(&mgf("unknown.mgf"));
+    assert_eq!(loaded.scene.len(), 1);
+    let patch = &loaded.scene.patches()[0];
+    assert!((patch.area() - 0.5).abs() < 1e-12, "{}", patch.area());
+    assert!(patch.vertices().contains(&Vec3::ZERO), "{:?}", patch.vertices());
+    assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
+    let w = &loaded.warnings[0];
+    assert!(w.contains("ignored 3 unknown entities ('bogus' ×2, 'glow' ×1; the first at "), "{w}");
+    assert!(w.ends_with("unknown.mgf:5), as MGF's reference parser does"), "{w}");
 }

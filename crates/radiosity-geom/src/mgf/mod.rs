@@ -43,9 +43,20 @@
 //!   cut into patches whose edges are at most `size` times the bounding-box diagonal of the
 //!   scene, as for glTF.
 //!
-//! Everything else is an error of one sentence naming the file and line: an unknown entity,
-//! wrong arguments, an undefined vertex, material or colour, a face with fewer than three
-//! vertices, a bare `xf` with nothing to end.
+//! - **Unknown entities** are ignored, as the reference parser does ("If an old version of the
+//!   MGF parser encounters new entities it does not recognize, the default action is to ignore
+//!   them, printing a warning message", MGF 2.0, Notes): one warning counts them per name and
+//!   names the file and line of the first.
+//! - **Vertices** without `p` are at the origin, the default vertex (`v id =`, MGF 2.0).
+//!
+//! Everything else is an error of one sentence naming the file and line: a line whose first
+//! word is not a name (MGF names begin with a letter), wrong arguments, an undefined vertex,
+//! material or colour, a face with fewer than three vertices, a bare `xf` with nothing to end.
+//!
+//! ## References
+//!
+//! - G. Ward, *The Materials and Geometry Format*, version 2.0, Lawrence Berkeley National
+//!   Laboratory (the entity pages `v.html`, `f.html` and `notes.html` of the specification).
 
 pub mod colour;
 pub(crate) mod polygon;
@@ -349,6 +360,10 @@ struct Loader {
     material_ids: HashMap<(String, [u64; 6]), MaterialId>,
     object_ids: HashMap<String, ObjectId>,
     ignored: BTreeMap<String, usize>,
+    /// Entities this loader does not know, by name, with how often they were met.
+    unknown: BTreeMap<String, usize>,
+    /// Where the first unknown entity was met, as `file:line`.
+    first_unknown: Option<String>,
     clamped: BTreeSet<String>,
     degenerate: usize,
     read: usize,
@@ -371,6 +386,8 @@ impl Loader {
             material_ids: HashMap::new(),
             object_ids: HashMap::new(),
             ignored: BTreeMap::new(),
+            unknown: BTreeMap::new(),
+            first_unknown: None,
             clamped: BTreeSet::new(),
             degenerate: 0,
             read: 0,
@@ -494,12 +511,20 @@ impl Loader {
                 let faces = self.shape(words, at)?;
                 self.emit(faces, at)?;
             }
-            _ => {
+            // MGF names begin with a letter; anything else is not an entity at all.
+            _ if !name.starts_with(|c: char| c.is_ascii_alphabetic()) => {
                 return Err(GeomError::MgfUnknownEntity {
                     path: at.path.to_path_buf(),
                     line: at.line,
                     entity: name.to_string(),
                 });
+            }
+            // The reference parser ignores entities it does not know, with a warning, so that
+            // files written for later versions of the format still load (MGF 2.0, "Ignoring
+            // new entities").
+            _ => {
+                *self.unknown.entry(name.to_string()).or_default() += 1;
+                self.first_unknown.get_or_insert_with(|| format!("{}:{}", at.path.display(), at.line));
             }
         }
         Ok(())
@@ -729,6 +754,15 @@ impl Loader {
             let list = self.ignored.iter().map(|(k, n)| format!("{k} ×{n}")).collect::<Vec<_>>().join(", ");
             warnings.push(format!(
                 "{file}: ignored {total} non-diffuse attributes ({list}): patches are diffuse reflectors and emitters only"
+            ));
+        }
+        if !self.unknown.is_empty() {
+            let total: usize = self.unknown.values().sum();
+            let list = self.unknown.iter().map(|(k, n)| format!("'{k}' ×{n}")).collect::<Vec<_>>().join(", ");
+            let first = self.first_unknown.as_deref().unwrap_or_default();
+            let s = if total == 1 { "y" } else { "ies" };
+            warnings.push(format!(
+                "{file}: ignored {total} unknown entit{s} ({list}; the first at {first}), as MGF's reference parser does"
             ));
         }
         if !self.clamped.is_empty() {

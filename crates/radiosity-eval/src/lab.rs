@@ -43,7 +43,7 @@ use crate::cache::{Cache, Lookup, scene_key};
 use crate::compare::Comparison;
 use crate::error::EvalError;
 use crate::matrix::FormFactors;
-use crate::metrics::{Evaluator, errors};
+use crate::metrics::{Evaluator, errors, errors_against};
 use crate::progress::Progress;
 use crate::reference::{ReferenceParams, ReferenceSolution};
 use crate::table::TableRow;
@@ -347,7 +347,9 @@ impl<'p> Lab<'p> {
         let (target, unit) = progress_target(rules, self.n());
         let n = self.n() as u64;
         let mut recorder = Recorder {
-            lab: self,
+            system: &self.system,
+            reference: self.reference.values(),
+            clock: Instant::now(),
             evaluator: evaluator.as_ref(),
             solver: name.clone(),
             every: plan.every.unwrap_or((target / 100).max(1)),
@@ -548,6 +550,9 @@ pub struct Point {
     pub columns: u64,
     /// The run's seconds so far (form factors and solving; measurement excluded).
     pub seconds: Real,
+    /// Wall seconds since the recorder's clock started (for a lab's runs, when the run was
+    /// set up), its own measuring taken out: the run's seconds and the executor's bookkeeping.
+    pub wall: Real,
     /// e_rms against the reference.
     pub e_rms: Real,
 }
@@ -571,7 +576,11 @@ pub struct FinalMetrics {
 
 /// Records e_rms after every step and every metric at planned steps (module doc).
 pub struct Recorder<'a> {
-    lab: &'a Lab<'a>,
+    system: &'a LinearSystem,
+    /// The exact answer, patch-major like the system's vectors.
+    reference: &'a [Real],
+    /// Where [`Point::wall`] counts from.
+    clock: Instant,
     evaluator: Option<&'a Evaluator<'a>>,
     solver: String,
     every: u64,
@@ -583,10 +592,42 @@ pub struct Recorder<'a> {
     by_columns: bool,
 }
 
+impl<'a> Recorder<'a> {
+    /// A recorder of e_rms after every step against `reference` (patch-major, like the
+    /// system's vectors) and nothing else, for a caller with a reference of its own (read
+    /// from a file, or a closed form); [`Point::wall`] counts from `clock`.
+    pub fn errors(system: &'a LinearSystem, reference: &'a [Real], clock: Instant) -> Recorder<'a> {
+        Recorder {
+            system,
+            reference,
+            clock,
+            evaluator: None,
+            solver: String::new(),
+            every: u64::MAX,
+            marks: Vec::new(),
+            points: Vec::new(),
+            rows: Vec::new(),
+            overhead: 0.0,
+            progress: &crate::progress::NoProgress,
+            by_columns: true,
+        }
+    }
+
+    /// e_rms after every step so far.
+    pub fn points(&self) -> &[Point] {
+        &self.points
+    }
+
+    /// Seconds spent measuring so far.
+    pub fn overhead(&self) -> Real {
+        self.overhead
+    }
+}
+
 impl Observer for Recorder<'_> {
     fn observe_step(&mut self, state: &State) -> Option<Real> {
         let start = Instant::now();
-        let e_rms = errors(&self.lab.system, &self.lab.reference, &state.radiosity).ok()?.e_rms;
+        let e_rms = errors_against(self.system, self.reference, &state.radiosity).ok()?.e_rms;
         let seconds = state.ff_seconds + state.solve_seconds;
         let new_mark =
             self.marks.contains(&state.columns) && self.points.last().is_none_or(|p| p.columns != state.columns);
@@ -606,13 +647,14 @@ impl Observer for Recorder<'_> {
                 Some(Ok(m)) => self.rows.push(row(m.e_max, m.residual, m.relative_bound)),
                 Some(Err(_)) => {}
                 None => {
-                    if let Ok(e) = errors(&self.lab.system, &self.lab.reference, &state.radiosity) {
+                    if let Ok(e) = errors_against(self.system, self.reference, &state.radiosity) {
                         self.rows.push(row(e.e_max, Real::NAN, Real::NAN));
                     }
                 }
             }
         }
-        self.points.push(Point { step: state.step, columns: state.columns, seconds, e_rms });
+        let wall = (start - self.clock).as_secs_f64() - self.overhead;
+        self.points.push(Point { step: state.step, columns: state.columns, seconds, wall, e_rms });
         self.progress.advance(if self.by_columns { state.columns } else { state.step }, &format!("e_rms {e_rms:.2e}"));
         self.overhead += start.elapsed().as_secs_f64();
         Some(e_rms)

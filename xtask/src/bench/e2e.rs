@@ -5,9 +5,9 @@
 //! peak memory is its own and nothing it allocates is left to the next. The child starts its
 //! clock before loading the scene, and counts everything a user would wait for: load, BVH,
 //! analysis, the backend's setup (for `matrix`, assembling the full matrix, always fresh,
-//! never from the cache) and the solve. After every step it computes e_rms against the
-//! reference the parent solved beforehand, and takes that measurement's time out of its
-//! clock. It prints its figures as one JSON line, with `VmHWM` from `/proc/self/status`
+//! never from the cache) and the solve. After every step the library's `Recorder` computes
+//! e_rms against the reference the parent solved beforehand, and takes that measurement's
+//! time out of its wall clock, which starts with the child's. It prints its figures as one JSON line, with `VmHWM` from `/proc/self/status`
 //! (the high-water mark of its resident memory; absent where `/proc` is not).
 
 use super::{Config, Findings, duration, human_bytes, median, progress, sig};
@@ -16,11 +16,12 @@ use crate::experiment::prepare;
 use anyhow::{Context, Result, bail};
 use radiosity_core::{LinearSystem, Real};
 use radiosity_eval::backends::fresh_backend;
+use radiosity_eval::lab::Recorder;
 use radiosity_eval::metrics::errors_against;
 use radiosity_eval::{Lab, LabOptions};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
-use radiosity_solvers::{Executor, Observer, Problem, SolverRegistry, State, StopRules};
+use radiosity_solvers::{Executor, Problem, SolverRegistry, StopRules};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -66,37 +67,6 @@ struct ChildReport {
     peak_rss: Option<u64>,
 }
 
-/// Records when e_rms first falls to each threshold, on the wall clock less its own time.
-struct WallObserver<'a> {
-    start: Instant,
-    system: &'a LinearSystem,
-    star: &'a [Real],
-    measurement: Real,
-    reached: Vec<Reached>,
-}
-
-impl Observer for WallObserver<'_> {
-    fn observe_step(&mut self, state: &State) -> Option<Real> {
-        let now = Instant::now();
-        let seconds = (now - self.start).as_secs_f64() - self.measurement;
-        let e_rms = errors_against(self.system, self.star, &state.radiosity).ok().map(|e| e.e_rms);
-        if let Some(e) = e_rms {
-            while let Some(&threshold) = THRESHOLDS.get(self.reached.len()) {
-                if e > threshold {
-                    break;
-                }
-                self.reached.push(Reached { e_rms: threshold, seconds, columns: state.columns, steps: state.step });
-            }
-        }
-        self.measurement += now.elapsed().as_secs_f64();
-        e_rms
-    }
-
-    fn measures_error(&self) -> bool {
-        true
-    }
-}
-
 /// The high-water mark of this process's resident memory, in bytes (Linux).
 fn peak_rss() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
@@ -124,19 +94,25 @@ pub(crate) fn child(scene: &str, solver: &str, ff: &str, reference: &Path, max_s
     let order = radiosity_geom::spatial_order(&prepared.loaded.scene);
     let backend_seconds = start.elapsed().as_secs_f64() - scene_seconds;
     let problem = Problem::new(&system, &backend)?.with_patch_order(&order)?;
-    let mut observer = WallObserver { start, system: &system, star: &star, measurement: 0.0, reached: Vec::new() };
-    let run = Executor::new(solver.as_mut(), rules).run(&problem, &mut observer)?;
-    let seconds = start.elapsed().as_secs_f64() - observer.measurement;
+    let mut recorder = Recorder::errors(&system, &star, start);
+    let run = Executor::new(solver.as_mut(), rules).run(&problem, &mut recorder)?;
+    let measurement = recorder.overhead();
+    let seconds = start.elapsed().as_secs_f64() - measurement;
+    let mut reached = Vec::new();
+    for threshold in THRESHOLDS {
+        let Some(p) = recorder.points().iter().find(|p| p.e_rms <= threshold) else { break };
+        reached.push(Reached { e_rms: threshold, seconds: p.wall, columns: p.columns, steps: p.step });
+    }
     let e_rms = errors_against(&system, &star, &run.state.radiosity)?.e_rms;
     let report = ChildReport {
         setup: Setup { scene: scene_seconds, backend: backend_seconds },
-        reached: observer.reached,
+        reached,
         e_rms,
         columns: run.state.columns,
         steps: run.state.step,
         termination: run.termination.to_string(),
         seconds,
-        measurement: observer.measurement,
+        measurement,
         peak_rss: peak_rss(),
     };
     println!("{}", serde_json::to_string(&report)?);

@@ -37,7 +37,7 @@
 //! Everything written is deterministic (no timings), so the report is snapshot-tested.
 
 use crate::backends::fresh_backend;
-use crate::lab::LabError;
+use crate::lab::{LabError, Recorder};
 use crate::metrics::errors_against;
 use crate::progress::Progress;
 use crate::table::round_significant;
@@ -47,12 +47,13 @@ use radiosity_core::{LinearSystem, Real};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
 use radiosity_solvers::{
-    BEYOND_PAPER_SOLVERS, Executor, GROUP_SOLVERS, Observer, POINT_SOLVERS, Problem, Record, SolverRegistry, State,
-    StopRule, StopRules, TerminationReason,
+    BEYOND_PAPER_SOLVERS, Executor, GROUP_SOLVERS, NoObserver, Observer, POINT_SOLVERS, Problem, Record,
+    SolverRegistry, State, StopRule, StopRules, TerminationReason,
 };
 use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::Path;
+use std::time::Instant;
 
 /// Steps allowed to a run, in multiples of the patch count.
 pub const STEP_CAP: f64 = 200.0;
@@ -294,30 +295,6 @@ impl Ended {
     }
 }
 
-/// Records the columns at which e_rms first reaches 1e-3 and 1e-6.
-struct Reach<'a> {
-    system: &'a LinearSystem,
-    truth: Option<&'a [Real]>,
-    reached: [Option<u64>; 2],
-}
-
-impl Observer for Reach<'_> {
-    fn measures_error(&self) -> bool {
-        self.truth.is_some()
-    }
-
-    fn observe_step(&mut self, state: &State) -> Option<Real> {
-        let truth = self.truth?;
-        let e = errors_against(self.system, truth, &state.radiosity).ok()?.e_rms;
-        for (slot, target) in self.reached.iter_mut().zip([1e-3, 1e-6]) {
-            if slot.is_none() && e <= target {
-                *slot = Some(state.columns);
-            }
-        }
-        Some(e)
-    }
-}
-
 /// Assembles F with `backend`, solves the reference and runs every solver.
 fn run_backend(
     prepared: &PreparedScene,
@@ -419,8 +396,14 @@ fn run_solver(
     let mut solver = registry.build(name)?;
     let problem = Problem::new(system, matrix)?;
     let rules = StopRules { rules: vec![StopRule::Residual(RESIDUAL_TARGET)], step_cap: STEP_CAP };
-    let mut reach = Reach { system, truth: reference, reached: [None; 2] };
-    let run = match Executor::new(solver.as_mut(), rules).run(&problem, &mut reach) {
+    // e_rms after every step against the reference, when there is one.
+    let mut recorder = reference.map(|r| Recorder::errors(system, r, Instant::now()));
+    let mut none = NoObserver;
+    let observer: &mut dyn Observer = match &mut recorder {
+        Some(r) => r,
+        None => &mut none,
+    };
+    let run = match Executor::new(solver.as_mut(), rules).run(&problem, observer) {
         Ok(run) => run,
         Err(e) => return Ok(Outcome::Failed(e.to_string())),
     };
@@ -440,7 +423,10 @@ fn run_solver(
     });
     Ok(Outcome::Ended(Box::new(Ended {
         termination: run.termination,
-        reached: reach.reached,
+        reached: [1e-3, 1e-6].map(|target| {
+            let points = recorder.as_ref().map_or(&[][..], |r| r.points());
+            points.iter().find(|p| p.e_rms <= target).map(|p| p.columns)
+        }),
         e_reference: error(reference),
         e_exact: error(exact),
         bound,

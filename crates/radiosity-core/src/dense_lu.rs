@@ -87,13 +87,21 @@ pub fn solve_m_matrix(n: usize, nonnegative: &[Real], b: Vec<Real>) -> Option<(V
         return None;
     }
     let phi = |a: usize, c: usize| Real::from(a == c) - nonnegative[a * n + c];
-    let norm = (0..n).map(|a| (0..n).map(|c| phi(a, c).abs()).sum::<Real>()).fold(0.0, Real::max);
     let mut solved = lu_solve_columns(n, false, phi, &[b, vec![1.0; n]]).ok()?;
     let z = solved.pop()?;
     let y = solved.pop()?;
-    if z.iter().any(|&v| !(v.is_finite() && v > 0.0)) {
+    Some((y, m_matrix_condition(n, nonnegative, &z)?))
+}
+
+/// `κ_∞(I − N)` from `z = (I − N)⁻¹ 1`, for a caller that solved with `1` as one of its
+/// right-hand sides ([`solve_m_matrix`] does): `‖I − N‖_∞ max z`, or `None` when `I − N` is
+/// not a nonsingular M-matrix (an entry of `N` negative or not finite, or `z` not positive).
+pub fn m_matrix_condition(n: usize, nonnegative: &[Real], z: &[Real]) -> Option<Real> {
+    if nonnegative.iter().any(|&v| !(v.is_finite() && v >= 0.0)) || z.iter().any(|&v| !(v.is_finite() && v > 0.0)) {
         return None;
     }
+    let phi = |a: usize, c: usize| Real::from(a == c) - nonnegative[a * n + c];
+    let norm = (0..n).map(|a| (0..n).map(|c| phi(a, c).abs()).sum::<Real>()).fold(0.0, Real::max);
     // Finite and positive factors: the product is never NaN (at worst it overflows to ∞).
-    Some((y, norm * z.iter().copied().fold(0.0, Real::max)))
+    Some(norm * z.iter().copied().fold(0.0, Real::max))
 }

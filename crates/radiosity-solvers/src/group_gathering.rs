@@ -18,9 +18,8 @@
 //!
 //! `state.unshot` keeps the last change of each patch. The solver records its group steps
 //! ([`crate::group_step::GroupStats`]): `group_steps`, `group_size_mean`, `group_size_max`,
-//! `group_condition` (`κ_∞(Φ_rr)`, the largest met, from a factorisation of its own that
-//! leaves the solve untouched; infinite for a group whose `Φ_rr` is not a nonsingular
-//! M-matrix) and `group_fallbacks` (always 0: a singular group system is an error here,
+//! `group_condition` (`κ_∞(Φ_rr)`, the largest met, from `1` as a second right-hand side
+//! of each group solve; infinite for a group whose `Φ_rr` is not a nonsingular M-matrix) and `group_fallbacks` (always 0: a singular group system is an error here,
 //! [`SolverError::SingularGroup`]). The residual reported is the sum over
 //! the last sweep of each patch's residual in the vector its group gathered from (exact for
 //! group Jacobi; for group Gauss–Seidel, of a vector that changes during the sweep, so an
@@ -40,8 +39,8 @@
 //! ## Cost
 //!
 //! A step gathers one group: `m` rows, so `m` columns ([`Problem::row`]), and one `m × m` LU
-//! per channel (`O(m³)`, the paper's "`m³` operations"), with a second for the recorded
-//! condition number; their time is `state.group_seconds`. A
+//! per channel (`O(m³)`, the paper's "`m³` operations"; with the all-ones right-hand side of
+//! the recorded condition number), its time `state.group_seconds`. A
 //! sweep is `⌈n/m⌉` steps and `n` columns, as for point Jacobi and Gauss–Seidel. With `m ≥ n`
 //! the one group is the whole system: one step solves it exactly.
 //!
@@ -61,7 +60,7 @@ use crate::record::Record;
 use crate::registry::{ParseSolverError, SolverParams, split_params, split_size, validated};
 use crate::state::State;
 use radiosity_core::Real;
-use radiosity_core::dense_lu::{SingularPivot, lu_solve, solve_m_matrix};
+use radiosity_core::dense_lu::{SingularPivot, lu_solve_columns, m_matrix_condition};
 use std::str::FromStr;
 use std::time::Instant;
 
@@ -187,16 +186,6 @@ impl GroupGathering {
         })
     }
 
-    /// `κ_∞(Φ_rr)` of the group's system in channel `c`, from `F_rr` in `self.block`: exact
-    /// when `Φ_rr` is a nonsingular M-matrix, infinite otherwise
-    /// ([`radiosity_core::dense_lu::solve_m_matrix`]). Its own factorisation, so that the
-    /// solve itself is untouched.
-    fn condition(&self, group: &[usize], c: usize, system: &radiosity_core::LinearSystem) -> Real {
-        let size = group.len();
-        let n_rr: Vec<Real> = (0..size * size).map(|ab| system.rho(group[ab / size], c) * self.block[ab]).collect();
-        solve_m_matrix(size, &n_rr, vec![0.0; size]).map_or(Real::INFINITY, |(_, condition)| condition)
-    }
-
     /// The name without parameters (`group-gs-g30`).
     fn head(&self) -> String {
         let base = match self.sweep {
@@ -261,20 +250,19 @@ impl Solver for GroupGathering {
         self.delta.resize(size * k, 0.0);
         let mut condition: Real = 0.0;
         for c in 0..k {
-            let phi = |a: usize, b: usize| Real::from(a == b) - system.rho(group[a], c) * self.block[a * size + b];
-            let solved = lu_solve(size, false, phi, |a| self.residual[a * k + c]).map_err(
-                |SingularPivot { pivot, value }| SolverError::SingularGroup {
-                    step: state.step + 1,
-                    size,
-                    channel: c,
-                    pivot,
-                    value,
-                },
-            )?;
-            for (a, v) in solved.into_iter().enumerate() {
+            // Φ_rr = I − N_rr; `1` as a second right-hand side on the same factorisation gives
+            // the condition number the solver records.
+            let n_rr: Vec<Real> = (0..size * size).map(|ab| system.rho(group[ab / size], c) * self.block[ab]).collect();
+            let phi = |a: usize, b: usize| Real::from(a == b) - n_rr[a * size + b];
+            let rhs = [(0..size).map(|a| self.residual[a * k + c]).collect(), vec![1.0; size]];
+            let mut solved = lu_solve_columns(size, false, phi, &rhs).map_err(|SingularPivot { pivot, value }| {
+                SolverError::SingularGroup { step: state.step + 1, size, channel: c, pivot, value }
+            })?;
+            let ones = solved.pop().expect("two right-hand sides");
+            condition = condition.max(m_matrix_condition(size, &n_rr, &ones).unwrap_or(Real::INFINITY));
+            for (a, &v) in solved[0].iter().enumerate() {
                 self.delta[a * k + c] = v;
             }
-            condition = condition.max(self.condition(group, c, system));
         }
         state.group_seconds += timer.elapsed().as_secs_f64();
         self.stats.add(&GroupShot { size, condition, fell_back: false, operations: 0 });

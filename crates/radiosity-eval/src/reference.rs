@@ -388,48 +388,68 @@ impl ReferenceSolution {
         if xxhash_rust::xxh3::xxh3_64(body).to_le_bytes() != sum {
             return Err(refuse("its checksum does not match (truncated or damaged file)"));
         }
-        let mut at = STORED_MAGIC.len();
-        let mut take = |len: usize| -> Result<&[u8], EvalError> {
-            let piece = body.get(at..at + len).ok_or_else(|| refuse("truncated file"))?;
-            at += len;
-            Ok(piece)
-        };
-        let version = u32::from_le_bytes(take(4)?.try_into().expect("4 bytes"));
+        let mut r = StoredReader { body, at: STORED_MAGIC.len() };
+        let version = u32::from_le_bytes(r.take(4)?.try_into().expect("4 bytes"));
         if version != STORED_FORMAT_VERSION {
             return Err(refuse(&format!(
                 "written in format version {version}, this build reads version {STORED_FORMAT_VERSION}"
             )));
         }
-        let mut word = || -> Result<u64, EvalError> { Ok(u64::from_le_bytes(take(8)?.try_into().expect("8 bytes"))) };
-        let key_len = word()? as usize;
-        let stored_key = take(key_len)?;
+        let key_len = r.word()?;
+        let stored_key = r.take(usize::try_from(key_len).unwrap_or(usize::MAX))?;
         if stored_key != key.as_bytes() {
             return Err(refuse(&format!(
                 "it was computed for '{}', not for '{key}'",
                 String::from_utf8_lossy(stored_key)
             )));
         }
-        let mut word = || -> Result<u64, EvalError> { Ok(u64::from_le_bytes(take(8)?.try_into().expect("8 bytes"))) };
-        let (k, n) = (word()? as usize, word()? as usize);
-        if k != system.channels().count() || n != system.len() {
+        let (k, n) = (r.word()?, r.word()?);
+        if k != system.channels().count() as u64 || n != system.len() as u64 {
             return Err(refuse("its size is not this system's"));
         }
-        let method = match (word()?, word()?) {
+        let (k, n) = (k as usize, n as usize);
+        let method = match (r.word()?, r.word()?) {
             (0, _) => Method::DenseLu,
             (1, sweeps) => Method::GaussSeidel { sweeps: sweeps as usize },
             _ => return Err(refuse("unknown method")),
         };
-        let mut real = || -> Result<Real, EvalError> { Ok(Real::from_bits(word()?)) };
-        let (residual_norm, bound, relative_bound, certified) = (real()?, real()?, real()?, real()? != 0.0);
-        let max_row_sum = real()?;
-        let rho_max = (0..k).map(|_| real()).collect::<Result<Vec<_>, _>>()?;
-        let kappa = (0..k).map(|_| real()).collect::<Result<Vec<_>, _>>()?;
-        let values = (0..n * k).map(|_| real()).collect::<Result<Vec<_>, _>>()?;
-        if at != body.len() {
+        let (residual_norm, bound, relative_bound, certified) = (r.real()?, r.real()?, r.real()?, r.real()? != 0.0);
+        let max_row_sum = r.real()?;
+        let rho_max = (0..k).map(|_| r.real()).collect::<Result<Vec<_>, _>>()?;
+        let kappa = (0..k).map(|_| r.real()).collect::<Result<Vec<_>, _>>()?;
+        let values = (0..n * k).map(|_| r.real()).collect::<Result<Vec<_>, _>>()?;
+        if r.at != body.len() {
             return Err(refuse("trailing bytes after the values"));
         }
         let contraction = Contraction { max_row_sum, rho_max, kappa };
         let certificate = Certificate { residual_norm, bound, relative_bound, certified, contraction };
         Ok(ReferenceSolution { channels: system.channels(), n, values, method, certificate })
+    }
+}
+
+/// Reads a stored reference's body front to back ([`ReferenceSolution::from_bytes`]).
+struct StoredReader<'b> {
+    body: &'b [u8],
+    at: usize,
+}
+
+impl<'b> StoredReader<'b> {
+    /// The next `len` bytes.
+    fn take(&mut self, len: usize) -> Result<&'b [u8], EvalError> {
+        let end = self.at.checked_add(len).filter(|&end| end <= self.body.len());
+        let end = end.ok_or_else(|| EvalError::StoredReference("truncated file".into()))?;
+        let piece = &self.body[self.at..end];
+        self.at = end;
+        Ok(piece)
+    }
+
+    /// The next little-endian `u64`.
+    fn word(&mut self) -> Result<u64, EvalError> {
+        Ok(u64::from_le_bytes(self.take(8)?.try_into().expect("8 bytes")))
+    }
+
+    /// The next little-endian `f64`.
+    fn real(&mut self) -> Result<Real, EvalError> {
+        Ok(Real::from_bits(self.word()?))
     }
 }

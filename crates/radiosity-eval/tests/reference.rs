@@ -172,3 +172,31 @@ fn refused_inputs_are_errors() {
     assert!(matches!(err, EvalError::NotConverged { sweeps: 2, .. }), "{err}");
     assert!(err.to_string().starts_with("Gauss-Seidel reached a relative bound of"), "{err}");
 }
+
+#[test]
+fn a_stored_reference_reads_back_whole_and_refuses_anything_else() {
+    let (system, f) = furnace();
+    for params in [dense(), exact_gauss_seidel()] {
+        let reference = ReferenceSolution::solve(&system, &f, params).unwrap();
+        let bytes = reference.to_bytes("the key");
+        assert_eq!(ReferenceSolution::from_bytes(&bytes, "the key", &system).unwrap(), reference);
+        let refused =
+            |bytes: &[u8], key: &str, system: &LinearSystem| match ReferenceSolution::from_bytes(bytes, key, system) {
+                Err(EvalError::StoredReference(why)) => why,
+                other => panic!("{other:?}"),
+            };
+        assert!(refused(&bytes, "another key", &system).contains("computed for 'the key'"));
+        // Every truncation and every flipped byte is caught (by the magic, the length or the
+        // checksum), never read as a reference.
+        for len in 0..bytes.len() {
+            refused(&bytes[..len], "the key", &system);
+        }
+        for at in [0, 20, 30, bytes.len() / 2, bytes.len() - 1] {
+            let mut damaged = bytes.clone();
+            damaged[at] ^= 0x40;
+            refused(&damaged, "the key", &system);
+        }
+        let grey = LinearSystem::new(Channels::Grey, vec![1.0; 5], vec![0.5; 5], vec![1.0; 5]).unwrap();
+        assert!(refused(&bytes, "the key", &grey).contains("size"));
+    }
+}

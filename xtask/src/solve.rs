@@ -192,12 +192,12 @@ pub fn run(args: &Args) -> Result<()> {
                 100.0 * stats.group_seconds / stats.seconds
             );
         }
-        let residual = match (stats.residual, residual_of) {
-            (Some(r), "displayed radiosity") => format!("residual power {r:.4e}"),
-            (Some(r), _) => format!(
+        let residual = match (outcome.last.residual, outcome.last.solver_residual) {
+            (Some(r), _) => format!("residual power {r:.4e}"),
+            (None, Some(r)) => format!(
                 "residual power of the shot radiosity {r:.4e} (the solver's own: the reference came from the cache)"
             ),
-            (None, _) => "residual not measured (the reference came from the cache)".into(),
+            (None, None) => "residual not measured (the reference came from the cache)".into(),
         };
         println!("error        e_rms {:.4e}, e_max {:.4e}, {residual}", stats.e_rms, stats.e_max);
         for r in &stats.reached {

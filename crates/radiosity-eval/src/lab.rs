@@ -172,14 +172,16 @@ impl<'p> Lab<'p> {
         options: LabOptions,
         progress: &dyn Progress,
     ) -> Result<Lab<'p>, LabError> {
+        // Before the backend: a stored matrix would be assembled for nothing.
         require_emitters(prepared)?;
         let backend = crate::backends::backend(prepared, spec, options.cache.as_ref(), progress)?;
         let serves_rows = backend.serves_rows();
         Lab::with_source(prepared, &spec.canonical(), Box::new(backend), serves_rows, options, progress)
     }
 
-    /// Sets a lab up with any column source, labelled `backend` in reports (and in cache keys:
-    /// give a new label whenever the source computes something else). `serves_rows` says
+    /// Sets a lab up with any column source, labelled `backend` in reports and in cache keys
+    /// (which also hold a fingerprint of three of its columns, so an edited source is not
+    /// taken for the old one). `serves_rows` says
     /// whether [`ColumnSource::fill_row`] gives exact rows of the matrix its columns assemble.
     pub fn with_source(
         prepared: &'p PreparedScene,
@@ -309,6 +311,14 @@ impl<'p> Lab<'p> {
         &self.origin
     }
 
+    /// Measures against the reference with F, when F is kept; the contraction is the one the
+    /// reference's certificate measured on the same F.
+    fn evaluator(&self) -> Result<Option<Evaluator<'_>>, LabError> {
+        let Some(m) = &self.matrix else { return Ok(None) };
+        let contraction = self.reference.certificate().contraction.clone();
+        Ok(Some(Evaluator::with_contraction(&self.system, m, &self.reference, contraction)?))
+    }
+
     /// The number of patches.
     pub fn n(&self) -> usize {
         self.system.len()
@@ -340,10 +350,7 @@ impl<'p> Lab<'p> {
             progress.warn(&w);
         }
         let name = solver.name();
-        let evaluator = match &self.matrix {
-            Some(m) => Some(Evaluator::new(&self.system, m, &self.reference)?),
-            None => None,
-        };
+        let evaluator = self.evaluator()?;
         let (target, unit) = progress_target(rules, self.n());
         let n = self.n() as u64;
         let mut recorder = Recorder {
@@ -357,7 +364,7 @@ impl<'p> Lab<'p> {
             points: Vec::new(),
             rows: Vec::new(),
             overhead: 0.0,
-            progress,
+            progress: Some(progress),
             by_columns: unit == "columns",
         };
         progress.begin(&name, target, unit);
@@ -413,8 +420,8 @@ impl<'p> Lab<'p> {
 
     /// The metrics of the reference itself (zero error; its residual when F is kept).
     pub fn reference_metrics(&self) -> Result<FinalMetrics, LabError> {
-        let residual = match &self.matrix {
-            Some(m) => Some(Evaluator::new(&self.system, m, &self.reference)?.evaluate(self.reference.values())?),
+        let residual = match self.evaluator()? {
+            Some(e) => Some(e.evaluate(self.reference.values())?),
             None => None,
         };
         Ok(FinalMetrics {
@@ -485,7 +492,7 @@ fn assemble(
     params: &ReferenceParams,
     progress: &dyn Progress,
 ) -> Result<FormFactors, LabError> {
-    progress.begin("F and the reference", 0, "");
+    progress.begin("form factors", 0, "");
     let matrix = FormFactors::assemble(source, params.max_matrix_bytes);
     progress.end();
     Ok(matrix?)
@@ -588,7 +595,8 @@ pub struct Recorder<'a> {
     points: Vec<Point>,
     rows: Vec<TableRow>,
     overhead: Real,
-    progress: &'a dyn Progress,
+    /// Where each step is reported, if anywhere (no message is formatted otherwise).
+    progress: Option<&'a dyn Progress>,
     by_columns: bool,
 }
 
@@ -608,7 +616,7 @@ impl<'a> Recorder<'a> {
             points: Vec::new(),
             rows: Vec::new(),
             overhead: 0.0,
-            progress: &crate::progress::NoProgress,
+            progress: None,
             by_columns: true,
         }
     }
@@ -627,7 +635,8 @@ impl<'a> Recorder<'a> {
 impl Observer for Recorder<'_> {
     fn observe_step(&mut self, state: &State) -> Option<Real> {
         let start = Instant::now();
-        let e_rms = errors_against(self.system, self.reference, &state.radiosity).ok()?.e_rms;
+        let errors = errors_against(self.system, self.reference, &state.radiosity).ok()?;
+        let e_rms = errors.e_rms;
         let seconds = state.ff_seconds + state.solve_seconds;
         let new_mark =
             self.marks.contains(&state.columns) && self.points.last().is_none_or(|p| p.columns != state.columns);
@@ -646,16 +655,14 @@ impl Observer for Recorder<'_> {
             match self.evaluator.map(|e| e.evaluate(&state.radiosity)) {
                 Some(Ok(m)) => self.rows.push(row(m.e_max, m.residual, m.relative_bound)),
                 Some(Err(_)) => {}
-                None => {
-                    if let Ok(e) = errors_against(self.system, self.reference, &state.radiosity) {
-                        self.rows.push(row(e.e_max, Real::NAN, Real::NAN));
-                    }
-                }
+                None => self.rows.push(row(errors.e_max, Real::NAN, Real::NAN)),
             }
         }
         let wall = (start - self.clock).as_secs_f64() - self.overhead;
         self.points.push(Point { step: state.step, columns: state.columns, seconds, wall, e_rms });
-        self.progress.advance(if self.by_columns { state.columns } else { state.step }, &format!("e_rms {e_rms:.2e}"));
+        if let Some(progress) = self.progress {
+            progress.advance(if self.by_columns { state.columns } else { state.step }, &format!("e_rms {e_rms:.2e}"));
+        }
         self.overhead += start.elapsed().as_secs_f64();
         Some(e_rms)
     }

@@ -352,8 +352,20 @@ impl<'a> Evaluator<'a> {
         matrix: &'a FormFactors,
         reference: &'a ReferenceSolution,
     ) -> Result<Evaluator<'a>, EvalError> {
-        check_reference(system, reference)?;
         let contraction = Contraction::from_matrix(system, matrix)?;
+        Evaluator::with_contraction(system, matrix, reference, contraction)
+    }
+
+    /// As [`Evaluator::new`], with the contraction of `matrix` already measured (the
+    /// reference's certificate carries it), so that no `n²` pass is repeated.
+    pub fn with_contraction(
+        system: &'a LinearSystem,
+        matrix: &'a FormFactors,
+        reference: &'a ReferenceSolution,
+        contraction: Contraction,
+    ) -> Result<Evaluator<'a>, EvalError> {
+        check_reference(system, reference)?;
+        check_sizes(system, matrix.patch_count(), None)?;
         Ok(Evaluator { system, matrix, reference, contraction })
     }
 

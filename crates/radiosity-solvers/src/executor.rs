@@ -182,24 +182,6 @@ impl<O: Observer + ?Sized> Observer for &mut O {
     }
 }
 
-impl<O: Observer + ?Sized> Observer for Box<O> {
-    fn observe_init(&mut self, solver: &str, state: &State) -> Option<Real> {
-        (**self).observe_init(solver, state)
-    }
-
-    fn observe_step(&mut self, state: &State) -> Option<Real> {
-        (**self).observe_step(state)
-    }
-
-    fn observe_final(&mut self, run: &Run) {
-        (**self).observe_final(run)
-    }
-
-    fn measures_error(&self) -> bool {
-        (**self).measures_error()
-    }
-}
-
 /// An observer that watches nothing.
 #[derive(Debug, Default)]
 pub struct NoObserver;

@@ -224,7 +224,7 @@ fn bad_backends_are_refused() {
         ("hemicube:res=3", &["backend 'hemicube'", "res=3", "even"]),
         ("hemicube:res=0", &["backend 'hemicube'", "res=0", "from 2 to 4096"]),
         ("montecarlo:rays=0", &["backend 'montecarlo'", "rays=0", "from 1 to"]),
-        ("analytic:bogus=1", &["backend 'analytic'", "no parameter 'bogus'", "order, tol, rays, seed"]),
+        ("analytic:bogus=1", &["backend 'analytic'", "no parameter 'bogus'", "order, tol, rays, budget, seed"]),
         ("matrix:rebalance=maybe", &["backend 'matrix'", "rebalance=maybe", "true or false"]),
     ];
     for (backend, words) in cases {

@@ -50,39 +50,23 @@
 //! ## Visibility
 //!
 //! When the scene analysis says nothing can occlude, no ray is traced (`V_ij = 1`).
-//! Otherwise about `k = rays` segments join the two patches of the pair (`lo`, `hi` by
-//! index). `hi`'s parameter square is cut into `s² = ⌊k^{1/4}⌋²` strata `S`; `k / s²` points
-//! `p` are Latin-hypercube jittered on `lo`, and each is joined to a jittered point of every
-//! stratum. Then
-//!
-//! `V_ij = Σ_p Σ_S F(dA_p → S) v(p, S) / Σ_p F(dA_p → hi)`,
-//!
-//! with `v ∈ {0, 1}` the segment's visibility: each point's strata are weighted by their exact
-//! form factors, which sum to the point's own `F(dA_p → hi)`, a bounded and smooth weight. It
-//! is consistent as `k` grows, and with `k = 1` it is the one ray's answer. Two simpler
-//! estimators were measured and dropped: weighting each segment by the point-to-point kernel
-//! `cos θ cos θ' / d²`, or by its stratum's form factor from an independent point, both give
-//! a few segments near a shared edge weights thousands of times the typical one; on the
-//! furnace with a block their row sums wandered by 1e-3 to 4e-3 whatever the ray count. The
-//! samples are drawn from a Xoshiro256++ stream keyed by the seed and the unordered pair, so
-//! `V_ij = V_ji` exactly and every column is the same whatever the thread that computes it.
-//!
-//! Measured on the closed furnace with a block (every row should sum to 1): at `res=4` the
-//! worst row is off by 8.1e-4 with 4096 rays and 4.7e-4 with 16384, the `k^{-1/2}` of
-//! sampling noise. On coarser meshes (`res=2`, patches half the box) it stalls near 1e-3
-//! (1.4e-3 with 65536 rays): inside a stratum the end point is drawn by area, not by kernel,
-//! a bias that shrinks only with the stratum's size. Sampling the strata by their kernel
-//! would remove it.
+//! Otherwise `V_ij` is the pair's visible fraction weighted by the kernel, estimated by
+//! [`crate::pair_visibility`]: each pair gets shadow rays in proportion to its larger
+//! unoccluded form factor (`budget` per unit, at least `rays`), both ends drawn where and as
+//! the kernel weighs them, with a probe deciding which pairs are partly visible and fresh
+//! rays estimating them. The samples are drawn from a Xoshiro256++ stream keyed by the seed
+//! and the unordered pair, so `V_ij = V_ji` exactly and every column is the same whatever
+//! the thread that computes it.
 
 use crate::ff_point_polygon::{MAX_CLIPPED, clip_above, distance_to_polygon, point_to_polygon};
 use crate::guard::ClampCounter;
+use crate::pair_visibility::{self, RayBudget};
 use crate::quadrature::{Panel, for_each_point_in, gauss_legendre, order_for, parametrisation};
 use crate::spec::AnalyticParams;
 use crate::traced::ShadowSegment;
 use radiosity_core::{ColumnSource, Patch, Real, Scene, Vec3};
 use radiosity_geom::{SceneAnalysis, Visibility};
-use rand::seq::SliceRandom;
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
 
@@ -192,12 +176,14 @@ impl<'a> AnalyticColumns<'a> {
         // round-off of a scaled or moved copy of the scene.
         let (ai, aj) = (pi.area(), pj.area());
         let smaller = if (ai - aj).abs() <= AREA_TIE * ai.max(aj) { i < j } else { ai < aj };
-        let unoccluded = if smaller { self.unoccluded(i, j, pi, pj) } else { self.unoccluded(j, i, pj, pi) * aj / ai };
-        if unoccluded == 0.0 {
+        // The pair's larger entry, the unoccluded factor of its smaller patch.
+        let larger = if smaller { self.unoccluded(i, j, pi, pj) } else { self.unoccluded(j, i, pj, pi) };
+        if larger == 0.0 {
             return 0.0;
         }
+        let unoccluded = if smaller { larger } else { larger * aj / ai };
         match self.visibility {
-            Some(_) => unoccluded * self.visible_fraction(i, j, trace),
+            Some(_) => unoccluded * self.visible_fraction(i, j, larger, trace),
             None => unoccluded,
         }
     }
@@ -279,58 +265,27 @@ impl<'a> AnalyticColumns<'a> {
         sum
     }
 
-    /// The kernel-weighted fraction of `rays` jittered segments between the patches that no
-    /// other patch blocks (see the module documentation).
-    fn visible_fraction(&self, i: usize, j: usize, trace: &mut impl FnMut(Vec3, usize, Vec3, usize) -> bool) -> Real {
+    /// The kernel-weighted visible fraction of the pair, the same for `(i, j)` and `(j, i)`
+    /// ([`crate::pair_visibility`]).
+    fn visible_fraction(
+        &self,
+        i: usize,
+        j: usize,
+        larger: Real,
+        trace: &mut impl FnMut(Vec3, usize, Vec3, usize) -> bool,
+    ) -> Real {
         let (lo, hi) = (i.min(j), i.max(j));
-        let (plo, phi) = (&self.scene.patches()[lo], &self.scene.patches()[hi]);
+        let patches = self.scene.patches();
         let mut rng = pair_rng(self.params.seed, lo, hi);
-        let k = self.params.rays;
-        if k == 1 {
-            let p = plo.point_at(rng.random(), rng.random());
-            let q = phi.point_at(rng.random(), rng.random());
-            return if trace(p, lo, q, hi) { 1.0 } else { 0.0 };
-        }
-        // `side²` strata of `hi`'s parameter square, and `k / side²` jittered (Latin
-        // hypercube) points on `lo`, each joined to a jittered point of every stratum.
-        let side = (k as Real).powf(0.25).floor().max(1.0) as usize;
-        let points = (k / (side * side)).max(1);
-        let mut strata: [Vec<usize>; 2] = std::array::from_fn(|_| (0..points).collect());
-        for s in &mut strata {
-            s.shuffle(&mut rng);
-        }
-        let cell = 1.0 / side as Real;
-        let cells: Vec<[Vec3; 4]> = (0..side * side)
-            .map(|c| {
-                let (s0, t0) = ((c % side) as Real * cell, (c / side) as Real * cell);
-                [(s0, t0), (s0 + cell, t0), (s0 + cell, t0 + cell), (s0, t0 + cell)]
-                    .map(|(s, t)| parametrisation(phi, s, t).0)
-            })
-            .collect();
-        let in_front_of_hi = |p: Vec3| phi.normal().dot(p - phi.vertices()[0]) > 0.0;
-        let (mut weighted, mut total, mut hits, mut rays) = (0.0, 0.0, 0usize, 0usize);
-        for (&su, &sv) in strata[0].iter().zip(&strata[1]) {
-            let u = (su as Real + rng.random::<Real>()) / points as Real;
-            let v = (sv as Real + rng.random::<Real>()) / points as Real;
-            let p = plo.point_at(u, v);
-            let front = in_front_of_hi(p);
-            for (c, corners) in cells.iter().enumerate() {
-                let (s0, t0) = ((c % side) as Real * cell, (c / side) as Real * cell);
-                let q = parametrisation(phi, s0 + cell * rng.random::<Real>(), t0 + cell * rng.random::<Real>()).0;
-                // The stratum as seen from p; the weights of one point sum to F(dA_p → hi).
-                let weight = if front { point_to_polygon(p, plo.normal(), corners) } else { 0.0 };
-                let visible = trace(p, lo, q, hi);
-                total += weight;
-                rays += 1;
-                if visible {
-                    weighted += weight;
-                    hits += 1;
-                }
-            }
-        }
-        let k = rays;
-        // Every sampled stratum out of sight of its point: fall back to the plain fraction.
-        if total > 0.0 { weighted / total } else { hits as Real / k as Real }
+        pair_visibility::visible_fraction(
+            (&patches[lo], lo),
+            (&patches[hi], hi),
+            larger,
+            RayBudget { rays: self.params.rays, per_unit: self.params.budget },
+            self.tolerance,
+            &mut rng,
+            trace,
+        )
     }
 }
 

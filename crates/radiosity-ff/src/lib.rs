@@ -36,7 +36,9 @@ pub mod guard;
 pub mod hemicube;
 pub mod matrix;
 pub mod montecarlo;
+pub mod pair_visibility;
 pub mod quadrature;
+pub mod solid_angle;
 pub mod spec;
 pub mod traced;
 

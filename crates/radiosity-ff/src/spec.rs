@@ -15,8 +15,12 @@ pub struct AnalyticParams {
     pub order: usize,
     /// The relative quadrature error each pair's order is chosen to meet (1 = centroid).
     pub tolerance: f64,
-    /// Shadow rays per pair, when the scene needs visibility.
+    /// The fewest shadow rays of a pair, when the scene needs visibility.
     pub rays: usize,
+    /// The shadow rays of a partially visible pair whose larger unoccluded form factor is 1:
+    /// a pair gets `budget` times its larger unoccluded form factor, at least `rays`
+    /// ([`crate::pair_visibility`]).
+    pub budget: usize,
     /// Seed of the jittered shadow rays.
     pub seed: u64,
 }
@@ -65,7 +69,16 @@ pub const ANALYTIC_PARAMS: &[ParamDoc] = &[
         doc: "largest Gauss-Legendre order on the receiver, 1 to 32 (1 = centroid only)",
     },
     ParamDoc { key: "tol", default: "1e-3", doc: "relative quadrature error each pair's order aims at, in (0, 1]" },
-    ParamDoc { key: "rays", default: "1", doc: "shadow rays per pair, 1 to 2^20 (none when nothing can occlude)" },
+    ParamDoc {
+        key: "rays",
+        default: "1",
+        doc: "fewest shadow rays per pair, 1 to 2^20 (none when nothing can occlude)",
+    },
+    ParamDoc {
+        key: "budget",
+        default: "16384",
+        doc: "shadow rays of a partly visible pair per unit of its larger unoccluded form factor, 0 to 2^24",
+    },
     ParamDoc { key: "seed", default: "0", doc: "seed of the jittered shadow rays" },
 ];
 
@@ -96,7 +109,7 @@ pub const BACKENDS: &[&str] = &["analytic", "hemicube", "montecarlo", "matrix"];
 
 impl Default for AnalyticParams {
     fn default() -> Self {
-        AnalyticParams { order: 8, tolerance: 1e-3, rays: 1, seed: 0 }
+        AnalyticParams { order: 8, tolerance: 1e-3, rays: 1, budget: 16384, seed: 0 }
     }
 }
 
@@ -118,7 +131,8 @@ impl BackendSpec {
                 BackendSpec::Analytic(AnalyticParams {
                     order: p.count("order", defaults.order, 1, 32)?,
                     tolerance: p.real("tol", defaults.tolerance, |t| t > 0.0 && t <= 1.0, "a tolerance in (0, 1]")?,
-                    rays: p.count("rays", 1, 1, 1 << 20)?,
+                    rays: p.count("rays", defaults.rays, 1, 1 << 20)?,
+                    budget: p.count("budget", defaults.budget, 0, 1 << 24)?,
                     seed: p.seed("seed", 0)?,
                 })
             }
@@ -162,7 +176,10 @@ impl BackendSpec {
     pub fn canonical(&self) -> String {
         match self {
             BackendSpec::Analytic(p) => {
-                format!("analytic:order={}:tol={:e}:rays={}:seed={}", p.order, p.tolerance, p.rays, p.seed)
+                format!(
+                    "analytic:order={}:tol={:e}:rays={}:budget={}:seed={}",
+                    p.order, p.tolerance, p.rays, p.budget, p.seed
+                )
             }
             BackendSpec::Hemicube(p) => format!("hemicube:res={}:seed={}", p.resolution, p.seed),
             BackendSpec::MonteCarlo(p) => format!("montecarlo:rays={}:seed={}", p.rays, p.seed),

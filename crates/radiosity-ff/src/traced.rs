@@ -165,7 +165,7 @@ mod tests {
         let (scene, visibility) = setup("multi-cubes");
         let analysis = SceneAnalysis::new(&scene, &visibility);
         let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
-        let spec = BackendSpec::parse("analytic").unwrap();
+        let spec = BackendSpec::parse("analytic:rays=1:budget=0").unwrap();
         let rays = ColumnRays::new(&spec, input).unwrap();
         let backend = AnalyticColumns::new(
             &scene,

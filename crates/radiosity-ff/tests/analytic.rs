@@ -165,14 +165,33 @@ fn closed_furnace_rows_sum_to_one() {
 }
 
 #[test]
-fn closed_furnace_with_a_block_rows_sum_to_one() {
-    // Partly hidden pairs need many shadow rays for their kernel-weighted visibility: the
-    // error falls like k^-1/2 here (8.1e-4 at 4096 rays, 4.7e-4 at 16384).
-    let (scene, vis, analysis, p) = analytic_for("furnace:res=4:block=true", "analytic:rays=4096");
+fn closed_occluded_scenes_close() {
+    // Closed scenes with occluders: every row within 2% of 1 and the mean within 1e-3. The
+    // block furnace meets it at the defaults; multi-cubes, whose rows are nearly all partly
+    // occluded, needs four times the default budget (at the default its worst row is 2.3%
+    // low). Before the kernel-weighted estimator, multi-cubes' rows ran from 0.56 to 1.22
+    // with a mean of 0.913.
+    for (scene, backend) in [("furnace:res=4:block=true", "analytic"), ("multi-cubes", "analytic:budget=65536")] {
+        let (scene, vis, analysis, p) = analytic_for(scene, backend);
+        let f = AnalyticColumns::new(&scene, &vis, &analysis, p);
+        assert!(f.traces_shadow_rays());
+        let sums = row_sums(&f);
+        for (i, s) in sums.iter().enumerate() {
+            assert!((s - 1.0).abs() < 2e-2, "{}: row {i} sums to {s}", scene.name());
+        }
+        let mean = sums.iter().sum::<f64>() / sums.len() as f64;
+        assert!((mean - 1.0).abs() < 1e-3, "{}: mean row sum {mean}", scene.name());
+    }
+}
+
+#[test]
+fn closure_improves_with_the_ray_budget() {
+    // Sixteen times the default budget: the block furnace's rows within 2.5e-3 of 1 (at the
+    // default, within 6e-3), the k^-1/2 of sampling noise.
+    let (scene, vis, analysis, p) = analytic_for("furnace:res=4:block=true", "analytic:budget=262144");
     let f = AnalyticColumns::new(&scene, &vis, &analysis, p);
-    assert!(f.traces_shadow_rays());
     for (i, s) in row_sums(&f).iter().enumerate() {
-        assert!((s - 1.0).abs() < 1e-3, "row {i} sums to {s}");
+        assert!((s - 1.0).abs() < 2.5e-3, "row {i} sums to {s}");
     }
 }
 
@@ -183,7 +202,7 @@ fn reciprocity_holds_to_round_off_on_every_built_in_scene() {
     // with shadow rays, clipped receivers and graded panels, and at any tolerance.
     for (scene, backend) in [
         ("multi-cubes", "analytic"),
-        ("multi-cubes", "analytic:rays=4:tol=1e-6"),
+        ("multi-cubes", "analytic:rays=4:budget=1024:tol=1e-6"),
         ("cornell:res=3", "analytic"),
         ("furnace:res=2:block=true", "analytic:rays=16"),
         ("inner-box:gap=0", "analytic"),

@@ -6,4 +6,5 @@ mod closed_forms;
 mod hemicube;
 mod matrix;
 mod montecarlo;
+mod pair_visibility;
 mod scale;

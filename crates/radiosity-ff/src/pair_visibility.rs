@@ -140,10 +140,6 @@ struct Sums {
     visible: Real,
     /// `Σ F(dA_x → S)`.
     total: Real,
-    /// Segments traced.
-    traced: usize,
-    /// Of which clear.
-    clear: usize,
 }
 
 /// How many shadow rays a pair gets.
@@ -271,10 +267,8 @@ impl Pair<'_> {
             let Some(y) = kernel_point(x, self.na, self.upper.polygon(), rng) else { continue };
             let clear = trace(x, self.ia, y, self.ib);
             sums.total += 1.0;
-            sums.traced += 1;
             if clear {
                 sums.visible += 1.0;
-                sums.clear += 1;
             }
         }
     }
@@ -316,10 +310,8 @@ impl Pair<'_> {
                 let Some(y) = kernel_point(x, self.na, stratum.polygon(), rng) else { continue };
                 let clear = trace(x, self.ia, y, self.ib);
                 sums.total += weight;
-                sums.traced += 1;
                 if clear {
                     sums.visible += weight;
-                    sums.clear += 1;
                 }
             }
         });

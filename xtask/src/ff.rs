@@ -15,6 +15,7 @@ use crate::experiment::{cache, prepare};
 use anyhow::{Result, bail};
 use radiosity_eval::backends::{ObtainedMatrix, obtain_matrix};
 use radiosity_ff::guard::MatrixFigures;
+use radiosity_ff::row_diagnosis::{RowDiagnosis, worst_rows};
 use radiosity_ff::{BackendSpec, StoredMatrix};
 use radiosity_geom::{Closure, PreparedScene};
 use serde::Serialize;
@@ -23,6 +24,8 @@ use std::io::Write;
 
 /// Scenes with more patches are assembled only with `--force`.
 pub const MAX_PATCHES: usize = 2000;
+/// Rows listed with their cause.
+const WORST_ROWS: usize = 5;
 
 /// Arguments of `ff`.
 #[derive(Debug, clap::Args)]
@@ -58,10 +61,11 @@ pub fn run(args: &Args) -> Result<()> {
     }
     let obtained = obtain_matrix(&prepared, &spec, Some(&cache()), &Bars::new())?;
     let figures = obtained.matrix.figures(&areas(&prepared));
+    let worst = worst_rows(prepared.scene(), &prepared.analysis, &obtained.matrix, WORST_ROWS);
     if args.json {
-        print_json(&prepared, &spec, &obtained, &figures)
+        print_json(&prepared, &spec, &obtained, &figures, &worst)
     } else {
-        print!("{}", summary(&args.scene, &prepared, &spec, &obtained, &figures));
+        print!("{}", summary(&args.scene, &prepared, &spec, &obtained, &figures, &worst));
         Ok(())
     }
 }
@@ -93,6 +97,7 @@ struct FfJson<'a> {
     clamped: Option<u64>,
     seconds: f64,
     cache: Option<&'a radiosity_eval::backends::CacheUse>,
+    worst_rows: &'a [RowDiagnosis],
 }
 
 /// The matrix as rows of `f32` (the stored precision), written without building them.
@@ -126,6 +131,7 @@ fn print_json(
     spec: &BackendSpec,
     obtained: &ObtainedMatrix,
     figures: &MatrixFigures,
+    worst: &[RowDiagnosis],
 ) -> Result<()> {
     let scene = &prepared.loaded.scene;
     let m = &obtained.matrix;
@@ -146,6 +152,7 @@ fn print_json(
         clamped: obtained.clamped,
         seconds: obtained.seconds,
         cache: obtained.cache.as_ref(),
+        worst_rows: worst,
     };
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     let written = serde_json::to_writer(&mut out, &json)
@@ -165,13 +172,14 @@ fn summary(
     spec: &BackendSpec,
     obtained: &ObtainedMatrix,
     figures: &MatrixFigures,
+    worst: &[RowDiagnosis],
 ) -> String {
     let m = &obtained.matrix;
     let n = m.len();
     let closure = match prepared.analysis.closure.value {
         Closure::Closed { .. } => "closed: every row should sum to 1".to_string(),
         Closure::Open { escaped, sampled } => format!(
-            "open ({:.2}% of sampled rays escape): rows sum to less than 1",
+            "open ({:.2}% of sampled rays are lost): rows sum to less than 1",
             100.0 * escaped as f64 / sampled.max(1) as f64
         ),
     };
@@ -209,6 +217,30 @@ fn summary(
         figures.row_sum_min, figures.row_sum_mean, figures.row_sum_max
     );
     out += &format!("reciprocity  max relative error {:.3e}\n", figures.max_reciprocity_error);
+    let g = &prepared.report().geometry;
+    if g.hidden + g.touching + g.overlapping > 0 {
+        out += &format!(
+            "geometry     {} hidden patches left out, {} touching, {} overlapping (`scenes --explain` lists them)\n",
+            g.hidden, g.touching, g.overlapping
+        );
+    }
+    match (worst.is_empty(), prepared.analysis.closure.value.is_closed()) {
+        (true, false) => out += "worst rows   none above 1\n",
+        (true, true) => {}
+        (false, closed) => {
+            out += &format!("worst rows   {}\n", if closed { "farthest from 1" } else { "farthest above 1" });
+            for w in worst {
+                out += &format!(
+                    "  {:>9.6}  patch {} of '{}': {}, {}\n",
+                    w.row_sum,
+                    w.patch,
+                    w.object,
+                    w.cause.as_str(),
+                    w.detail
+                );
+            }
+        }
+    }
     out += &match obtained.clamped {
         Some(c) => format!("clamped      {c} entries\n"),
         None => "clamped      not recorded (the matrix was loaded from the cache)\n".to_string(),

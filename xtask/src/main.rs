@@ -14,6 +14,7 @@ mod render;
 mod scenes;
 mod solve;
 mod stress;
+mod validate;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -44,6 +45,9 @@ enum Command {
     Export(export::Args),
     /// Run every solver and backend over stiff and extreme scenes and report what fails.
     Stress(stress::Args),
+    /// Path-trace each object's mean radiosity and set it beside the discrete solution at
+    /// increasing mesh resolution.
+    Validate(validate::Args),
     /// Measure columns per second against the ray-tracing limit, matrix assembly, group
     /// solves and end-to-end time and memory to accuracy, as a Markdown report.
     Bench(bench::Args),
@@ -63,6 +67,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render::run(&args),
         Command::Export(args) => export::run(&args),
         Command::Stress(args) => stress::run(&args),
+        Command::Validate(args) => validate::run(&args),
         Command::Bench(args) => bench::run(&args),
     };
     match result {

@@ -89,6 +89,15 @@ fn explain_text(r: &SceneReport, arg: &str) -> String {
     {
         out += &format!("  {what:<10} {}\n  {:<10} because {}\n", d.value, "", d.reason);
     }
+    let g = &r.geometry;
+    out += &format!(
+        "\ngeometry    {} hidden ({} pressed, {} enclosed, area {:.4e}), {} touching, {} overlapping\n",
+        g.hidden, g.pressed, g.enclosed, g.hidden_area, g.touching, g.overlapping
+    );
+    out += &format!("  {:<10} because {}\n", "", g.reason);
+    for e in &g.examples {
+        out += &format!("  {e}\n");
+    }
     out += "\nleft out\n";
     if r.left_out.is_empty() {
         out += "  nothing: this scene needs every stage\n";

@@ -82,7 +82,8 @@ fn scenes_text_lists_names_and_parameters() {
 fn explain_gives_a_reason_for_every_decision() {
     let out = xtask(&["scenes", "--explain", "furnace:block=true"]).success().get_output().stdout.clone();
     let text = String::from_utf8(out).unwrap();
-    assert_eq!(text.matches("because").count(), 4, "{text}");
+    assert_eq!(text.matches("because").count(), 5, "{text}");
+    assert!(text.contains("geometry    0 hidden") && text.contains("no patch is hidden"), "{text}");
     assert!(text.contains("shadow rays traced") && text.contains("grey, one channel"), "{text}");
     let r = stdout_json(&["scenes", "--explain", "furnace", "--json"]);
     assert_eq!(r["patches"], 96);
@@ -91,6 +92,19 @@ fn explain_gives_a_reason_for_every_decision() {
     assert!(r["closure"]["reason"].as_str().unwrap().contains("384 sampled rays"));
     let r = stdout_json(&["scenes", "--explain", "cornell:res=2", "--json"]);
     assert!(r["closure"]["value"].as_str().unwrap().starts_with("open"));
+}
+
+#[test]
+fn explain_names_the_hidden_patches_it_left_out() {
+    // The Cornell blocks have no bottoms: the floor wholly under them faces their insides.
+    let out = xtask(&["scenes", "--explain", "cornell"]).success().get_output().stdout.clone();
+    let text = String::from_utf8(out).unwrap();
+    assert!(text.contains("6 hidden (0 pressed, 6 enclosed"), "{text}");
+    assert!(text.contains("hidden: patch 20 of 'floor' faces the inside of a closed solid"), "{text}");
+    assert!(text.contains("6 hidden patches (pressed against other surfaces or inside closed solids)"), "{text}");
+    let r = stdout_json(&["scenes", "--explain", "cornell", "--json"]);
+    assert_eq!(r["geometry"]["hidden"], 6);
+    assert_eq!(r["patches"], 554, "the six are left out of the system");
 }
 
 #[test]
@@ -293,6 +307,10 @@ fn ff_text_summarises_the_matrix() {
         assert!(text.contains(words), "missing '{words}' in\n{text}");
     }
     assert!(text.contains("dense f32") || text.contains("sparse f32"), "{text}");
+    // A closed scene lists the rows farthest from 1 with a cause; the empty furnace traces no
+    // shadow rays, so what its rows miss is the quadrature's.
+    assert!(text.contains("worst rows   farthest from 1"), "{text}");
+    assert_eq!(text.matches(": quadrature, no shadow rays are traced").count(), 5, "{text}");
 }
 
 #[test]
@@ -506,4 +524,31 @@ fn render_and_export_stop_at_an_rms_rule() {
         assert!(steps < 40, "{command} ran {steps} steps for e_rms 1e-1: {stderr}");
     }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn validate_sets_the_path_traced_means_beside_each_resolution() {
+    let r = stdout_json(&["validate", "--scene", "furnace:res=2", "--samples", "4000", "--json"]);
+    assert_eq!(r["scene"], "furnace:res=2");
+    let scenes: Vec<&str> = r["resolutions"].as_array().unwrap().iter().map(|s| s["scene"].as_str().unwrap()).collect();
+    assert_eq!(scenes, ["furnace:res=2", "furnace:res=4", "furnace:res=8"]);
+    let objects = r["objects"].as_array().unwrap();
+    assert_eq!(objects.len(), 1);
+    let box_ = &objects[0];
+    for key in ["name", "area", "path_traced", "stderr", "discrete"] {
+        assert!(!box_[key].is_null(), "missing {key} in {box_}");
+    }
+    // E / (1 − ρ) = 2 exactly: the tracer within 4 standard errors, every mesh within 1e-3.
+    let (mean, stderr) = (box_["path_traced"][0].as_f64().unwrap(), box_["stderr"][0].as_f64().unwrap());
+    assert!((mean - 2.0).abs() < 4.0 * stderr && stderr < 0.02, "{mean} ± {stderr}");
+    for d in box_["discrete"].as_array().unwrap() {
+        assert!((d["mean"][0].as_f64().unwrap() - 2.0).abs() < 1e-3, "{d}");
+        assert!(d["scene"].is_string() && d["patches"].is_u64(), "{d}");
+    }
+    let out =
+        xtask(&["validate", "--scene", "furnace:res=2", "--samples", "4000"]).success().get_output().stdout.clone();
+    let text = String::from_utf8(out).unwrap();
+    assert!(text.contains("path traced") && text.contains("furnace:res=8"), "{text}");
+    let e = failure(&["validate", "--scene", "furnace:res=2", "--samples", "1"]);
+    assert!(e.contains("samples"), "{e}");
 }

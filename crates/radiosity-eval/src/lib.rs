@@ -16,7 +16,11 @@
 //! - [`render`]: a picture of a solved scene (ray-cast, smoothly shaded with [`shading`],
 //!   tone mapped), as PNG;
 //! - [`gltf_export`]: a solved scene as binary glTF with its radiosity as vertex colours and
-//!   its materials in the extras, so it loads back as the same system.
+//!   its materials in the extras, so it loads back as the same system;
+//! - [`path_trace`](mod@path_trace): each object's area-mean radiosity estimated by Monte Carlo
+//!   path tracing over the BVH, with its standard error: a truth of the continuous problem;
+//! - [`validate`](mod@validate): those path-traced means beside the discrete reference at
+//!   increasing mesh resolution, which separates discretization error from solver error.
 //!
 //! With `xtask`, it is the only crate that will write files; it writes to any
 //! [`std::io::Write`] and leaves opening files to its callers.
@@ -48,6 +52,7 @@ pub mod lab;
 pub mod matrix;
 pub mod metrics;
 pub mod paper;
+pub mod path_trace;
 pub mod plot;
 pub mod png_image;
 pub mod progress;
@@ -56,6 +61,7 @@ pub mod render;
 pub mod shading;
 pub mod stress;
 pub mod table;
+pub mod validate;
 
 pub use cache::Cache;
 pub use compare::Comparison;
@@ -63,6 +69,8 @@ pub use error::EvalError;
 pub use lab::{FinalMetrics, Lab, LabError, LabOptions, Outcome, Point, RecordPlan, ReferenceOrigin};
 pub use matrix::FormFactors;
 pub use metrics::{Contraction, ErrorBound, Errors, Evaluator, Metrics, Residual};
+pub use path_trace::{ObjectEstimate, PathTraceError, PathTraceParams, PathTraced, path_trace};
 pub use progress::{NoProgress, Progress};
 pub use reference::{Certificate, Method, ReferenceParams, ReferenceSolution};
 pub use table::{ConvergenceTable, TableRow};
+pub use validate::{ValidateError, ValidateParams, Validation, validate};

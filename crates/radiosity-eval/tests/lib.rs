@@ -1,11 +1,12 @@
 //! Integration tests of radiosity-eval: reference solutions against closed forms (furnace,
 //! two facing patches, the unit cube), the certified bound against true errors, metrics on
-//! hand-made vectors, tables under snapshot tests, and pictures and glTF files of solved
-//! scenes.
+//! hand-made vectors, tables under snapshot tests, pictures and glTF files of solved scenes,
+//! and the path tracer against closed forms and beside the discrete solution.
 
 mod examples;
 mod gltf_export;
 mod metrics;
+mod path_trace;
 mod plot;
 mod reference;
 mod render;

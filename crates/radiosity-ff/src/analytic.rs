@@ -52,11 +52,13 @@
 //! When the scene analysis says nothing can occlude, no ray is traced (`V_ij = 1`).
 //! Otherwise `V_ij` is the pair's visible fraction weighted by the kernel, estimated by
 //! [`crate::pair_visibility`]: each pair gets shadow rays in proportion to its larger
-//! unoccluded form factor (`budget` per unit, at least `rays`), both ends drawn where and as
-//! the kernel weighs them, with a probe deciding which pairs are partly visible and fresh
-//! rays estimating them. The samples are drawn from a Xoshiro256++ stream keyed by the seed
-//! and the unordered pair, so `V_ij = V_ji` exactly and every column is the same whatever
-//! the thread that computes it.
+//! unoccluded form factor (`budget` per unit, times a stiffness factor in scenes whose mean
+//! reflectivity exceeds 0.8, and at least `rays`), both ends drawn where and as
+//! the kernel weighs them, each segment from its own point of the smaller patch (the side the
+//! quadrature integrates over, where no point weighs more than `1/u` times the mean), with a
+//! probe deciding which pairs are partly visible and fresh rays estimating them. The samples
+//! are drawn from a Xoshiro256++ stream keyed by the seed and the unordered pair, so
+//! `V_ij = V_ji` exactly and every column is the same whatever the thread that computes it.
 
 use crate::ff_point_polygon::{MAX_CLIPPED, clip_above, distance_to_polygon, point_to_polygon};
 use crate::guard::ClampCounter;
@@ -95,6 +97,9 @@ pub struct AnalyticColumns<'a> {
     /// The largest distance from each patch's centroid to its vertices.
     reach: Vec<Real>,
     params: AnalyticParams,
+    /// Shadow rays per unit of unoccluded form factor: `params.budget` times the scene's
+    /// stiffness factor ([`pair_visibility::stiffness_factor`]).
+    budget: usize,
     tolerance: Real,
     clamped: ClampCounter,
 }
@@ -114,10 +119,17 @@ impl<'a> AnalyticColumns<'a> {
             nodes: (1..=params.order.max(1)).map(gauss_legendre).collect(),
             longest_edge: scene.patches().iter().map(longest_edge).collect(),
             reach: scene.patches().iter().map(reach).collect(),
+            budget: params.budget.saturating_mul(pair_visibility::stiffness_factor(stiffest_channel(scene))),
             params,
             tolerance: PLANE_TOLERANCE * scene.diagonal(),
             clamped: ClampCounter::default(),
         }
+    }
+
+    /// Shadow rays per unit of unoccluded form factor in this scene: `budget` times the
+    /// stiffness factor of its most reflective channel.
+    pub fn ray_budget(&self) -> usize {
+        self.budget
     }
 
     /// Whether shadow rays are traced.
@@ -182,8 +194,9 @@ impl<'a> AnalyticColumns<'a> {
             return 0.0;
         }
         let unoccluded = if smaller { larger } else { larger * aj / ai };
+        let (s, l) = if smaller { (i, j) } else { (j, i) };
         match self.visibility {
-            Some(_) => unoccluded * self.visible_fraction(i, j, larger, trace),
+            Some(_) => unoccluded * self.visible_fraction(s, l, larger, trace),
             None => unoccluded,
         }
     }
@@ -265,28 +278,41 @@ impl<'a> AnalyticColumns<'a> {
         sum
     }
 
-    /// The kernel-weighted visible fraction of the pair, the same for `(i, j)` and `(j, i)`
-    /// ([`crate::pair_visibility`]).
+    /// The kernel-weighted visible fraction of the pair of the smaller patch `s` and the larger
+    /// `l` ([`crate::pair_visibility`], which stratifies the points of the first patch it is
+    /// given), the same for `(i, j)` and `(j, i)`: the roles follow the areas, as the quadrature
+    /// does, and the stream the unordered pair.
     fn visible_fraction(
         &self,
-        i: usize,
-        j: usize,
+        s: usize,
+        l: usize,
         larger: Real,
         trace: &mut impl FnMut(Vec3, usize, Vec3, usize) -> bool,
     ) -> Real {
-        let (lo, hi) = (i.min(j), i.max(j));
         let patches = self.scene.patches();
-        let mut rng = pair_rng(self.params.seed, lo, hi);
+        let mut rng = pair_rng(self.params.seed, s.min(l), s.max(l));
         pair_visibility::visible_fraction(
-            (&patches[lo], lo),
-            (&patches[hi], hi),
+            (&patches[s], s),
+            (&patches[l], l),
             larger,
-            RayBudget { rays: self.params.rays, per_unit: self.params.budget },
+            RayBudget { rays: self.params.rays, per_unit: self.budget },
             self.tolerance,
             &mut rng,
             trace,
         )
     }
+}
+
+/// The largest over channels of the area-weighted mean reflectivity: how strongly the scene
+/// amplifies an error in its row sums.
+fn stiffest_channel(scene: &Scene) -> Real {
+    let mut weighted = [0.0; 3];
+    for (i, p) in scene.patches().iter().enumerate() {
+        for (w, r) in weighted.iter_mut().zip(scene.reflectivity(i).0) {
+            *w += p.area() * r;
+        }
+    }
+    weighted.into_iter().fold(0.0, Real::max) / scene.total_area()
 }
 
 /// The random stream of the unordered pair `lo < hi`: Xoshiro256++ seeded from the seed and

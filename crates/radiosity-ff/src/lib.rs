@@ -38,6 +38,7 @@ pub mod matrix;
 pub mod montecarlo;
 pub mod pair_visibility;
 pub mod quadrature;
+pub mod row_diagnosis;
 pub mod solid_angle;
 pub mod spec;
 pub mod traced;

@@ -63,29 +63,23 @@
 //! sums it corrected. Both steps are reported by [`RebalanceReport`].
 //!
 //! Measured (release, two threads, `cargo xtask ff --scene S --ff matrix:of=B:rebalance=true`;
-//! analytic `order=8:tol=1e-4:rays=1`, hemicube `res=128`, montecarlo `rays=10000` unless
+//! hemicube `res=128`, montecarlo `rays=10000` unless
 //! said; both scenes are closed). Row sums are min / mean / max; "changed" is `|F' − F| / F`
 //! over entries that were non-zero (largest, mean) and the zeros that symmetrising filled in:
 //!
 //! | scene | backend | assembled: row sums, reciprocity | symmetrised: row sums, reciprocity | changed | row factors | reciprocity after |
 //! |---|---|---|---|---|---|---|
-//! | `furnace:block=true` (120) | analytic | 0.916 / 0.995 / 1.047, 1.5e-4 | 0.916 / 0.995 / 1.047, 7e-8 | 0.007%, 0.001%, 0 | 0.955 – 1.092 | 0.125 |
-//! | | analytic `rays=16` | 0.995 / 1.000 / 1.010, 1.5e-4 | same, 7e-8 | 0.007%, 0.001%, 0 | 0.991 – 1.005 | 0.014 |
-//! | | hemicube | 0.966 / 1.002 / 1.036, 1 | 0.983 / 1.001 / 1.018, 9e-8 | 50%, 6.3%, 432 | 0.982 – 1.017 | 0.034 |
+//! | `furnace:block=true` (120) | hemicube | 0.966 / 1.002 / 1.036, 1 | 0.983 / 1.001 / 1.018, 9e-8 | 50%, 6.3%, 432 | 0.982 – 1.017 | 0.034 |
 //! | | montecarlo | 0.977 / 1.000 / 1.026, 1 | 0.989 / 1.000 / 1.013, 9e-8 | 700%, 9.7%, 52 | 0.987 – 1.012 | 0.024 |
-//! | `multi-cubes` (480) | analytic | 0.552 / 0.920 / 1.135, 1.3e-3 | same, 0 | 0.06%, 0.002%, 0 | 0.881 – 1.813 | 0.49 |
-//! | | analytic `rays=16` | 0.935 / 0.998 / 1.051, 1.3e-3 | same, 0 | 0.06%, 0.002%, 0 | 0.951 – 1.069 | 0.10 |
-//! | | hemicube | 0.619 / 0.876 / 1.108, 1 | 0.742 / 0.908 / 1.054, 0 | 1149%, 31%, 17172 | 0.949 – 1.348 | 0.30 |
+//! | `multi-cubes` (480) | hemicube | 0.619 / 0.876 / 1.108, 1 | 0.742 / 0.908 / 1.054, 0 | 1149%, 31%, 17172 | 0.949 – 1.348 | 0.30 |
 //! | | montecarlo | 0.959 / 1.000 / 1.047, 1 | 0.980 / 1.000 / 1.023, 0 | 950%, 22%, 4057 | 0.977 – 1.021 | 0.035 |
 //!
 //! What this says:
 //!
-//! - The analytic backend is reciprocal by construction up to its quadrature error (its
-//!   visibility is the same for `ij` and `ji`), so symmetrising moves its entries by less than
-//!   0.1%. Its row-sum spread is visibility noise (one shadow ray per pair by default), which
-//!   rescaling hides by moving whole rows by up to 81%: that is not more accurate, more rays
-//!   are (`rays=16` shrinks the spread five- to ninefold, and on `multi-cubes` raises the mean
-//!   row sum from 0.920 to 0.998).
+//! - The analytic backend is exactly reciprocal (each pair is integrated once), so
+//!   symmetrising changes nothing, and its rows are as close to 1 as its visibility estimate
+//!   makes them (README, "Form factors"); rescaling them would move whole rows, which is not
+//!   more accurate: a larger `budget` is.
 //! - Hemicube and Monte Carlo estimate each row on its own, so an entry can be zero one way
 //!   and not the other (reciprocity error 1). Symmetrising averages the two estimates of each
 //!   pair, which roughly halves their row-sum spread; this is where rebalancing earns its keep.

@@ -18,62 +18,136 @@
 //!
 //! A pair gets `k = max(rays, ⌈budget · u⌉)` segments, `u` its larger unoccluded form factor
 //! (the one of its smaller patch). A row's error is `Σ_j U_ij (V̂_ij − V_ij)`; with the
-//! variance of `V̂` falling like `1/k`, giving each pair rays in proportion to `U` makes a row's
-//! variance at most `σ² Σ_j U_ij / budget`, whatever the sizes of its pairs, and a row's
-//! rays at most `budget · Σ_j U_ij` on top of one per pair. The many distant pairs of a large
-//! scene get one ray each, the few near ones hundreds.
+//! variance of `V̂` at most about `σ² / k`, giving each pair rays in proportion to `U` makes
+//! a row's variance at most about `σ² Σ_j U_ij / budget`, whatever the sizes of its pairs,
+//! and a row's rays at most `budget · Σ_j U_ij` on top of one per pair. `σ²` is `V (1 − V)
+//! ≤ 1/4` for a pair estimated from its `k` segments and about `0.37` for one whose probe
+//! agreed by chance ("Probes"). The many distant pairs of a large scene get one ray each, the
+//! few near ones hundreds.
+//!
+//! ## Stiff scenes
+//!
+//! An error `δ` in the area-weighted mean row sum moves the solution of a closed scene by about
+//! `δ ρ̄ / (1 − ρ̄)` (DESIGN §5), and the noise in `δ` falls like `1/√budget`. So a scene whose
+//! most reflective channel has area-weighted mean reflectivity `ρ̄ > 0.8` gets the budget
+//! times `((1 − 0.8) / (1 − ρ̄))²`, at most 64: its solution is then as noisy as a scene's at
+//! `ρ̄ = 0.8` up to `ρ̄ = 0.975`, and the factor stays at 64 beyond. On a closed box with a
+//! block at `ρ = 0.99` the mean row sum's seed-to-seed spread was 1e-4 at the plain budget,
+//! which the reference amplifies to 1% of `E/(1 − ρ)`; at its factor of 64 the reference is
+//! within 0.25% of it (three seeds; 32 times left one seed 0.87% off). Scenes
+//! without shadow rays (`V = 1`) spend nothing on it, and the built-in scenes of the paper
+//! (ρ̄ ≤ 0.6) none either.
+//!
+//! ## Which patch is which
+//!
+//! The points `x` of the estimates below are drawn on `a`, and `a` is the smaller patch of
+//! the pair: the caller decides by the rule its quadrature uses (areas, the lower index on a
+//! tie), so `(i, j)` and `(j, i)` give the same roles. On `a`, `F(dA_x → H)` averages `u`
+//! and is at most 1, so no point weighs more than `1/u` times the mean. On the larger patch
+//! it averages `u A_a / A_b`, and a small part of that patch near the smaller one can hold
+//! nearly all of the kernel.
 //!
 //! ## Few rays: both ends drawn by the kernel
 //!
 //! With `k < 16`, each segment's ends are drawn in proportion to the kernel, so that each
 //! segment is clear with probability exactly `V` and the estimate, the clear fraction, is
 //! unbiased for any `k`: `x` on `L` in proportion to `F(dA_x → H)` by rejection from uniform
-//! points (bounded by the largest value at `L`'s corners, edge midpoints and centre, with a
-//! margin of 1.25;
-//! such pairs are small against their distance, where `F(dA_x → H)` varies little), and
-//! `y` on `H` in proportion to `cos θ_x cos θ_y / r²` from `x`: a direction uniform in `H`'s
-//! solid angle at `x` (Arvo 1995, [`crate::solid_angle`]) is kept with probability
-//! `cos θ_x / max cos θ_x`, the cosine at `y` and `1/r²` being the solid angle's own measure.
-//! The one-ray estimator this replaces drew both ends uniformly by area, which weights
+//! points (bounded by the largest value at `L`'s corners and edge midpoints, moved a hair
+//! inwards, and at its centre, with a margin of 1.25; such pairs are small against their
+//! distance, where `F(dA_x → H)` varies little), and `y` on `H` in proportion to
+//! `cos θ_x cos θ_y / r²` from `x`: a direction uniform in `H`'s solid angle at `x` (Arvo
+//! 1995, [`crate::solid_angle`]) is kept with probability `cos θ_x / max cos θ_x`, the cosine
+//! at `y` and `1/r²` being the solid angle's own measure. The first point and the first
+//! direction tried come from a Latin hypercube over both squares, so that the segments
+//! spread out; a rejected one is redrawn freely. The corners and midpoints are moved inwards
+//! because on `L`'s edge along `b`'s plane, `H` is cut a tolerance away too and
+//! `F(dA_x → H)` falls short of its value just inside: for a floor and a wall sharing an
+//! edge, 0.35 there against 0.5 just inside. The bound then fell below the largest value,
+//! and with only the floor's strip 0.05 wide along the edge visible, the estimate came out 5%
+//! low (9 standard errors over 200 000 segments); it is within 1 standard error now. The
+//! one-ray estimator all this replaces drew both ends uniformly by area, which weights
 //! visibility by area rather than by the kernel (0.5% low in the row sums of a box with a
 //! block), and drew them on the whole patches: a segment to the part of `b` behind `a`'s
 //! plane enters `a`'s own solid and is blocked.
 //!
-//! ## Many rays: stratified, weighted exactly
+//! ## Many rays: a point per segment, drawn where the kernel is
 //!
-//! With `k ≥ 16`, `H` is cut into strata `S` (cells of `b`'s parameter square cut by `a`'s
-//! plane, `s² = min(⌊k^{1/4}⌋, 8)²` of them), `k / s²` points `x` are stratified on `L` (a
-//! Latin hypercube, mapped to `L` by area), each point is joined to a point `y` drawn in
-//! every stratum in proportion to the kernel (as above), and
+//! With `k ≥ 16`, each of the `k` segments has its own `x` and its own direction to `y`,
+//! from one Latin hypercube over two squares. The first square is mapped to `L` (by area)
+//! through a density `p` that is constant on the cells of a grid over `L`'s parameter
+//! square and in proportion to the largest `F(dA_x → H)` at each cell's corners (a hair
+//! inside the cell), with at least `10⁻³` of the largest cell's. The grid has
+//! `⌊√k / 4⌋ ∈ [4, 16]` cells a side (`4 side² ≤ k / 4` evaluations for `k ≥ 256`), and a
+//! single cell where `F(dA_x → H)` varies by less than a factor 2 over the points of the
+//! rejection bound above. The second square is Arvo's map of `H` seen from `x`, kept by the
+//! cosine test above. Then
 //!
-//! `V̂ = Σ_x Σ_S F(dA_x → S) v(x, y_S) / Σ_x Σ_S F(dA_x → S)`,
+//! `V̂ = Σ w(x) v(x, y) / Σ w(x)`,  `w(x) = F(dA_x → H) / p(x)`,
 //!
-//! with `F(dA_x → S)` Lambert's exact point-to-polygon factor. Each point's strata carry its
-//! kernel exactly (`Σ_S F(dA_x → S) = F(dA_x → H)`), a fully visible pair gives exactly 1 and
-//! a hidden one exactly 0, and the one bias left, of the ratio over the points `x`, falls
-//! like `1/k`. Two other weights were measured and dropped: the point-to-point kernel of each
-//! segment, and a stratum's factor seen from an independent point; both give a few segments
-//! near a shared edge weights thousands of times the typical one.
+//! with `F(dA_x → H)` Lambert's exact point-to-polygon factor: `y` is drawn in proportion to
+//! the kernel from `x`, and `x` with density `p`, so the weighed sums estimate `∫∫ K v` and
+//! `∫∫ K`. A fully visible pair gives exactly 1 and a hidden one exactly 0, and the one bias
+//! left, of the ratio, falls like `1/k`: with only the floor's strip along the edge visible,
+//! −0.8% at `k = 16` and −0.4% at `k = 64` (with half the floor, −0.2% and 0.0%). The grid
+//! only has to follow `F(dA_x → H)` closely enough that the weights stay near their mean;
+//! where it varies fast, near a shared edge, it draws the points there. On a 7 × 53 cm wall
+//! with a 5 mm strip along its top edge, partly visible, 564 segments (without a probe)
+//! spread 0.018 with it against 0.031 without (binomial: 0.014), and 4 096 segments 0.0012
+//! against 0.0122.
+//!
+//! This replaces strata on `b`: `H` cut into up to 64 cells, and `k / 64` points `x`, uniform
+//! on `a` (the lower index), each joined to a point drawn in every cell and weighed by the
+//! cell's factor. That weighed each point's view of `H` exactly but rested on `√k` to
+//! `k / 64` points `x`, which is what counts when visibility changes across `a`, and with `a`
+//! the larger patch a few of them carried nearly all the weight. In a 2 cm slot 7 cm deep of
+//! the MGF classroom, a desk top's underside (0.70 m², the lower index) reaches 5 mm into
+//! the slot's opening, and only that 5 mm strip, 0.85% of the desk top, sees the slot's wall
+//! (0.079 m²) past its other wall: 91 points on the desk top gave a visible fraction of 0.078
+//! on average but spread 0.070 (binomial spread for its 5 866 segments: 0.0035); the
+//! classroom's own draw gave 0.31, above all of 400 others, and the wall's row summed to
+//! 1.076. Now the spread is 0.0031 with `x` on the wall and 0.0027 with `x` on the desk top,
+//! and the wall's row sums to 1.003 (0.9998 by cosine-weighted rays; 0.9995 on average over
+//! 32 seeds, spread 0.0025); the test
+//! `pair_visibility::a_wall_seeing_a_desk_top_through_a_slot` holds the case. Two other
+//! weights were measured before and dropped: the point-to-point kernel of each segment, and
+//! a cell's factor seen from an independent point; both give a few segments near a shared
+//! edge weights thousands of times the typical one.
 //!
 //! ## Probes
 //!
 //! Most pairs of a scene are fully visible or fully hidden, and need no refinement. A pair
-//! given `k ≥ 16` rays is first probed with `k / 16` segments stratified over both patches.
-//! When they agree (all clear or all blocked) the pair is estimated from `k / 16` fresh
-//! segments, otherwise from `k` fresh ones. The estimate never reuses the probe: an estimate
-//! from the very segments that decided to stop is biased (a pair 20% visible whose few probes
-//! all happen to be blocked would count as hidden, and nothing would make up for it; on
-//! `multi-cubes`, whose partly visible pairs are mostly hidden, that put the mean row sum
-//! 1.5% low). With the decision and the estimate independent, the estimate's expectation is
-//! `V` whichever way the probe decided, and a fully visible or hidden pair still comes out
-//! exactly 1 or 0. This is the visibility classification of hierarchical radiosity
-//! (Hanrahan, Salzman & Aupperle 1991), with rays instead of shafts.
+//! given `k ≥ 16` rays is first probed with `m = ⌈√k⌉` segments drawn as for many rays,
+//! from the grid of its `k` (so nearly as the kernel weighs them). When they agree (all
+//! clear or all blocked) the pair is estimated from `m` fresh segments, otherwise from `k`
+//! fresh ones. The estimate never reuses the probe: an estimate from the very segments that
+//! decided to stop is biased (a pair 20% visible whose few probes all happen to be blocked
+//! would count as hidden, and nothing would make up for it; on `multi-cubes`, whose partly
+//! visible pairs are mostly hidden, that put the mean row sum 1.5% low). With the decision
+//! and the estimate independent, the estimate's expectation is `V` whichever way the probe
+//! decided, and a fully visible or hidden pair still comes out exactly 1 or 0. This is the
+//! visibility classification of hierarchical radiosity (Hanrahan, Salzman & Aupperle 1991),
+//! with rays instead of shafts.
+//!
+//! The probe's size and how its segments are drawn set the variance a partly visible pair
+//! pays when its probe agrees by chance. If a share `q` of the kernel goes the other way,
+//! that happens with probability about `e^{−qm}` and leaves an estimate from `m` segments,
+//! of variance about `q / m`: at most `e^{−1} / m²` (at `q = 1/m`), which is `0.37 / k` for
+//! `m = √k`, the order of the `k`-segment estimate's own `V (1 − V) / k`. The probes used
+//! before had `k / 16` segments, which gives `95 / k²`, more than that below `k ≈ 400`: on
+//! the MGF classroom, the row sum of a 2 × 8 cm patch (3213, as `PreparedScene` numbers the
+//! scene) spread 0.0059 over 32 seeds with them and 0.0036 with `√k`, for the same number of
+//! segments (8 750 and 8 732 per column). And they were drawn uniformly by area, so that
+//! `q` was the visible share of the area, not of the kernel: for another of the classroom's
+//! slots (patches 5490 and 5266), 0.4% of the area against 7.5% of the kernel, so its 76
+//! probes agreed 71% of the time (0.1% drawn from the grid) and its factor spread 0.0074
+//! (29%) against 0.0011. Giving an agreed pair `4m` fresh segments instead of `m` was
+//! measured too: rows spread 20% less for 77% more segments, a worse trade than a larger
+//! `budget`.
 //!
 //! The samples come from the caller's random stream, keyed by the unordered pair, so `V_ab =
 //! V_ba` exactly and a pair's value does not depend on the thread or column that computes it.
 
 use crate::ff_point_polygon::{MAX_CLIPPED, clip_above, point_to_polygon};
-use crate::quadrature::parametrisation;
 use crate::solid_angle::{SphericalPolygon, pick_fan_triangle};
 use radiosity_core::{Patch, Real, Vec3};
 use rand::Rng;
@@ -81,11 +155,9 @@ use rand::seq::SliceRandom;
 
 /// Pairs given fewer rays than this are sampled without a probe.
 const PROBED: usize = 16;
-/// A probe traces this fraction of the pair's rays (at least 2).
-const PROBE_SHARE: usize = 16;
-/// The most strata along each side of `b`'s parameter square (64 strata).
-const MAX_SIDE: usize = 8;
-/// Points per sampling round kept on the stack.
+/// From this many segments on, `x` is stratified and weighed rather than drawn by rejection.
+const MANY: usize = 16;
+/// Latin-hypercube points whose permutations are kept on the stack.
 const STACK_POINTS: usize = 64;
 
 /// A convex polygon of at most [`MAX_CLIPPED`] vertices with its fan triangles' cumulative
@@ -136,9 +208,9 @@ impl Region {
 /// The running sums of one pair's estimate.
 #[derive(Clone, Copy, Debug, Default)]
 struct Sums {
-    /// `Σ F(dA_x → S) v`.
+    /// `Σ w v`, `w` each segment's weight.
     visible: Real,
-    /// `Σ F(dA_x → S)`.
+    /// `Σ w`.
     total: Real,
 }
 
@@ -160,15 +232,34 @@ impl RayBudget {
     }
 }
 
+/// Mean reflectivity up to which a scene gets the budget as given.
+const STIFF_FROM: Real = 0.8;
+/// The largest stiffness factor.
+const MAX_STIFFNESS: usize = 64;
+
+/// The factor on the ray budget of a scene whose most reflective channel has area-weighted
+/// mean reflectivity `rho` (module documentation, "Stiff scenes"): `((1 − 0.8) / (1 − ρ̄))²`,
+/// rounded up, between 1 and 64.
+pub fn stiffness_factor(rho: Real) -> usize {
+    // NaN and ρ̄ ≤ 0.8 both take the plain budget.
+    if rho.is_nan() || rho <= STIFF_FROM {
+        return 1;
+    }
+    let factor = ((1.0 - STIFF_FROM) / (1.0 - rho.min(1.0 - Real::EPSILON))).powi(2);
+    (factor.ceil() as usize).clamp(1, MAX_STIFFNESS)
+}
+
 /// `⌈count · u⌉` for `u ∈ [0, 1]`.
 fn scaled(count: usize, u: Real) -> usize {
     (count as Real * u.clamp(0.0, 1.0)).ceil() as usize
 }
 
 /// The kernel-weighted visible fraction of the pair `(a, b)` (module documentation), whose
-/// larger unoccluded form factor is `u`, with the rays `budget` gives it. `tolerance` is the
-/// distance below which a point counts as on a plane. `trace(x, ia, y, ib)` answers whether
-/// the segment from `x` on `a` (index `ia`) to `y` on `b` (index `ib`) is clear.
+/// larger unoccluded form factor is `u`, with the rays `budget` gives it. `a` should be the
+/// smaller patch, whose factor `u` is: its points are the ones stratified and weighed
+/// (module documentation, "Which patch is which"). `tolerance` is the distance below which a
+/// point counts as on a plane. `trace(x, ia, y, ib)` answers whether the segment from `x` on
+/// `a` (index `ia`) to `y` on `b` (index `ib`) is clear.
 pub fn visible_fraction(
     (a, ia): (&Patch, usize),
     (b, ib): (&Patch, usize),
@@ -186,57 +277,151 @@ pub fn visible_fraction(
     if lower.area() <= 0.0 || upper.area() <= 0.0 {
         return 1.0;
     }
-    let pair = Pair { lower, upper, b, na, oa: a.vertices()[0], tolerance, ia, ib };
+    let pair = Pair::new(lower, upper, na, ia, ib);
     let mut sums = Sums::default();
     let k = budget.rays(u);
     if k < PROBED {
-        pair.sample(k, rng, trace, &mut sums);
+        pair.sample_few(k, rng, trace, &mut sums);
     } else {
         // Decide with the probe, estimate with fresh segments: the estimate's expectation is
-        // then V whatever the probe decided (module documentation, "Adaptive refinement").
-        let probe = (k / PROBE_SHARE).max(2);
-        let clear = pair.probe(probe, rng, trace);
-        let agreed = clear == 0 || clear == probe;
-        pair.sample(if agreed { probe } else { k }, rng, trace, &mut sums);
+        // then V whatever the probe decided (module documentation, "Probes").
+        let grid = pair.grid(k);
+        let probe = probe_size(k);
+        let agreed = pair.probe(&grid, probe, rng, trace);
+        let fresh = if agreed { probe } else { k };
+        if fresh < MANY {
+            pair.sample_few(fresh, rng, trace, &mut sums);
+        } else {
+            pair.sample_many(&grid, fresh, rng, trace, &mut sums);
+        }
     }
     if sums.total > 0.0 { sums.visible / sums.total } else { 1.0 }
 }
 
+/// The segments of the probe of a pair given `k ≥ 16` rays, and of its estimate when the
+/// probe agrees: `⌈√k⌉` (module documentation, "Probes").
+fn probe_size(k: usize) -> usize {
+    (k as Real).sqrt().ceil() as usize
+}
+
 /// What sampling one pair needs.
-struct Pair<'p> {
+struct Pair {
     /// `a` cut by `b`'s plane.
     lower: Region,
     /// `b` cut by `a`'s plane.
     upper: Region,
-    /// The patch the strata cut.
-    b: &'p Patch,
     /// `a`'s normal.
     na: Vec3,
-    /// A point of `a`'s plane.
-    oa: Vec3,
-    tolerance: Real,
+    /// The bound on `F(dA_x → H)` over `L` for drawing `x` by rejection.
+    bound: Real,
+    /// Whether `F(dA_x → H)` varies over `L` by more than [`GRID_SPREAD`].
+    varies: bool,
     ia: usize,
     ib: usize,
 }
 
-impl Pair<'_> {
-    /// Traces `k` segments whose ends are stratified over both `L` and `H` (a Latin hypercube
-    /// on each, paired at random) and returns how many are clear. Only whether they agree is
-    /// used, so they spread over the pair as far as `k` segments can.
-    fn probe(&self, k: usize, rng: &mut impl Rng, trace: &mut impl FnMut(Vec3, usize, Vec3, usize) -> bool) -> usize {
-        let mut clear = 0;
-        latin_hypercube(k, rng, |_, [x, y]| {
-            let x = self.lower.point_at(x.0, x.1);
-            let y = self.upper.point_at(y.0, y.1);
-            clear += usize::from(trace(x, self.ia, y, self.ib));
-        });
-        clear
+impl Pair {
+    /// The pair `(L, H)` with the bound for drawing points of `L` by rejection: `F(dA_x → H)`
+    /// at the corners, edge midpoints and centre of `L`, with a margin (module documentation,
+    /// "Few rays"). The corners and midpoints are taken a hair inside `L`: on `L`'s boundary,
+    /// where `b`'s plane cuts `a`, `H` is cut a tolerance away as well, and `F` there falls
+    /// short of its value just inside (0.35 against 0.5 at the shared edge of a floor and a
+    /// wall), which left the bound below the largest value and drew too few points near the
+    /// edge.
+    fn new(lower: Region, upper: Region, na: Vec3, ia: usize, ib: usize) -> Pair {
+        let mut pair = Pair { lower, upper, na, bound: 0.0, varies: false, ia, ib };
+        let corners = pair.lower.polygon();
+        let centre = corners.iter().copied().sum::<Vec3>() / corners.len() as Real;
+        let midpoints = (0..corners.len()).map(|e| 0.5 * (corners[e] + corners[(e + 1) % corners.len()]));
+        let inside = |p: Vec3| p + (centre - p) * INSIDE;
+        let (smallest, largest) = corners
+            .iter()
+            .copied()
+            .chain(midpoints)
+            .map(inside)
+            .chain([centre])
+            .map(|x| pair.seen_from(x))
+            .fold((Real::INFINITY, 0.0), |(lo, hi): (Real, Real), f| (lo.min(f), hi.max(f)));
+        pair.bound = (FEW_MARGIN * largest).min(1.0);
+        pair.varies = largest > GRID_SPREAD * smallest;
+        pair
     }
 
-    /// Adds `k < 16` segments to `sums`, each with both ends drawn in proportion to the
-    /// kernel (module documentation), so that each one's visibility has expectation `V`:
-    /// `x` on `L` in proportion to `F(dA_x → H)` by rejection, `y` on `H` from `x` by
-    /// [`kernel_point`]. Each segment weighs the same.
+    /// `F(dA_x → H)`.
+    fn seen_from(&self, x: Vec3) -> Real {
+        point_to_polygon(x, self.na, self.upper.polygon())
+    }
+
+    /// Calls `f(x, y)` for `k` segments with both ends drawn in proportion to the kernel
+    /// (module documentation, "Few rays"), so that each one is clear with probability `V`: `x`
+    /// on `L` in proportion to `F(dA_x → H)` by rejection, `y` on `H` from `x` by
+    /// [`kernel_point`]. The first point tried for `x` and the first direction tried for `y`
+    /// come from a Latin hypercube over both squares, so that the segments spread out.
+    fn kernel_segments(&self, k: usize, rng: &mut impl Rng, mut f: impl FnMut(Vec3, Vec3)) {
+        if self.bound <= 0.0 {
+            return;
+        }
+        latin_hypercube(k, rng, |rng, [(mut u, mut v), direction]| {
+            let mut x = self.lower.point_at(u, v);
+            for _ in 1..MAX_TRIES {
+                if rng.random::<Real>() * self.bound <= self.seen_from(x) {
+                    break;
+                }
+                (u, v) = (rng.random(), rng.random());
+                x = self.lower.point_at(u, v);
+            }
+            if let Some(y) = kernel_point(x, self.na, self.upper.polygon(), direction, rng) {
+                f(x, y);
+            }
+        });
+    }
+
+    /// The grid that [`Pair::sample_many`] and [`Pair::probe`] draw `x` from for a pair given
+    /// `k` rays.
+    fn grid(&self, k: usize) -> Grid {
+        Grid::new(grid_side(k, self.varies), |u, v| self.seen_from(self.lower.point_at(u, v)))
+    }
+
+    /// Calls `f(x, y, w)` for `k` segments, each with its own `x` and its own direction to
+    /// `y`, from one Latin hypercube over two squares: `x` on `L` with the density `p` of
+    /// `grid`, `y` on `H` in proportion to the kernel from `x` by [`kernel_point`], and
+    /// `w = F(dA_x → H) / p(x)` (module documentation, "Many rays").
+    fn grid_segments(&self, grid: &Grid, k: usize, rng: &mut impl Rng, mut f: impl FnMut(Vec3, Vec3, Real)) {
+        let upper = self.upper.polygon();
+        latin_hypercube(k, rng, |rng, [square, direction]| {
+            let ((u, v), density) = grid.point_at(square);
+            let x = self.lower.point_at(u, v);
+            let weight = self.seen_from(x) / density;
+            if weight <= 0.0 {
+                return;
+            }
+            if let Some(y) = kernel_point(x, self.na, upper, direction, rng) {
+                f(x, y, weight);
+            }
+        });
+    }
+
+    /// Traces `k` segments drawn from `grid` ([`Pair::grid_segments`]), so nearly as the
+    /// kernel weighs them, and says whether they agree (all clear or all blocked). Only that
+    /// is used, so that the estimate is independent of the decision (module documentation,
+    /// "Probes").
+    fn probe(
+        &self,
+        grid: &Grid,
+        k: usize,
+        rng: &mut impl Rng,
+        trace: &mut impl FnMut(Vec3, usize, Vec3, usize) -> bool,
+    ) -> bool {
+        let (mut clear, mut traced) = (0, 0);
+        self.grid_segments(grid, k, rng, |x, y, _| {
+            traced += 1;
+            clear += usize::from(trace(x, self.ia, y, self.ib));
+        });
+        clear == 0 || clear == traced
+    }
+
+    /// Adds `k < 16` segments drawn by the kernel ([`Pair::kernel_segments`]) to `sums`, each
+    /// weighing the same.
     fn sample_few(
         &self,
         k: usize,
@@ -244,77 +429,98 @@ impl Pair<'_> {
         trace: &mut impl FnMut(Vec3, usize, Vec3, usize) -> bool,
         sums: &mut Sums,
     ) {
-        let seen_from = |x: Vec3| point_to_polygon(x, self.na, self.upper.polygon());
-        // F(dA_x → H) at the corners, edge midpoints and centre of L, with a margin, bounds it
-        // on L: a pair given this few rays is small against its distance, where F varies
-        // little (module documentation).
-        let lower = self.lower.polygon();
-        let centre = lower.iter().copied().sum::<Vec3>() / lower.len() as Real;
-        let midpoints = (0..lower.len()).map(|e| 0.5 * (lower[e] + lower[(e + 1) % lower.len()]));
-        let largest = lower.iter().copied().chain(midpoints).chain([centre]).map(seen_from).fold(0.0, Real::max);
-        let bound = (FEW_MARGIN * largest).min(1.0);
-        if bound <= 0.0 {
-            return;
-        }
-        for _ in 0..k {
-            let mut x = centre;
-            for _ in 0..MAX_TRIES {
-                x = self.lower.point_at(rng.random(), rng.random());
-                if rng.random::<Real>() * bound <= seen_from(x) {
-                    break;
-                }
-            }
-            let Some(y) = kernel_point(x, self.na, self.upper.polygon(), rng) else { continue };
-            let clear = trace(x, self.ia, y, self.ib);
+        self.kernel_segments(k, rng, |x, y| {
             sums.total += 1.0;
-            if clear {
+            if trace(x, self.ia, y, self.ib) {
                 sums.visible += 1.0;
             }
-        }
+        });
     }
 
-    /// Adds about `k` segments to `sums`: `side²` strata of `b` cut by `a`'s plane, and
-    /// `k / side²` Latin-hypercube points on `L`, each joined to every stratum.
-    fn sample(
+    /// Adds `k ≥ 16` segments drawn from `grid` ([`Pair::grid_segments`]) to `sums`, each
+    /// weighing `F(dA_x → H) / p(x)` (module documentation, "Many rays").
+    fn sample_many(
         &self,
+        grid: &Grid,
         k: usize,
         rng: &mut impl Rng,
         trace: &mut impl FnMut(Vec3, usize, Vec3, usize) -> bool,
         sums: &mut Sums,
     ) {
-        let side = ((k as Real).powf(0.25).floor() as usize).clamp(1, MAX_SIDE);
-        if side == 1 {
-            return self.sample_few(k, rng, trace, sums);
-        }
-        let points = (k / (side * side)).max(1);
-        let cell = 1.0 / side as Real;
-        let mut strata = [Region::EMPTY; MAX_SIDE * MAX_SIDE];
-        let origin = self.oa + self.na * self.tolerance;
-        for (c, stratum) in strata.iter_mut().enumerate().take(side * side) {
-            let (s0, t0) = ((c % side) as Real * cell, (c / side) as Real * cell);
-            let corners = [(s0, t0), (s0 + cell, t0), (s0 + cell, t0 + cell), (s0, t0 + cell)]
-                .map(|(s, t)| parametrisation(self.b, s, t).0);
-            *stratum = Region::clipped(&corners, origin, self.na);
-        }
-        let strata = &strata[..side * side];
-        latin_hypercube(points, rng, |rng, [(u, v)]| {
-            let x = self.lower.point_at(u, v);
-            for stratum in strata {
-                if stratum.area() <= 0.0 {
-                    continue;
-                }
-                let weight = point_to_polygon(x, self.na, stratum.polygon());
-                if weight <= 0.0 {
-                    continue;
-                }
-                let Some(y) = kernel_point(x, self.na, stratum.polygon(), rng) else { continue };
-                let clear = trace(x, self.ia, y, self.ib);
-                sums.total += weight;
-                if clear {
-                    sums.visible += weight;
-                }
+        self.grid_segments(grid, k, rng, |x, y, weight| {
+            sums.total += weight;
+            if trace(x, self.ia, y, self.ib) {
+                sums.visible += weight;
             }
         });
+    }
+}
+
+/// The fewest cells along each side of the grid [`Pair::sample_many`] draws `x` from, when
+/// `F(dA_x → H)` varies over `L`.
+const MIN_GRID: usize = 4;
+/// The most cells along each side of that grid.
+const MAX_GRID: usize = 16;
+/// `F(dA_x → H)` varies over `L` when its largest value at the points the rejection bound is
+/// taken from is more than this times its smallest.
+const GRID_SPREAD: Real = 2.0;
+/// A cell's density is at least this fraction of the largest cell's, so that no part of `L`
+/// goes unsampled.
+const GRID_FLOOR: Real = 1e-3;
+
+/// Cells along each side of the grid for `k` segments: `⌊√k / 4⌋`, between [`MIN_GRID`] and
+/// [`MAX_GRID`], so that its `4 side²` evaluations of `F(dA_x → H)` stay below `k / 4` for
+/// `k ≥ 256`; one cell when `F(dA_x → H)` hardly varies over `L` (`varies` false).
+fn grid_side(k: usize, varies: bool) -> usize {
+    if varies { (((k as Real).sqrt() / 4.0) as usize).clamp(MIN_GRID, MAX_GRID) } else { 1 }
+}
+
+/// A piecewise-constant density on the unit square, `side × side` cells, each in proportion
+/// to the largest of a function at its corners, taken a hair inside the cell (the map from
+/// the square to `L` jumps between fan triangles along some cell edges, and `L`'s boundary
+/// is where `F(dA_x → H)` falls short, see [`INSIDE`]).
+struct Grid {
+    side: usize,
+    /// `cumulative[c]`: the weights of cells `0..=c`, row by row.
+    cumulative: [Real; MAX_GRID * MAX_GRID],
+}
+
+impl Grid {
+    fn new(side: usize, f: impl Fn(Real, Real) -> Real) -> Grid {
+        let mut cumulative = [0.0; MAX_GRID * MAX_GRID];
+        if side == 1 {
+            cumulative[0] = 1.0;
+            return Grid { side, cumulative };
+        }
+        let width = 1.0 / side as Real;
+        let (near, far) = (INSIDE * width, (1.0 - INSIDE) * width);
+        let mut weights = [0.0; MAX_GRID * MAX_GRID];
+        for (c, weight) in weights.iter_mut().enumerate().take(side * side) {
+            let (u, v) = ((c % side) as Real * width, (c / side) as Real * width);
+            *weight = [(near, near), (far, near), (near, far), (far, far)]
+                .map(|(du, dv)| f(u + du, v + dv))
+                .into_iter()
+                .fold(0.0, Real::max);
+        }
+        let largest = weights.iter().copied().fold(0.0, Real::max);
+        let floor = if largest > 0.0 { GRID_FLOOR * largest } else { 1.0 };
+        let mut total = 0.0;
+        for (sum, weight) in cumulative.iter_mut().zip(weights).take(side * side) {
+            total += weight.max(floor);
+            *sum = total;
+        }
+        Grid { side, cumulative }
+    }
+
+    /// The point of the square at `(u, v) ∈ [0, 1)²` under the density (`u` picks the cell in
+    /// proportion to its weight and is rescaled within it), and the density there.
+    fn point_at(&self, (u, v): (Real, Real)) -> ((Real, Real), Real) {
+        let cells = self.side * self.side;
+        let (c, s, width) = pick_fan_triangle(&self.cumulative[..cells], u);
+        let total = self.cumulative[cells - 1];
+        let side = self.side as Real;
+        let (i, j) = ((c % self.side) as Real, (c / self.side) as Real);
+        (((i + s) / side, (j + v) / side), width / total * side * side)
     }
 }
 
@@ -323,23 +529,35 @@ const MAX_TRIES: usize = 64;
 /// The margin on the largest `F(dA_x → H)` found at the corners and centre of `L`, for
 /// drawing `x` by rejection.
 const FEW_MARGIN: Real = 1.25;
+/// How far towards `L`'s centre, as a fraction of the way, the corners and edge midpoints
+/// where `F(dA_x → H)` bounds the rejection are moved, and how far into its cell, as a
+/// fraction of the cell, each corner where [`Grid`] takes it: far more than the plane
+/// tolerance (`1e-9` of the scene), too little to change the value much. Lambert's formula
+/// loses digits in proportion to the inverse distance to an edge of `H`, and at `1e-6` the
+/// grid's weights moved with the rounding of the coordinates: `inner-box:res=2:gap=0` at
+/// scale `1e-8` differed from scale 1 by 2.2e-12 of the largest entry.
+const INSIDE: Real = 1e-3;
 
 /// A point `y` of `polygon` drawn with density in proportion to the kernel from `x` (normal
 /// `n`): a direction uniform in the polygon's solid angle (Arvo), kept with probability
-/// `cos θ_x` over its largest value on the polygon. `None` when the polygon subtends nothing.
-fn kernel_point(x: Vec3, n: Vec3, polygon: &[Vec3], rng: &mut impl Rng) -> Option<Vec3> {
+/// `cos θ_x` over its largest value on the polygon. The first direction tried is the one at
+/// `first ∈ [0, 1)²` (a stratified draw stays stratified when it is kept), the others are
+/// fresh. `None` when the polygon subtends nothing.
+fn kernel_point(x: Vec3, n: Vec3, polygon: &[Vec3], first: (Real, Real), rng: &mut impl Rng) -> Option<Vec3> {
     let seen = SphericalPolygon::new(x, polygon);
     let bound = seen.max_cosine(n);
     if bound <= 0.0 {
         return None;
     }
     let mut last = None;
+    let (mut u, mut v) = first;
     for _ in 0..MAX_TRIES {
-        let y = seen.point_at(x, rng.random(), rng.random())?;
+        let y = seen.point_at(x, u, v)?;
         if rng.random::<Real>() * bound <= n.dot((y - x).normalize_or_zero()) {
             return Some(y);
         }
         last = Some(y);
+        (u, v) = (rng.random(), rng.random());
     }
     last
 }

@@ -18,8 +18,8 @@ pub struct AnalyticParams {
     /// The fewest shadow rays of a pair, when the scene needs visibility.
     pub rays: usize,
     /// The shadow rays of a partially visible pair whose larger unoccluded form factor is 1:
-    /// a pair gets `budget` times its larger unoccluded form factor, at least `rays`
-    /// ([`crate::pair_visibility`]).
+    /// a pair gets `budget` times its larger unoccluded form factor, at least `rays`, and
+    /// stiff scenes more ([`crate::pair_visibility::stiffness_factor`]).
     pub budget: usize,
     /// Seed of the jittered shadow rays.
     pub seed: u64,
@@ -77,7 +77,8 @@ pub const ANALYTIC_PARAMS: &[ParamDoc] = &[
     ParamDoc {
         key: "budget",
         default: "16384",
-        doc: "shadow rays of a partly visible pair per unit of its larger unoccluded form factor, 0 to 2^24",
+        doc: "shadow rays of a partly visible pair per unit of its larger unoccluded form factor, 0 to 2^24 \
+              (times ((1 - 0.8) / (1 - mean ρ))², at most 64, in scenes whose mean ρ exceeds 0.8)",
     },
     ParamDoc { key: "seed", default: "0", doc: "seed of the jittered shadow rays" },
 ];

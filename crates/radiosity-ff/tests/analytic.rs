@@ -166,12 +166,11 @@ fn closed_furnace_rows_sum_to_one() {
 
 #[test]
 fn closed_occluded_scenes_close() {
-    // Closed scenes with occluders: every row within 2% of 1 and the mean within 1e-3. The
-    // block furnace meets it at the defaults; multi-cubes, whose rows are nearly all partly
-    // occluded, needs four times the default budget (at the default its worst row is 2.3%
-    // low). Before the kernel-weighted estimator, multi-cubes' rows ran from 0.56 to 1.22
-    // with a mean of 0.913.
-    for (scene, backend) in [("furnace:res=4:block=true", "analytic"), ("multi-cubes", "analytic:budget=65536")] {
+    // Closed scenes with occluders, at the defaults: every row within 2% of 1 and the mean
+    // within 1e-3. Before the kernel-weighted estimator, multi-cubes' rows ran from 0.56 to
+    // 1.22 with a mean of 0.913; before each shadow ray got its own point on the smaller
+    // patch, its worst row was 2.3% low.
+    for (scene, backend) in [("furnace:res=4:block=true", "analytic"), ("multi-cubes", "analytic")] {
         let (scene, vis, analysis, p) = analytic_for(scene, backend);
         let f = AnalyticColumns::new(&scene, &vis, &analysis, p);
         assert!(f.traces_shadow_rays());
@@ -185,13 +184,30 @@ fn closed_occluded_scenes_close() {
 }
 
 #[test]
+fn shared_mgf_scenes_have_no_row_above_one() {
+    // Open scenes written by others, prepared as every command prepares them (hidden patches
+    // left out): no row of F may create energy beyond the estimator's noise. Before the
+    // visibility was weighted by the kernel and each shadow ray got its own point on the
+    // smaller patch, cube.mgf's rows reached 1.0096 and the classroom's 1.076.
+    for name in ["cube.mgf", "examp1.mgf"] {
+        let arg = format!("{}/../../../shared/scenes/mgf/{name}", env!("CARGO_MANIFEST_DIR"));
+        let prepared = radiosity_geom::PreparedScene::load(&arg).unwrap();
+        assert!(!prepared.analysis.closure.value.is_closed(), "{name} is open");
+        let f = AnalyticColumns::new(prepared.scene(), &prepared.visibility, &prepared.analysis, params("analytic"));
+        for (i, s) in row_sums(&f).iter().enumerate() {
+            assert!(*s <= 1.01, "{name}: row {i} sums to {s}");
+        }
+    }
+}
+
+#[test]
 fn closure_improves_with_the_ray_budget() {
-    // Sixteen times the default budget: the block furnace's rows within 2.5e-3 of 1 (at the
-    // default, within 6e-3), the k^-1/2 of sampling noise.
+    // Sixteen times the default budget: the block furnace's rows within 1.5e-3 of 1 (at the
+    // default, within 3.3e-3), the k^-1/2 of sampling noise.
     let (scene, vis, analysis, p) = analytic_for("furnace:res=4:block=true", "analytic:budget=262144");
     let f = AnalyticColumns::new(&scene, &vis, &analysis, p);
     for (i, s) in row_sums(&f).iter().enumerate() {
-        assert!((s - 1.0).abs() < 2.5e-3, "row {i} sums to {s}");
+        assert!((s - 1.0).abs() < 1.5e-3, "row {i} sums to {s}");
     }
 }
 

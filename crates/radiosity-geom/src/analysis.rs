@@ -1,7 +1,12 @@
 //! Scene analysis: what the pipeline may leave out for a given scene, and why.
 //!
-//! Four decisions, each with the reason a user can read (`cargo xtask scenes --explain`):
+//! Five decisions, each with the reason a user can read (`cargo xtask scenes --explain`):
 //!
+//! - **Hidden geometry.** Patches no light can reach (pressed face to face against another
+//!   surface, or facing the inside of a closed solid) are left out of the system; patches
+//!   touching or overlapping others over part of their area are reported
+//!   ([`hidden`](crate::hidden) has the test). The other decisions are made on the scene
+//!   without the hidden patches.
 //! - **Occlusion.** If every patch lies in the closed front half-space of every other patch's
 //!   plane (the scene is the inside of a convex shell, like an empty room), no patch can block
 //!   the view between two others: a segment between two points in front of a plane can meet
@@ -12,12 +17,14 @@
 //! - **Channels.** If every material in use is grey, the scene is solved as one channel.
 //! - **Emitters.** Patches with positive emission in some channel; shooting methods shoot them
 //!   first.
-//! - **Closure.** Whether every ray leaving a patch hits another patch, so that each row of the
-//!   form-factor matrix should sum to 1. Measured, not assumed: `RAYS_PER_PATCH` cosine-weighted
+//! - **Closure.** Whether every ray leaving a patch meets the front of another patch, so that
+//!   each row of the form-factor matrix should sum to 1 (a ray that meets a back is lost, since
+//!   the kernel is zero behind a patch). Measured, not assumed: `RAYS_PER_PATCH` cosine-weighted
 //!   rays per patch from seeded random points ([`ChaCha8Rng`], seed 0), traced against the BVH.
 //!   One escaping ray makes the scene open, with the escaping fraction reported; closure
 //!   checks (rows summing to 1) apply only to closed scenes.
 
+use crate::hidden::{HiddenGeometry, HiddenParams, HiddenReason};
 use crate::visibility::Visibility;
 use radiosity_core::math::cosine_direction;
 use radiosity_core::{Channels, Real, Scene};
@@ -42,14 +49,14 @@ pub struct Decision<T> {
 /// Whether rays leaving the scene's patches all come back to a patch.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Closure {
-    /// No sampled ray escaped: rows of F should sum to 1.
+    /// Every sampled ray met the front of a patch: rows of F should sum to 1.
     Closed {
         /// Rays traced.
         sampled: usize,
     },
-    /// Some rays escaped: rows of F sum to less than 1.
+    /// Some rays were lost: rows of F sum to less than 1.
     Open {
-        /// Rays that hit nothing.
+        /// Rays that hit nothing or the back of a patch.
         escaped: usize,
         /// Rays traced.
         sampled: usize,
@@ -82,12 +89,26 @@ pub struct SceneAnalysis {
     pub emitters: Decision<Vec<usize>>,
     /// Whether the scene is closed.
     pub closure: Decision<Closure>,
+    /// The hidden patches left out (numbered as in the scene as loaded), and the touching and
+    /// overlapping ones kept (numbered as in `scene`).
+    pub hidden: Decision<HiddenGeometry>,
 }
 
 impl SceneAnalysis {
-    /// Analyses `scene`, using `visibility` (built over the same scene) for the closure test.
+    /// Analyses `scene`, using `visibility` (built over the same scene) for the closure test and
+    /// the search for hidden geometry. Hidden patches are reported, not removed:
+    /// [`PreparedScene`](crate::PreparedScene) leaves them out.
     pub fn new(scene: &Scene, visibility: &Visibility) -> SceneAnalysis {
+        let hidden = HiddenGeometry::find(scene, visibility, HiddenParams::default());
+        SceneAnalysis::with_hidden(scene, visibility, hidden)
+    }
+
+    /// Analyses `scene` as [`SceneAnalysis::new`] does, with the hidden geometry already found:
+    /// by [`HiddenGeometry::find`] on this scene, or on the scene as loaded and then
+    /// [renumbered](HiddenGeometry::renumbered) for `scene`, which leaves the hidden patches out.
+    pub fn with_hidden(scene: &Scene, visibility: &Visibility, hidden: HiddenGeometry) -> SceneAnalysis {
         SceneAnalysis {
+            hidden: hidden_decision(scene, hidden),
             patches: scene.len(),
             total_area: scene.total_area(),
             mean_reflectivity: scene.mean_reflectivity(),
@@ -102,6 +123,13 @@ impl SceneAnalysis {
     /// What the pipeline leaves out for this scene, one sentence each.
     pub fn left_out(&self) -> Vec<String> {
         let mut out = Vec::new();
+        let hidden = &self.hidden.value.hidden;
+        if self.hidden.value.left_out && !hidden.is_empty() {
+            out.push(format!(
+                "{} hidden patches (pressed against other surfaces or inside closed solids)",
+                hidden.len()
+            ));
+        }
         if !self.occlusion.value {
             out.push("shadow rays (nothing can occlude)".to_string());
         }
@@ -113,6 +141,34 @@ impl SceneAnalysis {
         }
         out
     }
+}
+
+fn hidden_decision(scene: &Scene, found: HiddenGeometry) -> Decision<HiddenGeometry> {
+    let hidden_area = found.hidden.iter().fold(0.0, |a, h| a + h.area);
+    let pressed = found.hidden.iter().filter(|h| h.reason == HiddenReason::Pressed).count();
+    let mut reason = if found.hidden.is_empty() {
+        format!("no patch is hidden ({} probe rays)", found.rays)
+    } else {
+        let (what, total) = match found.left_out {
+            true => ("are hidden and left out", hidden_area + scene.total_area()),
+            false => ("are hidden", scene.total_area()),
+        };
+        format!(
+            "{} patches, {:.3}% of the area, {what}: {pressed} pressed face to face against another surface, {} \
+             facing the inside of a closed solid ({} probe rays)",
+            found.hidden.len(),
+            100.0 * hidden_area / total,
+            found.hidden.len() - pressed,
+            found.rays
+        )
+    };
+    if !found.touching.is_empty() {
+        reason += &format!("; {} patches touch another surface over part of their area", found.touching.len());
+    }
+    if !found.overlapping.is_empty() {
+        reason += &format!("; {} patches overlap a coplanar patch", found.overlapping.len());
+    }
+    Decision { value: found, reason }
 }
 
 fn describe(scene: &Scene, patch: usize) -> String {
@@ -199,7 +255,9 @@ fn closure(scene: &Scene, visibility: &Visibility) -> Decision<Closure> {
         for _ in 0..RAYS_PER_PATCH {
             let origin = patch.point_at(rng.random::<Real>(), rng.random::<Real>());
             let direction = cosine_direction(patch.normal(), rng.random::<Real>(), rng.random::<Real>());
-            if visibility.escapes(origin, direction, Some(i)) {
+            // A ray that meets the back of a patch is lost too: the kernel is zero behind a
+            // patch, so the row of F misses what such rays carry.
+            if visibility.first_hit(origin, direction, Some(i)).is_none_or(|h| !h.front) {
                 escaped += 1;
                 first_escape.get_or_insert(i);
             }
@@ -209,12 +267,13 @@ fn closure(scene: &Scene, visibility: &Visibility) -> Decision<Closure> {
     match first_escape {
         None => Decision {
             value: Closure::Closed { sampled },
-            reason: format!("none of {sampled} sampled rays leaves the scene, so rows of F should sum to 1"),
+            reason: format!("each of {sampled} sampled rays meets the front of a patch, so rows of F should sum to 1"),
         },
         Some(i) => Decision {
             value: Closure::Open { escaped, sampled },
             reason: format!(
-                "{escaped} of {sampled} sampled rays ({:.2}%) leave the scene, the first from {}",
+                "{escaped} of {sampled} sampled rays ({:.2}%) leave the scene or meet the back of a patch, the first \
+                 from {}",
                 100.0 * escaped as Real / sampled as Real,
                 describe(scene, i)
             ),

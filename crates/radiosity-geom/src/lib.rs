@@ -21,6 +21,7 @@
 pub mod analysis;
 pub mod error;
 pub mod gltf_input;
+pub mod hidden;
 pub mod mesh;
 pub mod mgf;
 pub mod prepared;
@@ -31,8 +32,9 @@ pub mod visibility;
 
 pub use analysis::{Closure, Decision, SceneAnalysis};
 pub use error::GeomError;
+pub use hidden::{HiddenGeometry, HiddenParams, HiddenPatch, HiddenReason, PartialContact};
 pub use mesh::SceneBuilder;
-pub use prepared::{DecisionReport, PreparedScene, SceneReport, SetupSeconds};
+pub use prepared::{DecisionReport, GeometryReport, PreparedScene, SceneReport, SetupSeconds};
 pub use scenes::{BuiltinScene, builtin_scenes};
 pub use spatial_order::spatial_order;
 pub use spec::{KeyValueParams, ParamDoc};

@@ -3,9 +3,10 @@
 
 use crate::analysis::{Closure, SceneAnalysis};
 use crate::error::GeomError;
+use crate::hidden::{HiddenGeometry, HiddenParams, HiddenReason};
 use crate::visibility::Visibility;
 use crate::{LoadedScene, load_scene};
-use radiosity_core::{Channels, PatchShape};
+use radiosity_core::{Channels, PatchShape, Scene};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -14,9 +15,9 @@ use std::time::Instant;
 pub struct SetupSeconds {
     /// Loading (or generating) the scene.
     pub load: f64,
-    /// Building its BVH.
+    /// Building its BVH (twice when hidden patches were left out).
     pub bvh: f64,
-    /// The scene analysis.
+    /// The scene analysis, the search for hidden geometry included.
     pub analysis: f64,
 }
 
@@ -48,18 +49,40 @@ impl PreparedScene {
         Ok(PreparedScene::from_loaded(loaded, start.elapsed().as_secs_f64()))
     }
 
-    fn from_loaded(loaded: LoadedScene, load: f64) -> PreparedScene {
+    fn from_loaded(mut loaded: LoadedScene, load: f64) -> PreparedScene {
         let start = Instant::now();
-        let visibility = Visibility::new(&loaded.scene);
-        let bvh = start.elapsed().as_secs_f64();
+        let mut visibility = Visibility::new(&loaded.scene);
+        let mut bvh = start.elapsed().as_secs_f64();
         let start = Instant::now();
-        let analysis = SceneAnalysis::new(&loaded.scene, &visibility);
-        let analysis_seconds = start.elapsed().as_secs_f64();
+        let mut hidden = HiddenGeometry::find(&loaded.scene, &visibility, HiddenParams::default());
+        let mut analysis_seconds = start.elapsed().as_secs_f64();
+        if !hidden.hidden.is_empty() {
+            match without_hidden(&loaded.scene, &hidden) {
+                Some((scene, kept)) => {
+                    loaded.scene = scene;
+                    hidden = hidden.renumbered(&kept);
+                    let start = Instant::now();
+                    visibility = Visibility::new(&loaded.scene);
+                    bvh += start.elapsed().as_secs_f64();
+                }
+                None => {
+                    loaded.warnings.push(format!(
+                        "every one of the {} patches looks hidden (pressed against another or inside a closed \
+                         solid), so none was left out",
+                        hidden.hidden.len()
+                    ));
+                    hidden.hidden.clear();
+                }
+            }
+        }
+        let start = Instant::now();
+        let analysis = SceneAnalysis::with_hidden(&loaded.scene, &visibility, hidden);
+        analysis_seconds += start.elapsed().as_secs_f64();
         PreparedScene { loaded, visibility, analysis, seconds: SetupSeconds { load, bvh, analysis: analysis_seconds } }
     }
 
     /// The scene.
-    pub fn scene(&self) -> &radiosity_core::Scene {
+    pub fn scene(&self) -> &Scene {
         &self.loaded.scene
     }
 
@@ -72,7 +95,7 @@ impl PreparedScene {
         let closure = match a.closure.value {
             Closure::Closed { .. } => "closed".to_string(),
             Closure::Open { escaped, sampled } => {
-                format!("open ({:.2}% of rays escape)", 100.0 * escaped as f64 / sampled as f64)
+                format!("open ({:.2}% of rays lost)", 100.0 * escaped as f64 / sampled as f64)
             }
         };
         SceneReport {
@@ -103,11 +126,30 @@ impl PreparedScene {
                 reason: a.emitters.reason.clone(),
             },
             closure: DecisionReport { value: closure, reason: a.closure.reason.clone() },
+            geometry: GeometryReport::new(&a.hidden.value, a.hidden.reason.clone()),
             left_out: a.left_out(),
             warnings: self.loaded.warnings.clone(),
             seconds: self.seconds,
         }
     }
+}
+
+/// `scene` without the hidden patches, and the new index of every old patch (`None` for a
+/// hidden one); `None` when every patch is hidden.
+fn without_hidden(scene: &Scene, hidden: &HiddenGeometry) -> Option<(Scene, Vec<Option<usize>>)> {
+    let mut kept = vec![Some(0); scene.len()];
+    for h in &hidden.hidden {
+        kept[h.patch] = None;
+    }
+    let mut patches = Vec::with_capacity(scene.len() - hidden.hidden.len());
+    for (i, k) in kept.iter_mut().enumerate() {
+        if k.is_some() {
+            *k = Some(patches.len());
+            patches.push(scene.patches()[i].clone());
+        }
+    }
+    let reduced = Scene::new(scene.name(), patches, scene.materials().to_vec(), scene.objects().to_vec()).ok()?;
+    Some((reduced, kept))
 }
 
 /// A decision as shown to users.
@@ -150,12 +192,81 @@ pub struct SceneReport {
     pub emission: DecisionReport,
     /// Closed or open.
     pub closure: DecisionReport,
+    /// Hidden, touching and overlapping patches.
+    pub geometry: GeometryReport,
     /// What the pipeline leaves out, one item each.
     pub left_out: Vec<String>,
     /// The loader's warnings.
     pub warnings: Vec<String>,
     /// Where the preparation time went.
     pub seconds: SetupSeconds,
+}
+
+/// Hidden, touching and overlapping geometry as shown to users: counts, and a few examples
+/// each with the objects involved.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct GeometryReport {
+    /// Patches left out as hidden.
+    pub hidden: usize,
+    /// Of which pressed face to face against another surface.
+    pub pressed: usize,
+    /// Of which facing the inside of a closed solid.
+    pub enclosed: usize,
+    /// Their total area.
+    pub hidden_area: f64,
+    /// Patches touching another surface over part of their area (kept).
+    pub touching: usize,
+    /// Patches overlapped by a coplanar patch facing the same way (kept).
+    pub overlapping: usize,
+    /// Up to three examples of each kind, one sentence each.
+    pub examples: Vec<String>,
+    /// The decision in one sentence.
+    pub reason: String,
+}
+
+/// Examples shown per kind of finding.
+const EXAMPLES: usize = 3;
+
+impl GeometryReport {
+    fn new(found: &HiddenGeometry, reason: String) -> GeometryReport {
+        let pressed = found.hidden.iter().filter(|h| h.reason == HiddenReason::Pressed).count();
+        let mut examples = Vec::new();
+        for h in found.hidden.iter().filter(|h| h.reason == HiddenReason::Pressed).take(EXAMPLES) {
+            let against = h.against.as_deref().unwrap_or("?");
+            examples.push(format!("hidden: patch {} of '{}' is pressed against '{against}'", h.patch, h.object));
+        }
+        for h in found.hidden.iter().filter(|h| h.reason == HiddenReason::Enclosed).take(EXAMPLES) {
+            examples.push(format!("hidden: patch {} of '{}' faces the inside of a closed solid", h.patch, h.object));
+        }
+        for c in found.touching.iter().take(EXAMPLES) {
+            examples.push(format!(
+                "touching: patch {} of '{}' touches '{}' over {:.0}% of its probe points",
+                c.patch,
+                c.object,
+                c.other_object,
+                100.0 * c.fraction
+            ));
+        }
+        for c in found.overlapping.iter().take(EXAMPLES) {
+            examples.push(format!(
+                "overlap: patch {} of '{}' lies on top of a coplanar patch of '{}' over {:.0}% of its probe points",
+                c.patch,
+                c.object,
+                c.other_object,
+                100.0 * c.fraction
+            ));
+        }
+        GeometryReport {
+            hidden: found.hidden.len(),
+            pressed,
+            enclosed: found.hidden.len() - pressed,
+            hidden_area: found.hidden.iter().fold(0.0, |a, h| a + h.area),
+            touching: found.touching.len(),
+            overlapping: found.overlapping.len(),
+            examples,
+            reason,
+        }
+    }
 }
 
 impl SceneReport {

@@ -145,7 +145,11 @@ impl Visibility {
         let unit = d / len;
         let o = (origin - self.centre) * self.inv_scale - unit * BVH_BACKOFF;
         let map = BvhParam { scale: len };
-        let ray = Ray::new(Vec3A::from(o.as_vec3()), Vec3A::from(unit.as_vec3()), 0.0, map.to_bvh(tmax));
+        // Adding +0 turns a −0 component into +0: obvhs takes the octant of a ray from the sign
+        // bits of its direction, and a −0 component (as in `-Vec3::Y`) put the ray in an octant
+        // its slab test disagreed with, so rays straight down missed the floor.
+        let unit = Vec3A::from(unit.as_vec3()) + Vec3A::ZERO;
+        let ray = Ray::new(Vec3A::from(o.as_vec3()), unit, 0.0, map.to_bvh(tmax));
         (ray, map)
     }
 

@@ -4,6 +4,7 @@
 mod analysis;
 mod builtin_large;
 mod gltf_input;
+mod hidden;
 mod mesh;
 mod mgf_input;
 mod scenes;

@@ -191,3 +191,21 @@ fn bvh_hits_agree_with_brute_force() {
         assert!(near_wall > 1000);
     }
 }
+
+#[test]
+fn rays_along_axes_with_negative_zero_components_hit() {
+    // `-Vec3::Y` is (−0, −1, −0): obvhs reads a ray's octant from the sign bits, so such rays
+    // once missed the floor of every room. Every axis direction, both signs of zero, must agree
+    // with the brute-force answer.
+    let scene = radiosity_geom::load_scene("furnace:block=true").unwrap().scene;
+    let vis = Visibility::new(&scene);
+    let origin = v(0.31, 0.37, 0.29);
+    for axis in [Vec3::X, Vec3::Y, Vec3::Z] {
+        for d in [axis, -axis, axis * -1.0, Vec3::ZERO - axis] {
+            let fast = vis.first_hit(origin, d, None).map(|h| h.patch);
+            assert!(fast.is_some(), "{d:?} escapes a closed box");
+            assert_eq!(fast, vis.first_hit_brute_force(origin, d, None).map(|h| h.patch), "{d:?}");
+            assert!(!vis.escapes(origin, d, None), "{d:?}");
+        }
+    }
+}

@@ -1,0 +1,258 @@
+//! Hidden and overlapping geometry: patches no light can reach, patches touching another
+//! surface, and coplanar patches lying on top of each other.
+//!
+//! Real files are full of surfaces in contact: a box standing on a floor, a cabinet pushed
+//! against a wall, a face inside a closed solid, two copies of one face. Such patches cannot
+//! exchange light with the rest of the scene, and the form factors of surfaces at zero
+//! distance are where quadrature and shadow rays are least accurate, so they are found here,
+//! before any form factor is computed, and the hidden ones are left out of the system
+//! ([`PreparedScene`](crate::PreparedScene) rebuilds the scene without them).
+//!
+//! ## The test
+//!
+//! Each patch is probed at the `k × k` points of a centred grid in its `(s, t)` square
+//! ([`Patch::point_at`](radiosity_core::Patch::point_at)). At each point `x`, with normal `n`
+//! and the scene diagonal `D`:
+//!
+//! - **contact**: a ray from `x − δ n` along `n` (`δ = 1e-7 D`, so a surface exactly in the
+//!   plane of the patch is met at `t = δ`) whose first hit is the front of a patch facing back
+//!   (`n_j · n < −0.999`) within a gap of `τ = 1e-4 D`: something lies against the patch there;
+//! - **overlap**: a ray from `x + δ n` along `−n` whose first hit is the front of a patch facing
+//!   the same way (`n_j · n > 0.999`) within `2δ`: another patch lies in the same plane, on top
+//!   of this one;
+//! - **view**: `r` cosine-weighted rays from `x` (seeded by the patch index, so the answer does
+//!   not depend on threads), each landing on the front of some patch, on a back, or nowhere.
+//!
+//! A patch is **hidden** when no light can arrive on its front:
+//!
+//! - *pressed*: every probe point is in contact, and no view ray meets the front of a patch
+//!   farther than the contact gap from the patch's plane: the patch is pressed face to face
+//!   against other surfaces (a box on a floor hides the floor under it, and the floor hides the
+//!   box's bottom). The second condition tells a pressed pair from a thin wall modelled as two
+//!   coincident faces back to back, whose faces both see the room;
+//! - *enclosed*: every view ray meets the back of a patch: the patch faces the inside of a
+//!   closed solid.
+//!
+//! Patches in contact at some probe points but not all are **touching**, and patches with some
+//! points overlapped are **overlapping**; both stay in the system and are reported, since they
+//! explain rows of `F` that miss 1 (a patch seeing two coplanar copies of a face counts its
+//! form factor twice).
+//!
+//! The test samples: a hidden patch with a gap narrower than one probe grid cell, or a solid
+//! with a leak, may be missed (it then stays in the system, which is what happened before). It
+//! never removes a patch some view ray saw the front of another patch from, other than through a
+//! contact.
+
+use crate::visibility::Visibility;
+use radiosity_core::math::cosine_direction;
+use radiosity_core::{Real, Scene, Vec3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// Probe offset along the normal, relative to the scene diagonal.
+const OFFSET: Real = 1e-7;
+/// Widest gap that still counts as contact, relative to the scene diagonal.
+const CONTACT_GAP: Real = 1e-4;
+/// `|n_i · n_j|` above which two patches count as parallel.
+const PARALLEL: Real = 0.999;
+
+/// How hard to look for hidden geometry.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct HiddenParams {
+    /// Probe points along each side of a patch's `(s, t)` square (`k²` points per patch).
+    pub grid: usize,
+    /// Cosine-weighted view rays per probe point.
+    pub rays_per_point: usize,
+}
+
+impl Default for HiddenParams {
+    fn default() -> Self {
+        HiddenParams { grid: 3, rays_per_point: 4 }
+    }
+}
+
+/// Why a patch is hidden.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HiddenReason {
+    /// Pressed face to face against another surface.
+    Pressed,
+    /// Facing only the backs of patches: the inside of a closed solid.
+    Enclosed,
+}
+
+/// A patch no light can reach.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct HiddenPatch {
+    /// The patch, numbered as in the scene probed.
+    pub patch: usize,
+    /// The object it belongs to.
+    pub object: String,
+    /// Its area.
+    pub area: Real,
+    /// Why it is hidden.
+    pub reason: HiddenReason,
+    /// The object of the patch it is pressed against (at its first probe point), if pressed.
+    pub against: Option<String>,
+}
+
+/// A patch in contact with, or overlapped by, another over part of its area.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PartialContact {
+    /// The patch.
+    pub patch: usize,
+    /// The object it belongs to.
+    pub object: String,
+    /// A patch it touches or overlaps (at the first such probe point); `None` when that patch
+    /// is hidden and was left out.
+    pub other: Option<usize>,
+    /// The object of that patch.
+    pub other_object: String,
+    /// The share of its probe points in contact or overlapped, in `(0, 1]`.
+    pub fraction: Real,
+}
+
+/// What the probes found, in the patch indices of the scene they probed.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct HiddenGeometry {
+    /// Patches no light can reach, in index order.
+    pub hidden: Vec<HiddenPatch>,
+    /// Patches in contact with another surface over part of their area (not hidden).
+    pub touching: Vec<PartialContact>,
+    /// Patches with another coplanar patch facing the same way on top of part of them.
+    pub overlapping: Vec<PartialContact>,
+    /// Probe rays traced.
+    pub rays: usize,
+    /// True once the hidden patches were left out of the scene the other fields number
+    /// ([`HiddenGeometry::renumbered`]).
+    pub left_out: bool,
+}
+
+/// What the probes of one patch found.
+enum Probe {
+    Hidden(HiddenReason, Option<usize>),
+    Visible { touching: Option<(usize, Real)>, overlapping: Option<(usize, Real)> },
+}
+
+impl HiddenGeometry {
+    /// Probes every patch of `scene` against `visibility` (built over the same scene).
+    pub fn find(scene: &Scene, visibility: &Visibility, params: HiddenParams) -> HiddenGeometry {
+        let grid = params.grid.max(1);
+        let rays_per_point = params.rays_per_point.max(1);
+        let probes: Vec<Probe> =
+            (0..scene.len()).into_par_iter().map(|i| probe(scene, visibility, i, grid, rays_per_point)).collect();
+        let mut found = HiddenGeometry { rays: scene.len() * grid * grid * (2 + rays_per_point), ..Default::default() };
+        let object = |i: usize| scene.objects()[scene.patches()[i].object.0 as usize].clone();
+        let contact = |patch: usize, (other, fraction): (usize, Real)| PartialContact {
+            patch,
+            object: object(patch),
+            other: Some(other),
+            other_object: object(other),
+            fraction,
+        };
+        for (patch, p) in probes.into_iter().enumerate() {
+            match p {
+                Probe::Hidden(reason, against) => found.hidden.push(HiddenPatch {
+                    patch,
+                    object: object(patch),
+                    area: scene.patches()[patch].area(),
+                    reason,
+                    against: against.map(object),
+                }),
+                Probe::Visible { touching, overlapping } => {
+                    found.touching.extend(touching.map(|t| contact(patch, t)));
+                    found.overlapping.extend(overlapping.map(|o| contact(patch, o)));
+                }
+            }
+        }
+        found
+    }
+
+    /// True when nothing was found.
+    pub fn is_empty(&self) -> bool {
+        self.hidden.is_empty() && self.touching.is_empty() && self.overlapping.is_empty()
+    }
+
+    /// The hidden patch indices, in order.
+    pub fn hidden_indices(&self) -> Vec<usize> {
+        self.hidden.iter().map(|h| h.patch).collect()
+    }
+
+    /// The same findings in the indices of the scene with the hidden patches left out: `kept[i]`
+    /// is the new index of old patch `i` (`None` for a hidden one). Hidden patches keep their old
+    /// indices, which name patches of the scene as loaded.
+    pub fn renumbered(&self, kept: &[Option<usize>]) -> HiddenGeometry {
+        let map = |list: &[PartialContact]| {
+            list.iter()
+                .filter_map(|c| {
+                    Some(PartialContact { patch: kept[c.patch]?, other: c.other.and_then(|o| kept[o]), ..c.clone() })
+                })
+                .collect()
+        };
+        HiddenGeometry {
+            hidden: self.hidden.clone(),
+            touching: map(&self.touching),
+            overlapping: map(&self.overlapping),
+            rays: self.rays,
+            left_out: true,
+        }
+    }
+}
+
+fn probe(scene: &Scene, visibility: &Visibility, i: usize, grid: usize, rays_per_point: usize) -> Probe {
+    let patch = &scene.patches()[i];
+    let n = patch.normal();
+    let diagonal = scene.diagonal();
+    let (delta, gap) = (OFFSET * diagonal, CONTACT_GAP * diagonal);
+    let mut rng = ChaCha8Rng::seed_from_u64(0x6869_6464_656e ^ i as u64);
+    let points = grid * grid;
+    let (mut contacts, mut overlaps) = (0, 0);
+    let (mut first_contact, mut first_overlap) = (None, None);
+    let (mut far_fronts, mut backs, mut view_rays) = (0, 0, 0);
+    for a in 0..grid {
+        for b in 0..grid {
+            let x = patch.point_at((a as Real + 0.5) / grid as Real, (b as Real + 0.5) / grid as Real);
+            if let Some(h) = visibility.first_hit(x - delta * n, n, Some(i)) {
+                let other = scene.patches()[h.patch].normal();
+                if h.front && h.t <= delta + gap && other.dot(n) < -PARALLEL {
+                    contacts += 1;
+                    first_contact.get_or_insert(h.patch);
+                }
+            }
+            if let Some(h) = visibility.first_hit(x + delta * n, -n, Some(i)) {
+                let other = scene.patches()[h.patch].normal();
+                if h.front && h.t <= 2.0 * delta && other.dot(n) > PARALLEL {
+                    overlaps += 1;
+                    first_overlap.get_or_insert(h.patch);
+                }
+            }
+            for _ in 0..rays_per_point {
+                let d = cosine_direction(n, rng.random::<Real>(), rng.random::<Real>());
+                view_rays += 1;
+                match visibility.first_hit(x, d, Some(i)) {
+                    Some(h) if h.front => {
+                        let hit: Vec3 = x + h.t * d;
+                        if (hit - x).dot(n) > gap {
+                            far_fronts += 1;
+                        }
+                    }
+                    Some(_) => backs += 1,
+                    None => {}
+                }
+            }
+        }
+    }
+    if contacts == points && far_fronts == 0 {
+        return Probe::Hidden(HiddenReason::Pressed, first_contact);
+    }
+    if backs == view_rays {
+        return Probe::Hidden(HiddenReason::Enclosed, None);
+    }
+    let share = |k: usize| k as Real / points as Real;
+    Probe::Visible {
+        touching: first_contact.map(|j| (j, share(contacts))),
+        overlapping: first_overlap.map(|j| (j, share(overlaps))),
+    }
+}

@@ -120,6 +120,11 @@ impl Scene {
         &self.materials[self.patches[i].material.0 as usize]
     }
 
+    /// The name of the object patch `i` belongs to.
+    pub fn object_of(&self, i: usize) -> &str {
+        &self.objects[self.patches[i].object.0 as usize]
+    }
+
     /// The reflectivity of patch `i`.
     pub fn reflectivity(&self, i: usize) -> Spectrum {
         self.material_of(i).reflectivity

@@ -81,12 +81,11 @@ pub fn worst_rows(scene: &Scene, analysis: &SceneAnalysis, matrix: &StoredMatrix
     order.truncate(count);
     let found = &analysis.hidden.value;
     let overlapping: HashSet<usize> = found.overlapping.iter().map(|c| c.patch).collect();
-    let object = |i: usize| scene.objects()[scene.patches()[i].object.0 as usize].clone();
     order
         .into_iter()
         .map(|i| {
             let (cause, detail) = cause(scene, matrix, i, sums[i], analysis, &overlapping);
-            RowDiagnosis { patch: i, object: object(i), row_sum: sums[i], cause, detail }
+            RowDiagnosis { patch: i, object: scene.object_of(i).to_string(), row_sum: sums[i], cause, detail }
         })
         .collect()
 }
@@ -100,7 +99,6 @@ fn cause(
     overlapping: &HashSet<usize>,
 ) -> (RowCause, String) {
     let found = &analysis.hidden.value;
-    let object = |j: usize| scene.objects()[scene.patches()[j].object.0 as usize].clone();
     if let Some(c) = found.touching.iter().find(|c| c.patch == i) {
         let detail = format!("touches '{}' over {:.0}% of its probe points", c.other_object, 100.0 * c.fraction);
         return (RowCause::Touching, detail);
@@ -126,7 +124,7 @@ fn cause(
         if gap < p.area().sqrt() {
             let detail = format!(
                 "F = {value:.3} to patch {largest} of '{}' across a gap of {gap:.3e}, narrower than the patch",
-                object(largest)
+                scene.object_of(largest)
             );
             return (RowCause::NarrowGap, detail);
         }

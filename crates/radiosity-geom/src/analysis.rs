@@ -24,7 +24,7 @@
 //!   One escaping ray makes the scene open, with the escaping fraction reported; closure
 //!   checks (rows summing to 1) apply only to closed scenes.
 
-use crate::hidden::{HiddenGeometry, HiddenParams, HiddenReason};
+use crate::hidden::{HiddenGeometry, HiddenParams};
 use crate::visibility::Visibility;
 use radiosity_core::math::cosine_direction;
 use radiosity_core::{Channels, Real, Scene};
@@ -144,8 +144,7 @@ impl SceneAnalysis {
 }
 
 fn hidden_decision(scene: &Scene, found: HiddenGeometry) -> Decision<HiddenGeometry> {
-    let hidden_area = found.hidden.iter().fold(0.0, |a, h| a + h.area);
-    let pressed = found.hidden.iter().filter(|h| h.reason == HiddenReason::Pressed).count();
+    let (hidden_area, pressed) = (found.hidden_area(), found.pressed());
     let mut reason = if found.hidden.is_empty() {
         format!("no patch is hidden ({} probe rays)", found.rays)
     } else {
@@ -172,8 +171,7 @@ fn hidden_decision(scene: &Scene, found: HiddenGeometry) -> Decision<HiddenGeome
 }
 
 fn describe(scene: &Scene, patch: usize) -> String {
-    let object = &scene.objects()[scene.patches()[patch].object.0 as usize];
-    format!("patch {patch} of '{object}'")
+    format!("patch {patch} of '{}'", scene.object_of(patch))
 }
 
 fn occlusion(scene: &Scene) -> Decision<bool> {

@@ -45,7 +45,7 @@
 
 use crate::visibility::Visibility;
 use radiosity_core::math::cosine_direction;
-use radiosity_core::{Real, Scene, Vec3};
+use radiosity_core::{Real, Scene};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -144,7 +144,7 @@ impl HiddenGeometry {
         let probes: Vec<Probe> =
             (0..scene.len()).into_par_iter().map(|i| probe(scene, visibility, i, grid, rays_per_point)).collect();
         let mut found = HiddenGeometry { rays: scene.len() * grid * grid * (2 + rays_per_point), ..Default::default() };
-        let object = |i: usize| scene.objects()[scene.patches()[i].object.0 as usize].clone();
+        let object = |i: usize| scene.object_of(i).to_string();
         let contact = |patch: usize, (other, fraction): (usize, Real)| PartialContact {
             patch,
             object: object(patch),
@@ -175,9 +175,14 @@ impl HiddenGeometry {
         self.hidden.is_empty() && self.touching.is_empty() && self.overlapping.is_empty()
     }
 
-    /// The hidden patch indices, in order.
-    pub fn hidden_indices(&self) -> Vec<usize> {
-        self.hidden.iter().map(|h| h.patch).collect()
+    /// How many hidden patches are pressed against another surface (the others are enclosed).
+    pub fn pressed(&self) -> usize {
+        self.hidden.iter().filter(|h| h.reason == HiddenReason::Pressed).count()
+    }
+
+    /// The total area of the hidden patches.
+    pub fn hidden_area(&self) -> Real {
+        self.hidden.iter().fold(0.0, |a, h| a + h.area)
     }
 
     /// The same findings in the indices of the scene with the hidden patches left out: `kept[i]`
@@ -232,12 +237,9 @@ fn probe(scene: &Scene, visibility: &Visibility, i: usize, grid: usize, rays_per
                 let d = cosine_direction(n, rng.random::<Real>(), rng.random::<Real>());
                 view_rays += 1;
                 match visibility.first_hit(x, d, Some(i)) {
-                    Some(h) if h.front => {
-                        let hit: Vec3 = x + h.t * d;
-                        if (hit - x).dot(n) > gap {
-                            far_fronts += 1;
-                        }
-                    }
+                    // A front farther above the patch's plane than the contact gap.
+                    Some(h) if h.front && h.t * d.dot(n) > gap => far_fronts += 1,
+                    Some(h) if h.front => {}
                     Some(_) => backs += 1,
                     None => {}
                 }

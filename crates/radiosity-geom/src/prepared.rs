@@ -229,7 +229,7 @@ const EXAMPLES: usize = 3;
 
 impl GeometryReport {
     fn new(found: &HiddenGeometry, reason: String) -> GeometryReport {
-        let pressed = found.hidden.iter().filter(|h| h.reason == HiddenReason::Pressed).count();
+        let pressed = found.pressed();
         let mut examples = Vec::new();
         for h in found.hidden.iter().filter(|h| h.reason == HiddenReason::Pressed).take(EXAMPLES) {
             let against = h.against.as_deref().unwrap_or("?");
@@ -260,7 +260,7 @@ impl GeometryReport {
             hidden: found.hidden.len(),
             pressed,
             enclosed: found.hidden.len() - pressed,
-            hidden_area: found.hidden.iter().fold(0.0, |a, h| a + h.area),
+            hidden_area: found.hidden_area(),
             touching: found.touching.len(),
             overlapping: found.overlapping.len(),
             examples,

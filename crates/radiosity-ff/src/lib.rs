@@ -39,6 +39,7 @@ pub mod montecarlo;
 pub mod pair_visibility;
 pub mod quadrature;
 pub mod row_diagnosis;
+pub mod sobol;
 pub mod solid_angle;
 pub mod spec;
 pub mod traced;

@@ -70,30 +70,38 @@
 //! block), and drew them on the whole patches: a segment to the part of `b` behind `a`'s
 //! plane enters `a`'s own solid and is blocked.
 //!
-//! ## Many rays: a point per segment, drawn where the kernel is
+//! ## Many rays: a point per segment, both ends stratified together
 //!
 //! With `k ≥ 16`, each of the `k` segments has its own `x` and its own direction to `y`,
-//! from one Latin hypercube over two squares. The first square is mapped to `L` (by area)
-//! through a density `p` that is constant on the cells of a grid over `L`'s parameter
-//! square and in proportion to the largest `F(dA_x → H)` at each cell's corners (a hair
-//! inside the cell), with at least `10⁻³` of the largest cell's. The grid has
-//! `⌊√k / 4⌋ ∈ [4, 16]` cells a side (`4 side² ≤ k / 4` evaluations for `k ≥ 256`), and a
-//! single cell where `F(dA_x → H)` varies by less than a factor 2 over the points of the
-//! rejection bound above. The second square is Arvo's map of `H` seen from `x`, kept by the
-//! cosine test above. Then
+//! from the four coordinates of one point of an Owen-scrambled Sobol net ([`crate::sobol`]).
+//! The first two are mapped to `L` (by area) through a density `p` that is constant on the
+//! cells of a grid over `L`'s parameter square and in proportion to the largest
+//! `F(dA_x → H)` at each cell's corners (a hair inside the cell), with at least `10⁻³` of
+//! the largest cell's. The grid has `⌊√k / 4⌋ ∈ [4, 16]` cells a side (`4 side² ≤ k / 4`
+//! evaluations for `k ≥ 256`), and a single cell where `F(dA_x → H)` varies by less than a
+//! factor 2 over the points of the rejection bound above. The last two are the first
+//! direction tried in Arvo's map of `H` seen from `x`, kept by the cosine test above. Then
 //!
 //! `V̂ = Σ w(x) v(x, y) / Σ w(x)`,  `w(x) = F(dA_x → H) / p(x)`,
 //!
 //! with `F(dA_x → H)` Lambert's exact point-to-polygon factor: `y` is drawn in proportion to
 //! the kernel from `x`, and `x` with density `p`, so the weighed sums estimate `∫∫ K v` and
 //! `∫∫ K`. A fully visible pair gives exactly 1 and a hidden one exactly 0, and the one bias
-//! left, of the ratio, falls like `1/k`: with only the floor's strip along the edge visible,
-//! −0.8% at `k = 16` and −0.4% at `k = 64` (with half the floor, −0.2% and 0.0%). The grid
-//! only has to follow `F(dA_x → H)` closely enough that the weights stay near their mean;
-//! where it varies fast, near a shared edge, it draws the points there. On a 7 × 53 cm wall
-//! with a 5 mm strip along its top edge, partly visible, 564 segments (without a probe)
-//! spread 0.018 with it against 0.031 without (binomial: 0.014), and 4 096 segments 0.0012
-//! against 0.0122.
+//! left, of the ratio, falls like `1/k`. The grid only has to follow `F(dA_x → H)` closely
+//! enough that the weights stay near their mean; where it varies fast, near a shared edge,
+//! it draws the points there.
+//!
+//! Why a net over four dimensions: a visibility boundary moves with both ends of a segment
+//! (a desk's edge hides part of the floor from one point of a wall and another part from the
+//! next), so stratifying `x` and the direction each on its own, a Latin hypercube in each of
+//! two squares paired at random as before, leaves their joint variation to chance; the net
+//! stratifies boxes over all four coordinates at once (every box of `2^{d₁} × … × 2^{d₄}`
+//! cells with `Σ d = m − 3` holds 8 of its first `2^m` points), and its variance for such
+//! boundaries falls faster than `1/k` (Owen 1997). A rejected direction is redrawn outside
+//! the net. Weighing every direction by its cosine instead of rejecting (`w = Ω(x) cos θ_x /
+//! p(x)`, the direction uniform in the solid angle `Ω(x)`) keeps all of them in the net, but
+//! the cosine's own spread then enters the weights: it helped small patches next to large
+//! ones and hurt large patches facing each other, and was dropped.
 //!
 //! This replaces strata on `b`: `H` cut into up to 64 cells, and `k / 64` points `x`, uniform
 //! on `a` (the lower index), each joined to a point drawn in every cell and weighed by the
@@ -105,10 +113,8 @@
 //! (0.079 m²) past its other wall: 91 points on the desk top gave a visible fraction of 0.078
 //! on average but spread 0.070 (binomial spread for its 5 866 segments: 0.0035); the
 //! classroom's own draw gave 0.31, above all of 400 others, and the wall's row summed to
-//! 1.076. Now the spread is 0.0031 with `x` on the wall and 0.0027 with `x` on the desk top,
-//! and the wall's row sums to 1.003 (0.9998 by cosine-weighted rays; 0.9995 on average over
-//! 32 seeds, spread 0.0025); the test
-//! `pair_visibility::a_wall_seeing_a_desk_top_through_a_slot` holds the case. Two other
+//! 1.076; the test `pair_visibility::a_wall_seeing_a_desk_top_through_a_slot` holds the
+//! case. Two other
 //! weights were measured before and dropped: the point-to-point kernel of each segment, and
 //! a cell's factor seen from an independent point; both give a few segments near a shared
 //! edge weights thousands of times the typical one.
@@ -148,6 +154,7 @@
 //! V_ba` exactly and a pair's value does not depend on the thread or column that computes it.
 
 use crate::ff_point_polygon::{MAX_CLIPPED, clip_above, point_to_polygon};
+use crate::sobol::scrambled_sobol;
 use crate::solid_angle::{SphericalPolygon, pick_fan_triangle};
 use radiosity_core::{Patch, Real, Vec3};
 use rand::Rng;
@@ -383,19 +390,20 @@ impl Pair {
     }
 
     /// Calls `f(x, y, w)` for `k` segments, each with its own `x` and its own direction to
-    /// `y`, from one Latin hypercube over two squares: `x` on `L` with the density `p` of
-    /// `grid`, `y` on `H` in proportion to the kernel from `x` by [`kernel_point`], and
-    /// `w = F(dA_x → H) / p(x)` (module documentation, "Many rays").
+    /// `y`, from one scrambled Sobol point in four dimensions: `x` on `L` with the density `p`
+    /// of `grid`, `y` on `H` in proportion to the kernel from `x` by [`kernel_point`] (its
+    /// first direction tried from the point), and `w = F(dA_x → H) / p(x)` (module
+    /// documentation, "Many rays").
     fn grid_segments(&self, grid: &Grid, k: usize, rng: &mut impl Rng, mut f: impl FnMut(Vec3, Vec3, Real)) {
         let upper = self.upper.polygon();
-        latin_hypercube(k, rng, |rng, [square, direction]| {
-            let ((u, v), density) = grid.point_at(square);
+        scrambled_sobol(k, rng, |rng, [su, sv, du, dv]| {
+            let ((u, v), density) = grid.point_at((su, sv));
             let x = self.lower.point_at(u, v);
             let weight = self.seen_from(x) / density;
             if weight <= 0.0 {
                 return;
             }
-            if let Some(y) = kernel_point(x, self.na, upper, direction, rng) {
+            if let Some(y) = kernel_point(x, self.na, upper, (du, dv), rng) {
                 f(x, y, weight);
             }
         });

@@ -24,7 +24,19 @@ const TINY: Real = 1e-7;
 /// The solid angle of the triangle whose vertices lie in the unit directions `a`, `b`, `c`.
 pub fn triangle(a: Vec3, b: Vec3, c: Vec3) -> Real {
     let numerator = a.dot(b.cross(c)).abs();
-    let denominator = 1.0 + a.dot(b) + b.dot(c) + c.dot(a);
+    // `1 + p·q + r·(p + q) = |p + q|² / 2 + r·(p + q)` for unit vectors, with `p, q` the pair
+    // nearest opposite: seen from a point near an edge, its two ends are, and `1 + p·q`
+    // cancels to the square of the distance while `|p + q|` keeps its digits.
+    let (ab, bc, ca) = (a.dot(b), b.dot(c), c.dot(a));
+    let (p, q, r) = if ab <= bc && ab <= ca {
+        (a, b, c)
+    } else if bc <= ca {
+        (b, c, a)
+    } else {
+        (c, a, b)
+    };
+    let sum = p + q;
+    let denominator = 0.5 * sum.length_squared() + r.dot(sum);
     2.0 * numerator.atan2(denominator)
 }
 
@@ -167,6 +179,21 @@ mod tests {
     fn the_solid_angle_of_an_octant_is_half_pi() {
         let omega = triangle(Vec3::X, Vec3::Y, Vec3::Z);
         assert!((omega - std::f64::consts::FRAC_PI_2).abs() < 1e-14, "{omega}");
+    }
+
+    #[test]
+    fn a_triangle_seen_from_near_its_edge_keeps_its_digits() {
+        // a and b on the equator, an arc of π − 2 atan δ apart through +y, and c the pole:
+        // the triangle is that slice of the hemisphere, of solid angle π − 2 atan δ. Seen
+        // from a point δ from the edge a b, `1 + a·b` is 2δ² and lost to rounding.
+        for delta in [1e-5, 1e-7, 1e-9] {
+            let (a, b) = (Vec3::new(1.0, delta, 0.0).normalize(), Vec3::new(-1.0, delta, 0.0).normalize());
+            let exact = std::f64::consts::PI - 2.0 * delta.atan();
+            for (p, q, r) in [(a, b, Vec3::Z), (b, Vec3::Z, a), (Vec3::Z, a, b)] {
+                let omega = triangle(p, q, r);
+                assert!((omega - exact).abs() < 1e-14, "δ = {delta}: {omega} against {exact}");
+            }
+        }
     }
 
     #[test]

@@ -76,7 +76,7 @@ pub const ANALYTIC_PARAMS: &[ParamDoc] = &[
     },
     ParamDoc {
         key: "budget",
-        default: "16384",
+        default: "24576",
         doc: "shadow rays of a partly visible pair per unit of its larger unoccluded form factor, 0 to 2^24 \
               (times ((1 - 0.8) / (1 - mean ρ))², at most 64, in scenes whose mean ρ exceeds 0.8)",
     },
@@ -110,7 +110,7 @@ pub const BACKENDS: &[&str] = &["analytic", "hemicube", "montecarlo", "matrix"];
 
 impl Default for AnalyticParams {
     fn default() -> Self {
-        AnalyticParams { order: 8, tolerance: 1e-3, rays: 1, budget: 16384, seed: 0 }
+        AnalyticParams { order: 8, tolerance: 1e-3, rays: 1, budget: 24576, seed: 0 }
     }
 }
 

@@ -97,7 +97,7 @@
 //! two squares paired at random as before, leaves their joint variation to chance; the net
 //! stratifies boxes over all four coordinates at once (every box of `2^{d₁} × … × 2^{d₄}`
 //! cells with `Σ d = m − 3` holds 8 of its first `2^m` points), and its variance for such
-//! boundaries falls faster than `1/k` (Owen 1997). A rejected direction is redrawn outside
+//! boundaries falls faster than `1/k` (He & Wang 2015). A rejected direction is redrawn outside
 //! the net. Weighing every direction by its cosine instead of rejecting (`w = Ω(x) cos θ_x /
 //! p(x)`, the direction uniform in the solid angle `Ω(x)`) keeps all of them in the net, but
 //! the cosine's own spread then enters the weights: it helped small patches next to large
@@ -114,10 +114,9 @@
 //! on average but spread 0.070 (binomial spread for its 5 866 segments: 0.0035); the
 //! classroom's own draw gave 0.31, above all of 400 others, and the wall's row summed to
 //! 1.076; the test `pair_visibility::a_wall_seeing_a_desk_top_through_a_slot` holds the
-//! case. Two other
-//! weights were measured before and dropped: the point-to-point kernel of each segment, and
-//! a cell's factor seen from an independent point; both give a few segments near a shared
-//! edge weights thousands of times the typical one.
+//! case. Two other weights were measured before and dropped: the point-to-point kernel of
+//! each segment, and a cell's factor seen from an independent point; both give a few
+//! segments near a shared edge weights thousands of times the typical one.
 //!
 //! ## Probes
 //!

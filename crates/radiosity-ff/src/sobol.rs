@@ -8,15 +8,17 @@
 //! then scrambled by nested uniform (Owen 1995) scrambling, drawn per call from the random
 //! stream by Burley's hash (2020, "Practical hash-based Owen scrambling", JCGT 9(4), §4):
 //! the bits are reversed, permuted by the Laine–Karras hash, and reversed back, so that every
-//! interval of length `2^{−m}` keeps its points. The first `2^m` points of the sequence then
-//! stay a `(t, m, 4)`-net whatever the scramble, and any `k` consecutive from the first are
-//! nearly as spread; each scramble makes the estimate unbiased.
+//! elementary interval in base 2 goes to one of the same size with all its points. Every
+//! block of `2^m` consecutive points starting at a multiple of `2^m` is a `(3, m, 4)`-net
+//! (`t = 0 + 0 + 1 + 2` for these dimensions) whatever the scramble, so the first `k` points
+//! are a union of nets, one per binary digit of `k`; each scramble makes the estimate
+//! unbiased.
 //!
 //! Against a Latin hypercube in each of two squares paired at random, the net also
 //! stratifies the squares jointly, which is what a visibility boundary that moves with both
-//! ends of a segment needs: for an indicator with a smooth boundary the variance of a
-//! scrambled net falls like `k^{−1−1/s}` against `k^{−1}` (Owen 1997, "Scrambled net
-//! variance for integrals of smooth functions", Ann. Statist. 25(4); `s = 4` here).
+//! ends of a segment needs: for the indicator of a set with a smooth boundary, the variance
+//! of a scrambled net falls faster than `1/k` (He & Wang 2015, "On the convergence rate of
+//! randomized quasi-Monte Carlo for discontinuous functions", SIAM J. Numer. Anal. 53(5)).
 
 use radiosity_core::Real;
 use rand::Rng;

@@ -166,12 +166,12 @@ fn closed_furnace_rows_sum_to_one() {
 
 #[test]
 fn closed_occluded_scenes_close() {
-    // Closed scenes with occluders, at the defaults: every row within 2% of 1 and the mean
-    // within 1e-3. Before the kernel-weighted estimator, multi-cubes' rows ran from 0.56 to
-    // 1.22 with a mean of 0.913; before each shadow ray got its own point on the smaller
-    // patch, its worst row was 2.3% low.
-    // Every built-in closed scene with occluders: the office at a coarser mesh (1884 patches,
-    // the same furniture) stands for the office, whose full 10 990 rows take minutes.
+    // Every built-in closed scene with occluders, at the defaults: every row within 2% of 1
+    // and the mean within 1e-3. The office at a coarser mesh (1884 patches, the same
+    // furniture) stands for the office, whose full 10 990 rows take minutes. Before the
+    // kernel-weighted estimator, multi-cubes' rows ran from 0.56 to 1.22 with a mean of 0.913;
+    // before each shadow ray got its own point on the smaller patch, its worst row was 2.3%
+    // low.
     for scene in ["furnace:res=4:block=true", "inner-box", "multi-cubes", "office:size=0.8"] {
         let (scene, vis, analysis, p) = analytic_for(scene, "analytic");
         let f = AnalyticColumns::new(&scene, &vis, &analysis, p);
@@ -204,8 +204,8 @@ fn shared_mgf_scenes_have_no_row_above_one() {
 
 #[test]
 fn closure_improves_with_the_ray_budget() {
-    // Sixteen times the default budget: the block furnace's rows within 1.5e-3 of 1 (at the
-    // default, within 3.3e-3), the k^-1/2 of sampling noise.
+    // About eleven times the default budget: the block furnace's rows within 1.5e-3 of 1 (at
+    // the default, within 3.9e-3), the k^-1/2 of sampling noise.
     let (scene, vis, analysis, p) = analytic_for("furnace:res=4:block=true", "analytic:budget=262144");
     let f = AnalyticColumns::new(&scene, &vis, &analysis, p);
     for (i, s) in row_sums(&f).iter().enumerate() {

@@ -10,7 +10,11 @@
 //! As in argmin, an [`Observer`] is called once on the initial state
 //! ([`Observer::observe_init`], after [`Solver::init`]), after every step
 //! ([`Observer::observe_step`]) and once with the finished [`Run`]
-//! ([`Observer::observe_final`]). [`Every`] (or [`Observer::every`]) passes on only the steps
+//! ([`Observer::observe_final`]). An observer that asks for it
+//! ([`Observer::wants_residual_bound`]) also gets, just before each of the first two, the
+//! solver's bound on the residual of the displayed radiosity
+//! ([`Observer::observe_residual_bound`], [`Solver::residual_bound`],
+//! [`crate::residual_bound`]). [`Every`] (or [`Observer::every`]) passes on only the steps
 //! that are multiples of `n`. The `rms=` rule stops on the e_rms an observer returns; a run
 //! with such a rule and an observer that does not measure it ([`Observer::measures_error`]
 //! false) is refused before its first step ([`SolverError::ErrorNotMeasured`]), since the
@@ -43,6 +47,7 @@
 use crate::error::SolverError;
 use crate::problem::Problem;
 use crate::record::Record;
+use crate::residual_bound::ResidualBound;
 use crate::state::State;
 use crate::stop::{StopRule, StopRules, TerminationReason};
 use radiosity_core::Real;
@@ -117,6 +122,13 @@ pub trait Solver {
     /// while it does not know one.
     fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real>;
 
+    /// A bound on the residual of the displayed radiosity known without extra columns
+    /// ([`ResidualBound`]), or None when the solver knows none.
+    fn residual_bound(&self, problem: &Problem<'_>, state: &State) -> Option<ResidualBound> {
+        let _ = (problem, state);
+        None
+    }
+
     /// Whether the solver gathers along rows of F ([`Problem::row`]) rather than shooting
     /// columns: its system is then the column system only if the source serves exact rows.
     fn gathers_rows(&self) -> bool {
@@ -155,6 +167,20 @@ pub trait Observer {
         false
     }
 
+    /// Whether the executor passes the solver's residual bound to
+    /// [`Observer::observe_residual_bound`] (false by default: computing it costs `O(n k)`).
+    fn wants_residual_bound(&self) -> bool {
+        false
+    }
+
+    /// Called, when [`Observer::wants_residual_bound`], just before [`Observer::observe_init`]
+    /// and each [`Observer::observe_step`], on the same state, with the solver's bound on the
+    /// residual of its displayed radiosity ([`Solver::residual_bound`]; `None` when it knows
+    /// none). Outside the timed region, like every observer call.
+    fn observe_residual_bound(&mut self, state: &State, bound: Option<&ResidualBound>) {
+        let _ = (state, bound);
+    }
+
     /// This observer, called after every `n`-th step only ([`Every`]).
     fn every(self, n: u64) -> Every<Self>
     where
@@ -175,6 +201,14 @@ impl<O: Observer + ?Sized> Observer for &mut O {
 
     fn observe_final(&mut self, run: &Run) {
         (**self).observe_final(run)
+    }
+
+    fn wants_residual_bound(&self) -> bool {
+        (**self).wants_residual_bound()
+    }
+
+    fn observe_residual_bound(&mut self, state: &State, bound: Option<&ResidualBound>) {
+        (**self).observe_residual_bound(state, bound)
     }
 
     fn measures_error(&self) -> bool {
@@ -231,6 +265,16 @@ impl<O: Observer> Observer for Every<O> {
         self.inner.observe_final(run)
     }
 
+    fn wants_residual_bound(&self) -> bool {
+        self.inner.wants_residual_bound()
+    }
+
+    fn observe_residual_bound(&mut self, state: &State, bound: Option<&ResidualBound>) {
+        if state.step % self.n == 0 {
+            self.inner.observe_residual_bound(state, bound)
+        }
+    }
+
     fn measures_error(&self) -> bool {
         self.inner.measures_error()
     }
@@ -276,6 +320,7 @@ impl<'s> Executor<'s> {
         let start = Instant::now();
         self.solver.init(problem, &mut state)?;
         self.account(problem, &mut state, start.elapsed().as_secs_f64(), start_ff);
+        self.pass_bound(problem, &state, observer);
         let mut error = observer.observe_init(&self.solver.name(), &state);
         let mut watch = Watch::new();
         // The cap guards runs whose rules cannot be met; an explicit `steps=` or `columns=`
@@ -297,11 +342,19 @@ impl<'s> Executor<'s> {
             self.solver.next_step(problem, &mut state)?;
             state.step += 1;
             self.account(problem, &mut state, step_start.elapsed().as_secs_f64(), ff_before);
+            self.pass_bound(problem, &state, observer);
             error = observer.observe_step(&state);
         };
         let run = Run { state, termination, solver: self.solver.name(), record: self.solver.record() };
         observer.observe_final(&run);
         Ok(run)
+    }
+
+    /// Gives `observer` the solver's residual bound on `state`, if it wants it.
+    fn pass_bound(&self, problem: &Problem<'_>, state: &State, observer: &mut dyn Observer) {
+        if observer.wants_residual_bound() {
+            observer.observe_residual_bound(state, self.solver.residual_bound(problem, state).as_ref());
+        }
     }
 
     /// Adds a step's columns and seconds to the state.

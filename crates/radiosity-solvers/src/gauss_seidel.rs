@@ -16,6 +16,7 @@ use crate::executor::Solver;
 use crate::gathering::{SweepResidual, gather, relax};
 use crate::problem::Problem;
 use crate::registry::{ParseSolverError, SolverParams, no_params, split_params, validated};
+use crate::residual_bound::{ResidualBound, SweepChanges};
 use crate::state::State;
 use radiosity_core::Real;
 use std::str::FromStr;
@@ -66,6 +67,7 @@ pub struct GaussSeidel {
     row: Vec<Real>,
     residual: Vec<Real>,
     sweep: SweepResidual,
+    changes: SweepChanges,
 }
 
 impl GaussSeidel {
@@ -74,7 +76,13 @@ impl GaussSeidel {
         if !(omega > 0.0 && omega < 2.0) {
             return Err(SolverError::BadParams(format!("SOR needs 0 < ω < 2, not {omega}")));
         }
-        Ok(GaussSeidel { omega, row: Vec::new(), residual: Vec::new(), sweep: SweepResidual::default() })
+        Ok(GaussSeidel {
+            omega,
+            row: Vec::new(),
+            residual: Vec::new(),
+            sweep: SweepResidual::default(),
+            changes: SweepChanges::default(),
+        })
     }
 }
 
@@ -83,17 +91,31 @@ impl Solver for GaussSeidel {
         if self.omega == 1.0 { "gauss-seidel".into() } else { format!("sor-{}", self.omega) }
     }
 
+    fn init(&mut self, _problem: &Problem<'_>, _state: &mut State) -> Result<(), SolverError> {
+        self.sweep = SweepResidual::default();
+        self.changes = SweepChanges::default();
+        Ok(())
+    }
+
     fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
         let i = self.sweep.next;
         self.residual.resize(state.channels, 0.0);
         gather(problem, &state.radiosity, i, &mut self.row, &mut self.residual);
+        self.changes.replacing(problem, state, i);
         relax(state, i, self.omega, &self.residual)?;
         self.sweep.add(problem, i, &self.residual);
+        if self.sweep.next == 0 {
+            self.changes.end_sweep();
+        }
         Ok(())
     }
 
     fn residual_power(&self, _problem: &Problem<'_>, _state: &State) -> Option<Real> {
         self.sweep.last()
+    }
+
+    fn residual_bound(&self, problem: &Problem<'_>, state: &State) -> Option<ResidualBound> {
+        Some(self.changes.bound(problem, state, false, self.omega))
     }
 
     fn gathers_rows(&self) -> bool {

@@ -101,6 +101,7 @@ use crate::overshooting::{Ambient, OvershootTracker, ShootingMethod, argmax, sho
 use crate::problem::Problem;
 use crate::record::Record;
 use crate::registry::{ParseSolverError, SolverParams, named, split_params, split_size, validated};
+use crate::residual_bound::{self, ResidualBound};
 use crate::shooting::unshot_power;
 use crate::state::State;
 use radiosity_core::Real;
@@ -558,6 +559,10 @@ impl Solver for GroupAccelerated {
 
     fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real> {
         Some(unshot_power(problem, state))
+    }
+
+    fn residual_bound(&self, problem: &Problem<'_>, state: &State) -> Option<ResidualBound> {
+        Some(residual_bound::shooting(problem, state))
     }
 
     fn record(&self) -> Record {

@@ -58,6 +58,7 @@ use crate::group_step::{GroupShot, GroupStats};
 use crate::problem::Problem;
 use crate::record::Record;
 use crate::registry::{ParseSolverError, SolverParams, split_params, split_size, validated};
+use crate::residual_bound::{ResidualBound, SweepChanges};
 use crate::state::State;
 use radiosity_core::Real;
 use radiosity_core::dense_lu::{SingularPivot, lu_solve_columns, m_matrix_condition};
@@ -161,6 +162,7 @@ pub struct GroupGathering {
     residual: Vec<Real>,
     delta: Vec<Real>,
     residuals: SweepResidual,
+    changes: SweepChanges,
     stats: GroupStats,
 }
 
@@ -182,6 +184,7 @@ impl GroupGathering {
             residual: Vec::new(),
             delta: Vec::new(),
             residuals: SweepResidual::default(),
+            changes: SweepChanges::default(),
             stats: GroupStats::default(),
         })
     }
@@ -219,6 +222,7 @@ impl Solver for GroupGathering {
         };
         self.next = 0;
         self.residuals = SweepResidual::default();
+        self.changes = SweepChanges::default();
         self.stats = GroupStats::default();
         Ok(())
     }
@@ -269,15 +273,23 @@ impl Solver for GroupGathering {
         // For group Jacobi the group's B is still its value at the start of the sweep: no
         // other group of the sweep changes it.
         for (a, &i) in group.iter().enumerate() {
+            self.changes.replacing(problem, state, i);
             relax(state, i, 1.0, &self.delta[a * k..(a + 1) * k])?;
             self.residuals.add(problem, i, &self.residual[a * k..(a + 1) * k]);
         }
         self.next = if start + size == n { 0 } else { self.next + 1 };
+        if self.next == 0 {
+            self.changes.end_sweep();
+        }
         Ok(())
     }
 
     fn residual_power(&self, _problem: &Problem<'_>, _state: &State) -> Option<Real> {
         self.residuals.last()
+    }
+
+    fn residual_bound(&self, problem: &Problem<'_>, state: &State) -> Option<ResidualBound> {
+        Some(self.changes.bound(problem, state, self.sweep == Sweep::Jacobi, 1.0))
     }
 
     fn gathers_rows(&self) -> bool {

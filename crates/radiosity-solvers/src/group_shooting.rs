@@ -26,6 +26,7 @@ use crate::overshooting::{Ambient, Overshoot, OvershootTracker, ShootingMethod, 
 use crate::problem::Problem;
 use crate::record::Record;
 use crate::registry::{ParseSolverError, SolverParams, named, no_params, split_params, split_size, validated};
+use crate::residual_bound::{self, ResidualBound};
 use crate::shooting::unshot_power;
 use crate::state::State;
 use radiosity_core::Real;
@@ -175,6 +176,10 @@ impl Solver for GroupShooting {
 
     fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real> {
         Some(unshot_power(problem, state))
+    }
+
+    fn residual_bound(&self, problem: &Problem<'_>, state: &State) -> Option<ResidualBound> {
+        Some(residual_bound::shooting(problem, state))
     }
 
     fn record(&self) -> Record {

@@ -15,6 +15,7 @@ use crate::executor::Solver;
 use crate::gathering::{SweepResidual, gather, relax};
 use crate::problem::Problem;
 use crate::registry::{ParseSolverError, SolverParams, no_params, split_params};
+use crate::residual_bound::{ResidualBound, SweepChanges};
 use crate::state::State;
 use radiosity_core::Real;
 use std::str::FromStr;
@@ -53,11 +54,18 @@ pub struct Jacobi {
     row: Vec<Real>,
     residual: Vec<Real>,
     sweep: SweepResidual,
+    changes: SweepChanges,
 }
 
 impl Solver for Jacobi {
     fn name(&self) -> String {
         "jacobi".into()
+    }
+
+    fn init(&mut self, _problem: &Problem<'_>, _state: &mut State) -> Result<(), SolverError> {
+        self.sweep = SweepResidual::default();
+        self.changes = SweepChanges::default();
+        Ok(())
     }
 
     fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
@@ -70,13 +78,21 @@ impl Solver for Jacobi {
         // Step from the sweep's start value: B_i = B_i^k + r_i.
         let k = state.channels;
         state.radiosity[i * k..(i + 1) * k].copy_from_slice(&self.sweep_start[i * k..(i + 1) * k]);
+        self.changes.replacing(problem, state, i);
         relax(state, i, 1.0, &self.residual)?;
         self.sweep.add(problem, i, &self.residual);
+        if self.sweep.next == 0 {
+            self.changes.end_sweep();
+        }
         Ok(())
     }
 
     fn residual_power(&self, _problem: &Problem<'_>, _state: &State) -> Option<Real> {
         self.sweep.last()
+    }
+
+    fn residual_bound(&self, problem: &Problem<'_>, state: &State) -> Option<ResidualBound> {
+        Some(self.changes.bound(problem, state, true, 1.0))
     }
 
     fn gathers_rows(&self) -> bool {

@@ -6,8 +6,9 @@
 //! on the finished run, outside the timed region ([`Every`] thins them out). Each solver
 //! lives in its own module, whose documentation gives its update rule and references; what a
 //! solver alone knows (its group steps, their condition numbers and fallbacks) comes back in
-//! the run's [`Record`]. This crate depends on `radiosity-core` only and is tested on small
-//! in-memory matrices.
+//! the run's [`Record`]. Every built-in solver also bounds, at no extra column, the residual
+//! of the radiosity it displays ([`Solver::residual_bound`], [`residual_bound`]). This crate
+//! depends on `radiosity-core` only and is tested on small in-memory matrices.
 //!
 //! Solvers are built from their command-line names by a [`SolverRegistry`], which tries its
 //! families of names in order; each family is a parameter struct ([`SolverParams`]:
@@ -88,6 +89,7 @@ pub mod progressive;
 pub mod record;
 pub mod registry;
 pub mod relax;
+pub mod residual_bound;
 pub mod shao;
 pub mod shooting;
 pub mod southwell;
@@ -111,6 +113,7 @@ pub use overshooting::{Overshoot, PointShootingParams, ShootingMethod};
 pub use problem::Problem;
 pub use record::{Record, Value};
 pub use registry::{ParseSolverError, SolverEntry, SolverParams, SolverRegistry};
+pub use residual_bound::{ResidualBound, area_norms};
 pub use state::State;
 pub use stop::{Count, StopRule, StopRules, TerminationReason};
 

@@ -4,9 +4,10 @@
 //! ## Rule
 //!
 //! Pick `j = argmax_j A_j Σ_c |ΔB_jc + ΔB⁺_jc|` (lowest index on ties), shoot
-//! `s = ΔB_j + ΔB⁺_j` ([`crate::shooting::shoot_column`]), then set `ΔB_j = −ΔB⁺_j`. The shot
-//! radiosity `x = B − ΔB` grows by `s` at `j`, and `ΔB` stays exactly the residual of `x`
-//! whatever `ΔB⁺` is: the overshoot changes the speed, never the fixed point. One column a
+//! `s = ΔB_j + ΔB⁺_j` ([`crate::shooting::shoot_column`]), then set `ΔB_j = −ΔB⁺_j` (plus the
+//! shooter's own share `ρ_j F_jj s`, zero for planar patches, [`crate::shooting::own_share`]).
+//! The shot radiosity `x = B − ΔB` grows by `s` at `j`, and `ΔB` stays exactly the residual of
+//! `x` whatever `ΔB⁺` is: the overshoot changes the speed, never the fixed point. One column a
 //! step.
 //!
 //! Every variant's overshoot is a sum of three terms, per channel `c`:
@@ -54,7 +55,8 @@ use crate::executor::Solver;
 use crate::problem::Problem;
 use crate::progressive::ProgressiveRefinement;
 use crate::registry::{ParseSolverError, SolverParams, named, no_params, split_params, validated};
-use crate::shooting::{set_unshot, shoot_column, unshot_power};
+use crate::residual_bound::{self, ResidualBound};
+use crate::shooting::{own_share, set_unshot, shoot_column, unshot_power};
 use crate::southwell::Southwell;
 use crate::state::State;
 use crate::xu::XuParts;
@@ -465,7 +467,7 @@ pub fn shoot_with_overshoot(
     let amount: Vec<Real> = unshot.iter().zip(&plus).map(|(u, p)| u + p).collect();
     shoot_column(problem, state, &amount, column)?;
     for (c, p) in plus.iter().enumerate() {
-        set_unshot(state, j * k + c, -p)?;
+        set_unshot(state, j * k + c, own_share(problem, j, c, amount[c], column) - p)?;
     }
     tracker.record(j, &row, Ambient::measure(problem, state).power);
     Ok(())
@@ -491,5 +493,9 @@ impl Solver for Overshooting {
 
     fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real> {
         Some(unshot_power(problem, state))
+    }
+
+    fn residual_bound(&self, problem: &Problem<'_>, state: &State) -> Option<ResidualBound> {
+        Some(residual_bound::shooting(problem, state))
     }
 }

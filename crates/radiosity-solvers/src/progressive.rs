@@ -1,7 +1,8 @@
 //! `pr`: progressive refinement, shooting from the patch with the most unshot power.
 //!
 //! Rule: pick `j = argmax_j A_j Σ_c |ΔB_jc|` (the lowest index on ties), shoot `s = ΔB_j`
-//! ([`crate::shooting::shoot`]), then `ΔB_j = 0`. Each step costs one column.
+//! ([`crate::shooting::shoot`]), then `ΔB_j = ρ_j F_jj s`, the shooter's own share (zero for
+//! planar patches, [`crate::shooting::own_share`]). Each step costs one column.
 //!
 //! ## References
 //!
@@ -13,7 +14,8 @@
 use crate::error::SolverError;
 use crate::executor::Solver;
 use crate::problem::Problem;
-use crate::shooting::{shoot, unshot_power};
+use crate::residual_bound::{self, ResidualBound};
+use crate::shooting::{own_share, set_unshot, shoot, unshot_power};
 use crate::state::State;
 use radiosity_core::Real;
 
@@ -37,7 +39,8 @@ pub(crate) fn select(state: &State, weight: impl Fn(usize) -> Real) -> usize {
     best.0
 }
 
-/// Shoots all of `j`'s unshot radiosity and clears it.
+/// Shoots all of `j`'s unshot radiosity, leaving `j` only its own share of the shot
+/// ([`own_share`], zero for a planar patch).
 pub(crate) fn shoot_all(
     problem: &Problem<'_>,
     state: &mut State,
@@ -50,7 +53,9 @@ pub(crate) fn shoot_all(
     amount.clear();
     amount.extend_from_slice(&state.unshot[j * k..(j + 1) * k]);
     shoot(problem, state, j, amount, column)?;
-    state.unshot[j * k..(j + 1) * k].fill(0.0);
+    for (c, &s) in amount.iter().enumerate() {
+        set_unshot(state, j * k + c, own_share(problem, j, c, s, column))?;
+    }
     Ok(())
 }
 
@@ -67,5 +72,9 @@ impl Solver for ProgressiveRefinement {
 
     fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real> {
         Some(unshot_power(problem, state))
+    }
+
+    fn residual_bound(&self, problem: &Problem<'_>, state: &State) -> Option<ResidualBound> {
+        Some(residual_bound::shooting(problem, state))
     }
 }

@@ -3,8 +3,11 @@
 //!
 //! For every patch `i` and channel `c`: `δ_ic = ρ_ic F_ij s_c`, `B_ic += δ_ic`,
 //! `ΔB_ic += δ_ic` (Cohen, Chen, Wallace & Greenberg 1988, "A progressive refinement
-//! approach to fast radiosity image generation"). `F_jj = 0` for planar patches, so the
-//! shooter's own values are set by the caller.
+//! approach to fast radiosity image generation"). The caller then sets the shooter's own
+//! unshot radiosity: what it keeps back (zero, or `−ΔB⁺_j` when overshooting) plus its own
+//! share of the shot, `ρ_j F_jj s` ([`own_share`]; zero for planar patches, `F_jj = 0`). With
+//! that share, `ΔB` stays exactly the residual of the shot radiosity `x = B − ΔB`: `x_j` grows
+//! by `s`, which changes `r_j(x)` by `ρ_j F_jj s − s`.
 
 use crate::error::SolverError;
 use crate::problem::Problem;
@@ -41,6 +44,14 @@ pub fn shoot_column(
         }
     }
     Ok(())
+}
+
+/// The share of a shot of `amount` (one channel, `c`) from patch `j` through `column`
+/// (`column[i] = F_ij`) that `j` receives itself: `ρ_jc F_jj amount`, exactly zero when
+/// `F_jj = 0`. The shooter keeps it unshot (module doc).
+pub fn own_share(problem: &Problem<'_>, j: usize, c: usize, amount: Real, column: &[Real]) -> Real {
+    let f = column[j];
+    if f == 0.0 { 0.0 } else { problem.system().rho(j, c) * f * amount }
 }
 
 /// Adds `delta` to the radiosity and the unshot radiosity at `idx` (`i * channels + c`),

@@ -1,7 +1,9 @@
 //! `southwell`: Southwell iteration, shooting from the patch with the largest residual.
 //!
 //! Rule: pick `j = argmax_j Σ_c |ΔB_jc|` (the residual of the shot radiosity, not weighted
-//! by area; the lowest index on ties), shoot `s = ΔB_j`, then `ΔB_j = 0`. One column a step.
+//! by area; the lowest index on ties), shoot `s = ΔB_j`, then `ΔB_j = ρ_j F_jj s`, the
+//! shooter's own share (zero for planar patches, [`crate::shooting::own_share`]). One column a
+//! step.
 //!
 //! ## References
 //!
@@ -12,6 +14,7 @@ use crate::error::SolverError;
 use crate::executor::Solver;
 use crate::problem::Problem;
 use crate::progressive::{select, shoot_all};
+use crate::residual_bound::{self, ResidualBound};
 use crate::shooting::unshot_power;
 use crate::state::State;
 use radiosity_core::Real;
@@ -35,5 +38,9 @@ impl Solver for Southwell {
 
     fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real> {
         Some(unshot_power(problem, state))
+    }
+
+    fn residual_bound(&self, problem: &Problem<'_>, state: &State) -> Option<ResidualBound> {
+        Some(residual_bound::shooting(problem, state))
     }
 }

@@ -4,6 +4,8 @@
 use radiosity_core::{Channels, DenseColumns, LinearSystem, Real};
 use radiosity_solvers::*;
 
+mod residual_bound;
+
 /// Howell's form factors between unit squares: directly opposed at distance 1, and
 /// perpendicular sharing an edge (C-11 and C-14, evaluated in f64).
 fn cube_form_factors() -> (Real, Real) {

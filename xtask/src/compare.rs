@@ -1,13 +1,15 @@
 //! `cargo xtask compare [--scene SCENE] [--solvers S1,S2,…] [--ff BACKEND] [--until RULES]
-//! [--out DIR]`: runs several solvers on one scene against its reference, and writes what a
-//! researcher reads and shows ([`radiosity_eval::compare`]): `convergence.csv`, `report.md`
-//! and plots of e_rms against steps, columns and seconds, under `results/<scene>-<date-time>/`
+//! [--reference KIND] [--out DIR]`: runs several solvers on one scene against its reference,
+//! and writes what a researcher reads and shows ([`radiosity_eval::compare`]):
+//! `convergence.csv`, `report.md` and plots of e_rms (with `--reference none`, of the
+//! certified bound) against steps, columns and seconds, under `results/<scene>-<date-time>/`
 //! or `--out`. A summary table ends the output.
 
 use crate::bars::Bars;
-use crate::experiment::{check_out_dir, default_out, lab, prepare};
+use crate::experiment::{ReferenceArg, check_out_dir, default_out, lab, prepare};
 use anyhow::{Result, bail};
 use radiosity_eval::Comparison;
+use radiosity_eval::reference_kind::ReferenceKind;
 use radiosity_ff::BackendSpec;
 use radiosity_solvers::{Solver, SolverRegistry, StopRules};
 use std::path::{Path, PathBuf};
@@ -30,6 +32,8 @@ pub struct Args {
     /// Stop rules for every solver.
     #[arg(long, value_name = "RULES", default_value = "columns=2n")]
     until: String,
+    #[command(flatten)]
+    reference: ReferenceArg,
     /// The output folder (default `results/<scene>-<date-time>/`).
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
@@ -42,11 +46,12 @@ pub struct Plan {
     solvers: Vec<Box<dyn Solver>>,
     spec: BackendSpec,
     rules: StopRules,
+    kind: ReferenceKind,
 }
 
 impl Plan {
     /// Checks every argument, so a typo fails at once.
-    pub fn new(scene: &str, solvers: &str, ff: &str, until: &str) -> Result<Plan> {
+    pub fn new(scene: &str, solvers: &str, ff: &str, until: &str, kind: ReferenceKind) -> Result<Plan> {
         let spec = BackendSpec::parse(ff)?;
         let registry = SolverRegistry::builtin();
         let solvers = solvers
@@ -58,7 +63,11 @@ impl Plan {
         if solvers.is_empty() {
             bail!("--solvers names no solver");
         }
-        Ok(Plan { scene: scene.to_string(), solvers, spec, rules: StopRules::parse(until)? })
+        let rules = StopRules::parse(until)?;
+        if rules.needs_error() && kind == ReferenceKind::None {
+            bail!("an rms= rule needs a reference to measure e_rms against, and --reference none computes none");
+        }
+        Ok(Plan { scene: scene.to_string(), solvers, spec, rules, kind })
     }
 
     /// Runs every solver and writes the report, table and plots into `out`.
@@ -67,7 +76,7 @@ impl Plan {
         radiosity_eval::lab::require_emitters(&prepared)?;
         let report = prepared.report();
         eprintln!("{}: {} patches; left out: {}", report.scene, report.patches, report.left_out_phrase());
-        let lab = lab(&prepared, &self.spec, true)?;
+        let lab = lab(&prepared, &self.spec, true, self.kind)?;
         let comparison = lab.compare(self.solvers, &self.rules, &Bars::new())?;
         comparison.write(out)?;
         Ok(comparison)
@@ -76,7 +85,7 @@ impl Plan {
 
 /// Runs `compare`.
 pub fn run(args: &Args) -> Result<()> {
-    let plan = Plan::new(&args.scene, &args.solvers, &args.ff, &args.until)?;
+    let plan = Plan::new(&args.scene, &args.solvers, &args.ff, &args.until, args.reference.parse()?)?;
     let out = args.out.clone().unwrap_or_else(|| default_out(&args.scene));
     check_out_dir(&out)?;
     let comparison = plan.execute(&out)?;

@@ -4,7 +4,8 @@
 
 use crate::bars::Bars;
 use anyhow::{Result, bail};
-use radiosity_eval::{Cache, Lab, LabOptions};
+use radiosity_eval::reference_kind::ReferenceKind;
+use radiosity_eval::{Cache, FinalMetrics, Lab, LabOptions};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
 use radiosity_solvers::{Solver, SolverError, SolverRegistry, StopRules};
@@ -29,6 +30,26 @@ pub struct SolveArgs {
     /// residual=1e-4, time=30s.
     #[arg(long, value_name = "RULES", default_value = "columns=2n")]
     pub until: String,
+    #[command(flatten)]
+    pub reference: ReferenceArg,
+}
+
+/// `--reference auto|matrix|shooting|none`, shared by every command that measures.
+#[derive(Debug, clap::Args)]
+pub struct ReferenceArg {
+    /// The reference to measure against: matrix (the stored matrix, certified to 1e-10),
+    /// shooting (a long shooting run without a matrix, certified to 1e-8), none (no e_rms: the
+    /// certified bound alone), or auto (matrix when it fits RADIOSITY_MEMORY, by default a
+    /// quarter of the machine's memory; shooting otherwise).
+    #[arg(long = "reference", value_name = "KIND", default_value = "auto")]
+    pub kind: String,
+}
+
+impl ReferenceArg {
+    /// The kind, checked.
+    pub fn parse(&self) -> Result<ReferenceKind> {
+        Ok(self.kind.parse()?)
+    }
 }
 
 /// The `--solver` help: every family the registry builds.
@@ -39,9 +60,9 @@ fn solver_help() -> String {
     )
 }
 
-/// What [`SolveArgs::check`] gives: the backend, the solver (`None` for the reference) and
-/// the stop rules.
-pub type Checked = (BackendSpec, Option<Box<dyn Solver>>, StopRules);
+/// What [`SolveArgs::check`] gives: the backend, the solver (`None` for the reference), the
+/// stop rules and the reference's kind.
+pub type Checked = (BackendSpec, Option<Box<dyn Solver>>, StopRules, ReferenceKind);
 
 impl SolveArgs {
     /// Checks the backend, the solver (or `reference`) and the stop rules before any geometry
@@ -56,7 +77,15 @@ impl SolveArgs {
                 e => e.into(),
             })?),
         };
-        Ok((spec, solver, StopRules::parse(&self.until)?))
+        let kind = self.reference.parse()?;
+        if solver.is_none() && kind == ReferenceKind::None {
+            bail!("--solver reference needs a reference: use --reference auto, matrix or shooting, not none");
+        }
+        let rules = StopRules::parse(&self.until)?;
+        if rules.needs_error() && kind == ReferenceKind::None {
+            bail!("an rms= rule needs a reference to measure e_rms against, and --reference none computes none");
+        }
+        Ok((spec, solver, rules, kind))
     }
 }
 
@@ -76,10 +105,22 @@ pub fn cache() -> Cache {
     Cache::from_env(Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap_or(Path::new(".")).join("target/ff-cache"))
 }
 
-/// A lab on `prepared` with the backend `spec`, the cache, and F kept when `residuals`.
-pub fn lab<'p>(prepared: &'p PreparedScene, spec: &BackendSpec, residuals: bool) -> Result<Lab<'p>> {
-    let options = LabOptions::default().with_residuals(residuals).with_cache(Some(cache()));
-    Ok(Lab::new(prepared, spec, options, &Bars::new())?)
+/// A lab on `prepared` with the backend `spec`, the cache, the reference `kind`, and F kept
+/// when `residuals`.
+pub fn lab<'p>(
+    prepared: &'p PreparedScene,
+    spec: &BackendSpec,
+    residuals: bool,
+    kind: ReferenceKind,
+) -> Result<Lab<'p>> {
+    let options = LabOptions::default().with_residuals(residuals).with_cache(Some(cache())).with_reference(kind);
+    let lab = Lab::new(prepared, spec, options, &Bars::new())?;
+    let chosen = lab.chosen();
+    // Only the choice that costs a long run is announced; reports say which was used.
+    if kind == ReferenceKind::Auto && chosen.kind == ReferenceKind::Shooting {
+        eprintln!("reference: shooting ({})", chosen.why);
+    }
+    Ok(lab)
 }
 
 /// Checks, before any work, that `path` can be written as a file: it is not a directory and
@@ -133,23 +174,38 @@ pub fn solved_rgb(
     spec: &BackendSpec,
     solver: Option<Box<dyn Solver>>,
     rules: &StopRules,
+    kind: ReferenceKind,
 ) -> Result<(Vec<[radiosity_core::Real; 3]>, String)> {
-    let lab = lab(prepared, spec, false)?;
+    let lab = lab(prepared, spec, false, kind)?;
     let rgb = match solver {
         None => lab.radiosity_rgb(None, rules, &Bars::new())?,
         Some(mut solver) => {
             let o = lab.run(solver.as_mut(), rules, &radiosity_eval::RecordPlan::errors_only(), &Bars::new())?;
             eprintln!(
-                "{} stopped: {}; {} steps, {} columns, {:.3} s, e_rms {:.3e}",
+                "{} stopped: {}; {} steps, {} columns, {:.3} s, {}",
                 args.solver,
                 o.termination,
                 o.state.step,
                 o.state.columns,
                 o.seconds(),
-                o.last.e_rms
+                error_phrase(&o.last)
             );
             radiosity_eval::lab::rgb(&o.state)
         }
     };
     Ok((rgb, lab.backend().to_string()))
+}
+
+/// The final error of a run in words: e_rms where there is a reference, and the certified
+/// bound where the solver knows one.
+pub fn error_phrase(last: &FinalMetrics) -> String {
+    let mut parts = Vec::new();
+    if let Some(e) = last.e_rms {
+        parts.push(format!("e_rms {e:.3e}"));
+    }
+    match last.bound {
+        Some(b) => parts.push(format!("certified relative L1 bound {b:.3e}")),
+        None => parts.push("no certified bound".into()),
+    }
+    parts.join(", ")
 }

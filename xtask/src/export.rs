@@ -29,9 +29,9 @@ pub fn run(args: &Args) -> Result<()> {
     // Every argument is checked before any geometry is built, so a typo fails at once.
     check_output(&args.out)?;
     check_output_file(&args.out)?;
-    let (spec, solver, rules) = args.run.check()?;
+    let (spec, solver, rules, kind) = args.run.check()?;
     let prepared = prepare(&args.run.scene)?;
-    let (rgb, ff) = solved_rgb(&args.run, &prepared, &spec, solver, &rules)?;
+    let (rgb, ff) = solved_rgb(&args.run, &prepared, &spec, solver, &rules, kind)?;
     if let Some(i) = rgb.iter().position(|b| b.iter().any(|c| !c.is_finite())) {
         bail!("{} left a radiosity that is not finite at patch {i}, so there is nothing to export", args.run.solver);
     }

@@ -5,7 +5,7 @@
 //! reference alone assembles all 10,990 columns (once; later runs read it from the cache).
 
 use crate::compare::Plan;
-use crate::experiment::default_out;
+use crate::experiment::{ReferenceArg, default_out};
 use anyhow::{Context, Result, bail};
 use radiosity_eval::paper::{FIGURES, HEADER, RULES, section};
 use std::path::PathBuf;
@@ -19,6 +19,8 @@ pub struct Args {
     /// Which of the paper's scenes to run: multi-cubes, labyrinth, office.
     #[arg(long, default_value = "multi-cubes,labyrinth,office")]
     scenes: String,
+    #[command(flatten)]
+    reference: ReferenceArg,
 }
 
 /// Runs `paper`.
@@ -31,7 +33,9 @@ pub fn run(args: &Args) -> Result<()> {
     if figures.is_empty() {
         bail!("--scenes names no scene");
     }
-    let plans = figures.iter().map(|f| Plan::new(f.scene, f.solvers, "analytic", RULES)).collect::<Result<Vec<_>>>()?;
+    let kind = args.reference.parse()?;
+    let plans =
+        figures.iter().map(|f| Plan::new(f.scene, f.solvers, "analytic", RULES, kind)).collect::<Result<Vec<_>>>()?;
     let out = args.out.clone().unwrap_or_else(|| default_out("paper"));
     let mut md = String::from(HEADER);
     for (figure, plan) in figures.iter().zip(plans) {

@@ -38,7 +38,7 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<()> {
     let start = Instant::now();
     // Every argument is checked before any geometry is built, so a typo fails at once.
-    let (spec, solver, rules) = args.run.check()?;
+    let (spec, solver, rules, kind) = args.run.check()?;
     if !args.out.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
         bail!("the output image must be a .png file, not '{}'", args.out.display());
     }
@@ -54,7 +54,7 @@ pub fn run(args: &Args) -> Result<()> {
     let scene = &prepared.loaded.scene;
     let aspect = Real::from(args.width) / Real::from(args.height);
     let camera = camera.unwrap_or_else(|| Camera::default_for(&args.run.scene, scene, aspect));
-    let (rgb, _) = solved_rgb(&args.run, &prepared, &spec, solver, &rules)?;
+    let (rgb, _) = solved_rgb(&args.run, &prepared, &spec, solver, &rules, kind)?;
 
     let render_start = Instant::now();
     let params = RenderParams { camera, width: args.width, height: args.height };

@@ -1,12 +1,13 @@
 //! `cargo xtask solve --scene SCENE --solver SOLVER [--ff BACKEND] [--until RULES]
-//! [--json | --out FILE]`: runs one solver and reports its error against the reference
-//! solution of the same discrete system (DESIGN §7).
+//! [--reference KIND] [--json | --out FILE]`: runs one solver and reports its error against
+//! the reference solution of the same discrete system, and its certified bound (DESIGN §7).
 //!
 //! Every argument is parsed before any geometry is built, so a typo fails at once. The
 //! reference comes from the cache when it is there (then F is not assembled and the residual
-//! reported is the solver's own), otherwise F is assembled once, outside the run, for the
-//! reference and the final residual. The run's columns, steps and seconds are the solver's
-//! alone.
+//! reported is the solver's own), otherwise it is computed once, outside the run: from the
+//! stored matrix, or by a long shooting run when the matrix does not fit
+//! (`--reference auto|matrix|shooting|none`). With `none` there is no e_rms, only the
+//! certified bound. The run's columns, steps and seconds are the solver's alone.
 
 use crate::bars::Bars;
 use crate::experiment::{SolveArgs, check_output_file, lab, prepare};
@@ -61,21 +62,38 @@ struct StatsJson {
     seconds: Real,
     ff_seconds: Real,
     group_seconds: Real,
-    e_rms: Real,
-    e_max: Real,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    e_rms: Option<Real>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    e_max: Option<Real>,
     /// The residual power of the displayed radiosity, or else the solver's own.
     residual: Option<Real>,
     /// Which vector `residual` is the residual of.
-    residual_of: &'static str,
-    /// The certified bound on the area-weighted L1 error of the displayed radiosity.
+    residual_of: String,
+    /// The certified bound on the area-weighted L1 error of the displayed radiosity, relative
+    /// to the reference's (null when the solver knows none and F is not kept).
     bound: Option<Real>,
     termination: String,
     /// With an `rms=` rule: the first step at which `e_rms` fell to each power of ten.
     reached: Vec<ReachedJson>,
     /// The solver's own figures (group steps, sizes, condition numbers, fallbacks).
     record: serde_json::Map<String, serde_json::Value>,
-    reference: String,
-    certificate: String,
+    reference: ReferenceJson,
+}
+
+/// The reference a run was measured against.
+#[derive(Serialize)]
+struct ReferenceJson {
+    /// `matrix`, `shooting` or `none`.
+    kind: String,
+    /// Why it was chosen.
+    why: String,
+    /// How it was computed, unless `none`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    method: Option<String>,
+    /// Its certificate, unless `none`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    certificate: Option<String>,
 }
 
 #[derive(Serialize)]
@@ -108,18 +126,21 @@ fn json_value(v: &Value) -> serde_json::Value {
 
 /// Runs `solve`.
 pub fn run(args: &Args) -> Result<()> {
-    let (spec, solver, rules) = args.run.check()?;
+    let (spec, solver, rules, kind) = args.run.check()?;
     if let Some(out) = &args.out {
         check_output_file(out)?;
     }
     let prepared = prepare(&args.run.scene)?;
-    let lab = lab(&prepared, &spec, false)?;
+    let lab = lab(&prepared, &spec, false, kind)?;
     let outcome = match solver {
         // `reference` is the exact solution itself: its cost is assembling F and solving it.
         None => Outcome {
             solver: "reference".into(),
-            state: lab.reference_state(),
-            termination: format!("solved exactly: {}", lab.reference().method()),
+            state: lab.reference_state()?,
+            termination: format!(
+                "solved exactly: {}",
+                lab.reference().map(|r| r.method().to_string()).unwrap_or_default()
+            ),
             last: lab.reference_metrics()?,
             reached: Vec::new(),
             record: Record::default(),
@@ -145,13 +166,23 @@ pub fn run(args: &Args) -> Result<()> {
             }
         }
     };
-    let (method, certificate) = (lab.reference().method().to_string(), lab.reference().certificate().to_string());
+    let reference = ReferenceJson {
+        kind: lab.chosen().kind.to_string(),
+        why: lab.chosen().why.clone(),
+        method: lab.reference().map(|r| r.method().to_string()),
+        certificate: lab.reference().map(|r| r.certificate().to_string()),
+    };
+    let no_f = match lab.reference() {
+        Some(_) => "F was not assembled, the reference came from the cache",
+        None => "F was not assembled: there is no reference",
+    };
     let (residual, residual_of) = match (outcome.last.residual, outcome.last.solver_residual) {
-        (Some(r), _) => (Some(r), "displayed radiosity"),
-        (None, Some(r)) => {
-            (Some(r), "the solver's own (shot radiosity); F was not assembled, the reference came from the cache")
-        }
-        (None, None) => (None, "not known: F was not assembled, the reference came from the cache"),
+        (Some(r), _) => (Some(r), "displayed radiosity".to_string()),
+        (None, Some(_)) => (
+            outcome.last.solver_residual,
+            format!("the solver's own (for shooting methods, the shot radiosity); {no_f}"),
+        ),
+        (None, None) => (None, format!("not known: {no_f}")),
     };
     let s = &outcome.state;
     let stats = StatsJson {
@@ -169,8 +200,7 @@ pub fn run(args: &Args) -> Result<()> {
         termination: outcome.termination.clone(),
         reached: outcome.reached,
         record: outcome.record.iter().map(|(k, v)| (k.to_string(), json_value(v))).collect(),
-        reference: method,
-        certificate,
+        reference,
     };
     let scene = prepared.scene();
     if !args.json && args.out.is_none() {
@@ -194,12 +224,20 @@ pub fn run(args: &Args) -> Result<()> {
         }
         let residual = match (outcome.last.residual, outcome.last.solver_residual) {
             (Some(r), _) => format!("residual power {r:.4e}"),
-            (None, Some(r)) => format!(
-                "residual power of the shot radiosity {r:.4e} (the solver's own: the reference came from the cache)"
-            ),
-            (None, None) => "residual not measured (the reference came from the cache)".into(),
+            (None, Some(r)) => {
+                format!("the solver's own residual power {r:.4e} (for shooting, of the shot radiosity; {no_f})")
+            }
+            (None, None) => format!("residual not measured ({no_f})"),
         };
-        println!("error        e_rms {:.4e}, e_max {:.4e}, {residual}", stats.e_rms, stats.e_max);
+        let errors = match (stats.e_rms, stats.e_max) {
+            (Some(r), Some(m)) => format!("e_rms {r:.4e}, e_max {m:.4e}, "),
+            _ => "no e_rms (no reference), ".into(),
+        };
+        println!("error        {errors}{residual}");
+        match stats.bound {
+            Some(b) => println!("bound        certified relative L1 error ≤ {b:.4e}"),
+            None => println!("bound        none: the solver knows no bound on its residual"),
+        }
         for r in &stats.reached {
             println!(
                 "reached      e_rms {:.0e} after {} steps, {} columns, {:.3} s",
@@ -210,7 +248,13 @@ pub fn run(args: &Args) -> Result<()> {
             let items: Vec<String> = outcome.record.iter().map(|(k, v)| format!("{k} {}", value_cell(v))).collect();
             println!("recorded     {}", items.join(", "));
         }
-        println!("reference    {}; {}", stats.reference, stats.certificate);
+        let r = &stats.reference;
+        match (&r.method, &r.certificate) {
+            (Some(method), Some(certificate)) => {
+                println!("reference    {} ({}): {method}; {certificate}", r.kind, r.why)
+            }
+            _ => println!("reference    none ({})", r.why),
+        }
         return Ok(());
     }
     let patches = scene

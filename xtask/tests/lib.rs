@@ -371,7 +371,9 @@ fn solve_reports_error_against_the_reference() {
     // Half-way-ish convergence: clearly better than nothing, clearly not converged.
     assert!(e_rms > 1e-5 && e_rms < 1e-1, "{e_rms}");
     assert!(stats["termination"].as_str().unwrap().contains("480 columns"));
-    assert!(stats["reference"].as_str().unwrap().contains("dense LU"));
+    assert!(stats["reference"]["method"].as_str().unwrap().contains("dense LU"), "{stats}");
+    assert_eq!(stats["reference"]["kind"], "matrix", "{stats}");
+    assert!(stats["bound"].as_f64().unwrap() >= 0.0, "{stats}");
     assert_eq!(r["patches"].as_array().unwrap().len(), 480);
     for key in ["id", "area", "centroid", "normal", "reflectivity", "emission", "radiosity"] {
         assert!(r["patches"][0].get(key).is_some(), "patch key {key}");
@@ -551,4 +553,83 @@ fn validate_sets_the_path_traced_means_beside_each_resolution() {
     assert!(text.contains("path traced") && text.contains("furnace:res=8"), "{text}");
     let e = failure(&["validate", "--scene", "furnace:res=2", "--samples", "1"]);
     assert!(e.contains("samples"), "{e}");
+}
+
+#[test]
+fn reference_none_reports_the_bound_alone_end_to_end() {
+    let args = ["solve", "--scene", "furnace:res=2", "--solver", "xu", "--reference", "none", "--json"];
+    let r = stdout_json(&args);
+    let stats = &r["stats"];
+    assert!(stats.get("e_rms").is_none() && stats.get("e_max").is_none(), "{stats}");
+    assert_eq!(stats["reference"]["kind"], "none", "{stats}");
+    let bound = stats["bound"].as_f64().unwrap();
+    // Against the matrix reference the same run has the same solution and a bound no
+    // smaller than its error.
+    let with = stdout_json(&args[..args.len() - 3].iter().chain(&["--json"]).copied().collect::<Vec<_>>());
+    assert_eq!(r["patches"], with["patches"]);
+    assert!(with["stats"]["e_rms"].as_f64().unwrap() <= 1e-3 && bound <= 1e-2, "{stats} {}", with["stats"]);
+    // The text report says there is no reference.
+    let out = xtask(&args[..args.len() - 1]).success().get_output().stdout.clone();
+    let text = String::from_utf8(out).unwrap();
+    assert!(text.contains("no e_rms") && text.contains("reference    none"), "{text}");
+    // compare plots and tabulates the bound.
+    let out = std::env::temp_dir().join(format!("radiosity-compare-none-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let compare = [
+        "compare",
+        "--scene",
+        "furnace:res=2",
+        "--solvers",
+        "pr,xu",
+        "--reference",
+        "none",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    xtask(&compare).success();
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(report.contains("Reference `none`"), "{report}");
+    assert!(out.join("bound-seconds.png").exists() && !out.join("e_rms-seconds.png").exists());
+    std::fs::remove_dir_all(&out).unwrap();
+    // What cannot be done without a reference is refused before any work.
+    for (solver, until, why) in
+        [("pr", "rms=1e-3", "rms= rule needs a reference"), ("reference", "columns=n", "needs a reference")]
+    {
+        let args = ["solve", "--scene", "furnace:res=2", "--solver", solver, "--until", until, "--reference", "none"];
+        let e = failure(&args);
+        assert!(e.contains(why), "{e}");
+    }
+    let e = failure(&["solve", "--scene", "furnace:res=2", "--solver", "pr", "--reference", "exact"]);
+    assert!(e.contains("auto, matrix, shooting or none"), "{e}");
+}
+
+#[test]
+fn a_matrix_over_the_memory_budget_is_refused_and_auto_shoots_instead() {
+    let args = ["solve", "--scene", "furnace:res=2", "--solver", "pr", "--reference", "matrix"];
+    let out = Command::cargo_bin("xtask")
+        .unwrap()
+        .args(args)
+        .env("RADIOSITY_CACHE_DIR", cache_dir())
+        .env("RADIOSITY_MEMORY", "1K")
+        .assert()
+        .failure()
+        .code(1)
+        .get_output()
+        .clone();
+    let e = String::from_utf8(out.stderr).unwrap();
+    assert!(e.contains("RADIOSITY_MEMORY") && e.contains("needs about"), "{e}");
+    let out = Command::cargo_bin("xtask")
+        .unwrap()
+        .args(["solve", "--scene", "furnace:res=2", "--solver", "pr", "--json"])
+        .env("RADIOSITY_CACHE_DIR", cache_dir())
+        .env("RADIOSITY_MEMORY", "1K")
+        .assert()
+        .success()
+        .get_output()
+        .clone();
+    let r: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(r["stats"]["reference"]["kind"], "shooting", "{}", r["stats"]);
+    assert!(r["stats"]["reference"]["method"].as_str().unwrap().starts_with("xu without a matrix"));
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(stderr.contains("reference: shooting"), "{stderr}");
 }

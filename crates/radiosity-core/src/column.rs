@@ -55,6 +55,34 @@ impl<T: ColumnSource + ?Sized> ColumnSource for &T {
     }
 }
 
+impl<T: ColumnSource + ?Sized> ColumnSource for Box<T> {
+    fn patch_count(&self) -> usize {
+        (**self).patch_count()
+    }
+
+    fn fill_column(&self, j: usize, column: &mut [Real]) {
+        (**self).fill_column(j, column)
+    }
+
+    fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
+        (**self).fill_row(i, row)
+    }
+}
+
+impl<T: ColumnSource + ?Sized + Send> ColumnSource for std::sync::Arc<T> {
+    fn patch_count(&self) -> usize {
+        (**self).patch_count()
+    }
+
+    fn fill_column(&self, j: usize, column: &mut [Real]) {
+        (**self).fill_column(j, column)
+    }
+
+    fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
+        (**self).fill_row(i, row)
+    }
+}
+
 /// A form-factor matrix held in memory, column-major.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DenseColumns {

@@ -1,13 +1,14 @@
 //! A comparison of solvers on one lab, and what a researcher reads and shows of it:
 //! `convergence.csv` (every metric at the recorded steps), `report.md` (e_rms at n/4, n/2, n
 //! and 2n columns; columns and seconds to reach e_rms 1e-2 and 1e-3; where the time went;
-//! what the scene analysis left out; the reference and its certificate) and plots of e_rms
-//! against shooting steps (the paper's axis), columns and wall seconds, as SVG and PNG, and a
-//! summary table for the terminal.
+//! what the scene analysis left out; the reference, its kind and its certificate) and plots of
+//! e_rms against shooting steps (the paper's axis), columns and wall seconds, as SVG and PNG,
+//! and a summary table for the terminal. Without a reference (`--reference none`) the
+//! certified bound of every step takes e_rms's place in the tables and plots.
 //!
 //! Measurement never counts as solver time: it is reported apart (see [`crate::lab`]).
 
-use crate::lab::{Lab, LabError, Outcome, Point, ReferenceOrigin};
+use crate::lab::{ChosenReference, Lab, LabError, Outcome, Point, ReferenceOrigin};
 use crate::plot::{Curve, PlotSpec, write_png, write_svg};
 use crate::table::{ConvergenceTable, round_significant};
 use radiosity_core::Real;
@@ -27,10 +28,12 @@ pub struct Comparison {
     pub backend: String,
     /// The stop rules every solver ran under, as written.
     pub rules: String,
-    /// The reference's method.
-    pub reference_method: String,
-    /// The reference's certificate.
-    pub reference_certificate: String,
+    /// The reference's kind and why it was chosen.
+    pub reference_kind: ChosenReference,
+    /// The reference's method, unless the reference is `none`.
+    pub reference_method: Option<String>,
+    /// The reference's certificate, unless the reference is `none`.
+    pub reference_certificate: Option<String>,
     /// Where the reference came from.
     pub reference_origin: ReferenceOrigin,
     /// One per solver, in order.
@@ -54,8 +57,9 @@ impl Comparison {
             n: lab.n() as u64,
             backend: lab.backend().to_string(),
             rules: rules.rules.iter().map(|r| r.to_string()).collect::<Vec<_>>().join(","),
-            reference_method: lab.reference().method().to_string(),
-            reference_certificate: lab.reference().certificate().to_string(),
+            reference_kind: lab.chosen().clone(),
+            reference_method: lab.reference().map(|r| r.method().to_string()),
+            reference_certificate: lab.reference().map(|r| r.certificate().to_string()),
             reference_origin: lab.origin().clone(),
             outcomes,
         }
@@ -64,6 +68,23 @@ impl Comparison {
     /// The outcome of `solver`, by name.
     pub fn outcome(&self, solver: &str) -> Option<&Outcome> {
         self.outcomes.iter().find(|o| o.solver == solver)
+    }
+
+    /// Whether the runs were measured against a reference (otherwise the certified bound
+    /// stands in for e_rms).
+    pub fn has_reference(&self) -> bool {
+        self.reference_method.is_some()
+    }
+
+    /// The name of the curve the tables and plots show: `e_rms`, or `bound` without a
+    /// reference.
+    pub fn metric(&self) -> &'static str {
+        if self.has_reference() { "e_rms" } else { "bound" }
+    }
+
+    /// The shown metric of a point.
+    fn value(&self, p: &Point) -> Real {
+        if self.has_reference() { p.e_rms } else { p.bound }
     }
 
     /// Every recorded row of every run.
@@ -93,19 +114,25 @@ impl Comparison {
     fn write_plots(&self, dir: &Path, files: &mut Vec<PathBuf>) -> Result<Vec<(String, String)>, LabError> {
         type Axis = fn(&Point) -> Real;
         let axes: [(&str, &str, Axis); 3] = [
-            ("e_rms-steps", "shooting steps", |p| p.step as Real),
-            ("e_rms-columns", "form-factor columns computed", |p| p.columns as Real),
-            ("e_rms-seconds", "wall seconds (form factors and solving)", |p| p.seconds),
+            ("steps", "shooting steps", |p| p.step as Real),
+            ("columns", "form-factor columns computed", |p| p.columns as Real),
+            ("seconds", "wall seconds (form factors and solving)", |p| p.seconds),
         ];
+        let metric = self.metric();
+        let what = if self.has_reference() { "e_rms" } else { "certified bound" };
         let mut written = Vec::new();
-        for (stem, x_label, x) in axes {
+        for (axis, x_label, x) in axes {
+            let stem = format!("{metric}-{axis}");
             let curves: Vec<Curve> = self
                 .outcomes
                 .iter()
-                .map(|o| Curve { label: o.solver.clone(), points: o.points.iter().map(|p| (x(p), p.e_rms)).collect() })
+                .map(|o| Curve {
+                    label: o.solver.clone(),
+                    points: o.points.iter().map(|p| (x(p), self.value(p))).filter(|(_, y)| y.is_finite()).collect(),
+                })
                 .collect();
             let spec = PlotSpec {
-                title: format!("{}: e_rms against {x_label}", self.scene.scene),
+                title: format!("{}: {what} against {x_label}", self.scene.scene),
                 x_label: x_label.into(),
                 size: (800, 500),
             };
@@ -114,7 +141,7 @@ impl Comparison {
             let png = dir.join(format!("{stem}.png"));
             write_png(&curves, &spec, create(&png)?)?;
             files.extend([svg, png]);
-            written.push((stem.to_string(), spec.title));
+            written.push((stem, spec.title));
         }
         Ok(written)
     }
@@ -131,22 +158,40 @@ impl Comparison {
         );
         let _ = writeln!(md, "- Left out by the scene analysis: {}.", self.scene.left_out_phrase());
         let origin = match &self.reference_origin {
-            ReferenceOrigin::Solved { assembly_seconds, solve_seconds } => {
+            ReferenceOrigin::Solved { assembly_seconds, solve_seconds } if *assembly_seconds > 0.0 => {
                 format!("F assembled in {assembly_seconds:.2} s, solved in {solve_seconds:.2} s")
             }
+            ReferenceOrigin::Solved { solve_seconds, .. } => format!("solved in {solve_seconds:.2} s"),
             ReferenceOrigin::Cached { seconds, .. } => format!("read from the cache in {seconds:.2} s"),
+            ReferenceOrigin::NotComputed => "not computed".into(),
         };
-        let _ = writeln!(md, "- Reference: {}; {} ({origin}).\n", self.reference_method, self.reference_certificate);
-        let _ = writeln!(md, "## e_rms at n/4, n/2, n and 2n columns\n");
+        let kind = &self.reference_kind;
+        match (&self.reference_method, &self.reference_certificate) {
+            (Some(method), Some(certificate)) => {
+                let _ =
+                    writeln!(md, "- Reference `{}` ({}): {method}; {certificate} ({origin}).\n", kind.kind, kind.why);
+            }
+            _ => {
+                let _ = writeln!(
+                    md,
+                    "- Reference `none` ({}): no e_rms; the tables and plots show the certified bound on each step's \
+                     relative L1 error, from what the solver knows without extra columns.\n",
+                    kind.why
+                );
+            }
+        }
+        let metric = self.metric();
+        let _ = writeln!(md, "## {metric} at n/4, n/2, n and 2n columns\n");
         let _ = writeln!(md, "| solver | n/4 | n/2 | n | 2n |\n|---|--:|--:|--:|--:|");
         for o in &self.outcomes {
-            let at = |c: u64| cell(o.at_columns(c));
+            let at = |c: u64| cell(o.at_columns_point(c).map(|p| self.value(&p)));
             let _ = writeln!(md, "| `{}` | {} | {} | {} | {} |", o.solver, at(n / 4), at(n / 2), at(n), at(2 * n));
         }
-        let _ = writeln!(md, "\n## Columns and seconds to reach e_rms 1e-2 and 1e-3\n");
+        let _ = writeln!(md, "\n## Columns and seconds to reach {metric} 1e-2 and 1e-3\n");
         let _ = writeln!(md, "| solver | 1e-2 | 1e-3 |\n|---|--:|--:|");
         for o in &self.outcomes {
-            let _ = writeln!(md, "| `{}` | {} | {} |", o.solver, reached_cell(o, 1e-2), reached_cell(o, 1e-3));
+            let _ =
+                writeln!(md, "| `{}` | {} | {} |", o.solver, self.reached_cell(o, 1e-2), self.reached_cell(o, 1e-3));
         }
         let _ = writeln!(md, "\n## Where the time went\n");
         let _ = writeln!(
@@ -193,23 +238,46 @@ impl Comparison {
     /// The compact table for the terminal.
     pub fn summary(&self) -> String {
         let mut out = format!(
-            "{:<24} {:>8} {:>8} {:>10} {:>10} {:>10} {:>9}\n",
-            "solver", "steps", "columns", "e_rms @n", "e_rms end", "1e-3 at", "seconds"
+            "{:<24} {:>8} {:>8} {:>10} {:>10} {:>10} {:>10} {:>9}\n",
+            "solver",
+            "steps",
+            "columns",
+            format!("{} @n", self.metric()),
+            format!("{} end", self.metric()),
+            "bound end",
+            "1e-3 at",
+            "seconds"
         );
         for o in &self.outcomes {
             let _ = writeln!(
                 out,
-                "{:<24} {:>8} {:>8} {:>10} {:>10} {:>10} {:>9.3}",
+                "{:<24} {:>8} {:>8} {:>10} {:>10} {:>10} {:>10} {:>9.3}",
                 o.solver,
                 o.state.step,
                 o.state.columns,
-                cell(o.at_columns(self.n)),
-                cell(o.points.last().map(|p| p.e_rms)),
-                o.reached(1e-3).map_or("—".into(), |p| p.columns.to_string()),
+                cell(o.at_columns_point(self.n).map(|p| self.value(&p))),
+                cell(o.points.last().map(|p| self.value(p))),
+                cell(o.last.bound),
+                self.reached(o, 1e-3).map_or("—".into(), |p| p.columns.to_string()),
                 o.seconds()
             );
         }
         out
+    }
+
+    /// The first point of `o` where the shown metric ([`Comparison::metric`]) is at or below
+    /// `target`.
+    pub fn reached<'o>(&self, o: &'o Outcome, target: Real) -> Option<&'o Point> {
+        o.points.iter().find(|p| self.value(p) <= target)
+    }
+
+    /// The shown metric of `o` after `step` steps (the last point if the run ended before).
+    pub fn at_step(&self, o: &Outcome, step: u64) -> Option<Real> {
+        o.points.iter().take_while(|p| p.step <= step).last().map(|p| self.value(p)).filter(|v| !v.is_nan())
+    }
+
+    fn reached_cell(&self, o: &Outcome, target: Real) -> String {
+        self.reached(o, target).map_or("—".into(), |p| format!("{} / {:.3} s", p.columns, p.seconds))
     }
 }
 
@@ -226,9 +294,5 @@ pub fn value_cell(value: &Value) -> String {
 }
 
 fn cell(value: Option<Real>) -> String {
-    value.map_or("—".into(), |v| round_significant(v, 3))
-}
-
-fn reached_cell(o: &Outcome, target: Real) -> String {
-    o.reached(target).map_or("—".into(), |p| format!("{} / {:.3} s", p.columns, p.seconds))
+    value.filter(|v| !v.is_nan()).map_or("—".into(), |v| round_significant(v, 3))
 }

@@ -60,6 +60,31 @@ pub enum EvalError {
         /// The relative bound asked for.
         target: Real,
     },
+    /// The shooting reference could not be run.
+    #[error("the shooting reference with {solver} cannot run: {message}")]
+    ShootingReference {
+        /// The solver.
+        solver: String,
+        /// Why.
+        message: String,
+    },
+    /// The shooting reference stopped before its bound was reached.
+    #[error(
+        "the shooting reference with {solver} reached a certified relative bound of {reached:e} after {steps} steps, \
+         not the {target:e} asked for ({termination})"
+    )]
+    ShootingNotConverged {
+        /// The solver.
+        solver: String,
+        /// Steps taken.
+        steps: u64,
+        /// The bound reached.
+        reached: Real,
+        /// The bound asked for.
+        target: Real,
+        /// Why the run ended.
+        termination: String,
+    },
     /// Gauss–Seidel produced a NaN or an infinity.
     #[error("Gauss-Seidel diverged after {sweeps} sweeps")]
     Diverged {

@@ -42,15 +42,21 @@
 use crate::cache::{Cache, Lookup, scene_key};
 use crate::compare::Comparison;
 use crate::error::EvalError;
-use crate::matrix::FormFactors;
-use crate::metrics::{Evaluator, errors, errors_against};
+use crate::matrix::{F32Columns, FormFactors};
+use crate::metrics::{Contraction, Evaluator, SolverBound, errors, errors_against};
 use crate::progress::Progress;
 use crate::reference::{ReferenceParams, ReferenceSolution};
+use crate::reference_kind::{MEMORY_VARIABLE, MemoryBudget, ReferenceKind, gib, matrix_bytes};
+use crate::reference_shooting::{ShootingParams, solve_by_shooting};
 use crate::table::TableRow;
 use radiosity_core::{ColumnSource, LinearSystem, Real};
-use radiosity_ff::{BackendSpec, FfError};
+use radiosity_ff::{Backend, BackendSpec, FfError, StoredMatrix};
 use radiosity_geom::{GeomError, PreparedScene, SceneReport};
-use radiosity_solvers::{Executor, Observer, Problem, Record, Solver, SolverError, State, StopRule, StopRules};
+use radiosity_solvers::{
+    Executor, Observer, Problem, Record, ResidualBound, Solver, SolverError, State, StopRule, StopRules,
+};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 use thiserror::Error;
 
@@ -100,19 +106,32 @@ impl LabError {
 #[derive(Clone, Debug)]
 #[non_exhaustive]
 pub struct LabOptions {
-    /// Always assemble F, so that recorded steps carry the residual and the certified bound of
-    /// the displayed radiosity (default). Without it, F is assembled only when the reference
-    /// is not in the cache (and then kept, since it is there).
+    /// Keep the stored matrix whenever the reference is `matrix`, so that recorded steps carry
+    /// the residual of the displayed radiosity (default). Without it, the matrix is assembled
+    /// only when the reference is not in the cache (and then kept, since it is there).
     pub residuals: bool,
     /// Where reference solutions (and stored matrices) are cached; none by default.
     pub cache: Option<Cache>,
-    /// How the reference is solved.
+    /// How a `matrix` reference is solved.
     pub reference: ReferenceParams,
+    /// Which reference to measure against (default `auto`, [`crate::reference_kind`]).
+    pub kind: ReferenceKind,
+    /// How a `shooting` reference is run.
+    pub shooting: ShootingParams,
+    /// The memory a stored matrix may take; `None`: [`MemoryBudget::from_env`].
+    pub memory: Option<MemoryBudget>,
 }
 
 impl Default for LabOptions {
     fn default() -> Self {
-        LabOptions { residuals: true, cache: None, reference: ReferenceParams::default() }
+        LabOptions {
+            residuals: true,
+            cache: None,
+            reference: ReferenceParams::default(),
+            kind: ReferenceKind::Auto,
+            shooting: ShootingParams::default(),
+            memory: None,
+        }
     }
 }
 
@@ -128,16 +147,35 @@ impl LabOptions {
         self.cache = cache;
         self
     }
+
+    /// Sets [`LabOptions::kind`].
+    pub fn with_reference(mut self, kind: ReferenceKind) -> Self {
+        self.kind = kind;
+        self
+    }
+
+    /// Sets [`LabOptions::memory`].
+    pub fn with_memory(mut self, memory: MemoryBudget) -> Self {
+        self.memory = Some(memory);
+        self
+    }
+
+    /// Sets [`LabOptions::shooting`].
+    pub fn with_shooting(mut self, shooting: ShootingParams) -> Self {
+        self.shooting = shooting;
+        self
+    }
 }
 
 /// Where the reference came from.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ReferenceOrigin {
-    /// Solved now, after assembling F.
+    /// Solved now, after assembling the matrix (`matrix`), or by a long run (`shooting`, no
+    /// assembly).
     Solved {
-        /// Seconds to assemble F.
+        /// Seconds to assemble the matrix (0 without one).
         assembly_seconds: Real,
-        /// Seconds to solve once F was assembled.
+        /// Seconds to solve once the matrix was assembled.
         solve_seconds: Real,
     },
     /// Read from the cache.
@@ -147,6 +185,17 @@ pub enum ReferenceOrigin {
         /// Seconds to read it.
         seconds: Real,
     },
+    /// There is no reference (`none`).
+    NotComputed,
+}
+
+/// The reference a lab measures against, once `auto` is decided, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChosenReference {
+    /// `matrix`, `shooting` or `none`.
+    pub kind: ReferenceKind,
+    /// Why: asked for, or what `auto` weighed.
+    pub why: String,
 }
 
 /// A prepared scene with everything solvers are measured against.
@@ -157,15 +206,37 @@ pub struct Lab<'p> {
     system: LinearSystem,
     source: Box<dyn ColumnSource + 'p>,
     serves_rows: bool,
-    matrix: Option<FormFactors>,
-    reference: ReferenceSolution,
+    matrix: Option<Arc<FormFactors>>,
+    reference: Option<ReferenceSolution>,
     origin: ReferenceOrigin,
+    chosen: ChosenReference,
+    contraction: Contraction,
     order: Vec<usize>,
+}
+
+/// How the matrix of a lab's source is obtained, when a `matrix` reference needs it.
+enum Assembly<'s> {
+    /// The backend is a stored matrix: it is the matrix.
+    Stored(Arc<FormFactors>),
+    /// Each unordered pair once (`F_rs` for the smaller patch `r`), the other by reciprocity.
+    Reciprocal(&'s (dyn Fn(usize, usize) -> Real + Sync)),
+    /// Column by column from the source.
+    Columns,
+}
+
+/// What [`Lab::setup`] works out.
+struct Setup {
+    matrix: Option<Arc<FormFactors>>,
+    reference: Option<ReferenceSolution>,
+    origin: ReferenceOrigin,
+    chosen: ChosenReference,
+    contraction: Contraction,
 }
 
 impl<'p> Lab<'p> {
     /// Builds the backend `spec` (a stored matrix from the options' cache when it is there),
-    /// and sets the lab up with it.
+    /// and sets the lab up with it. A `matrix` reference of the analytic backend is assembled
+    /// by reciprocity (each pair once); of a stored matrix, it is that matrix.
     pub fn new(
         prepared: &'p PreparedScene,
         spec: &BackendSpec,
@@ -174,15 +245,39 @@ impl<'p> Lab<'p> {
     ) -> Result<Lab<'p>, LabError> {
         // Before the backend: a stored matrix would be assembled for nothing.
         require_emitters(prepared)?;
+        let label = spec.canonical();
         let backend = crate::backends::backend(prepared, spec, options.cache.as_ref(), progress)?;
         let serves_rows = backend.serves_rows();
-        Lab::with_source(prepared, &spec.canonical(), Box::new(backend), serves_rows, options, progress)
+        match backend {
+            Backend::Matrix(stored) => {
+                let matrix = Arc::new(FormFactors::from_stored(stored));
+                let source = SharedMatrix(matrix.clone());
+                let setup = Lab::setup(prepared, &label, &source, Assembly::Stored(matrix), &options, progress)?;
+                Ok(Lab::finish(prepared, &label, Box::new(source), serves_rows, setup))
+            }
+            Backend::Analytic(analytic) => {
+                let source = F32Columns(Backend::Analytic(analytic));
+                let pair = |i: usize, j: usize| match &source.0 {
+                    Backend::Analytic(a) => a.pair(i, j),
+                    _ => unreachable!("built analytic above"),
+                };
+                let setup = Lab::setup(prepared, &label, &source, Assembly::Reciprocal(&pair), &options, progress)?;
+                Ok(Lab::finish(prepared, &label, Box::new(source), serves_rows, setup))
+            }
+            other => {
+                let source = F32Columns(other);
+                let setup = Lab::setup(prepared, &label, &source, Assembly::Columns, &options, progress)?;
+                Ok(Lab::finish(prepared, &label, Box::new(source), serves_rows, setup))
+            }
+        }
     }
 
     /// Sets a lab up with any column source, labelled `backend` in reports and in cache keys
     /// (which also hold a fingerprint of three of its columns, so an edited source is not
     /// taken for the old one). `serves_rows` says
     /// whether [`ColumnSource::fill_row`] gives exact rows of the matrix its columns assemble.
+    /// Solvers read its columns rounded to `f32`, as a stored matrix holds them, so that a
+    /// `matrix` reference (assembled column by column) solves exactly their system.
     pub fn with_source(
         prepared: &'p PreparedScene,
         backend: &str,
@@ -200,20 +295,89 @@ impl<'p> Lab<'p> {
                 scene.len()
             )));
         }
+        let source = F32Columns(source);
+        let setup = Lab::setup(prepared, backend, &source, Assembly::Columns, &options, progress)?;
+        Ok(Lab::finish(prepared, backend, Box::new(source), serves_rows, setup))
+    }
+
+    fn finish(
+        prepared: &'p PreparedScene,
+        backend: &str,
+        source: Box<dyn ColumnSource + 'p>,
+        serves_rows: bool,
+        setup: Setup,
+    ) -> Lab<'p> {
+        let scene = prepared.scene();
+        Lab {
+            prepared,
+            report: prepared.report(),
+            backend: backend.to_string(),
+            system: LinearSystem::from_scene(scene),
+            source,
+            serves_rows,
+            matrix: setup.matrix,
+            reference: setup.reference,
+            origin: setup.origin,
+            chosen: setup.chosen,
+            contraction: setup.contraction,
+            order: radiosity_geom::spatial_order(scene),
+        }
+    }
+
+    /// Decides the reference (module doc of [`crate::reference_kind`]), reads it from the
+    /// cache or computes it.
+    fn setup(
+        prepared: &PreparedScene,
+        backend: &str,
+        source: &dyn ColumnSource,
+        assembly: Assembly<'_>,
+        options: &LabOptions,
+        progress: &dyn Progress,
+    ) -> Result<Setup, LabError> {
+        let scene = prepared.scene();
         let system = LinearSystem::from_scene(scene);
+        let stored = match &assembly {
+            Assembly::Stored(m) => Some(m.clone()),
+            _ => None,
+        };
+        let chosen = choose(source, stored.is_some(), options)?;
+        let none = |chosen| {
+            let contraction = match &stored {
+                Some(m) => Contraction::from_matrix(&system, m)?,
+                None => Contraction::assumed(&system),
+            };
+            Ok::<_, LabError>(Setup {
+                matrix: stored.clone(),
+                reference: None,
+                origin: ReferenceOrigin::NotComputed,
+                chosen,
+                contraction,
+            })
+        };
+        if chosen.kind == ReferenceKind::None {
+            return none(chosen);
+        }
         let params = options.reference.clone();
+        let kind = chosen.kind;
         // The key costs three columns: only worked out when there is a cache to look in.
         let key = match &options.cache {
-            Some(_) => format!(
-                "{}; backend {backend}; columns {:016x}; reference {params:?}",
-                scene_key(scene),
-                source_fingerprint(&*source)
-            ),
+            Some(_) => {
+                let how = match kind {
+                    ReferenceKind::Shooting => format!("shooting {:?}", options.shooting),
+                    _ => format!("matrix {params:?}"),
+                };
+                format!(
+                    "{}; backend {backend}; columns {:016x}; reference {how}",
+                    scene_key(scene),
+                    source_fingerprint(source)
+                )
+            }
             None => String::new(),
         };
         let start = Instant::now();
         let mut cached = None;
         if let Some(cache) = &options.cache {
+            progress.begin("reading the reference", 0, "");
             match cache.read("reference", &key) {
                 Lookup::Hit(bytes) => match ReferenceSolution::from_bytes(&bytes, &key, &system) {
                     Ok(r) => cached = Some(r),
@@ -222,53 +386,48 @@ impl<'p> Lab<'p> {
                 Lookup::Miss => {}
                 Lookup::Unreadable(why) => progress.warn(&why),
             }
+            progress.end();
         }
-        let (matrix, reference, origin) = match cached {
+        let keep_matrix = kind == ReferenceKind::Matrix && (options.residuals || cached.is_none());
+        let (matrix, assembly_seconds) = match (keep_matrix, assembly) {
+            (false, _) => (stored, 0.0),
+            (true, Assembly::Stored(m)) => (Some(m), 0.0),
+            (true, assembly) => {
+                let start = Instant::now();
+                let m = assemble(&system, source, assembly, progress)?;
+                (Some(Arc::new(m)), start.elapsed().as_secs_f64())
+            }
+        };
+        let (reference, origin) = match cached {
             Some(reference) => {
-                let origin = ReferenceOrigin::Cached {
-                    path: options
-                        .cache
-                        .as_ref()
-                        .map(|c| c.path("reference", &key).display().to_string())
-                        .unwrap_or_default(),
-                    seconds: start.elapsed().as_secs_f64(),
-                };
-                let matrix = match options.residuals {
-                    true => Some(assemble(&*source, &params, progress)?),
-                    false => None,
-                };
-                (matrix, reference, origin)
+                let path = options.cache.as_ref().map(|c| c.path("reference", &key).display().to_string());
+                (
+                    reference,
+                    ReferenceOrigin::Cached { path: path.unwrap_or_default(), seconds: start.elapsed().as_secs_f64() },
+                )
             }
             None => {
-                let start = Instant::now();
-                let matrix = assemble(&*source, &params, progress)?;
-                let assembly_seconds = start.elapsed().as_secs_f64();
-                progress.begin("reference", 0, "");
-                let reference = ReferenceSolution::solve_matrix(&system, &matrix, params)?;
-                progress.end();
-                let solve_seconds = start.elapsed().as_secs_f64() - assembly_seconds;
+                let solve_start = Instant::now();
+                let reference = match &matrix {
+                    Some(m) if kind == ReferenceKind::Matrix => {
+                        progress.begin("reference (matrix)", 0, "");
+                        let r = ReferenceSolution::solve_matrix(&system, m, params);
+                        progress.end();
+                        r?
+                    }
+                    _ => solve_by_shooting(&system, source, &options.shooting, progress)?,
+                };
                 if let Some(cache) = &options.cache {
                     if let Err(e) = cache.write("reference", &key, &reference.to_bytes(&key)) {
                         progress.warn(&format!("the reference was not cached: {e}"));
                     }
                 }
-                let origin = ReferenceOrigin::Solved { assembly_seconds, solve_seconds };
-                (Some(matrix), reference, origin)
+                let solve_seconds = solve_start.elapsed().as_secs_f64();
+                (reference, ReferenceOrigin::Solved { assembly_seconds, solve_seconds })
             }
         };
-        let order = radiosity_geom::spatial_order(scene);
-        Ok(Lab {
-            prepared,
-            report: prepared.report(),
-            backend: backend.to_string(),
-            system,
-            source,
-            serves_rows,
-            matrix,
-            reference,
-            origin,
-            order,
-        })
+        let contraction = reference.certificate().contraction.clone();
+        Ok(Setup { matrix, reference: Some(reference), origin, chosen, contraction })
     }
 
     /// The prepared scene.
@@ -296,14 +455,15 @@ impl<'p> Lab<'p> {
         &*self.source
     }
 
-    /// F, when it is kept ([`LabOptions::residuals`], or assembled for the reference).
+    /// The stored matrix, when it is kept ([`LabOptions::residuals`], assembled for the
+    /// reference, or the backend itself).
     pub fn matrix(&self) -> Option<&FormFactors> {
-        self.matrix.as_ref()
+        self.matrix.as_deref()
     }
 
-    /// The exact solution of the same discrete system.
-    pub fn reference(&self) -> &ReferenceSolution {
-        &self.reference
+    /// The exact solution of the same discrete system, unless the reference is `none`.
+    pub fn reference(&self) -> Option<&ReferenceSolution> {
+        self.reference.as_ref()
     }
 
     /// Where the reference came from.
@@ -311,12 +471,22 @@ impl<'p> Lab<'p> {
         &self.origin
     }
 
-    /// Measures against the reference with F, when F is kept; the contraction is the one the
-    /// reference's certificate measured on the same F.
+    /// The reference measured against, once `auto` is decided, and why.
+    pub fn chosen(&self) -> &ChosenReference {
+        &self.chosen
+    }
+
+    /// The contraction every certified bound of this lab rests on: measured on the stored
+    /// matrix when there is one, DESIGN §5's hypothesis otherwise ([`Contraction::assumed`]).
+    pub fn contraction(&self) -> &Contraction {
+        &self.contraction
+    }
+
+    /// Measures against the reference with F, when both are kept; the contraction is the one
+    /// measured on the same F.
     fn evaluator(&self) -> Result<Option<Evaluator<'_>>, LabError> {
-        let Some(m) = &self.matrix else { return Ok(None) };
-        let contraction = self.reference.certificate().contraction.clone();
-        Ok(Some(Evaluator::with_contraction(&self.system, m, &self.reference, contraction)?))
+        let (Some(m), Some(reference)) = (&self.matrix, &self.reference) else { return Ok(None) };
+        Ok(Some(Evaluator::with_contraction(&self.system, m, reference, self.contraction.clone())?))
     }
 
     /// The number of patches.
@@ -355,7 +525,9 @@ impl<'p> Lab<'p> {
         let n = self.n() as u64;
         let mut recorder = Recorder {
             system: &self.system,
-            reference: self.reference.values(),
+            reference: self.reference.as_ref().map(|r| r.values()),
+            contraction: Some(&self.contraction),
+            known: None,
             clock: Instant::now(),
             evaluator: evaluator.as_ref(),
             solver: name.clone(),
@@ -373,20 +545,34 @@ impl<'p> Lab<'p> {
         progress.end();
         let run = run?;
         let solver_residual = solver.residual_power(&problem, &run.state);
-        let last = match &evaluator {
-            Some(e) => {
+        let known = solver.residual_bound(&problem, &run.state);
+        let solver_bound =
+            known.map(|k| SolverBound::new(&self.system, &self.contraction, &k, &run.state.radiosity).relative);
+        let last = match (&evaluator, &self.reference) {
+            (Some(e), _) => {
                 let m = e.evaluate(&run.state.radiosity)?;
+                let matrix_bound =
+                    m.bound.certified.then(|| matrix_relative_bound(&self.system, &m, &run.state.radiosity));
                 FinalMetrics {
-                    e_rms: m.e_rms,
-                    e_max: m.e_max,
+                    e_rms: Some(m.e_rms),
+                    e_max: Some(m.e_max),
                     residual: Some(m.residual),
-                    bound: m.bound.certified.then_some(m.relative_bound),
+                    bound: solver_bound.or(matrix_bound),
                     solver_residual,
                 }
             }
-            None => {
-                let e = errors(&self.system, &self.reference, &run.state.radiosity)?;
-                FinalMetrics { e_rms: e.e_rms, e_max: e.e_max, residual: None, bound: None, solver_residual }
+            (None, Some(reference)) => {
+                let e = errors(&self.system, reference, &run.state.radiosity)?;
+                FinalMetrics {
+                    e_rms: Some(e.e_rms),
+                    e_max: Some(e.e_max),
+                    residual: None,
+                    bound: solver_bound,
+                    solver_residual,
+                }
+            }
+            (None, None) => {
+                FinalMetrics { e_rms: None, e_max: None, residual: None, bound: solver_bound, solver_residual }
             }
         };
         Ok(Outcome {
@@ -402,33 +588,41 @@ impl<'p> Lab<'p> {
     }
 
     /// The reference as a final state: its cost is assembling F (form-factor time) and
-    /// solving it, or reading it from the cache.
-    pub fn reference_state(&self) -> State {
+    /// solving it, or reading it from the cache. Fails when the reference is `none`.
+    pub fn reference_state(&self) -> Result<State, LabError> {
+        let reference = self.reference.as_ref().ok_or_else(no_reference)?;
         let mut state = State::from_emission(self.system.emissions(), self.system.channels().count());
-        state.radiosity.copy_from_slice(self.reference.values());
+        state.radiosity.copy_from_slice(reference.values());
         state.unshot.fill(0.0);
-        state.columns = self.system.len() as u64;
+        state.columns = match reference.method() {
+            crate::reference::Method::Shooting { columns, .. } => *columns,
+            _ => self.system.len() as u64,
+        };
         match self.origin {
             ReferenceOrigin::Solved { assembly_seconds, solve_seconds } => {
                 state.ff_seconds = assembly_seconds;
                 state.solve_seconds = solve_seconds;
             }
             ReferenceOrigin::Cached { seconds, .. } => state.solve_seconds = seconds,
+            ReferenceOrigin::NotComputed => {}
         }
-        state
+        Ok(state)
     }
 
-    /// The metrics of the reference itself (zero error; its residual when F is kept).
+    /// The metrics of the reference itself (zero error; its residual when F is kept, and its
+    /// certificate's bound).
     pub fn reference_metrics(&self) -> Result<FinalMetrics, LabError> {
+        let reference = self.reference.as_ref().ok_or_else(no_reference)?;
         let residual = match self.evaluator()? {
-            Some(e) => Some(e.evaluate(self.reference.values())?),
+            Some(e) => Some(e.evaluate(reference.values())?),
             None => None,
         };
+        let certificate = reference.certificate();
         Ok(FinalMetrics {
-            e_rms: 0.0,
-            e_max: 0.0,
+            e_rms: Some(0.0),
+            e_max: Some(0.0),
             residual: residual.map(|m| m.residual),
-            bound: residual.and_then(|m| m.bound.certified.then_some(m.relative_bound)),
+            bound: certificate.certified.then_some(certificate.relative_bound),
             solver_residual: None,
         })
     }
@@ -457,10 +651,79 @@ impl<'p> Lab<'p> {
         progress: &dyn Progress,
     ) -> Result<Vec<[Real; 3]>, LabError> {
         let state = match solver {
-            None => self.reference_state(),
+            None => self.reference_state()?,
             Some(solver) => self.run(solver, rules, &RecordPlan::errors_only(), progress)?.state,
         };
         Ok(rgb(&state))
+    }
+}
+
+/// The error of asking for the reference of a lab without one.
+fn no_reference() -> LabError {
+    LabError::Invalid("there is no reference solution with --reference none".into())
+}
+
+/// The F-based certified bound of `b` relative to `Σ A |B*|`, in the reference-free form of
+/// [`SolverBound`] (so that it reads like the solver's own).
+fn matrix_relative_bound(system: &LinearSystem, m: &crate::metrics::Metrics, b: &[Real]) -> Real {
+    crate::metrics::relative_without_reference(system, m.bound.bound, b)
+}
+
+/// A stored matrix that is both a lab's backend and its matrix, held once.
+struct SharedMatrix(Arc<FormFactors>);
+
+impl ColumnSource for SharedMatrix {
+    fn patch_count(&self) -> usize {
+        self.0.patch_count()
+    }
+
+    fn fill_column(&self, j: usize, column: &mut [Real]) {
+        self.0.fill_column(j, column)
+    }
+
+    fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
+        self.0.fill_row(i, row)
+    }
+}
+
+/// Decides the reference: as asked, or for `auto` a stored backend's matrix, else `matrix`
+/// when its estimated size fits the budget and `shooting` when it does not. An explicit
+/// `matrix` that does not fit is refused before anything is assembled.
+fn choose(source: &dyn ColumnSource, stored: bool, options: &LabOptions) -> Result<ChosenReference, LabError> {
+    let asked = |kind| ChosenReference { kind, why: "asked for".into() };
+    match options.kind {
+        ReferenceKind::None => return Ok(asked(ReferenceKind::None)),
+        ReferenceKind::Shooting => return Ok(asked(ReferenceKind::Shooting)),
+        ReferenceKind::Matrix | ReferenceKind::Auto if stored => {
+            let why = match options.kind {
+                ReferenceKind::Auto => "auto: the backend is a stored matrix".to_string(),
+                _ => "asked for; the backend is a stored matrix".to_string(),
+            };
+            return Ok(ChosenReference { kind: ReferenceKind::Matrix, why });
+        }
+        _ => {}
+    }
+    let budget = match &options.memory {
+        Some(b) => b.clone(),
+        None => MemoryBudget::from_env()?,
+    };
+    let (bytes, _) = matrix_bytes(source, budget.bytes);
+    let fits = bytes <= budget.bytes;
+    let n = source.patch_count();
+    let weighed = format!("the matrix of {n} patches needs about {} of the {budget}", gib(bytes));
+    match (options.kind, fits) {
+        (ReferenceKind::Matrix, true) => {
+            Ok(ChosenReference { kind: ReferenceKind::Matrix, why: format!("asked for; {weighed}") })
+        }
+        (ReferenceKind::Matrix, false) => Err(LabError::Invalid(format!(
+            "--reference matrix: {weighed}; raise {MEMORY_VARIABLE} (e.g. {MEMORY_VARIABLE}=16G) or use --reference \
+             shooting or none"
+        ))),
+        (_, true) => Ok(ChosenReference { kind: ReferenceKind::Matrix, why: format!("auto: {weighed}") }),
+        (_, false) => Ok(ChosenReference {
+            kind: ReferenceKind::Shooting,
+            why: format!("auto: {weighed}, so a long shooting run stands in for it"),
+        }),
     }
 }
 
@@ -487,15 +750,38 @@ pub fn require_emitters(prepared: &PreparedScene) -> Result<(), LabError> {
     Ok(())
 }
 
+/// Assembles the stored matrix of `source` for a `matrix` reference: each pair once by
+/// reciprocity when the backend can give single entries, column by column otherwise.
 fn assemble(
+    system: &LinearSystem,
     source: &dyn ColumnSource,
-    params: &ReferenceParams,
+    assembly: Assembly<'_>,
     progress: &dyn Progress,
 ) -> Result<FormFactors, LabError> {
-    progress.begin("form factors", 0, "");
-    let matrix = FormFactors::assemble(source, params.max_matrix_bytes);
-    progress.end();
-    Ok(matrix?)
+    let n = source.patch_count() as u64;
+    let done = AtomicU64::new(0);
+    let matrix = match assembly {
+        Assembly::Stored(m) => return Ok((*m).clone()),
+        Assembly::Reciprocal(pair) => {
+            progress.begin("assembling the matrix (each pair once)", n * (n + 1) / 2, "pairs");
+            let m = StoredMatrix::assemble_reciprocal(system.areas(), pair, &|k| {
+                let k = done.fetch_max(k as u64, Ordering::Relaxed).max(k as u64);
+                progress.advance(k, "");
+            });
+            progress.end();
+            m?.0
+        }
+        Assembly::Columns => {
+            progress.begin("assembling the matrix", n, "columns");
+            let m = StoredMatrix::assemble(source, &|_| {
+                let k = done.fetch_add(1, Ordering::Relaxed) + 1;
+                progress.advance(k, "");
+            });
+            progress.end();
+            m
+        }
+    };
+    Ok(FormFactors::from_stored(matrix))
 }
 
 /// The radiosity of every patch of `state` as RGB (a grey channel repeated three times).
@@ -548,7 +834,7 @@ impl RecordPlan {
     }
 }
 
-/// One step of a run: where it stood and its e_rms.
+/// One step of a run: where it stood, its e_rms and its certified bound.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Point {
     /// Steps done.
@@ -560,32 +846,42 @@ pub struct Point {
     /// Wall seconds since the recorder's clock started (for a lab's runs, when the run was
     /// set up), its own measuring taken out: the run's seconds and the executor's bookkeeping.
     pub wall: Real,
-    /// e_rms against the reference.
+    /// e_rms against the reference (NaN without one).
     pub e_rms: Real,
+    /// The certified bound on the displayed radiosity's area-weighted L1 error relative to the
+    /// reference's, from what the solver knows without extra columns ([`SolverBound`]); NaN
+    /// when the solver knows none.
+    pub bound: Real,
 }
 
 /// The metrics of a run's final radiosity.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FinalMetrics {
-    /// e_rms against the reference.
-    pub e_rms: Real,
-    /// e_max against the reference.
-    pub e_max: Real,
+    /// e_rms against the reference, when there is one.
+    pub e_rms: Option<Real>,
+    /// e_max against the reference, when there is one.
+    pub e_max: Option<Real>,
     /// The residual power of the displayed radiosity, when F is kept.
     pub residual: Option<Real>,
-    /// The certified bound on its area-weighted L1 error relative to the reference's L1 norm,
-    /// when F is kept and certifiable.
+    /// The certified bound on its area-weighted L1 error relative to the reference's L1 norm:
+    /// the solver's own ([`SolverBound`]), or from F's residual when the solver knows none and F
+    /// is kept; `None` when neither is there.
     pub bound: Option<Real>,
     /// The residual power the solver knows without F (for shooting methods, that of the shot
     /// radiosity), when it knows one.
     pub solver_residual: Option<Real>,
 }
 
-/// Records e_rms after every step and every metric at planned steps (module doc).
+/// Records e_rms and the certified bound after every step and every metric at planned steps
+/// (module doc).
 pub struct Recorder<'a> {
     system: &'a LinearSystem,
-    /// The exact answer, patch-major like the system's vectors.
-    reference: &'a [Real],
+    /// The exact answer, patch-major like the system's vectors, when there is one.
+    reference: Option<&'a [Real]>,
+    /// The contraction the certified bound rests on; no bound without one.
+    contraction: Option<&'a Contraction>,
+    /// The solver's residual bound on the state about to be observed.
+    known: Option<ResidualBound>,
     /// Where [`Point::wall`] counts from.
     clock: Instant,
     evaluator: Option<&'a Evaluator<'a>>,
@@ -607,7 +903,9 @@ impl<'a> Recorder<'a> {
     pub fn errors(system: &'a LinearSystem, reference: &'a [Real], clock: Instant) -> Recorder<'a> {
         Recorder {
             system,
-            reference,
+            reference: Some(reference),
+            contraction: None,
+            known: None,
             clock,
             evaluator: None,
             solver: String::new(),
@@ -621,7 +919,14 @@ impl<'a> Recorder<'a> {
         }
     }
 
-    /// e_rms after every step so far.
+    /// Also records the certified bound after every step, on `contraction` (measured on a
+    /// stored matrix, or [`Contraction::assumed`]).
+    pub fn with_bound(mut self, contraction: &'a Contraction) -> Recorder<'a> {
+        self.contraction = Some(contraction);
+        self
+    }
+
+    /// The points recorded so far.
     pub fn points(&self) -> &[Point] {
         &self.points
     }
@@ -635,8 +940,15 @@ impl<'a> Recorder<'a> {
 impl Observer for Recorder<'_> {
     fn observe_step(&mut self, state: &State) -> Option<Real> {
         let start = Instant::now();
-        let errors = errors_against(self.system, self.reference, &state.radiosity).ok()?;
-        let e_rms = errors.e_rms;
+        let errors = match self.reference {
+            Some(reference) => Some(errors_against(self.system, reference, &state.radiosity).ok()?),
+            None => None,
+        };
+        let e_rms = errors.map_or(Real::NAN, |e| e.e_rms);
+        let bound = match (self.known.take(), self.contraction) {
+            (Some(known), Some(c)) => SolverBound::new(self.system, c, &known, &state.radiosity).relative,
+            _ => Real::NAN,
+        };
         let seconds = state.ff_seconds + state.solve_seconds;
         let new_mark =
             self.marks.contains(&state.columns) && self.points.last().is_none_or(|p| p.columns != state.columns);
@@ -653,22 +965,42 @@ impl Observer for Recorder<'_> {
                 bound,
             };
             match self.evaluator.map(|e| e.evaluate(&state.radiosity)) {
-                Some(Ok(m)) => self.rows.push(row(m.e_max, m.residual, m.relative_bound)),
+                Some(Ok(m)) => {
+                    let fallback = if m.bound.certified {
+                        matrix_relative_bound(self.system, &m, &state.radiosity)
+                    } else {
+                        Real::INFINITY
+                    };
+                    self.rows.push(row(m.e_max, m.residual, if bound.is_nan() { fallback } else { bound }))
+                }
                 Some(Err(_)) => {}
-                None => self.rows.push(row(errors.e_max, Real::NAN, Real::NAN)),
+                None => self.rows.push(row(errors.map_or(Real::NAN, |e| e.e_max), Real::NAN, bound)),
             }
         }
         let wall = (start - self.clock).as_secs_f64() - self.overhead;
-        self.points.push(Point { step: state.step, columns: state.columns, seconds, wall, e_rms });
+        self.points.push(Point { step: state.step, columns: state.columns, seconds, wall, e_rms, bound });
         if let Some(progress) = self.progress {
-            progress.advance(if self.by_columns { state.columns } else { state.step }, &format!("e_rms {e_rms:.2e}"));
+            let message = match (e_rms.is_nan(), bound.is_nan()) {
+                (false, _) => format!("e_rms {e_rms:.2e}"),
+                (true, false) => format!("bound {bound:.2e}"),
+                (true, true) => String::new(),
+            };
+            progress.advance(if self.by_columns { state.columns } else { state.step }, &message);
         }
         self.overhead += start.elapsed().as_secs_f64();
-        Some(e_rms)
+        (!e_rms.is_nan()).then_some(e_rms)
     }
 
     fn measures_error(&self) -> bool {
-        true
+        self.reference.is_some()
+    }
+
+    fn wants_residual_bound(&self) -> bool {
+        self.contraction.is_some()
+    }
+
+    fn observe_residual_bound(&mut self, _state: &State, bound: Option<&ResidualBound>) {
+        self.known = bound.cloned();
     }
 }
 
@@ -706,7 +1038,17 @@ impl Outcome {
 
     /// e_rms when `columns` columns had been computed (the first step there).
     pub fn at_columns(&self, columns: u64) -> Option<Real> {
-        self.points.iter().find(|p| p.columns >= columns).filter(|p| p.columns == columns).map(|p| p.e_rms)
+        self.at_columns_point(columns).map(|p| p.e_rms)
+    }
+
+    /// The point where `columns` columns had been computed (the first step there).
+    pub fn at_columns_point(&self, columns: u64) -> Option<Point> {
+        self.points.iter().find(|p| p.columns >= columns).filter(|p| p.columns == columns).copied()
+    }
+
+    /// The first point whose certified bound is at or below `target`.
+    pub fn bound_reached(&self, target: Real) -> Option<&Point> {
+        self.points.iter().find(|p| p.bound <= target)
     }
 
     /// The first point at or below `target`.

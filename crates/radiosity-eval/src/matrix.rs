@@ -2,39 +2,59 @@
 //!
 //! Geometric backends compute `F` one column at a time, and a column is the expensive unit.
 //! The reference solve and repeated metric evaluations need every column, often many times,
-//! so [`FormFactors`] fetches each column once and keeps the matrix dense, in `f64`, stored
-//! **row-major**: Gauss–Seidel and the product `F B` read rows. Its size is `8 n²` bytes
-//! (0.97 GB at n = 11 000, 20 GB at 50 000); assembly refuses matrices larger than the limit
-//! it is given. A stored-matrix backend serving rows directly can replace it later.
+//! so [`FormFactors`] holds the matrix in one of two ways:
+//!
+//! - **stored** ([`FormFactors::from_stored`]): a [`StoredMatrix`] of `radiosity-ff`, values
+//!   in `f32`, dense or sparse, whichever is smaller (each pair of the analytic backend
+//!   computed once, the other entry by reciprocity). Every sum over it is taken in `f64`. This
+//!   is what a [`crate::Lab`] holds: `4 n²` bytes at most (0.48 GB at n = 11 000), less for
+//!   occluded and open scenes, and never a dense `f64` copy;
+//! - **dense `f64`** ([`FormFactors::assemble`]), row-major, `8 n²` bytes: for the small
+//!   systems of tests and of the stress suite, whose stiff furnaces need rows rescaled to sum
+//!   to 1 in `f64` ([`FormFactors::close_rows`]). Assembly refuses matrices larger than the
+//!   limit it is given.
 //!
 //! Columns are fetched in fixed blocks, each block in parallel with rayon, and every sum is
 //! taken in a fixed order (row `i` of `F B` over `j = 0, 1, …`; weighted column sums over
 //! `i = 0, 1, …`), so results do not depend on the thread count. Streaming the columns
-//! ([`Residual::from_columns`](crate::Residual::from_columns)) and reading the stored matrix
+//! ([`Residual::from_columns`](crate::Residual::from_columns)) and reading a dense matrix
 //! ([`FormFactors`]) add in the same order and give bit-identical results.
 
 use crate::error::EvalError;
 use radiosity_core::{ColumnSource, LinearSystem, Real};
+use radiosity_ff::StoredMatrix;
 use rayon::prelude::*;
 
 /// Columns fetched together, in parallel, before they are scattered or accumulated.
 const BLOCK: usize = 128;
 
-/// A dense form-factor matrix in memory, row-major: `get(i, j) = F_ij`.
+/// A form-factor matrix in memory: `get(i, j) = F_ij`.
 ///
-/// It is itself a [`ColumnSource`], so solvers can run on it without recomputing columns
-/// (a column is gathered from the rows, which costs `n` strided reads).
+/// It is itself a [`ColumnSource`], so solvers can run on it without recomputing columns.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FormFactors {
     n: usize,
-    rows: Vec<Real>,
+    entries: Entries,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+enum Entries {
+    /// Row-major `f64`: `F_ij` at `i * n + j`.
+    Dense(Vec<Real>),
+    /// A stored matrix of `f32` values, column-major.
+    Stored(StoredMatrix),
 }
 
 impl FormFactors {
-    /// Fetches every column of `f` once (in parallel) and stores the matrix, refusing it if
-    /// `8 n²` bytes exceed `max_bytes`, or if an entry is negative or not finite.
+    /// Fetches every column of `f` once (in parallel) and stores the matrix dense in `f64`,
+    /// refusing it if `8 n²` bytes exceed `max_bytes`, or if an entry is negative or not finite.
     pub fn assemble(f: &(impl ColumnSource + ?Sized), max_bytes: usize) -> Result<FormFactors, EvalError> {
         assemble_dyn(&f, max_bytes)
+    }
+
+    /// Holds a stored matrix of `radiosity-ff` as it is (`f32` values, sums in `f64`).
+    pub fn from_stored(matrix: StoredMatrix) -> FormFactors {
+        FormFactors { n: matrix.len(), entries: Entries::Stored(matrix) }
     }
 
     /// The number of patches `n`.
@@ -42,18 +62,45 @@ impl FormFactors {
         self.n
     }
 
-    /// `F_ij`.
-    pub fn get(&self, i: usize, j: usize) -> Real {
-        self.rows[i * self.n + j]
+    /// Bytes taken by the entries.
+    pub fn bytes(&self) -> usize {
+        match &self.entries {
+            Entries::Dense(rows) => rows.len() * size_of::<Real>(),
+            Entries::Stored(m) => m.bytes(),
+        }
     }
 
-    /// Row `i`: `F_ij` for every `j`.
-    pub fn row(&self, i: usize) -> &[Real] {
-        &self.rows[i * self.n..(i + 1) * self.n]
+    /// The stored matrix, when the entries are held as one.
+    pub fn stored(&self) -> Option<&StoredMatrix> {
+        match &self.entries {
+            Entries::Dense(_) => None,
+            Entries::Stored(m) => Some(m),
+        }
+    }
+
+    /// `F_ij`.
+    ///
+    /// # Panics
+    ///
+    /// If `i` or `j` is not below `n`, like slice indexing.
+    pub fn get(&self, i: usize, j: usize) -> Real {
+        match &self.entries {
+            Entries::Dense(rows) => rows[i * self.n + j],
+            Entries::Stored(m) => m.get(i, j),
+        }
+    }
+
+    /// `Σ_j F_ij` for every row `i`, summed in `f64` in column order.
+    pub fn row_sums(&self) -> Vec<Real> {
+        match &self.entries {
+            Entries::Dense(rows) => rows.par_chunks(self.n.max(1)).map(|row| row.iter().sum()).collect(),
+            Entries::Stored(m) => m.row_sums(),
+        }
     }
 
     /// Rescales every row with a positive sum to sum to 1, in `f64`, and returns the smallest
-    /// and largest factor applied (`(1, 1)` when nothing changed).
+    /// and largest factor applied (`(1, 1)` when nothing changed). A stored matrix is first
+    /// copied dense in `f64`, so this is for small systems only.
     ///
     /// For a closed scene only: there every row of the exact `F` sums to 1, so with uniform
     /// `ρ` and `E` the furnace identity `B = E / (1 − ρ)` becomes the exact solution of the
@@ -64,8 +111,17 @@ impl FormFactors {
     /// does the same in `f32`, which leaves row sums off by about 1e-7: too much at `ρ =
     /// 0.999`.
     pub fn close_rows(&mut self) -> (Real, Real) {
+        if let Entries::Stored(m) = &self.entries {
+            let n = self.n;
+            let mut rows = vec![0.0; n * n];
+            for j in 0..n {
+                m.for_each_in_column(j, |i, v| rows[i * n + j] = Real::from(v));
+            }
+            self.entries = Entries::Dense(rows);
+        }
+        let Entries::Dense(rows) = &mut self.entries else { unreachable!("made dense above") };
         let (mut lo, mut hi) = (1.0, 1.0);
-        for row in self.rows.chunks_mut(self.n.max(1)) {
+        for row in rows.chunks_mut(self.n.max(1)) {
             let sum: Real = row.iter().sum();
             if sum > 0.0 {
                 let factor = 1.0 / sum;
@@ -79,7 +135,15 @@ impl FormFactors {
 
     /// The largest row sum `max_i Σ_j F_ij` (at most 1 in a scene that loses no energy).
     pub fn max_row_sum(&self) -> Real {
-        self.rows.par_chunks(self.n.max(1)).map(|row| row.iter().sum::<Real>()).reduce(|| 0.0, Real::max)
+        self.row_sums().into_iter().fold(0.0, Real::max)
+    }
+
+    /// Row `i` of a dense `f64` matrix.
+    pub(crate) fn dense_row(&self, i: usize) -> Option<&[Real]> {
+        match &self.entries {
+            Entries::Dense(rows) => Some(&rows[i * self.n..(i + 1) * self.n]),
+            Entries::Stored(_) => None,
+        }
     }
 }
 
@@ -89,14 +153,44 @@ impl ColumnSource for FormFactors {
     }
 
     fn fill_column(&self, j: usize, column: &mut [Real]) {
-        for (i, v) in column.iter_mut().enumerate() {
-            *v = self.rows[i * self.n + j];
+        match &self.entries {
+            Entries::Dense(rows) => {
+                for (i, v) in column.iter_mut().enumerate() {
+                    *v = rows[i * self.n + j];
+                }
+            }
+            Entries::Stored(m) => m.fill_column(j, column),
         }
     }
 
     fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
-        row.copy_from_slice(self.row(i));
+        match &self.entries {
+            Entries::Dense(rows) => row.copy_from_slice(&rows[i * self.n..(i + 1) * self.n]),
+            Entries::Stored(m) => _ = m.fill_row(i, row),
+        }
         true
+    }
+}
+
+/// A column source whose entries are rounded to `f32`, as a stored matrix holds them: a lab's
+/// solvers read these, so that they solve exactly the system its stored reference solves.
+/// Rounding costs `n` conversions a column, nothing beside computing one.
+pub struct F32Columns<S>(pub S);
+
+impl<S: ColumnSource> ColumnSource for F32Columns<S> {
+    fn patch_count(&self) -> usize {
+        self.0.patch_count()
+    }
+
+    fn fill_column(&self, j: usize, column: &mut [Real]) {
+        self.0.fill_column(j, column);
+        column.iter_mut().for_each(|v| *v = Real::from(*v as f32));
+    }
+
+    fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
+        let exact = self.0.fill_row(i, row);
+        row.iter_mut().for_each(|v| *v = Real::from(*v as f32));
+        exact
     }
 }
 
@@ -115,7 +209,7 @@ fn assemble_dyn(f: &dyn ColumnSource, max_bytes: usize) -> Result<FormFactors, E
             }
         });
     })?;
-    Ok(FormFactors { n, rows })
+    Ok(FormFactors { n, entries: Entries::Dense(rows) })
 }
 
 /// Fetches the columns of `f` in blocks of [`BLOCK`] (each block in parallel), checks every
@@ -213,11 +307,29 @@ pub(crate) fn pass_columns(system: &LinearSystem, f: &dyn ColumnSource, b: &[Rea
     Ok(Pass { fb, max_row_sum, kappa })
 }
 
-/// Per channel, `max_j Σ_i A_i ρ_ic F_ij / A_j`, from the stored matrix (`n²` reads).
+/// Per channel, `max_j Σ_i A_i ρ_ic F_ij / A_j`, from the matrix in memory (`n²` reads).
 pub(crate) fn kappa_matrix(system: &LinearSystem, m: &FormFactors) -> Vec<Real> {
     let n = m.n;
     let k = system.channels().count();
     let (area, rho) = (system.areas(), system.reflectivities());
+    let rows = match &m.entries {
+        Entries::Dense(rows) => rows,
+        Entries::Stored(stored) => {
+            // Columns in parallel, each summed over its rows in order.
+            return (0..n)
+                .into_par_iter()
+                .map(|j| {
+                    let mut sums = vec![0.0; k];
+                    stored.for_each_in_column(j, |i, v| {
+                        for (c, s) in sums.iter_mut().enumerate() {
+                            *s += area[i] * rho[i * k + c] * Real::from(v);
+                        }
+                    });
+                    sums.into_iter().map(|s| s / area[j]).collect::<Vec<_>>()
+                })
+                .reduce(|| vec![0.0; k], |a, b| a.iter().zip(&b).map(|(x, y)| x.max(*y)).collect());
+        }
+    };
     // Column chunks in parallel; inside a chunk, rows in order (the streaming pass's order).
     let chunk = BLOCK;
     let partial: Vec<Vec<Real>> = (0..n.div_ceil(chunk))
@@ -226,7 +338,7 @@ pub(crate) fn kappa_matrix(system: &LinearSystem, m: &FormFactors) -> Vec<Real> 
             let (j0, j1) = (b * chunk, ((b + 1) * chunk).min(n));
             let mut sums = vec![0.0; (j1 - j0) * k];
             for i in 0..n {
-                let row = &m.rows[i * n + j0..i * n + j1];
+                let row = &rows[i * n + j0..i * n + j1];
                 for c in 0..k {
                     let w = area[i] * rho[i * k + c];
                     for (dj, fij) in row.iter().enumerate() {
@@ -246,17 +358,50 @@ pub(crate) fn kappa_matrix(system: &LinearSystem, m: &FormFactors) -> Vec<Real> 
     partial.into_iter().fold(vec![0.0; k], |a, p| a.iter().zip(&p).map(|(x, y)| x.max(*y)).collect())
 }
 
-/// `F b` from the stored matrix, rows in parallel, each row summed in column order.
+/// `F b` from the matrix in memory, patch-major with `k` channels. Dense: rows in parallel,
+/// each row summed in column order. Stored: columns in fixed chunks (as many whatever the
+/// thread count), each chunk's partial product accumulated in column order and the partials
+/// added in chunk order, so the sums do not depend on the thread count either.
 pub(crate) fn multiply_matrix(m: &FormFactors, b: &[Real], k: usize) -> Vec<Real> {
     let n = m.n;
     let mut fb = vec![0.0; n * k];
-    fb.par_chunks_mut(k).enumerate().for_each(|(i, out)| {
-        let row = &m.rows[i * n..(i + 1) * n];
-        for (j, fij) in row.iter().enumerate() {
-            for c in 0..k {
-                out[c] += fij * b[j * k + c];
+    match &m.entries {
+        Entries::Dense(rows) => fb.par_chunks_mut(k).enumerate().for_each(|(i, out)| {
+            let row = &rows[i * n..(i + 1) * n];
+            for (j, fij) in row.iter().enumerate() {
+                for c in 0..k {
+                    out[c] += fij * b[j * k + c];
+                }
+            }
+        }),
+        Entries::Stored(stored) => {
+            let chunks = n.div_ceil(PRODUCT_CHUNK_COLUMNS).clamp(1, PRODUCT_CHUNKS);
+            let width = n.div_ceil(chunks.max(1)).max(1);
+            let partials: Vec<Vec<Real>> = (0..chunks)
+                .into_par_iter()
+                .map(|chunk| {
+                    let mut out = vec![0.0; n * k];
+                    for j in chunk * width..((chunk + 1) * width).min(n) {
+                        let bj = &b[j * k..(j + 1) * k];
+                        stored.for_each_in_column(j, |i, v| {
+                            let v = Real::from(v);
+                            for c in 0..k {
+                                out[i * k + c] += v * bj[c];
+                            }
+                        });
+                    }
+                    out
+                })
+                .collect();
+            for partial in partials {
+                fb.iter_mut().zip(partial).for_each(|(s, p)| *s += p);
             }
         }
-    });
+    }
     fb
 }
+
+/// At most this many partial products in a product with a stored matrix ...
+const PRODUCT_CHUNKS: usize = 16;
+/// ... and at least this many columns in each.
+const PRODUCT_CHUNK_COLUMNS: usize = 1024;

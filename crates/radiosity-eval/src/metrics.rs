@@ -55,6 +55,7 @@ use crate::error::EvalError;
 use crate::matrix::{FormFactors, Pass, check_sizes, check_vector, kappa_matrix, multiply_matrix, pass_columns};
 use crate::reference::ReferenceSolution;
 use radiosity_core::{ColumnSource, LinearSystem, Real};
+use radiosity_solvers::ResidualBound;
 
 /// How strongly `diag(ρ) F` can amplify a vector in the area-weighted L1 norm, per channel,
 /// and whether the certified bound holds.
@@ -68,16 +69,25 @@ pub struct Contraction {
     /// Per channel, `κ_c = max_j Σ_i A_i ρ_ic F_ij / A_j`, the norm of `diag(ρ_c) F` in the
     /// area-weighted L1 norm.
     pub kappa: Vec<Real>,
+    /// Whether `max_row_sum` and `kappa` were measured on the matrix; when not
+    /// ([`Contraction::assumed`]), they are DESIGN §5's hypothesis, and every bound built on
+    /// them holds under it.
+    pub measured: bool,
 }
 
 impl Contraction {
     fn new(system: &LinearSystem, max_row_sum: Real, kappa: Vec<Real>) -> Contraction {
-        let k = system.channels().count();
-        let mut rho_max = vec![0.0_f64; k];
-        for (idx, &r) in system.reflectivities().iter().enumerate() {
-            rho_max[idx % k] = rho_max[idx % k].max(r);
-        }
-        Contraction { max_row_sum, rho_max, kappa }
+        Contraction { max_row_sum, rho_max: rho_max(system), kappa, measured: true }
+    }
+
+    /// The contraction DESIGN §5's hypothesis gives without looking at `F`: rows sum to at
+    /// most 1 and `F` is reciprocal (`A_i F_ij = A_j F_ji`), so that
+    /// `κ_c = max_j Σ_i ρ_ic F_ji ≤ ρ_max,c`. What runs without a stored matrix bound their
+    /// error with; the analytic backend is exactly reciprocal and its rows sum to 1 within its
+    /// stated accuracy (`cargo xtask ff` measures both).
+    pub fn assumed(system: &LinearSystem) -> Contraction {
+        let rho_max = rho_max(system);
+        Contraction { max_row_sum: 1.0, kappa: rho_max.clone(), rho_max, measured: false }
     }
 
     /// Measures the contraction of `system` with the stored matrix `m` (`n²` reads).
@@ -107,6 +117,16 @@ impl Contraction {
     pub fn rows_at_most_one(&self) -> bool {
         self.max_row_sum <= 1.0
     }
+}
+
+/// Per channel, `max_i ρ_ic`.
+fn rho_max(system: &LinearSystem) -> Vec<Real> {
+    let k = system.channels().count();
+    let mut rho_max = vec![0.0_f64; k];
+    for (idx, &r) in system.reflectivities().iter().enumerate() {
+        rho_max[idx % k] = rho_max[idx % k].max(r);
+    }
+    rho_max
 }
 
 /// A certified bound on the area-weighted L1 error of a vector.
@@ -384,4 +404,56 @@ impl<'a> Evaluator<'a> {
         let errors = errors(self.system, self.reference, b)?;
         Ok(Metrics::new(errors, &self.residual(b)?))
     }
+}
+
+/// The certified bound on the error of a displayed radiosity from what its solver knows
+/// without extra columns ([`ResidualBound`]), and a contraction: measured on a stored matrix,
+/// or DESIGN §5's hypothesis ([`Contraction::assumed`]).
+///
+/// Per channel `‖r_c‖_A ≤ κ_c ‖d_c‖_A + ‖e_c‖_A` ([`ResidualBound::residual_norm`]), and
+/// `Σ_c ‖B_c − B*_c‖_A ≤ Σ_c ‖r_c‖_A / (1 − q_c)`, as in [`Residual::bound`]. The relative
+/// figure needs no reference: `‖B*‖_A ≥ ‖B‖_A − ‖B − B*‖_A` and `B* ≥ E` elementwise, so
+/// `Σ A |B − B*| / Σ A |B*| ≤ bound / max(Σ A |B| − bound, Σ A E)`. It is therefore the same
+/// number with or without a reference, and a run with `--reference none` reports what one
+/// with a reference does (but for the contraction, measured on a stored matrix).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct SolverBound {
+    /// The bound on `Σ_c Σ_i A_i |B_ic − B*_ic|` (infinite when some `q_c ≥ 1`).
+    pub absolute: Real,
+    /// The bound on that error relative to `Σ_c Σ_i A_i |B*_ic|`.
+    pub relative: Real,
+}
+
+impl SolverBound {
+    /// The bound on the displayed radiosity `b` (patch-major, like `system`'s vectors).
+    pub fn new(system: &LinearSystem, contraction: &Contraction, known: &ResidualBound, b: &[Real]) -> SolverBound {
+        let k = system.channels().count();
+        let mut absolute = 0.0;
+        for c in 0..k.min(known.channels()) {
+            let q = contraction.factor(c);
+            if q >= 1.0 {
+                absolute = Real::INFINITY;
+                break;
+            }
+            absolute += known.residual_norm(c, contraction.kappa[c]) / (1.0 - q);
+        }
+        SolverBound { absolute, relative: relative_without_reference(system, absolute, b) }
+    }
+}
+
+/// `absolute`, a bound on `Σ A |b − B*|`, relative to a lower bound on `Σ A |B*|` that needs no
+/// reference: the larger of `Σ A |b| − absolute` (the triangle inequality) and `Σ A E`
+/// (`B* = Σ_k (ρ F)^k E ≥ E`, every term non-negative). 0 when `absolute` is; infinite when
+/// nothing emits and the first is not positive.
+pub(crate) fn relative_without_reference(system: &LinearSystem, absolute: Real, b: &[Real]) -> Real {
+    if absolute == 0.0 {
+        return 0.0;
+    }
+    let k = system.channels().count();
+    let area = system.areas();
+    let norm: Real = b.iter().enumerate().map(|(idx, v)| area[idx / k] * v.abs()).sum();
+    let emitted: Real = system.emissions().iter().enumerate().map(|(idx, e)| area[idx / k] * e.abs()).sum();
+    let lower = (norm - absolute).max(emitted);
+    if lower > 0.0 { absolute / lower } else { Real::INFINITY }
 }

@@ -32,7 +32,7 @@ pub const FIGURES: [Figure; 3] = [
 
 /// A claim of the paper: `better` ends below `worse` at n steps.
 fn beats(c: &Comparison, better: &str, worse: &str) -> (String, String, bool) {
-    let e = |name: &str| c.outcome(name).and_then(|o| o.at_step(c.n));
+    let e = |name: &str| c.outcome(name).and_then(|o| c.at_step(o, c.n));
     let (b, w) = (e(better), e(worse));
     let holds = matches!((b, w), (Some(b), Some(w)) if b < w);
     (format!("`{better}` beats `{worse}` at n steps"), format!("{} against {}", sci(b), sci(w)), holds)
@@ -53,10 +53,10 @@ pub fn claims(figure: &Figure, c: &Comparison) -> Vec<(String, String, bool)> {
             beats(c, "xu-g30-m480", "xu-g30"),
         ],
         "labyrinth" => {
-            let within = c.outcome("xu-g50-m500").and_then(|o| o.reached(1e-2)).map(|p| p.columns);
+            let within = c.outcome("xu-g50-m500").and_then(|o| c.reached(o, 1e-2)).map(|p| p.columns);
             vec![
                 (
-                    "`xu-g50-m500` reaches e_rms ≤ 1e-2 within n columns".into(),
+                    format!("`xu-g50-m500` reaches {} ≤ 1e-2 within n columns", c.metric()),
                     within.map_or("not reached".into(), |k| format!("after {k} of {} columns", c.n)),
                     within.is_some_and(|k| k <= c.n),
                 ),
@@ -68,11 +68,11 @@ pub fn claims(figure: &Figure, c: &Comparison) -> Vec<(String, String, bool)> {
             // "Group accelerated PR converges faster than PR, but the difference appears to
             // be very small"; "group accelerated Xu does not provide any acceleration".
             // "Little" is read as less than a factor 2 in e_rms at n steps.
-            let e = |name: &str| c.outcome(name).and_then(|o| o.at_step(c.n));
+            let e = |name: &str| c.outcome(name).and_then(|o| c.at_step(o, c.n));
             let gain = |claim: &str, a: &str, b: &str| match (e(a), e(b)) {
                 (Some(x), Some(y)) => (
                     claim.to_string(),
-                    format!("{:.2}× lower e_rms ({} against {})", y / x, sci(Some(x)), sci(Some(y))),
+                    format!("{:.2}× lower {} ({} against {})", y / x, c.metric(), sci(Some(x)), sci(Some(y))),
                     y / x < 2.0,
                 ),
                 _ => (claim.to_string(), "—".into(), false),
@@ -90,16 +90,17 @@ pub fn claims(figure: &Figure, c: &Comparison) -> Vec<(String, String, bool)> {
 pub fn section(figure: &Figure, c: &Comparison) -> String {
     let mut md = String::new();
     let _ = writeln!(md, "## {} ({}, n = {})\n", figure.scene, figure.figure, c.n);
-    let _ = writeln!(md, "![e_rms against shooting steps]({}/e_rms-steps.png)\n", figure.scene);
-    let _ = writeln!(md, "| method | e_rms at n steps | columns | to 1e-2 | to 1e-3 | group share |");
+    let metric = c.metric();
+    let _ = writeln!(md, "![{metric} against shooting steps]({}/{metric}-steps.png)\n", figure.scene);
+    let _ = writeln!(md, "| method | {metric} at n steps | columns | to 1e-2 | to 1e-3 | group share |");
     let _ = writeln!(md, "|---|--:|--:|--:|--:|--:|");
     for o in &c.outcomes {
-        let reach = |t: Real| o.reached(t).map_or("—".into(), |p| format!("{} / {:.2} s", p.columns, p.seconds));
+        let reach = |t: Real| c.reached(o, t).map_or("—".into(), |p| format!("{} / {:.2} s", p.columns, p.seconds));
         let _ = writeln!(
             md,
             "| `{}` | {} | {} | {} | {} | {:.1}% |",
             o.solver,
-            sci(o.at_step(c.n)),
+            sci(c.at_step(o, c.n)),
             o.columns_at_step(c.n).map_or("—".into(), |k| k.to_string()),
             reach(1e-2),
             reach(1e-3),

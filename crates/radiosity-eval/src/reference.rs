@@ -119,6 +119,16 @@ pub enum Method {
         /// Sweeps done (each reads all of `F` once).
         sweeps: usize,
     },
+    /// A long run of a shooting solver over the backend's columns, without a matrix
+    /// ([`crate::reference_shooting`]).
+    Shooting {
+        /// The solver, as on the command line.
+        solver: String,
+        /// Steps taken.
+        steps: u64,
+        /// Columns computed.
+        columns: u64,
+    },
 }
 
 impl fmt::Display for Method {
@@ -126,6 +136,9 @@ impl fmt::Display for Method {
         match self {
             Method::DenseLu => write!(f, "dense LU with partial pivoting (faer)"),
             Method::GaussSeidel { sweeps } => write!(f, "Gauss-Seidel, {sweeps} sweeps"),
+            Method::Shooting { solver, steps, columns } => {
+                write!(f, "{solver} without a matrix, {steps} steps, {columns} columns")
+            }
         }
     }
 }
@@ -153,6 +166,9 @@ impl fmt::Display for Certificate {
             write!(f, "certified relative L1 error ≤ {:.3e}", self.relative_bound)?;
         } else {
             write!(f, "not certified (contraction {:.6} ≥ 1)", self.contraction.max_factor())?;
+        }
+        if !self.contraction.measured {
+            return write!(f, ", if rows of F sum to at most 1 and F is reciprocal (assumed, not measured)");
         }
         let rows = self.contraction.max_row_sum;
         if self.contraction.rows_at_most_one() {
@@ -212,6 +228,17 @@ impl ReferenceSolution {
             contraction: residual.contraction().clone(),
         };
         Ok(ReferenceSolution { channels: system.channels(), n: system.len(), values, method, certificate })
+    }
+
+    /// A reference from its values (patch-major), how they were computed and their
+    /// certificate.
+    pub(crate) fn from_parts(
+        system: &LinearSystem,
+        values: Vec<Real>,
+        method: Method,
+        certificate: Certificate,
+    ) -> ReferenceSolution {
+        ReferenceSolution { channels: system.channels(), n: system.len(), values, method, certificate }
     }
 
     /// `B*_ic` at `i * channels + c`.
@@ -292,12 +319,12 @@ fn gauss_seidel(
     contraction: &Contraction,
     params: &ReferenceParams,
 ) -> Result<(Vec<Real>, usize), EvalError> {
+    if m.stored().is_some() {
+        return column_gauss_seidel(system, m, contraction, params);
+    }
     let (n, k) = (system.len(), k(system));
     let (area, rho, e) = (system.areas(), system.reflectivities(), system.emissions());
-    let certified = contraction.certified();
-    // Weight of each channel's residual in the stop measure: the bound's factor when it is
-    // certified, 1 (the plain residual) when it is not.
-    let weight: Vec<Real> = (0..k).map(|c| if certified { 1.0 / (1.0 - contraction.factor(c)) } else { 1.0 }).collect();
+    let weight = stop_weights(contraction, k);
     let measure = |norms: &[Real]| -> Real { norms.iter().zip(&weight).map(|(r, w)| r * w).sum() };
     let mut b = e.to_vec();
     let mut sums = vec![0.0; k];
@@ -306,7 +333,7 @@ fn gauss_seidel(
     for sweep in 1..=params.max_sweeps {
         delta.fill(0.0);
         for i in 0..n {
-            let row = m.row(i);
+            let row = m.dense_row(i).expect("a dense matrix has rows");
             sums.fill(0.0);
             for (j, fij) in row.iter().enumerate() {
                 for c in 0..k {
@@ -341,10 +368,89 @@ fn gauss_seidel(
     Err(EvalError::NotConverged { sweeps: params.max_sweeps, reached, target: params.certified })
 }
 
+/// Per channel, the weight of the residual norm in the stop measure: the bound's factor
+/// `1 / (1 − q_c)` when the contraction is certified, 1 (the plain residual) when it is not.
+fn stop_weights(contraction: &Contraction, k: usize) -> Vec<Real> {
+    let certified = contraction.certified();
+    (0..k).map(|c| if certified { 1.0 / (1.0 - contraction.factor(c)) } else { 1.0 }).collect()
+}
+
+/// Gauss–Seidel over a stored matrix's columns: shooting every patch's unshot radiosity in
+/// index order, which is Gauss–Seidel on the shot radiosity `x` (the residual of `x` is the
+/// unshot `u`, updated as each column is shot), read column by column as the matrix is
+/// stored. A patch's own entry is solved for exactly (`s = u_j / (1 − ρ_j F_jj)` leaves
+/// `u_j = 0`). After a sweep the stop measure is taken from `u` itself, then confirmed by the
+/// exact residual; the answer is `x + u = E + ρ F x`. Sequential, so the sums do not depend
+/// on the thread count.
+fn column_gauss_seidel(
+    system: &LinearSystem,
+    m: &FormFactors,
+    contraction: &Contraction,
+    params: &ReferenceParams,
+) -> Result<(Vec<Real>, usize), EvalError> {
+    let stored = m.stored().expect("called for stored matrices");
+    let (n, k) = (system.len(), k(system));
+    let (area, rho, e) = (system.areas(), system.reflectivities(), system.emissions());
+    let weight = stop_weights(contraction, k);
+    let measure = |v: &[Real]| -> Real {
+        let mut norms = vec![0.0; k];
+        for (idx, x) in v.iter().enumerate() {
+            norms[idx % k] += area[idx / k] * x.abs();
+        }
+        norms.iter().zip(&weight).map(|(r, w)| r * w).sum()
+    };
+    let diagonal: Vec<Real> = (0..n).map(|j| stored.get(j, j)).collect();
+    let mut x = vec![0.0; n * k];
+    let mut u = e.to_vec();
+    let mut shot = vec![0.0; k];
+    let mut reached = Real::INFINITY;
+    for sweep in 1..=params.max_sweeps {
+        for j in 0..n {
+            let mut any = false;
+            for (c, s) in shot.iter_mut().enumerate() {
+                let idx = j * k + c;
+                *s = u[idx] / (1.0 - rho[idx] * diagonal[j]);
+                any |= *s != 0.0;
+            }
+            if !any {
+                continue;
+            }
+            stored.for_each_in_column(j, |i, v| {
+                if i != j {
+                    let v = Real::from(v);
+                    for c in 0..k {
+                        u[i * k + c] += rho[i * k + c] * v * shot[c];
+                    }
+                }
+            });
+            for c in 0..k {
+                x[j * k + c] += shot[c];
+                u[j * k + c] = 0.0;
+            }
+        }
+        let b: Vec<Real> = x.iter().zip(&u).map(|(x, u)| x + u).collect();
+        if !b.iter().all(|v| v.is_finite()) {
+            return Err(EvalError::Diverged { sweeps: sweep });
+        }
+        let norm_b: Real = b.iter().enumerate().map(|(idx, v)| area[idx / k] * v.abs()).sum();
+        let relative = |r: Real| if r == 0.0 { 0.0 } else { r / norm_b };
+        // The residual of x is u; that of x + u = E + ρ F x is ρ F u, at most κ ‖u‖.
+        reached = relative(measure(&u) * contraction.kappa.iter().fold(0.0, |a: Real, b| a.max(*b)));
+        if reached <= params.certified {
+            let residual = Residual::with_contraction(system, m, contraction.clone(), &b)?;
+            reached = relative(residual.channel_norms().iter().zip(&weight).map(|(r, w)| r * w).sum());
+            if reached <= params.certified {
+                return Ok((b, sweep));
+            }
+        }
+    }
+    Err(EvalError::NotConverged { sweeps: params.max_sweeps, reached, target: params.certified })
+}
+
 /// The magic string at the start of a stored reference.
 const STORED_MAGIC: &[u8; 20] = b"radiosity-reference\0";
 /// The format of a stored reference; a file of another version is refused.
-pub const STORED_FORMAT_VERSION: u32 = 1;
+pub const STORED_FORMAT_VERSION: u32 = 2;
 
 impl ReferenceSolution {
     /// The reference as bytes for the on-disk cache, with `key` (what it was computed from)
@@ -358,17 +464,21 @@ impl ReferenceSolution {
         out.extend_from_slice(key.as_bytes());
         out.extend_from_slice(&(self.channels.count() as u64).to_le_bytes());
         out.extend_from_slice(&(self.n as u64).to_le_bytes());
-        let (tag, sweeps) = match self.method {
-            Method::DenseLu => (0u64, 0u64),
-            Method::GaussSeidel { sweeps } => (1, sweeps as u64),
+        let (tag, count, columns, solver) = match &self.method {
+            Method::DenseLu => (0u64, 0u64, 0u64, ""),
+            Method::GaussSeidel { sweeps } => (1, *sweeps as u64, 0, ""),
+            Method::Shooting { solver, steps, columns } => (2, *steps, *columns, solver.as_str()),
         };
-        out.extend_from_slice(&tag.to_le_bytes());
-        out.extend_from_slice(&sweeps.to_le_bytes());
+        for word in [tag, count, columns, solver.len() as u64] {
+            out.extend_from_slice(&word.to_le_bytes());
+        }
+        out.extend_from_slice(solver.as_bytes());
         let c = &self.certificate;
         for v in [c.residual_norm, c.bound, c.relative_bound, Real::from(u8::from(c.certified))] {
             out.extend_from_slice(&v.to_le_bytes());
         }
         out.extend_from_slice(&c.contraction.max_row_sum.to_le_bytes());
+        out.extend_from_slice(&u64::from(c.contraction.measured).to_le_bytes());
         for v in c.contraction.rho_max.iter().chain(&c.contraction.kappa).chain(&self.values) {
             out.extend_from_slice(&v.to_le_bytes());
         }
@@ -408,20 +518,25 @@ impl ReferenceSolution {
             return Err(refuse("its size is not this system's"));
         }
         let (k, n) = (k as usize, n as usize);
-        let method = match (r.word()?, r.word()?) {
-            (0, _) => Method::DenseLu,
-            (1, sweeps) => Method::GaussSeidel { sweeps: sweeps as usize },
+        let (tag, count, columns, solver_len) = (r.word()?, r.word()?, r.word()?, r.word()?);
+        let solver = String::from_utf8(r.take(usize::try_from(solver_len).unwrap_or(usize::MAX))?.to_vec())
+            .map_err(|_| refuse("the solver's name is not UTF-8"))?;
+        let method = match tag {
+            0 => Method::DenseLu,
+            1 => Method::GaussSeidel { sweeps: count as usize },
+            2 => Method::Shooting { solver, steps: count, columns },
             _ => return Err(refuse("unknown method")),
         };
         let (residual_norm, bound, relative_bound, certified) = (r.real()?, r.real()?, r.real()?, r.real()? != 0.0);
         let max_row_sum = r.real()?;
+        let measured = r.word()? != 0;
         let rho_max = (0..k).map(|_| r.real()).collect::<Result<Vec<_>, _>>()?;
         let kappa = (0..k).map(|_| r.real()).collect::<Result<Vec<_>, _>>()?;
         let values = (0..n * k).map(|_| r.real()).collect::<Result<Vec<_>, _>>()?;
         if r.at != body.len() {
             return Err(refuse("trailing bytes after the values"));
         }
-        let contraction = Contraction { max_row_sum, rho_max, kappa };
+        let contraction = Contraction { max_row_sum, rho_max, kappa, measured };
         let certificate = Certificate { residual_norm, bound, relative_bound, certified, contraction };
         Ok(ReferenceSolution { channels: system.channels(), n, values, method, certificate })
     }

@@ -325,7 +325,7 @@ fn run_backend(
     if backend.close_rows {
         result.closure_factors = Some(matrix.close_rows());
     }
-    let sums: Vec<Real> = (0..system.len()).map(|i| matrix.row(i).iter().sum()).collect();
+    let sums: Vec<Real> = matrix.row_sums();
     result.row_sums = (sums.iter().copied().fold(Real::INFINITY, Real::min), sums.iter().copied().fold(0.0, Real::max));
     let contraction = Contraction::from_matrix(&system, &matrix)?;
     result.contraction = contraction.max_factor();

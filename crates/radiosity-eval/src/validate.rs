@@ -469,8 +469,8 @@ fn solve_discrete(
     let options = LabOptions::default().with_residuals(false).with_cache(params.cache.clone());
     let (means, reference) = {
         let lab = Lab::new(&prepared, &params.backend, options, progress)?;
-        let means = object_means(&surface, prepared.scene(), &rgb(&lab.reference_state()));
-        (means, lab.reference().method().to_string())
+        let means = object_means(&surface, prepared.scene(), &rgb(&lab.reference_state()?));
+        (means, lab.reference().map(|r| r.method().to_string()).unwrap_or_default())
     };
     let resolution = Resolution {
         scene: arg,

@@ -5,6 +5,7 @@
 
 mod examples;
 mod gltf_export;
+mod lab;
 mod metrics;
 mod path_trace;
 mod plot;

@@ -515,6 +515,30 @@ impl StoredMatrix {
         sums
     }
 
+    /// Calls `f(i, F_ij)` for the stored entries of column `j`, rows in increasing order
+    /// (every entry when dense, the non-zeros when sparse): what products, column sums and
+    /// column-ordered sweeps over a stored matrix read, without a copy of the column.
+    ///
+    /// # Panics
+    ///
+    /// If `j` is not below `n`, like slice indexing.
+    pub fn for_each_in_column(&self, j: usize, mut f: impl FnMut(usize, f32)) {
+        assert!(j < self.n, "column {j} of a {0} × {0} matrix", self.n);
+        match &self.entries {
+            Entries::Dense(e) => {
+                for (i, &v) in e[j * self.n..(j + 1) * self.n].iter().enumerate() {
+                    f(i, v);
+                }
+            }
+            Entries::Sparse(m) => {
+                let range = m.indptr().outer_inds_sz(j);
+                for (&i, &v) in m.indices()[range.clone()].iter().zip(&m.data()[range]) {
+                    f(i as usize, v);
+                }
+            }
+        }
+    }
+
     /// Calls `f(i, j, F_ij)` for the stored entries, column by column (every entry when
     /// dense, the non-zeros when sparse).
     fn for_each_entry(&self, mut f: impl FnMut(usize, usize, f32)) {

@@ -1,0 +1,273 @@
+//! The laboratory's references and bounds: the certified bound of every step holds against
+//! the reference, `--reference none` runs without matrix or reference, `auto` weighs the
+//! matrix against the memory budget, the shooting and stored-matrix references agree with
+//! dense LU within their certificates, and the cache tells reference kinds apart.
+
+use radiosity_core::ColumnSource;
+use radiosity_eval::reference_kind::{MemoryBudget, ReferenceKind, parse_bytes};
+use radiosity_eval::reference_shooting::ShootingParams;
+use radiosity_eval::{Cache, Lab, LabOptions, Method, NoProgress, RecordPlan, ReferenceOrigin, ReferenceParams};
+use radiosity_eval::{SolverBound, metrics};
+use radiosity_ff::BackendSpec;
+use radiosity_geom::PreparedScene;
+use radiosity_solvers::{Executor, Observer, Problem, ResidualBound, SolverRegistry, State, StopRules};
+
+fn analytic() -> BackendSpec {
+    BackendSpec::parse("analytic").unwrap()
+}
+
+fn lab<'p>(scene: &'p PreparedScene, options: LabOptions) -> Lab<'p> {
+    Lab::new(scene, &analytic(), options, &NoProgress).unwrap()
+}
+
+/// Checks, at init and after every step, that the true relative L1 error of the displayed
+/// radiosity is at most the certified bound, and counts the checks.
+struct BoundCheck<'a> {
+    lab: &'a Lab<'a>,
+    known: Option<ResidualBound>,
+    checked: usize,
+    solver: String,
+    largest_ratio: f64,
+}
+
+impl Observer for BoundCheck<'_> {
+    fn observe_step(&mut self, state: &State) -> Option<f64> {
+        let system = self.lab.system();
+        let reference = self.lab.reference().unwrap();
+        let known =
+            self.known.take().unwrap_or_else(|| panic!("{} knows no bound at step {}", self.solver, state.step));
+        let bound = SolverBound::new(system, self.lab.contraction(), &known, &state.radiosity);
+        let e = metrics::errors(system, reference, &state.radiosity).unwrap();
+        let relative = e.l1 / e.reference_l1;
+        // Round-off only: the reference itself is certified to 1e-10.
+        assert!(
+            relative <= bound.relative * (1.0 + 1e-9) + 1e-10,
+            "{} at step {}: relative L1 error {relative:e} above its bound {:e}",
+            self.solver,
+            state.step,
+            bound.relative
+        );
+        assert!(bound.relative.is_finite(), "{} at step {}", self.solver, state.step);
+        if relative > 1e-8 {
+            self.largest_ratio = self.largest_ratio.max(bound.relative / relative);
+        }
+        self.checked += 1;
+        Some(e.e_rms)
+    }
+
+    fn wants_residual_bound(&self) -> bool {
+        true
+    }
+
+    fn observe_residual_bound(&mut self, _state: &State, bound: Option<&ResidualBound>) {
+        self.known = bound.cloned();
+    }
+}
+
+#[test]
+fn the_certified_bound_of_every_step_holds_against_the_reference() {
+    let scene = PreparedScene::load("cornell:res=4").unwrap();
+    let lab = lab(&scene, LabOptions::default());
+    assert!(lab.contraction().measured, "a matrix reference measures the contraction");
+    let registry = SolverRegistry::builtin();
+    let n = lab.n();
+    for name in [
+        "jacobi",
+        "gauss-seidel",
+        "sor-1.2",
+        "southwell",
+        "pr",
+        "feda",
+        "shao",
+        "xu",
+        "relax-1.5",
+        "group-jacobi-g16",
+        "group-gs-g16",
+        "group-pr-g8",
+        "pr-g8",
+        "xu-g16-m80",
+    ] {
+        let mut solver = registry.build(name).unwrap();
+        // The lab's stored matrix holds exactly the columns its source gives (rounded to
+        // f32 both ways), and serves them without computing them again.
+        let problem = Problem::new(lab.system(), lab.matrix().unwrap()).unwrap();
+        let mut check = BoundCheck { lab: &lab, known: None, checked: 0, solver: name.into(), largest_ratio: 0.0 };
+        let rules = StopRules::parse("columns=2n").unwrap();
+        Executor::new(solver.as_mut(), rules).run(&problem, &mut check).unwrap();
+        // A step is a patch or a group of up to 16: every one of 2n columns' steps is checked.
+        assert!(check.checked > 2 * n / 16, "{name}: {} steps checked", check.checked);
+        // Not vacuous: within a modest factor of the true error for the shooting methods.
+        if ["pr", "southwell", "xu"].contains(&name) {
+            assert!(check.largest_ratio < 50.0, "{name}: the bound was {}× the error", check.largest_ratio);
+        }
+    }
+}
+
+#[test]
+fn a_run_records_the_bound_beside_e_rms_and_ends_on_it() {
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let lab = lab(&scene, LabOptions::default());
+    let mut solver = SolverRegistry::builtin().build("xu").unwrap();
+    let rules = StopRules::parse("columns=2n").unwrap();
+    let o = lab.run(solver.as_mut(), &rules, &RecordPlan::default(), &NoProgress).unwrap();
+    assert!(o.points.iter().all(|p| p.bound.is_finite() && p.e_rms.is_finite()));
+    let (first, last) = (o.points.first().unwrap(), o.points.last().unwrap());
+    assert!(last.bound < 1e-2 * first.bound, "{first:?} {last:?}");
+    assert_eq!(o.last.bound, Some(last.bound));
+    // The rows of the table carry the same bound as the point of their step.
+    for row in &o.rows {
+        let p = o.points.iter().find(|p| p.step == row.step).unwrap();
+        assert_eq!(row.bound, p.bound, "step {}", row.step);
+    }
+}
+
+#[test]
+fn reference_none_measures_the_bound_alone_without_any_matrix() {
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let options = LabOptions::default().with_reference(ReferenceKind::None);
+    let lab = lab(&scene, options);
+    assert!(lab.reference().is_none() && lab.matrix().is_none());
+    assert_eq!(lab.origin(), &ReferenceOrigin::NotComputed);
+    assert_eq!(lab.chosen().kind, ReferenceKind::None);
+    assert!(!lab.contraction().measured);
+    // The same run against a matrix reference: the same bounds, step for step, but for the
+    // contraction (measured there, assumed here).
+    let with_reference = self::lab(&scene, LabOptions::default());
+    let registry = SolverRegistry::builtin();
+    let rules = StopRules::parse("columns=n").unwrap();
+    let none = lab.run(registry.build("pr").unwrap().as_mut(), &rules, &RecordPlan::default(), &NoProgress).unwrap();
+    let measured = with_reference
+        .run(registry.build("pr").unwrap().as_mut(), &rules, &RecordPlan::default(), &NoProgress)
+        .unwrap();
+    assert_eq!(none.last.e_rms, None);
+    assert!(none.points.iter().all(|p| p.e_rms.is_nan() && p.bound.is_finite()));
+    assert_eq!(none.state.radiosity, measured.state.radiosity, "the reference does not change the run");
+    for (a, b) in none.points.iter().zip(&measured.points) {
+        let (rho_max, kappa) = (lab.contraction().factor(0), with_reference.contraction().kappa[0]);
+        // The assumed κ = ρ_max against the measured one; both bounds of the same vector.
+        if kappa <= rho_max {
+            assert!(a.bound >= b.bound * (1.0 - 1e-12), "step {}: {} against {}", a.step, a.bound, b.bound);
+        }
+    }
+    // An rms= rule cannot be measured.
+    let e = lab
+        .run(
+            registry.build("pr").unwrap().as_mut(),
+            &StopRules::parse("rms=1e-3").unwrap(),
+            &RecordPlan::default(),
+            &NoProgress,
+        )
+        .unwrap_err();
+    assert!(e.to_string().contains("e_rms"), "{e}");
+    assert!(lab.reference_state().is_err());
+    // The comparison plots and tabulates the bound.
+    let dir = std::env::temp_dir().join(format!("radiosity-lab-none-{}", std::process::id()));
+    let comparison = lab.compare(vec![registry.build("pr").unwrap()], &rules, &NoProgress).unwrap();
+    comparison.write(&dir).unwrap();
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(report.contains("Reference `none`") && report.contains("## bound at n/4"), "{report}");
+    assert!(std::fs::read(dir.join("bound-columns.png")).unwrap().starts_with(b"\x89PNG"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn auto_weighs_the_matrix_against_the_memory_budget() {
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let fits = lab(&scene, LabOptions::default().with_memory(MemoryBudget::fixed(1 << 30)));
+    assert_eq!(fits.chosen().kind, ReferenceKind::Matrix, "{:?}", fits.chosen());
+    assert!(fits.matrix().is_some());
+    let tiny = || LabOptions::default().with_memory(MemoryBudget::fixed(1024));
+    let shooting = lab(&scene, tiny());
+    assert_eq!(shooting.chosen().kind, ReferenceKind::Shooting, "{:?}", shooting.chosen());
+    assert!(shooting.chosen().why.contains("needs about"), "{:?}", shooting.chosen());
+    assert!(shooting.matrix().is_none());
+    // Asked for explicitly, a matrix over the budget is refused before anything is assembled.
+    let e = Lab::new(&scene, &analytic(), tiny().with_reference(ReferenceKind::Matrix), &NoProgress).err().unwrap();
+    assert!(e.to_string().contains("RADIOSITY_MEMORY"), "{e}");
+    // The shooting reference is the matrix's within its certificate.
+    let (a, b) = (fits.reference().unwrap(), shooting.reference().unwrap());
+    assert!(matches!(b.method(), Method::Shooting { .. }), "{}", b.method());
+    assert!(b.certificate().certified && b.certificate().relative_bound <= 1e-8, "{}", b.certificate());
+    assert!(!b.certificate().contraction.measured);
+    let e = metrics::errors(fits.system(), a, b.values()).unwrap();
+    assert!(e.l1 / e.reference_l1 <= b.certificate().relative_bound + a.certificate().relative_bound + 1e-12, "{e:?}");
+}
+
+#[test]
+fn the_stored_matrix_reference_agrees_with_dense_lu() {
+    let scene = PreparedScene::load("cornell:res=4").unwrap();
+    let lu = lab(&scene, LabOptions::default());
+    assert_eq!(lu.reference().unwrap().method(), &Method::DenseLu);
+    let mut options = LabOptions::default();
+    options.reference = ReferenceParams::default().with_dense_limit(10);
+    let gs = lab(&scene, options);
+    let r = gs.reference().unwrap();
+    assert!(matches!(r.method(), Method::GaussSeidel { .. }), "{}", r.method());
+    assert!(r.certificate().certified && r.certificate().relative_bound <= 1e-10, "{}", r.certificate());
+    let e = metrics::errors(gs.system(), lu.reference().unwrap(), r.values()).unwrap();
+    assert!(e.l1 / e.reference_l1 <= 1e-10, "{e:?}");
+    assert!(gs.matrix().unwrap().stored().is_some(), "no dense f64 copy");
+    // Assembled by reciprocity, each pair once, the matrix holds the very columns solvers
+    // read: the reference solves their system.
+    let n = gs.n();
+    let (mut stored, mut computed) = (vec![0.0; n], vec![0.0; n]);
+    let mut differ = 0;
+    for j in 0..n {
+        gs.matrix().unwrap().fill_column(j, &mut stored);
+        gs.source().fill_column(j, &mut computed);
+        for (a, b) in stored.iter().zip(&computed) {
+            assert!((a - b).abs() <= 1e-7 * b.abs(), "column {j}: {a} against {b}");
+            differ += usize::from(a != b);
+        }
+    }
+    assert!(differ <= n * n / 10_000, "{differ} entries differ in their last bit");
+}
+
+#[test]
+fn the_cache_tells_reference_kinds_apart() {
+    let dir = std::env::temp_dir().join(format!("radiosity-lab-cache-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let with = |kind| {
+        let options =
+            LabOptions::default().with_cache(Some(Cache::at(&dir))).with_reference(kind).with_residuals(false);
+        let lab = lab(&scene, options);
+        (lab.origin().clone(), lab.reference().unwrap().values().to_vec(), lab.matrix().is_some())
+    };
+    let (first, matrix_values, kept) = with(ReferenceKind::Matrix);
+    assert!(matches!(first, ReferenceOrigin::Solved { .. }) && kept, "{first:?}");
+    let (shooting, shooting_values, kept) = with(ReferenceKind::Shooting);
+    assert!(matches!(shooting, ReferenceOrigin::Solved { .. }), "a shooting reference read the matrix's: {shooting:?}");
+    assert!(!kept);
+    assert_ne!(matrix_values, shooting_values);
+    let (again, values, kept) = with(ReferenceKind::Matrix);
+    assert!(matches!(again, ReferenceOrigin::Cached { .. }) && !kept, "{again:?}");
+    assert_eq!(values, matrix_values);
+    let (again, values, _) = with(ReferenceKind::Shooting);
+    assert!(matches!(again, ReferenceOrigin::Cached { .. }), "{again:?}");
+    assert_eq!(values, shooting_values);
+    // A different shooting target is another entry.
+    let options = LabOptions::default()
+        .with_cache(Some(Cache::at(&dir)))
+        .with_reference(ReferenceKind::Shooting)
+        .with_shooting(ShootingParams::default().with_certified(1e-6));
+    assert!(matches!(lab(&scene, options).origin(), ReferenceOrigin::Solved { .. }));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn memory_budgets_and_kinds_parse_or_say_why_not() {
+    assert_eq!(parse_bytes("6G").unwrap(), 6 << 30);
+    assert_eq!(parse_bytes("512MiB").unwrap(), 512 << 20);
+    assert_eq!(parse_bytes(" 1.5 g ").unwrap(), 3 << 29);
+    assert_eq!(parse_bytes("4096").unwrap(), 4096);
+    for bad in ["", "six", "6X", "-1G", "0"] {
+        let e = parse_bytes(bad).unwrap_err().to_string();
+        assert!(e.contains("RADIOSITY_MEMORY"), "{bad}: {e}");
+    }
+    for kind in ReferenceKind::NAMES {
+        assert_eq!(kind.parse::<ReferenceKind>().unwrap().to_string(), kind);
+    }
+    let e = "matrx".parse::<ReferenceKind>().unwrap_err().to_string();
+    assert!(e.contains("auto, matrix, shooting or none"), "{e}");
+}

@@ -5,7 +5,7 @@
 use crate::bars::Bars;
 use anyhow::{Result, bail};
 use radiosity_eval::reference_kind::ReferenceKind;
-use radiosity_eval::{Cache, FinalMetrics, Lab, LabOptions};
+use radiosity_eval::{Cache, FinalMetrics, Lab, LabOptions, Progress};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
 use radiosity_solvers::{Solver, SolverError, SolverRegistry, StopRules};
@@ -89,9 +89,16 @@ impl SolveArgs {
     }
 }
 
-/// Loads and prepares a scene, printing its load warnings (the loaders name the file).
+/// Loads and prepares a scene with a spinner for each stage, printing its load warnings (the
+/// loaders name the file).
 pub fn prepare(arg: &str) -> Result<PreparedScene> {
-    let prepared = PreparedScene::load(arg)?;
+    let bars = Bars::new();
+    let prepared = PreparedScene::load_reporting(arg, &|stage| {
+        bars.end();
+        bars.begin(stage, 0, "");
+    });
+    bars.end();
+    let prepared = prepared?;
     for w in &prepared.loaded.warnings {
         eprintln!("warning: {w}");
     }

@@ -141,8 +141,12 @@ impl HiddenGeometry {
     pub fn find(scene: &Scene, visibility: &Visibility, params: HiddenParams) -> HiddenGeometry {
         let grid = params.grid.max(1);
         let rays_per_point = params.rays_per_point.max(1);
-        let probes: Vec<Probe> =
-            (0..scene.len()).into_par_iter().map(|i| probe(scene, visibility, i, grid, rays_per_point)).collect();
+        // The scene's scale, once: it is a pass over every vertex.
+        let diagonal = scene.diagonal();
+        let probes: Vec<Probe> = (0..scene.len())
+            .into_par_iter()
+            .map(|i| probe(scene, visibility, diagonal, i, grid, rays_per_point))
+            .collect();
         let mut found = HiddenGeometry { rays: scene.len() * grid * grid * (2 + rays_per_point), ..Default::default() };
         let object = |i: usize| scene.object_of(i).to_string();
         let contact = |patch: usize, (other, fraction): (usize, Real)| PartialContact {
@@ -206,10 +210,16 @@ impl HiddenGeometry {
     }
 }
 
-fn probe(scene: &Scene, visibility: &Visibility, i: usize, grid: usize, rays_per_point: usize) -> Probe {
+fn probe(
+    scene: &Scene,
+    visibility: &Visibility,
+    diagonal: Real,
+    i: usize,
+    grid: usize,
+    rays_per_point: usize,
+) -> Probe {
     let patch = &scene.patches()[i];
     let n = patch.normal();
-    let diagonal = scene.diagonal();
     let (delta, gap) = (OFFSET * diagonal, CONTACT_GAP * diagonal);
     let mut rng = ChaCha8Rng::seed_from_u64(0x6869_6464_656e ^ i as u64);
     let points = grid * grid;

@@ -37,23 +37,33 @@ pub struct PreparedScene {
 impl LoadedScene {
     /// Builds the BVH and analyses the scene.
     pub fn prepare(self) -> PreparedScene {
-        PreparedScene::from_loaded(self, 0.0)
+        PreparedScene::from_loaded(self, 0.0, &|_| {})
     }
 }
 
 impl PreparedScene {
     /// Loads the scene argument `arg` ([`load_scene`]), builds its BVH and analyses it.
     pub fn load(arg: &str) -> Result<PreparedScene, GeomError> {
-        let start = Instant::now();
-        let loaded = load_scene(arg)?;
-        Ok(PreparedScene::from_loaded(loaded, start.elapsed().as_secs_f64()))
+        PreparedScene::load_reporting(arg, &|_| {})
     }
 
-    fn from_loaded(mut loaded: LoadedScene, load: f64) -> PreparedScene {
+    /// As [`PreparedScene::load`], calling `stage` with the name of each stage as it begins
+    /// (`loading`, `building the BVH`, `probing for hidden geometry`, `analysing the scene`):
+    /// each takes seconds at `10⁵` patches, and a command line shows them.
+    pub fn load_reporting(arg: &str, stage: &dyn Fn(&str)) -> Result<PreparedScene, GeomError> {
         let start = Instant::now();
+        stage("loading");
+        let loaded = load_scene(arg)?;
+        Ok(PreparedScene::from_loaded(loaded, start.elapsed().as_secs_f64(), stage))
+    }
+
+    fn from_loaded(mut loaded: LoadedScene, load: f64, stage: &dyn Fn(&str)) -> PreparedScene {
+        let start = Instant::now();
+        stage("building the BVH");
         let mut visibility = Visibility::new(&loaded.scene);
         let mut bvh = start.elapsed().as_secs_f64();
         let start = Instant::now();
+        stage("probing for hidden geometry");
         let mut hidden = HiddenGeometry::find(&loaded.scene, &visibility, HiddenParams::default());
         let mut analysis_seconds = start.elapsed().as_secs_f64();
         if !hidden.hidden.is_empty() {
@@ -76,6 +86,7 @@ impl PreparedScene {
             }
         }
         let start = Instant::now();
+        stage("analysing the scene");
         let analysis = SceneAnalysis::with_hidden(&loaded.scene, &visibility, hidden);
         analysis_seconds += start.elapsed().as_secs_f64();
         PreparedScene { loaded, visibility, analysis, seconds: SetupSeconds { load, bvh, analysis: analysis_seconds } }

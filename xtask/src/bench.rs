@@ -28,6 +28,14 @@
 //!    outside every timed run, and handed to the children in a file; the children compute
 //!    e_rms between steps and subtract that time from the wall time.
 //!
+//! 5. **`scale`** ([`scale`]): `office` at 10 990, 33 179 and 95 832 patches and the largest
+//!    real scene (`office.mgf` cut to 114 042 patches), each method in a child process with
+//!    no reference and no matrix: setup, seconds per column, columns per second, peak memory,
+//!    and wall time from scene load to a certified bound of 1e-1 and 1e-2, with the growth
+//!    exponent of the time per column in `n`. Not part of a plain `cargo xtask bench`: it
+//!    takes `--max-seconds` (default 120 s) per run and method and scene, about half an hour;
+//!    `--only scale` runs it.
+//!
 //! Each section's medians are over `--runs` runs (default 5 for `columns` and `lu`, 3 for
 //! `assembly` and `e2e`). The report states the machine's core count and ends with the
 //! performance targets beside the measurement.
@@ -41,6 +49,7 @@ mod assembly;
 mod columns;
 mod e2e;
 mod lu;
+mod scale;
 
 use crate::experiment::check_output_file;
 use crate::experiment::prepare;
@@ -52,7 +61,10 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 
 /// The sections, in report order.
-const SECTIONS: [&str; 4] = ["columns", "assembly", "lu", "e2e"];
+const SECTIONS: [&str; 5] = ["columns", "assembly", "lu", "e2e", "scale"];
+
+/// The sections a plain `cargo xtask bench` runs (`scale` is asked for by name).
+const DEFAULT_SECTIONS: [&str; 4] = ["columns", "assembly", "lu", "e2e"];
 
 /// Arguments of `bench`.
 #[derive(Debug, clap::Args)]
@@ -63,7 +75,8 @@ pub struct Args {
     /// A smoke test: a small scene, few columns, small backends, few runs (figures mean nothing).
     #[arg(long)]
     quick: bool,
-    /// Only these sections, comma-separated: columns, assembly, lu, e2e (e2e includes memory).
+    /// Only these sections, comma-separated: columns, assembly, lu, e2e (e2e includes memory),
+    /// scale (not run by default: about half an hour).
     #[arg(long, value_name = "SECTIONS")]
     only: Option<String>,
     /// Runs per measurement (default 5 for columns and lu, 3 for assembly and e2e; with
@@ -80,7 +93,7 @@ pub struct Args {
     #[arg(long, value_name = "S1,S2,…")]
     solvers: Option<String>,
     /// Longest solver time (form factors and solve) of one end-to-end run, in seconds
-    /// (default 300; with --quick 60).
+    /// (default 300, for scale 120; with --quick 60, for scale 5).
     #[arg(long, value_name = "SECONDS")]
     max_seconds: Option<f64>,
     /// Internal: run one end-to-end case in this process and print its figures as JSON.
@@ -92,6 +105,9 @@ pub struct Args {
     /// Internal: the reference solution, raw little-endian f64.
     #[arg(long, hide = true, value_name = "FILE")]
     child_reference: Option<PathBuf>,
+    /// Internal: run one scale case in this process and print its figures as JSON.
+    #[arg(long, hide = true, value_name = "SOLVER")]
+    child_scale: Option<String>,
 }
 
 /// What every section is run with.
@@ -114,6 +130,8 @@ pub(crate) struct Config {
     solvers: Vec<String>,
     /// Wall-time cap of one end-to-end run.
     max_seconds: f64,
+    /// Solver-time cap of one scale run.
+    scale_seconds: f64,
     /// The shortest timed measurement in section 1: shorter ones are repeated.
     min_seconds: f64,
 }
@@ -163,6 +181,7 @@ impl Config {
             group_sizes: if quick { vec![20, 50] } else { vec![20, 50, 100, 200, 500] },
             solvers,
             max_seconds: args.max_seconds.unwrap_or(if quick { 60.0 } else { 300.0 }),
+            scale_seconds: args.max_seconds.unwrap_or(if quick { 5.0 } else { 120.0 }),
             min_seconds: if quick { 0.05 } else { 0.2 },
         })
     }
@@ -170,7 +189,7 @@ impl Config {
 
 /// Which sections to run, from `--only`.
 fn sections(only: Option<&str>) -> Result<Vec<&'static str>> {
-    let Some(only) = only else { return Ok(SECTIONS.to_vec()) };
+    let Some(only) = only else { return Ok(DEFAULT_SECTIONS.to_vec()) };
     let mut chosen = Vec::new();
     for name in only.split(',').map(str::trim).filter(|s| !s.is_empty()) {
         let Some(section) = SECTIONS.iter().find(|s| **s == name || (name == "memory" && **s == "e2e")) else {
@@ -200,6 +219,10 @@ pub(crate) struct Findings {
 
 /// Runs `bench` (or, with the hidden child arguments, one end-to-end case).
 pub fn run(args: &Args) -> Result<()> {
+    if let Some(solver) = &args.child_scale {
+        let Some(scene) = &args.scene else { bail!("a scale child run needs --scene") };
+        return scale::child(scene, solver, args.max_seconds.unwrap_or(120.0));
+    }
     if let Some(solver) = &args.child_solver {
         let (Some(ff), Some(reference), Some(scene)) = (&args.child_ff, &args.child_reference, &args.scene) else {
             bail!("an end-to-end child run needs --scene, --child-ff and --child-reference");
@@ -219,6 +242,7 @@ pub fn run(args: &Args) -> Result<()> {
             "columns" => columns::run(&config, &prepared, &mut findings)?,
             "assembly" => assembly::run(&config, &prepared)?,
             "lu" => lu::run(&config)?,
+            "scale" => scale::run(&config)?,
             _ => e2e::run(&config, &prepared, &mut findings)?,
         };
         report += &text;

@@ -174,7 +174,9 @@ pub fn default_out(scene: &str) -> PathBuf {
 
 /// The RGB radiosity of every patch of `prepared` solved as `args` say (the reference for
 /// `reference`), and the backend's label: what `render` and export show. How the run ended
-/// goes to stderr; an `rms=` rule is measured against the reference, so it stops the run.
+/// goes to stderr, with its certified bound; an `rms=` rule is measured against the
+/// reference, so it stops the run. With `--reference auto` a run with no `rms=` rule
+/// computes no reference.
 pub fn solved_rgb(
     args: &SolveArgs,
     prepared: &PreparedScene,
@@ -183,6 +185,13 @@ pub fn solved_rgb(
     rules: &StopRules,
     kind: ReferenceKind,
 ) -> Result<(Vec<[radiosity_core::Real; 3]>, String)> {
+    // A picture needs no reference unless it is the reference or an rms= rule measures
+    // against it: `auto` then computes none, which on a large scene saves the long shooting
+    // run that would stand in for a matrix that does not fit.
+    let kind = match kind {
+        ReferenceKind::Auto if solver.is_some() && !rules.needs_error() => ReferenceKind::None,
+        kind => kind,
+    };
     let lab = lab(prepared, spec, false, kind)?;
     let rgb = match solver {
         None => lab.radiosity_rgb(None, rules, &Bars::new())?,

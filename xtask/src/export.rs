@@ -1,6 +1,7 @@
 //! `cargo xtask export --scene SCENE --solver SOLVER --out SOLVED.glb [--ff BACKEND]
-//! [--until RULES]`: writes the solved scene as binary glTF 2.0, its radiosity as vertex
-//! colours, for any glTF viewer (DESIGN §7).
+//! [--until RULES] [--reference KIND]`: writes the solved scene as binary glTF 2.0, its
+//! radiosity as vertex colours, for any glTF viewer (DESIGN §7); no reference is computed
+//! unless `--solver reference`, an `rms=` rule or `--reference` asks for one.
 //!
 //! The file is [`radiosity_eval::gltf_export`]'s: one primitive per material, unlit white
 //! materials carrying each surface's reflectivity and emission in their extras (so the file

@@ -1,5 +1,7 @@
 //! `cargo xtask render --scene SCENE --solver SOLVER --out IMAGE.png [--ff BACKEND] [--until RULES]
-//! [--camera x,y,z:tx,ty,tz[:fov]] [--width W --height H]`: a picture of the solved radiosity.
+//! [--reference KIND] [--camera x,y,z:tx,ty,tz[:fov]] [--width W --height H]`: a picture of the
+//! solved radiosity (no reference is computed unless `--solver reference`, an `rms=` rule or
+//! `--reference` asks for one).
 //!
 //! The picture is [`radiosity_eval::render`]'s: a pinhole camera (each built-in scene's
 //! default, or `--camera`) ray-casting the scene's BVH, smooth shading from the radiosity at

@@ -235,29 +235,31 @@ impl Comparison {
         md
     }
 
-    /// The compact table for the terminal.
+    /// The compact table for the terminal: with a reference, e_rms and the certified bound;
+    /// without, the bound alone.
     pub fn summary(&self) -> String {
+        let metric = self.metric();
+        let bound = if self.has_reference() { format!(" {:>10}", "bound end") } else { String::new() };
         let mut out = format!(
-            "{:<24} {:>8} {:>8} {:>10} {:>10} {:>10} {:>10} {:>9}\n",
+            "{:<24} {:>8} {:>8} {:>10} {:>10}{bound} {:>10} {:>9}\n",
             "solver",
             "steps",
             "columns",
-            format!("{} @n", self.metric()),
-            format!("{} end", self.metric()),
-            "bound end",
+            format!("{metric} @n"),
+            format!("{metric} end"),
             "1e-3 at",
             "seconds"
         );
         for o in &self.outcomes {
+            let bound = if self.has_reference() { format!(" {:>10}", cell(o.last.bound)) } else { String::new() };
             let _ = writeln!(
                 out,
-                "{:<24} {:>8} {:>8} {:>10} {:>10} {:>10} {:>10} {:>9.3}",
+                "{:<24} {:>8} {:>8} {:>10} {:>10}{bound} {:>10} {:>9.3}",
                 o.solver,
                 o.state.step,
                 o.state.columns,
                 cell(o.at_columns_point(self.n).map(|p| self.value(&p))),
                 cell(o.points.last().map(|p| self.value(p))),
-                cell(o.last.bound),
                 self.reached(o, 1e-3).map_or("—".into(), |p| p.columns.to_string()),
                 o.seconds()
             );

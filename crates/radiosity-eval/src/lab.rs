@@ -19,25 +19,36 @@
 //!
 //! ## What is measured, and when
 //!
-//! F is fetched once, outside every run, and serves the reference and the residuals; a run's
-//! columns, steps and seconds are the solver's alone. The [`Recorder`] is an observer: the
-//! executor calls it between steps, outside the timed region. It computes e_rms against the
-//! reference after every step (`O(n)`), and every metric (e_rms, e_max, the residual power and
-//! the certified bound, DESIGN §5; a product with F, `O(n²)`) at about 100 points of a run and
-//! at `n/4`, `n/2`, `n` and `2n` columns. Its own time is reported apart, as measurement.
+//! The reference is obtained once, outside every run, as [`LabOptions::kind`] says
+//! ([`crate::reference_kind`]): from the stored matrix (`matrix`), by a long shooting run
+//! without a matrix (`shooting`), or not at all (`none`); `auto` takes the matrix when it fits
+//! the memory budget. A run's columns, steps and seconds are the solver's alone. The
+//! [`Recorder`] is an observer: the executor calls it between steps, outside the timed region.
+//! After every step it computes e_rms against the reference (`O(n)`, when there is one) and the
+//! certified bound on the displayed radiosity's relative L1 error from what the solver knows
+//! without extra columns ([`SolverBound`], `O(n)`, with or without a reference); at about 100
+//! points of a run and at `n/4`, `n/2`, `n` and `2n` columns it also computes, when the stored
+//! matrix is kept, e_max and the residual power of the displayed radiosity (a product with F,
+//! `O(nnz)`). Its own time is reported apart, as measurement.
+//!
+//! **The bound's hypothesis.** With a stored matrix the contraction `κ_c` is measured on it;
+//! without one it is DESIGN §5's hypothesis, rows of F summing to at most 1 and F reciprocal,
+//! so `κ_c ≤ ρ_max,c` ([`Contraction::assumed`]). The analytic backend is exactly reciprocal
+//! and its rows sum to 1 within its stated accuracy.
 //!
 //! ## The reference cache
 //!
-//! With a [`Cache`], the reference solution is stored on disk under a key of the scene
-//! ([`crate::cache::scene_key`]), the backend's label (for built-in backends, the canonical
-//! argument with every parameter), a fingerprint of three of its columns (so that a backend
-//! whose numbers change never reads an old entry), the reference parameters and the format
-//! version, and read back next time. A lab that does not keep residuals
+//! With a [`Cache`], the reference solution is stored on disk with its certificate, under a key
+//! of the scene ([`crate::cache::scene_key`]), the backend's label (for built-in backends, the
+//! canonical argument with every parameter), a fingerprint of three of its columns (so that a
+//! backend whose numbers change never reads an old entry), the reference's kind and parameters
+//! and the format version, and read back next time. A lab that does not keep residuals
 //! ([`LabOptions::residuals`] false: `solve`, `render`, `export`) then assembles no F at all
 //! when the reference is in the cache, so a second run on a large scene starts at once; its
 //! final residual is then the solver's own (for shooting methods that of the shot radiosity
 //! `B − ΔB`, whose residual is `ΔB`), and [`FinalMetrics`] says which it has. Comparisons
-//! always keep F, so their residual columns never depend on the cache.
+//! keep the matrix whenever the reference is `matrix`, so their residual columns never
+//! depend on the cache.
 
 use crate::cache::{Cache, Lookup, scene_key};
 use crate::compare::Comparison;

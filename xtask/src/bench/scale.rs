@@ -1,0 +1,219 @@
+//! Section `scale`: the cost of a column and of a certified answer as the scene grows, with no
+//! matrix anywhere (`--reference none`).
+//!
+//! For `office` at `size` 0.186, 0.093 and 0.05 (10 990, 33 179 and 95 832 patches) and the
+//! largest real scene of `../shared/scenes` cut finer (`office.mgf` at `size=0.007`, 114 042
+//! patches), each method runs in a child process (this executable, re-invoked) for at most
+//! `--max-seconds` of solver time: from scene load, its setup (load, BVH, analysis, backend),
+//! seconds per column and columns per second, its peak resident memory (`VmHWM`), the
+//! certified bound at the end, and the wall time from scene load to a certified bound of 1e-1
+//! and 1e-2 ([`radiosity_eval::SolverBound`], the bound every recorded step carries). The
+//! growth of the time per column with `n` is fitted over the office sizes (least squares of
+//! `log(seconds per column)` against `log n`): a column computes `n` pairs, so the exponent
+//! should be about 1.
+
+use super::{Config, duration, human_bytes, median, progress, sig};
+use anyhow::{Context, Result, bail};
+use radiosity_core::Real;
+use radiosity_eval::{Lab, LabOptions, NoProgress, RecordPlan, ReferenceKind};
+use radiosity_ff::BackendSpec;
+use radiosity_solvers::{SolverRegistry, StopRules};
+use serde::{Deserialize, Serialize};
+use std::fmt::Write as _;
+use std::process::Command;
+use std::time::Instant;
+
+/// The scenes of the section: three office sizes, then the largest real scene.
+pub(crate) const SCENES: [&str; 4] = [
+    "office:size=0.186",
+    "office:size=0.093",
+    "office:size=0.05",
+    "../shared/scenes/mgf/office3/office.mgf:size=0.007",
+];
+
+/// The certified bounds timed.
+const BOUNDS: [Real; 2] = [1e-1, 1e-2];
+
+/// What one child reports.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct ScaleReport {
+    patches: usize,
+    /// Load, BVH and analysis.
+    scene_seconds: Real,
+    /// The lab's setup (backend, no reference).
+    backend_seconds: Real,
+    columns: u64,
+    /// The run's seconds (form factors and solving).
+    seconds: Real,
+    /// Of which form factors.
+    ff_seconds: Real,
+    /// The certified relative bound at the end.
+    bound: Real,
+    /// Wall seconds from scene load to each bound of [`BOUNDS`] reached, and the columns then.
+    reached: Vec<(Real, Real, u64)>,
+    peak_rss: Option<u64>,
+}
+
+/// Runs one case in this process and prints its report as JSON.
+pub(crate) fn child(scene: &str, solver: &str, max_seconds: Real) -> Result<()> {
+    let rules = StopRules::parse(&format!("time={}ms", (max_seconds * 1e3).ceil() as u64))?;
+    let mut solver = SolverRegistry::builtin().build(solver)?;
+    let start = Instant::now();
+    let prepared = crate::experiment::prepare(scene)?;
+    let scene_seconds = start.elapsed().as_secs_f64();
+    let options = LabOptions::default().with_reference(ReferenceKind::None).with_residuals(false);
+    let lab = Lab::new(&prepared, &BackendSpec::parse("analytic")?, options, &NoProgress)?;
+    let backend_seconds = start.elapsed().as_secs_f64() - scene_seconds;
+    let setup = start.elapsed().as_secs_f64();
+    let o = lab.run(solver.as_mut(), &rules, &RecordPlan::errors_only(), &NoProgress)?;
+    let reached = BOUNDS.iter().filter_map(|&b| o.bound_reached(b).map(|p| (b, setup + p.wall, p.columns))).collect();
+    let report = ScaleReport {
+        patches: lab.n(),
+        scene_seconds,
+        backend_seconds,
+        columns: o.state.columns,
+        seconds: o.seconds(),
+        ff_seconds: o.state.ff_seconds,
+        bound: o.last.bound.unwrap_or(Real::NAN),
+        reached,
+        peak_rss: super::e2e::peak_rss(),
+    };
+    println!("{}", serde_json::to_string(&report)?);
+    Ok(())
+}
+
+fn spawn(scene: &str, solver: &str, max_seconds: Real) -> Result<ScaleReport> {
+    let exe = std::env::current_exe().context("cannot find this executable to run the scale cases")?;
+    let output = Command::new(exe)
+        .args(["bench", "--scene", scene, "--child-scale", solver, "--max-seconds", &max_seconds.to_string()])
+        .output()
+        .context("cannot start a scale run")?;
+    if !output.status.success() {
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        let why = stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("no message");
+        bail!("the scale run of {solver} on {scene} failed: {}", why.trim_start_matches("error: "));
+    }
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let line = stdout.lines().rev().find(|l| l.starts_with('{')).unwrap_or_default();
+    serde_json::from_str(line).with_context(|| format!("the scale run of {solver} on {scene} printed no report"))
+}
+
+/// Runs the section.
+pub(crate) fn run(config: &Config) -> Result<String> {
+    let scenes: Vec<&str> = if config.quick { vec!["cornell:res=4", "cornell:res=8"] } else { SCENES.to_vec() };
+    let solvers = &config.solvers;
+    let bar = progress((scenes.len() * solvers.len() * config.runs_heavy) as u64, "scale");
+    let mut rows = Vec::new();
+    for scene in &scenes {
+        for solver in solvers {
+            let mut runs = Vec::new();
+            for r in 0..config.runs_heavy {
+                bar.set_message(format!("{solver} on {scene}, run {}/{}", r + 1, config.runs_heavy));
+                runs.push(spawn(scene, solver, config.scale_seconds)?);
+                bar.inc(1);
+            }
+            rows.push((scene.to_string(), solver.clone(), runs));
+        }
+    }
+    bar.finish_and_clear();
+    Ok(report(config, &rows))
+}
+
+type Row = (String, String, Vec<ScaleReport>);
+
+fn report(config: &Config, rows: &[Row]) -> String {
+    let mut out = String::from("## Scale: columns and certified bounds without a matrix\n\n");
+    let _ = writeln!(
+        out,
+        "Each run is a child process with `--reference none`, stopped after {} of solver time; wall times \
+         count from scene load. Seconds per column are the run's form-factor seconds over its columns. \
+         Medians of {} run(s).\n",
+        duration(config.scale_seconds),
+        config.runs_heavy
+    );
+    let _ = writeln!(
+        out,
+        "| scene | n | setup | method | columns | s/column | columns/s | peak memory | bound at end | to bound 1e-1 | \
+         to bound 1e-2 |\n|---|--:|--:|---|--:|--:|--:|--:|--:|--:|--:|"
+    );
+    let mut per_column: Vec<(String, f64, f64)> = Vec::new();
+    for (scene, solver, runs) in rows {
+        let m = |f: &dyn Fn(&ScaleReport) -> f64| median(&runs.iter().map(f).collect::<Vec<_>>());
+        let n = runs.first().map_or(0, |r| r.patches);
+        let setup = m(&|r| r.scene_seconds + r.backend_seconds);
+        let columns = m(&|r| r.columns as f64);
+        let spc = m(&|r| r.ff_seconds / r.columns.max(1) as f64);
+        let cps = m(&|r| r.columns as f64 / r.seconds.max(1e-12));
+        let rss = m(&|r| r.peak_rss.map_or(f64::NAN, |b| b as f64));
+        let bound = m(&|r| r.bound);
+        let to = |b: Real| {
+            let times: Vec<f64> =
+                runs.iter().map(|r| r.reached.iter().find(|x| x.0 == b).map_or(f64::NAN, |x| x.1)).collect();
+            let reached = times.iter().filter(|t| !t.is_nan()).count();
+            match reached {
+                0 => "not reached".to_string(),
+                k if k == runs.len() => duration(median(&times)),
+                k => format!("{} ({k} of {} runs)", duration(median(&times)), runs.len()),
+            }
+        };
+        per_column.push((solver.clone(), n as f64, spc));
+        let _ = writeln!(
+            out,
+            "| `{scene}` | {} | {} | `{solver}` | {} | {} | {} | {} | {} | {} | {} |",
+            sig(n as f64, 3),
+            duration(setup),
+            sig(columns, 3),
+            duration(spc),
+            sig(cps, 3),
+            if rss.is_nan() { "—".into() } else { human_bytes(rss as u64) },
+            sig(bound, 3),
+            to(1e-1),
+            to(1e-2)
+        );
+    }
+    out.push('\n');
+    // The growth exponent over the office sizes, per method.
+    let mut fits = Vec::new();
+    for solver in &config.solvers {
+        let points: Vec<(f64, f64)> = per_column
+            .iter()
+            .zip(rows)
+            .filter(|((s, _, spc), (scene, _, _))| s == solver && scene.starts_with("office:") && spc.is_finite())
+            .map(|((_, n, spc), _)| (n.ln(), spc.ln()))
+            .collect();
+        if points.len() >= 2 {
+            fits.push(format!("`{solver}` {}", sig(slope(&points), 3)));
+        }
+    }
+    if !fits.is_empty() {
+        let _ = writeln!(
+            out,
+            "Growth of the seconds per column with n over the office sizes (the slope of log–log least squares; \
+             1 is linear): {}.\n",
+            fits.join(", ")
+        );
+    }
+    out
+}
+
+/// The least-squares slope of `points` (x, y).
+fn slope(points: &[(f64, f64)]) -> f64 {
+    let k = points.len() as f64;
+    let (sx, sy) = points.iter().fold((0.0, 0.0), |(a, b), (x, y)| (a + x, b + y));
+    let (mx, my) = (sx / k, sy / k);
+    let (num, den) =
+        points.iter().fold((0.0, 0.0), |(n, d), (x, y)| (n + (x - mx) * (y - my), d + (x - mx) * (x - mx)));
+    if den > 0.0 { num / den } else { f64::NAN }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::slope;
+
+    #[test]
+    fn the_slope_of_a_power_law_is_its_exponent() {
+        let points: Vec<(f64, f64)> =
+            [1e4, 3e4, 1e5].iter().map(|n: &f64| (n.ln(), (2e-6 * n.powf(1.1)).ln())).collect();
+        assert!((slope(&points) - 1.1).abs() < 1e-12);
+    }
+}

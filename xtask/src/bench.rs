@@ -382,6 +382,22 @@ pub(crate) fn progress(len: u64, prefix: &str) -> ProgressBar {
     bar
 }
 
+/// Runs this executable again with `args` (a child case of a section, in its own process so
+/// that its peak memory is its own) and reads the JSON line it prints last; `what` names the
+/// case in errors.
+pub(crate) fn run_child<T: serde::de::DeserializeOwned>(args: &[String], what: &str) -> Result<T> {
+    let exe = std::env::current_exe().context("cannot find this executable to run the child cases")?;
+    let output = std::process::Command::new(exe).args(args).output().with_context(|| format!("cannot start {what}"))?;
+    if !output.status.success() {
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        let why = stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("no message");
+        bail!("{what} failed: {}", why.trim_start_matches("error: "));
+    }
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let line = stdout.lines().rev().find(|l| l.starts_with('{')).unwrap_or_default();
+    serde_json::from_str(line).with_context(|| format!("{what} printed no report"))
+}
+
 /// A rayon pool of `threads` threads.
 pub(crate) fn pool(threads: usize) -> Result<rayon::ThreadPool> {
     rayon::ThreadPoolBuilder::new()

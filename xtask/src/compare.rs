@@ -6,7 +6,7 @@
 //! or `--out`. A summary table ends the output.
 
 use crate::bars::Bars;
-use crate::experiment::{ReferenceArg, check_out_dir, default_out, lab, prepare};
+use crate::experiment::{ReferenceArg, check_measurable, check_out_dir, default_out, lab, prepare};
 use anyhow::{Result, bail};
 use radiosity_eval::Comparison;
 use radiosity_eval::reference_kind::ReferenceKind;
@@ -64,9 +64,7 @@ impl Plan {
             bail!("--solvers names no solver");
         }
         let rules = StopRules::parse(until)?;
-        if rules.needs_error() && kind == ReferenceKind::None {
-            bail!("an rms= rule needs a reference to measure e_rms against, and --reference none computes none");
-        }
+        check_measurable(&rules, kind)?;
         Ok(Plan { scene: scene.to_string(), solvers, spec, rules, kind })
     }
 

@@ -82,11 +82,17 @@ impl SolveArgs {
             bail!("--solver reference needs a reference: use --reference auto, matrix or shooting, not none");
         }
         let rules = StopRules::parse(&self.until)?;
-        if rules.needs_error() && kind == ReferenceKind::None {
-            bail!("an rms= rule needs a reference to measure e_rms against, and --reference none computes none");
-        }
+        check_measurable(&rules, kind)?;
         Ok((spec, solver, rules, kind))
     }
+}
+
+/// Refuses, before any work, an `rms=` rule that `--reference none` leaves nothing to measure.
+pub fn check_measurable(rules: &StopRules, kind: ReferenceKind) -> Result<()> {
+    if rules.needs_error() && kind == ReferenceKind::None {
+        bail!("an rms= rule needs a reference to measure e_rms against, and --reference none computes none");
+    }
+    Ok(())
 }
 
 /// Loads and prepares a scene with a spinner for each stage, printing its load warnings (the

@@ -237,6 +237,7 @@ enum Assembly<'s> {
 
 /// What [`Lab::setup`] works out.
 struct Setup {
+    system: LinearSystem,
     matrix: Option<Arc<FormFactors>>,
     reference: Option<ReferenceSolution>,
     origin: ReferenceOrigin,
@@ -262,7 +263,8 @@ impl<'p> Lab<'p> {
         match backend {
             Backend::Matrix(stored) => {
                 let matrix = Arc::new(FormFactors::from_stored(stored));
-                let source = SharedMatrix(matrix.clone());
+                // The backend and the lab's matrix, held once.
+                let source = matrix.clone();
                 let setup = Lab::setup(prepared, &label, &source, Assembly::Stored(matrix), &options, progress)?;
                 Ok(Lab::finish(prepared, &label, Box::new(source), serves_rows, setup))
             }
@@ -323,7 +325,7 @@ impl<'p> Lab<'p> {
             prepared,
             report: prepared.report(),
             backend: backend.to_string(),
-            system: LinearSystem::from_scene(scene),
+            system: setup.system,
             source,
             serves_rows,
             matrix: setup.matrix,
@@ -358,6 +360,7 @@ impl<'p> Lab<'p> {
                 None => Contraction::assumed(&system),
             };
             Ok::<_, LabError>(Setup {
+                system: system.clone(),
                 matrix: stored.clone(),
                 reference: None,
                 origin: ReferenceOrigin::NotComputed,
@@ -403,9 +406,14 @@ impl<'p> Lab<'p> {
         let (matrix, assembly_seconds) = match (keep_matrix, assembly) {
             (false, _) => (stored, 0.0),
             (true, Assembly::Stored(m)) => (Some(m), 0.0),
-            (true, assembly) => {
+            (true, Assembly::Reciprocal(pair)) => {
                 let start = Instant::now();
-                let m = assemble(&system, source, assembly, progress)?;
+                let m = assemble(&system, source, Some(pair), progress)?;
+                (Some(Arc::new(m)), start.elapsed().as_secs_f64())
+            }
+            (true, Assembly::Columns) => {
+                let start = Instant::now();
+                let m = assemble(&system, source, None, progress)?;
                 (Some(Arc::new(m)), start.elapsed().as_secs_f64())
             }
         };
@@ -438,7 +446,7 @@ impl<'p> Lab<'p> {
             }
         };
         let contraction = reference.certificate().contraction.clone();
-        Ok(Setup { matrix, reference: Some(reference), origin, chosen, contraction })
+        Ok(Setup { system, matrix, reference: Some(reference), origin, chosen, contraction })
     }
 
     /// The prepared scene.
@@ -680,23 +688,6 @@ fn matrix_relative_bound(system: &LinearSystem, m: &crate::metrics::Metrics, b: 
     crate::metrics::relative_without_reference(system, m.bound.bound, b)
 }
 
-/// A stored matrix that is both a lab's backend and its matrix, held once.
-struct SharedMatrix(Arc<FormFactors>);
-
-impl ColumnSource for SharedMatrix {
-    fn patch_count(&self) -> usize {
-        self.0.patch_count()
-    }
-
-    fn fill_column(&self, j: usize, column: &mut [Real]) {
-        self.0.fill_column(j, column)
-    }
-
-    fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
-        self.0.fill_row(i, row)
-    }
-}
-
 /// Decides the reference: as asked, or for `auto` a stored backend's matrix, else `matrix`
 /// when its estimated size fits the budget and `shooting` when it does not. An explicit
 /// `matrix` that does not fit is refused before anything is assembled.
@@ -766,14 +757,13 @@ pub fn require_emitters(prepared: &PreparedScene) -> Result<(), LabError> {
 fn assemble(
     system: &LinearSystem,
     source: &dyn ColumnSource,
-    assembly: Assembly<'_>,
+    pair: Option<&(dyn Fn(usize, usize) -> Real + Sync)>,
     progress: &dyn Progress,
 ) -> Result<FormFactors, LabError> {
     let n = source.patch_count() as u64;
     let done = AtomicU64::new(0);
-    let matrix = match assembly {
-        Assembly::Stored(m) => return Ok((*m).clone()),
-        Assembly::Reciprocal(pair) => {
+    let matrix = match pair {
+        Some(pair) => {
             progress.begin("assembling the matrix (each pair once)", n * (n + 1) / 2, "pairs");
             let m = StoredMatrix::assemble_reciprocal(system.areas(), pair, &|k| {
                 let k = done.fetch_max(k as u64, Ordering::Relaxed).max(k as u64);
@@ -782,7 +772,7 @@ fn assemble(
             progress.end();
             m?.0
         }
-        Assembly::Columns => {
+        None => {
             progress.begin("assembling the matrix", n, "columns");
             let m = StoredMatrix::assemble(source, &|_| {
                 let k = done.fetch_add(1, Ordering::Relaxed) + 1;

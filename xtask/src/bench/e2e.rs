@@ -10,7 +10,7 @@
 //! time out of its wall clock, which starts with the child's. It prints its figures as one JSON line, with `VmHWM` from `/proc/self/status`
 //! (the high-water mark of its resident memory; absent where `/proc` is not).
 
-use super::{Config, Findings, duration, human_bytes, median, progress, sig};
+use super::{Config, Findings, duration, human_bytes, median, progress, run_child, sig};
 use crate::bars::Bars;
 use crate::experiment::prepare;
 use anyhow::{Context, Result, bail};
@@ -25,7 +25,6 @@ use radiosity_solvers::{Executor, Problem, SolverRegistry, StopRules};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::time::Instant;
 
 /// The e_rms thresholds timed, largest first; the runs stop at the last.
@@ -130,21 +129,13 @@ impl Drop for TempFile {
 
 /// Runs one child and reads its report.
 fn spawn(config: &Config, solver: &str, ff: &str, reference: &Path) -> Result<ChildReport> {
-    let exe = std::env::current_exe().context("cannot find this executable to run the end-to-end cases")?;
-    let output = Command::new(exe)
-        .args(["bench", "--scene", &config.scene, "--child-solver", solver, "--child-ff", ff, "--child-reference"])
-        .arg(reference)
-        .args(["--max-seconds", &config.max_seconds.to_string()])
-        .output()
-        .context("cannot start an end-to-end run")?;
-    if !output.status.success() {
-        let stderr = String::from_utf8_lossy(&output.stderr);
-        let why = stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("no message");
-        bail!("the end-to-end run of {solver} over {ff} failed: {}", why.trim_start_matches("error: "));
-    }
-    let stdout = String::from_utf8_lossy(&output.stdout);
-    let line = stdout.lines().rev().find(|l| l.starts_with('{')).unwrap_or_default();
-    serde_json::from_str(line).with_context(|| format!("the end-to-end run of {solver} over {ff} printed no report"))
+    let mut args: Vec<String> = ["bench", "--scene", &config.scene, "--child-solver", solver, "--child-ff", ff]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    args.extend(["--child-reference".to_string(), reference.display().to_string()]);
+    args.extend(["--max-seconds".to_string(), config.max_seconds.to_string()]);
+    run_child(&args, &format!("the end-to-end run of {solver} over {ff}"))
 }
 
 /// Runs sections 4 and 5.

@@ -12,15 +12,14 @@
 //! `log(seconds per column)` against `log n`): a column computes `n` pairs, so the exponent
 //! should be about 1.
 
-use super::{Config, duration, human_bytes, median, progress, sig};
-use anyhow::{Context, Result, bail};
+use super::{Config, duration, human_bytes, median, progress, run_child, sig};
+use anyhow::Result;
 use radiosity_core::Real;
 use radiosity_eval::{Lab, LabOptions, NoProgress, RecordPlan, ReferenceKind};
 use radiosity_ff::BackendSpec;
 use radiosity_solvers::{SolverRegistry, StopRules};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
-use std::process::Command;
 use std::time::Instant;
 
 /// The scenes of the section: three office sizes, then the largest real scene.
@@ -83,19 +82,8 @@ pub(crate) fn child(scene: &str, solver: &str, max_seconds: Real) -> Result<()> 
 }
 
 fn spawn(scene: &str, solver: &str, max_seconds: Real) -> Result<ScaleReport> {
-    let exe = std::env::current_exe().context("cannot find this executable to run the scale cases")?;
-    let output = Command::new(exe)
-        .args(["bench", "--scene", scene, "--child-scale", solver, "--max-seconds", &max_seconds.to_string()])
-        .output()
-        .context("cannot start a scale run")?;
-    if !output.status.success() {
-        let stderr = String::from_utf8_lossy(&output.stderr);
-        let why = stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("no message");
-        bail!("the scale run of {solver} on {scene} failed: {}", why.trim_start_matches("error: "));
-    }
-    let stdout = String::from_utf8_lossy(&output.stdout);
-    let line = stdout.lines().rev().find(|l| l.starts_with('{')).unwrap_or_default();
-    serde_json::from_str(line).with_context(|| format!("the scale run of {solver} on {scene} printed no report"))
+    let args = ["bench", "--scene", scene, "--child-scale", solver, "--max-seconds", &max_seconds.to_string()];
+    run_child(&args.map(String::from), &format!("the scale run of {solver} on {scene}"))
 }
 
 /// Runs the section.

@@ -685,7 +685,7 @@ fn no_reference() -> LabError {
 /// The F-based certified bound of `b` relative to `Σ A |B*|`, in the reference-free form of
 /// [`SolverBound`] (so that it reads like the solver's own).
 fn matrix_relative_bound(system: &LinearSystem, m: &crate::metrics::Metrics, b: &[Real]) -> Real {
-    crate::metrics::relative_without_reference(system, m.bound.bound, b)
+    crate::metrics::relative_without_reference(system, m.bound.bound, b, false)
 }
 
 /// Decides the reference: as asked, or for `auto` a stored backend's matrix, else `matrix`

@@ -411,11 +411,15 @@ impl<'a> Evaluator<'a> {
 /// or DESIGN §5's hypothesis ([`Contraction::assumed`]).
 ///
 /// Per channel `‖r_c‖_A ≤ κ_c ‖d_c‖_A + ‖e_c‖_A` ([`ResidualBound::residual_norm`]), and
-/// `Σ_c ‖B_c − B*_c‖_A ≤ Σ_c ‖r_c‖_A / (1 − q_c)`, as in [`Residual::bound`]. The relative
-/// figure needs no reference: `‖B*‖_A ≥ ‖B‖_A − ‖B − B*‖_A` and `B* ≥ E` elementwise, so
-/// `Σ A |B − B*| / Σ A |B*| ≤ bound / max(Σ A |B| − bound, Σ A E)`. It is therefore the same
-/// number with or without a reference, and a run with `--reference none` reports what one
-/// with a reference does (but for the contraction, measured on a stored matrix).
+/// `Σ_c ‖B_c − B*_c‖_A ≤ Σ_c ‖r_c‖_A / (1 − κ_c)`, since `‖(I − ρ_c F)⁻¹‖_A ≤ 1 / (1 − κ_c)`
+/// when `κ_c = ‖ρ_c F‖_A < 1` (the `sharp` form of [`Residual::bound`]; with
+/// [`Contraction::assumed`], `κ_c = ρ_max,c` and this is DESIGN §5's certificate). The
+/// relative figure needs no reference: `‖B*‖_A ≥ ‖B‖_A − ‖B − B*‖_A` and `B* ≥ E`
+/// elementwise, and when the solver knows its residual is non-negative
+/// ([`ResidualBound::nonnegative`]) `B* ≥ B`, so `‖B*‖_A ≥ Σ A B`; the bound is divided by
+/// the largest of the three. It is therefore the same number with or without a reference,
+/// and a run with `--reference none` reports what one with a reference does (but for the
+/// contraction, measured on a stored matrix).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct SolverBound {
@@ -431,22 +435,24 @@ impl SolverBound {
         let k = system.channels().count();
         let mut absolute = 0.0;
         for c in 0..k.min(known.channels()) {
-            let q = contraction.factor(c);
+            let q = contraction.kappa[c];
             if q >= 1.0 {
                 absolute = Real::INFINITY;
                 break;
             }
-            absolute += known.residual_norm(c, contraction.kappa[c]) / (1.0 - q);
+            absolute += known.residual_norm(c, q) / (1.0 - q);
         }
-        SolverBound { absolute, relative: relative_without_reference(system, absolute, b) }
+        let relative = relative_without_reference(system, absolute, b, known.nonnegative);
+        SolverBound { absolute, relative }
     }
 }
 
 /// `absolute`, a bound on `Σ A |b − B*|`, relative to a lower bound on `Σ A |B*|` that needs no
-/// reference: the larger of `Σ A |b| − absolute` (the triangle inequality) and `Σ A E`
-/// (`B* = Σ_k (ρ F)^k E ≥ E`, every term non-negative). 0 when `absolute` is; infinite when
-/// nothing emits and the first is not positive.
-pub(crate) fn relative_without_reference(system: &LinearSystem, absolute: Real, b: &[Real]) -> Real {
+/// reference: the largest of `Σ A |b| − absolute` (the triangle inequality), `Σ A E`
+/// (`B* = Σ_k (ρ F)^k E ≥ E`, every term non-negative) and, when `below` (`b ≤ B*`
+/// elementwise, [`ResidualBound::nonnegative`]), `Σ A b`. 0 when `absolute` is; infinite
+/// when the lower bound is not positive.
+pub(crate) fn relative_without_reference(system: &LinearSystem, absolute: Real, b: &[Real], below: bool) -> Real {
     if absolute == 0.0 {
         return 0.0;
     }
@@ -454,6 +460,7 @@ pub(crate) fn relative_without_reference(system: &LinearSystem, absolute: Real, 
     let area = system.areas();
     let norm: Real = b.iter().enumerate().map(|(idx, v)| area[idx / k] * v.abs()).sum();
     let emitted: Real = system.emissions().iter().enumerate().map(|(idx, e)| area[idx / k] * e.abs()).sum();
-    let lower = (norm - absolute).max(emitted);
+    let signed: Real = if below { b.iter().enumerate().map(|(idx, v)| area[idx / k] * v).sum() } else { 0.0 };
+    let lower = (norm - absolute).max(emitted).max(signed);
     if lower > 0.0 { absolute / lower } else { Real::INFINITY }
 }

@@ -3,7 +3,10 @@
 use crate::{cube_form_factors, random_system};
 use approx::assert_relative_eq;
 use radiosity_core::{Channels, ColumnSource, DenseColumns, LinearSystem};
-use radiosity_eval::{EvalError, Evaluator, FormFactors, ReferenceParams, ReferenceSolution, Residual, metrics};
+use radiosity_eval::{
+    EvalError, Evaluator, FormFactors, ReferenceParams, ReferenceSolution, Residual, SolverBound, metrics,
+};
+use radiosity_solvers::ResidualBound;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -38,6 +41,27 @@ fn metrics_of_emission_alone_by_hand() {
     assert!(m.bound.certified);
     assert_relative_eq!(m.bound.bound, 0.5, max_relative = 1e-15);
     assert!(m.bound.bound >= m.l1_error);
+}
+
+#[test]
+fn the_solvers_bound_by_hand_and_what_the_sign_of_the_residual_buys() {
+    // PR on the pair after shooting patch 0: B = (1, 1/12), ΔB = (0, 1/12) ≥ 0, so the
+    // residual ρ F ΔB ≥ 0 and B ≤ B*. ‖ΔB‖_A = 3/12; with the measured κ = 1/4 the absolute
+    // bound is κ ‖ΔB‖_A / (1 − κ) = 1/12 (true: 1/47 + 3/564 = 15/564).
+    let (system, f, reference) = pair();
+    let b = [1.0, 1.0 / 12.0];
+    let contraction = Residual::from_columns(&system, &f, &b).unwrap().contraction().clone();
+    let known = ResidualBound::new(vec![0.25], vec![0.0]);
+    let unsigned = SolverBound::new(&system, &contraction, &known, &b);
+    assert_relative_eq!(unsigned.absolute, 1.0 / 12.0, max_relative = 1e-15);
+    // Relative to max(‖B‖_A − 1/12, Σ A E) = 7/6 without the sign, to Σ A B = 5/4 with it.
+    assert_relative_eq!(unsigned.relative, 1.0 / 14.0, max_relative = 1e-15);
+    let signed = SolverBound::new(&system, &contraction, &known.with_nonnegative_residual(true), &b);
+    assert_relative_eq!(signed.relative, 1.0 / 15.0, max_relative = 1e-15);
+    // Both hold: the true relative L1 error is (15/564) / (60/47) = 1/48.
+    let e = metrics::errors(&system, &reference, &b).unwrap();
+    assert_relative_eq!(e.l1 / e.reference_l1, 1.0 / 48.0, max_relative = 1e-12);
+    assert!(e.l1 <= signed.absolute && e.l1 / e.reference_l1 <= signed.relative);
 }
 
 #[test]

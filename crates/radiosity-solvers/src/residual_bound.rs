@@ -64,6 +64,15 @@
 //!   `r_l = r_l(B^k) + ρ_l Σ_{j solved} F_lj δ^k_j` with `r(B^k) = ρ F δ^{k-1}` (own group
 //!   left out; `δ^{-1} = E`): `d` and `e` as for point Jacobi.
 //!
+//! ## The sign of the residual
+//!
+//! A solver may also state that its residual is elementwise non-negative
+//! ([`ResidualBound::nonnegative`]). Then `B* − B = (I − ρ F)⁻¹ r = Σ_k (ρ F)^k r ≥ 0`, so
+//! `Σ A B* ≥ Σ A B`, a lower bound on the answer's norm that a caller can divide by (the
+//! relative bound of `radiosity-eval`). Shooting states it whenever every `ΔB ≥ 0`, since then
+//! `r = ρ F ΔB ≥ 0`: always for `southwell` and `pr` from non-negative emissions, and for
+//! overshooting methods until some patch is overshot. Gathering solvers do not state it.
+//!
 //! Group gathering has no fallback (a singular group system is an error), and its LU solves
 //! are exact but for round-off, so nothing enters `e`. Every built-in solver returns a bound;
 //! a solver of one's own returns `None` unless it implements [`crate::Solver::residual_bound`].
@@ -91,6 +100,9 @@ pub struct ResidualBound {
     pub through_f: Vec<Real>,
     /// Per channel, `‖e_c‖_A`.
     pub direct: Vec<Real>,
+    /// Whether the residual is known to be elementwise non-negative, so that `B* ≥ B`
+    /// (module doc); `false` when the solver does not know.
+    pub nonnegative: bool,
 }
 
 impl ResidualBound {
@@ -98,7 +110,13 @@ impl ResidualBound {
     /// number of channels in both).
     pub fn new(through_f: Vec<Real>, direct: Vec<Real>) -> ResidualBound {
         assert_eq!(through_f.len(), direct.len(), "a residual bound has as many direct terms as channels");
-        ResidualBound { through_f, direct }
+        ResidualBound { through_f, direct, nonnegative: false }
+    }
+
+    /// The same bound, stating that the residual is elementwise non-negative (module doc).
+    pub fn with_nonnegative_residual(mut self, nonnegative: bool) -> ResidualBound {
+        self.nonnegative = nonnegative;
+        self
     }
 
     /// `‖r_c‖_A ≤ kappa[c] · through_f[c] + direct[c]` for channel c.
@@ -124,11 +142,13 @@ pub fn area_norms(areas: &[Real], values: &[Real], channels: usize) -> Vec<Real>
     norms
 }
 
-/// The bound of a shooting method: `d = ΔB`, `e = 0` (module doc).
+/// The bound of a shooting method: `d = ΔB`, `e = 0`, and `r = ρ F ΔB ≥ 0` when every
+/// `ΔB ≥ 0` (module doc).
 pub(crate) fn shooting(problem: &Problem<'_>, state: &State) -> ResidualBound {
     let through_f = area_norms(problem.system().areas(), &state.unshot, state.channels);
     let direct = vec![0.0; state.channels];
-    ResidualBound { through_f, direct }
+    let nonnegative = state.unshot.iter().all(|v| *v >= 0.0);
+    ResidualBound { through_f, direct, nonnegative }
 }
 
 /// What a sweeping (gathering) solver keeps for its bound: per channel, `Σ A_j |u_j|` of the
@@ -169,6 +189,6 @@ impl SweepChanges {
             .collect();
         let factor = (1.0 / omega - 1.0).abs();
         let direct = norms.iter().map(|u| factor * u).collect();
-        ResidualBound { through_f, direct }
+        ResidualBound { through_f, direct, nonnegative: false }
     }
 }

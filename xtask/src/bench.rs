@@ -234,16 +234,20 @@ pub fn run(args: &Args) -> Result<()> {
         check_output_file(out)?;
     }
     let config = Config::new(args)?;
-    let prepared = prepare(&config.scene)?;
-    let mut report = header(&config, &prepared, &sections);
+    // `lu` and `scale` bring their own systems and scenes: the bench scene is loaded only for
+    // the sections that measure on it.
+    let needs_scene = sections.iter().any(|s| !["lu", "scale"].contains(s));
+    let prepared = if needs_scene { Some(prepare(&config.scene)?) } else { None };
+    let mut report = header(&config, prepared.as_ref(), &sections);
     let mut findings = Findings::default();
     for section in &sections {
-        let text = match *section {
-            "columns" => columns::run(&config, &prepared, &mut findings)?,
-            "assembly" => assembly::run(&config, &prepared)?,
-            "lu" => lu::run(&config)?,
-            "scale" => scale::run(&config)?,
-            _ => e2e::run(&config, &prepared, &mut findings)?,
+        let text = match (*section, &prepared) {
+            ("lu", _) => lu::run(&config)?,
+            ("scale", _) => scale::run(&config)?,
+            ("columns", Some(prepared)) => columns::run(&config, prepared, &mut findings)?,
+            ("assembly", Some(prepared)) => assembly::run(&config, prepared)?,
+            (_, Some(prepared)) => e2e::run(&config, prepared, &mut findings)?,
+            (_, None) => bail!("the section {section} needs the bench scene"),
         };
         report += &text;
     }
@@ -256,22 +260,24 @@ pub fn run(args: &Args) -> Result<()> {
 }
 
 /// The title, the machine and how the figures were taken.
-fn header(config: &Config, prepared: &PreparedScene, sections: &[&str]) -> String {
+fn header(config: &Config, prepared: Option<&PreparedScene>, sections: &[&str]) -> String {
     let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
     let mut out = String::from("# Benchmarks (`cargo xtask bench`)\n\n");
     if config.quick {
         out += "**Smoke test (`--quick`): small scene and backends, figures mean nothing.**\n\n";
     }
+    let scene = match prepared {
+        Some(prepared) => format!("Scene `{}`: {} patches. ", config.scene, prepared.loaded.scene.len()),
+        None => String::new(),
+    };
     let _ = writeln!(
         out,
         "Machine: {cores} cores available ({} rayon threads by default), {} {}, release build: {}. \
-         Scene `{}`: {} patches. Medians of {} runs (assembly and end-to-end: {}).\n",
+         {scene}Figures are medians over the runs of each: {} (assembly, end-to-end and scale: {}).\n",
         rayon::current_num_threads(),
         std::env::consts::OS,
         std::env::consts::ARCH,
         if cfg!(debug_assertions) { "no (debug assertions on)" } else { "yes" },
-        config.scene,
-        prepared.loaded.scene.len(),
         config.runs_cheap,
         config.runs_heavy,
     );

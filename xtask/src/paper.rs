@@ -1,4 +1,4 @@
-//! `cargo xtask paper [--out DIR] [--scenes S1,S2,…]`: the equivalents of Rousselle &
+//! `cargo xtask paper [--out DIR] [--scenes S1,S2,…] [--ff BACKEND]`: the equivalents of Rousselle &
 //! Renaud's figures 1–3 ([`radiosity_eval::paper`]), each of their claims set beside our
 //! measurement. Each scene gets its own `compare` folder (table, report, plots); `report.md`
 //! at the top shows the step plots and the claims. The office takes several minutes: its
@@ -7,7 +7,8 @@
 use crate::compare::Plan;
 use crate::experiment::{ReferenceArg, default_out};
 use anyhow::{Context, Result, bail};
-use radiosity_eval::paper::{FIGURES, HEADER, RULES, section};
+use radiosity_eval::paper::{FIGURES, RULES, header, section};
+use radiosity_ff::BackendSpec;
 use std::path::PathBuf;
 
 /// Arguments of `paper`.
@@ -19,6 +20,10 @@ pub struct Args {
     /// Which of the paper's scenes to run: multi-cubes, labyrinth, office.
     #[arg(long, default_value = "multi-cubes,labyrinth,office")]
     scenes: String,
+    /// The form-factor backend, with `:key=value` parameters: the paper's claims under other
+    /// form factors (the paper used analytic ones).
+    #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic")]
+    ff: String,
     #[command(flatten)]
     reference: ReferenceArg,
 }
@@ -35,9 +40,9 @@ pub fn run(args: &Args) -> Result<()> {
     }
     let kind = args.reference.parse()?;
     let plans =
-        figures.iter().map(|f| Plan::new(f.scene, f.solvers, "analytic", RULES, kind)).collect::<Result<Vec<_>>>()?;
+        figures.iter().map(|f| Plan::new(f.scene, f.solvers, &args.ff, RULES, kind)).collect::<Result<Vec<_>>>()?;
     let out = args.out.clone().unwrap_or_else(|| default_out("paper"));
-    let mut md = String::from(HEADER);
+    let mut md = header(&BackendSpec::parse(&args.ff)?.canonical());
     for (figure, plan) in figures.iter().zip(plans) {
         let comparison = plan.execute(&out.join(figure.scene))?;
         print!("{}", comparison.summary());

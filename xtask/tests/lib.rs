@@ -16,6 +16,12 @@ fn cache_dir() -> std::path::PathBuf {
     std::env::temp_dir().join(format!("radiosity-test-cache-{}", std::process::id()))
 }
 
+/// Analytic form factors with a small shadow-ray budget, for tests of the command line on
+/// `multi-cubes`, whose occluded pairs make the default budget cost about 30 ms a column:
+/// what these tests check does not depend on the budget, and the default one is checked
+/// against Howell and the path tracer in `radiosity-ff` and `radiosity-eval`.
+const QUICK_FF: &str = "analytic:budget=1024";
+
 fn xtask(args: &[&str]) -> assert_cmd::assert::Assert {
     Command::cargo_bin("xtask")
         .unwrap()
@@ -140,9 +146,11 @@ fn compare_writes_the_table_the_report_and_the_plots() {
 #[test]
 fn paper_sets_each_claim_beside_the_measurement() {
     let dir = std::env::temp_dir().join(format!("radiosity-paper-{}", std::process::id()));
-    xtask(&["paper", "--scenes", "multi-cubes", "--out", dir.to_str().unwrap()]).success();
+    xtask(&["paper", "--scenes", "multi-cubes", "--ff", QUICK_FF, "--out", dir.to_str().unwrap()]).success();
     let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
-    for text in ["Fig. 1", "n = 480", "`xu-g30-m480` beats `xu-g30` at n steps", "multi-cubes/e_rms-steps.png"] {
+    for text in
+        ["Fig. 1", "n = 480", "`xu-g30-m480` beats `xu-g30` at n steps", "multi-cubes/e_rms-steps.png", "budget=1024"]
+    {
         assert!(report.contains(text), "missing {text} in\n{report}");
     }
     // Each claim row ends with its verdict.
@@ -363,7 +371,18 @@ fn ff_matrix_is_cached_and_loaded_the_second_time() {
 
 #[test]
 fn solve_reports_error_against_the_reference() {
-    let r = stdout_json(&["solve", "--scene", "multi-cubes", "--solver", "pr", "--until", "columns=480", "--json"]);
+    let r = stdout_json(&[
+        "solve",
+        "--scene",
+        "multi-cubes",
+        "--ff",
+        QUICK_FF,
+        "--solver",
+        "pr",
+        "--until",
+        "columns=480",
+        "--json",
+    ]);
     let stats = &r["stats"];
     assert_eq!(stats["columns"], 480);
     assert_eq!(stats["steps"], 480);
@@ -412,7 +431,18 @@ fn solve_reference_is_the_exact_solution_and_group_methods_run() {
 #[test]
 fn solve_stops_at_every_kind_of_rule() {
     let stats = |rules: &str| {
-        let r = stdout_json(&["solve", "--scene", "multi-cubes", "--solver", "pr", "--until", rules, "--json"]);
+        let r = stdout_json(&[
+            "solve",
+            "--scene",
+            "multi-cubes",
+            "--ff",
+            QUICK_FF,
+            "--solver",
+            "pr",
+            "--until",
+            rules,
+            "--json",
+        ]);
         r["stats"].clone()
     };
     let s = stats("columns=100");

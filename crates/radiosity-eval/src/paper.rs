@@ -115,8 +115,13 @@ pub fn section(figure: &Figure, c: &Comparison) -> String {
     md
 }
 
-/// The report's opening.
-pub const HEADER: &str = "# The paper's figures and claims, measured\n\nRousselle & Renaud, *Group Accelerated \
-    Shooting Methods for Radiosity*, §5. Every method runs to n shooting steps with analytic form factors at their \
-    defaults and the automatic group frequency (group steps as often as keeps their counted operations near 5% of \
-    the columns' modelled cost). Each scene's folder holds its full comparison report.\n\n";
+/// The report's opening, naming the form-factor backend every run used (`backend`, its
+/// canonical argument).
+pub fn header(backend: &str) -> String {
+    format!(
+        "# The paper's figures and claims, measured\n\nRousselle & Renaud, *Group Accelerated Shooting Methods \
+         for Radiosity*, §5. Every method runs to n shooting steps with the form factors `{backend}` and the \
+         automatic group frequency (group steps as often as keeps their counted operations near 5% of the \
+         columns' modelled cost). Each scene's folder holds its full comparison report.\n\n"
+    )
+}

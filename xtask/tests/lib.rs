@@ -22,6 +22,11 @@ fn cache_dir() -> std::path::PathBuf {
 /// against Howell and the path tracer in `radiosity-ff` and `radiosity-eval`.
 const QUICK_FF: &str = "analytic:budget=1024";
 
+/// `solve --json` of `pr` on `multi-cubes` with [`QUICK_FF`] until `rules`.
+fn quick_pr(rules: &str) -> Value {
+    stdout_json(&["solve", "--scene", "multi-cubes", "--ff", QUICK_FF, "--solver", "pr", "--until", rules, "--json"])
+}
+
 fn xtask(args: &[&str]) -> assert_cmd::assert::Assert {
     Command::cargo_bin("xtask")
         .unwrap()
@@ -371,18 +376,7 @@ fn ff_matrix_is_cached_and_loaded_the_second_time() {
 
 #[test]
 fn solve_reports_error_against_the_reference() {
-    let r = stdout_json(&[
-        "solve",
-        "--scene",
-        "multi-cubes",
-        "--ff",
-        QUICK_FF,
-        "--solver",
-        "pr",
-        "--until",
-        "columns=480",
-        "--json",
-    ]);
+    let r = quick_pr("columns=480");
     let stats = &r["stats"];
     assert_eq!(stats["columns"], 480);
     assert_eq!(stats["steps"], 480);
@@ -431,18 +425,7 @@ fn solve_reference_is_the_exact_solution_and_group_methods_run() {
 #[test]
 fn solve_stops_at_every_kind_of_rule() {
     let stats = |rules: &str| {
-        let r = stdout_json(&[
-            "solve",
-            "--scene",
-            "multi-cubes",
-            "--ff",
-            QUICK_FF,
-            "--solver",
-            "pr",
-            "--until",
-            rules,
-            "--json",
-        ]);
+        let r = quick_pr(rules);
         r["stats"].clone()
     };
     let s = stats("columns=100");

@@ -234,23 +234,29 @@ pub fn run(args: &Args) -> Result<()> {
         check_output_file(out)?;
     }
     let config = Config::new(args)?;
-    // `lu` and `scale` bring their own systems and scenes: the bench scene is loaded only for
-    // the sections that measure on it.
-    let needs_scene = sections.iter().any(|s| !["lu", "scale"].contains(s));
-    let prepared = if needs_scene { Some(prepare(&config.scene)?) } else { None };
-    let mut report = header(&config, prepared.as_ref(), &sections);
+    // `lu` and `scale` bring their own systems and scenes: the bench scene is loaded by the
+    // first section that measures on it, and the header, written last, names it only then.
+    let mut prepared: Option<PreparedScene> = None;
+    let mut body = String::new();
     let mut findings = Findings::default();
     for section in &sections {
-        let text = match (*section, &prepared) {
-            ("lu", _) => lu::run(&config)?,
-            ("scale", _) => scale::run(&config)?,
-            ("columns", Some(prepared)) => columns::run(&config, prepared, &mut findings)?,
-            ("assembly", Some(prepared)) => assembly::run(&config, prepared)?,
-            (_, Some(prepared)) => e2e::run(&config, prepared, &mut findings)?,
-            (_, None) => bail!("the section {section} needs the bench scene"),
+        body += &match *section {
+            "lu" => lu::run(&config)?,
+            "scale" => scale::run(&config)?,
+            on_scene => {
+                let scene = match prepared {
+                    Some(ref scene) => scene,
+                    None => prepared.insert(prepare(&config.scene)?),
+                };
+                match on_scene {
+                    "columns" => columns::run(&config, scene, &mut findings)?,
+                    "assembly" => assembly::run(&config, scene)?,
+                    _ => e2e::run(&config, scene, &mut findings)?,
+                }
+            }
         };
-        report += &text;
     }
+    let mut report = header(&config, prepared.as_ref(), &sections) + &body;
     report += &targets(&findings, &config.scene);
     print!("{report}");
     if let Some(out) = &args.out {

@@ -68,6 +68,11 @@ impl Plan {
         Ok(Plan { scene: scene.to_string(), solvers, spec, rules, kind })
     }
 
+    /// The form-factor backend every solver runs on.
+    pub fn backend(&self) -> &BackendSpec {
+        &self.spec
+    }
+
     /// Runs every solver and writes the report, table and plots into `out`.
     pub fn execute(self, out: &Path) -> Result<Comparison> {
         let prepared = prepare(&self.scene)?;

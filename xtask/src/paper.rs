@@ -8,7 +8,6 @@ use crate::compare::Plan;
 use crate::experiment::{ReferenceArg, default_out};
 use anyhow::{Context, Result, bail};
 use radiosity_eval::paper::{FIGURES, RULES, header, section};
-use radiosity_ff::BackendSpec;
 use std::path::PathBuf;
 
 /// Arguments of `paper`.
@@ -42,7 +41,7 @@ pub fn run(args: &Args) -> Result<()> {
     let plans =
         figures.iter().map(|f| Plan::new(f.scene, f.solvers, &args.ff, RULES, kind)).collect::<Result<Vec<_>>>()?;
     let out = args.out.clone().unwrap_or_else(|| default_out("paper"));
-    let mut md = header(&BackendSpec::parse(&args.ff)?.canonical());
+    let mut md = header(&plans.first().map_or_else(String::new, |p| p.backend().canonical()));
     for (figure, plan) in figures.iter().zip(plans) {
         let comparison = plan.execute(&out.join(figure.scene))?;
         print!("{}", comparison.summary());

@@ -72,46 +72,42 @@ fn kappa(system: &LinearSystem, f: &DenseColumns) -> Vec<Real> {
         .collect()
 }
 
-/// Per channel, `‖r_c‖_A` of `r = E + ρ F B − B`, and the scale of its round-off,
-/// `Σ_i A_i (|E_ic| + ρ_ic Σ_j F_ij |B_jc| + |B_ic|)`.
-fn residual_norms(system: &LinearSystem, f: &DenseColumns, b: &[Real]) -> Vec<(Real, Real)> {
-    let (n, k, area) = (system.len(), system.channels().count(), system.areas());
-    (0..k)
-        .map(|c| {
-            let (mut norm, mut scale) = (0.0, 0.0);
-            for i in 0..n {
-                let (fb, fb_abs) = (0..n).fold((0.0, 0.0), |(s, t), j| {
-                    let v = f.get(i, j) * b[j * k + c];
-                    (s + v, t + v.abs())
-                });
-                let r = system.e(i, c) + system.rho(i, c) * fb - b[i * k + c];
-                norm += area[i] * r.abs();
-                scale += area[i] * (system.e(i, c).abs() + system.rho(i, c) * fb_abs + b[i * k + c].abs());
-            }
-            (norm, scale)
-        })
-        .collect()
-}
-
-/// The most negative `r_ic` of `r = E + ρ F B − B` relative to its round-off scale
-/// `|E_ic| + ρ_ic Σ_j F_ij |B_jc| + |B_ic|` (0 when none is negative).
-fn most_negative_residual(system: &LinearSystem, f: &DenseColumns, b: &[Real]) -> Real {
+/// Every `(r_ic, s_ic)` of `r = E + ρ F B − B`, patch-major, with the scale of its round-off
+/// `s_ic = |E_ic| + ρ_ic Σ_j F_ij |B_jc| + |B_ic|`.
+fn residual_entries(system: &LinearSystem, f: &DenseColumns, b: &[Real]) -> Vec<(Real, Real)> {
     let (n, k) = (system.len(), system.channels().count());
-    let mut worst: Real = 0.0;
-    for i in 0..n {
-        for c in 0..k {
+    (0..n * k)
+        .map(|idx| {
+            let (i, c) = (idx / k, idx % k);
             let (fb, fb_abs) = (0..n).fold((0.0, 0.0), |(s, t), j| {
                 let v = f.get(i, j) * b[j * k + c];
                 (s + v, t + v.abs())
             });
-            let r = system.e(i, c) + system.rho(i, c) * fb - b[i * k + c];
-            let scale = system.e(i, c).abs() + system.rho(i, c) * fb_abs + b[i * k + c].abs();
-            if scale > 0.0 {
-                worst = worst.min(r / scale);
-            }
-        }
+            let r = system.e(i, c) + system.rho(i, c) * fb - b[idx];
+            (r, system.e(i, c).abs() + system.rho(i, c) * fb_abs + b[idx].abs())
+        })
+        .collect()
+}
+
+/// Per channel, `‖r_c‖_A` of `r = E + ρ F B − B`, and the scale of its round-off,
+/// `Σ_i A_i s_ic` ([`residual_entries`]).
+fn residual_norms(system: &LinearSystem, f: &DenseColumns, b: &[Real]) -> Vec<(Real, Real)> {
+    let (k, area) = (system.channels().count(), system.areas());
+    let mut norms = vec![(0.0, 0.0); k];
+    for (idx, (r, scale)) in residual_entries(system, f, b).into_iter().enumerate() {
+        norms[idx % k].0 += area[idx / k] * r.abs();
+        norms[idx % k].1 += area[idx / k] * scale;
     }
-    worst
+    norms
+}
+
+/// The most negative `r_ic / s_ic` ([`residual_entries`]; 0 when no entry is negative).
+fn most_negative_residual(system: &LinearSystem, f: &DenseColumns, b: &[Real]) -> Real {
+    residual_entries(system, f, b)
+        .into_iter()
+        .filter(|(_, scale)| *scale > 0.0)
+        .map(|(r, scale)| r / scale)
+        .fold(0.0, Real::min)
 }
 
 /// Checks every bound the executor passes against the exact residual, and keeps the ratios

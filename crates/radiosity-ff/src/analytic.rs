@@ -60,12 +60,13 @@
 //! are drawn from a Xoshiro256++ stream keyed by the seed and the unordered pair, so
 //! `V_ij = V_ji` exactly and every column is the same whatever the thread that computes it.
 
-use crate::ff_point_polygon::{MAX_CLIPPED, clip_above, distance_to_polygon, point_to_polygon};
+use crate::ff_point_polygon::{MAX_CLIPPED, clip_above, distance_to_polygon, point_to_polygon, point_to_polygon_x4};
 use crate::guard::ClampCounter;
 use crate::pair_visibility::{self, RayBudget};
 use crate::quadrature::{Panel, for_each_point_in, gauss_legendre, order_for, parametrisation};
 use crate::spec::AnalyticParams;
 use crate::traced::ShadowSegment;
+use crate::visibility_cache::{CacheFigures, Record, VisibilityCache};
 use radiosity_core::{ColumnSource, Patch, Real, Scene, Vec3};
 use radiosity_geom::{SceneAnalysis, Visibility};
 use rand::SeedableRng;
@@ -102,6 +103,9 @@ pub struct AnalyticColumns<'a> {
     budget: usize,
     tolerance: Real,
     clamped: ClampCounter,
+    /// The visible fractions of the pairs of every column and row computed so far, while
+    /// their budget lasts ([`crate::visibility_cache`]); none when no ray is traced.
+    cache: Option<VisibilityCache>,
 }
 
 impl<'a> AnalyticColumns<'a> {
@@ -123,7 +127,16 @@ impl<'a> AnalyticColumns<'a> {
             params,
             tolerance: PLANE_TOLERANCE * scene.diagonal(),
             clamped: ClampCounter::default(),
+            cache: analysis
+                .occlusion
+                .value
+                .then(|| VisibilityCache::new(scene.len(), params.cache_mib.saturating_mul(1 << 20))),
         }
+    }
+
+    /// What the record of visible fractions holds and has saved, when rays are traced.
+    pub fn visibility_cache(&self) -> Option<CacheFigures> {
+        self.cache.as_ref().map(VisibilityCache::figures)
     }
 
     /// Shadow rays per unit of unoccluded form factor in this scene: `budget` times the
@@ -142,13 +155,69 @@ impl<'a> AnalyticColumns<'a> {
         self.clamped.count()
     }
 
-    /// `F_ij` before clamping.
+    /// `F_ij` before clamping, computed afresh (no record is read or written).
     pub fn pair(&self, i: usize, j: usize) -> Real {
+        self.pair_known(i, j, None).0
+    }
+
+    /// `F_ij` before clamping, with `V_ij = known` when it is given, and the visible fraction
+    /// the entry used (`None` when the pair needed none).
+    fn pair_known(&self, i: usize, j: usize, known: Option<Real>) -> (Real, Option<Real>) {
         match self.visibility {
-            Some(vis) => self.pair_traced(i, j, &mut |p, from, q, to| vis.unoccluded_between(p, from, q, to)),
+            Some(vis) => self.pair_traced(i, j, known, &mut |p, from, q, to| vis.unoccluded_between(p, from, q, to)),
             // Never called: nothing is traced without visibility.
-            None => self.pair_traced(i, j, &mut |_, _, _, _| true),
+            None => self.pair_traced(i, j, None, &mut |_, _, _, _| true),
         }
+    }
+
+    /// Column (`column` true) or row `p` into `out`: entries `F_kp` or `F_pk`, in parallel.
+    /// Visible fractions come from the record of `p` when there is one, otherwise from the
+    /// record of each `k` that has one, and the ones used are recorded as `p`'s while the
+    /// budget lasts ([`crate::visibility_cache`]). The entries are the same either way.
+    fn fill_line(&self, p: usize, out: &mut [Real], column: bool) {
+        let n = out.len();
+        let entry = |k: usize, known: Option<Real>| {
+            let (i, j) = if column { (k, p) } else { (p, k) };
+            self.pair_known(i, j, known)
+        };
+        let cache = self.cache.as_ref();
+        let own = cache.and_then(|c| c.record(p));
+        let keep = cache.is_some_and(|c| own.is_none() && c.has_room(n));
+        let known = |k: usize| match (cache, own) {
+            (_, Some(record)) => record.get(k),
+            (Some(c), None) => c.record(k).and_then(|record| record.get(p)),
+            (None, None) => None,
+        };
+        let mut visible = if keep { vec![None; n] } else { Vec::new() };
+        let reused: u64 = if keep {
+            out.par_iter_mut()
+                .zip(visible.par_iter_mut())
+                .with_min_len(PAIRS_PER_TASK)
+                .enumerate()
+                .map(|(k, (f, v))| {
+                    let given = known(k);
+                    (*f, *v) = entry(k, given);
+                    u64::from(given.is_some())
+                })
+                .sum()
+        } else {
+            out.par_iter_mut()
+                .with_min_len(PAIRS_PER_TASK)
+                .enumerate()
+                .map(|(k, f)| {
+                    let given = known(k);
+                    *f = entry(k, given).0;
+                    u64::from(given.is_some())
+                })
+                .sum()
+        };
+        if let Some(cache) = cache {
+            cache.count_reused(reused);
+            if keep {
+                cache.insert(p, Record::new(&visible));
+            }
+        }
+        self.clamped.clamp(out);
     }
 
     /// Appends to `out` every shadow-ray segment that computing column `j` traces, in the
@@ -163,23 +232,30 @@ impl<'a> AnalyticColumns<'a> {
             return;
         }
         for i in 0..self.scene.len() {
-            self.pair_traced(i, j, &mut |p, from, q, to| {
+            self.pair_traced(i, j, None, &mut |p, from, q, to| {
                 out.push(ShadowSegment { p, from, q, to });
                 true
             });
         }
     }
 
-    /// `F_ij` before clamping, with `trace(p, from, q, to)` answering whether the segment
-    /// from `p` on patch `from` to `q` on patch `to` is unoccluded; it is called only when
-    /// shadow rays are traced.
-    fn pair_traced(&self, i: usize, j: usize, trace: &mut impl FnMut(Vec3, usize, Vec3, usize) -> bool) -> Real {
+    /// `F_ij` before clamping and the visible fraction it used (`None` when the pair needed
+    /// none), with `trace(p, from, q, to)` answering whether the segment from `p` on patch
+    /// `from` to `q` on patch `to` is unoccluded; it is called only when shadow rays are
+    /// traced and `known` does not give the visible fraction.
+    fn pair_traced(
+        &self,
+        i: usize,
+        j: usize,
+        known: Option<Real>,
+        trace: &mut impl FnMut(Vec3, usize, Vec3, usize) -> bool,
+    ) -> (Real, Option<Real>) {
         if i == j {
-            return 0.0;
+            return (0.0, None);
         }
         let (pi, pj) = (&self.scene.patches()[i], &self.scene.patches()[j]);
         if behind(pj, pi, self.tolerance) || behind(pi, pj, self.tolerance) {
-            return 0.0;
+            return (0.0, None);
         }
         // One rule for the unordered pair: integrate over the smaller patch (the lower index
         // on a tie) and take the other entry by reciprocity, so `A_i F_ij = A_j F_ji` holds to
@@ -191,13 +267,16 @@ impl<'a> AnalyticColumns<'a> {
         // The pair's larger entry, the unoccluded factor of its smaller patch.
         let larger = if smaller { self.unoccluded(i, j, pi, pj) } else { self.unoccluded(j, i, pj, pi) };
         if larger == 0.0 {
-            return 0.0;
+            return (0.0, None);
         }
         let unoccluded = if smaller { larger } else { larger * aj / ai };
         let (s, l) = if smaller { (i, j) } else { (j, i) };
         match self.visibility {
-            Some(_) => unoccluded * self.visible_fraction(s, l, larger, trace),
-            None => unoccluded,
+            Some(_) => {
+                let v = known.unwrap_or_else(|| self.visible_fraction(s, l, larger, trace));
+                (unoccluded * v, Some(v))
+            }
+            None => (unoccluded, None),
         }
     }
 
@@ -271,10 +350,25 @@ impl<'a> AnalyticColumns<'a> {
             }
             None => self.params.order,
         };
+        // Four points at a time on SIMD lanes ([`point_to_polygon_x4`], bit for bit the
+        // one-point values), summed in the rule's order.
         let mut sum = 0.0;
+        let mut batch = [(Vec3::ZERO, 0.0); 4];
+        let mut filled = 0;
         for_each_point_in(pi, panel, &self.nodes[order - 1], |x, w| {
-            sum += w * point_to_polygon(x, pi.normal(), pj.vertices());
+            batch[filled] = (x, w);
+            filled += 1;
+            if filled == 4 {
+                let values = point_to_polygon_x4(batch.map(|(x, _)| x), pi.normal(), pj.vertices());
+                for ((_, w), f) in batch.iter().zip(values) {
+                    sum += w * f;
+                }
+                filled = 0;
+            }
         });
+        for &(x, w) in &batch[..filled] {
+            sum += w * point_to_polygon(x, pi.normal(), pj.vertices());
+        }
         sum
     }
 
@@ -363,15 +457,13 @@ impl ColumnSource for AnalyticColumns<'_> {
     /// solver asks for one column at a time, and this is where its second core goes to work.
     /// Each entry is the same whichever thread computes it.
     fn fill_column(&self, j: usize, column: &mut [Real]) {
-        column.par_iter_mut().with_min_len(PAIRS_PER_TASK).enumerate().for_each(|(i, f)| *f = self.pair(i, j));
-        self.clamped.clamp(column);
+        self.fill_line(j, column, true);
     }
 
     /// Every pair is computed on its own, whichever column asks, so row `i` holds exactly the
     /// entries the columns hold, at the cost of one column.
     fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
-        row.par_iter_mut().with_min_len(PAIRS_PER_TASK).enumerate().for_each(|(j, f)| *f = self.pair(i, j));
-        self.clamped.clamp(row);
+        self.fill_line(i, row, false);
         true
     }
 }

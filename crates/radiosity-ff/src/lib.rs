@@ -43,6 +43,7 @@ pub mod sobol;
 pub mod solid_angle;
 pub mod spec;
 pub mod traced;
+pub mod visibility_cache;
 
 pub use analytic::AnalyticColumns;
 pub use backend::{Backend, FormFactorInput};

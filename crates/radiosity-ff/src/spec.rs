@@ -23,6 +23,10 @@ pub struct AnalyticParams {
     pub budget: usize,
     /// Seed of the jittered shadow rays.
     pub seed: u64,
+    /// Mebibytes of recorded visible fractions, so that a pair is traced once
+    /// ([`crate::visibility_cache`]; 0: none). It changes no entry, so the canonical argument
+    /// leaves it out and caches of matrices and references ignore it.
+    pub cache_mib: usize,
 }
 
 /// Parameters of the hemicube backend.
@@ -81,6 +85,11 @@ pub const ANALYTIC_PARAMS: &[ParamDoc] = &[
               (times ((1 - 0.8) / (1 - mean ρ))², at most 64, in scenes whose mean ρ exceeds 0.8)",
     },
     ParamDoc { key: "seed", default: "0", doc: "seed of the jittered shadow rays" },
+    ParamDoc {
+        key: "cache",
+        default: "256",
+        doc: "MiB of recorded visible fractions, so that no pair is traced twice, 0 to 2^20 (changes no value)",
+    },
 ];
 
 /// Parameters of `hemicube`.
@@ -110,7 +119,7 @@ pub const BACKENDS: &[&str] = &["analytic", "hemicube", "montecarlo", "matrix"];
 
 impl Default for AnalyticParams {
     fn default() -> Self {
-        AnalyticParams { order: 8, tolerance: 1e-3, rays: 1, budget: 24576, seed: 0 }
+        AnalyticParams { order: 8, tolerance: 1e-3, rays: 1, budget: 24576, seed: 0, cache_mib: 256 }
     }
 }
 
@@ -135,6 +144,7 @@ impl BackendSpec {
                     rays: p.count("rays", defaults.rays, 1, 1 << 20)?,
                     budget: p.count("budget", defaults.budget, 0, 1 << 24)?,
                     seed: p.seed("seed", 0)?,
+                    cache_mib: p.count("cache", defaults.cache_mib, 0, 1 << 20)?,
                 })
             }
             "hemicube" => {
@@ -172,8 +182,9 @@ impl BackendSpec {
         })
     }
 
-    /// The canonical argument, with every parameter spelled out: equal specs give equal
-    /// strings, so it keys caches and labels results.
+    /// The canonical argument, with every parameter that changes a value spelled out: specs
+    /// that give the same entries give equal strings, so it keys caches and labels results
+    /// (`analytic`'s `cache`, which changes no entry, is left out).
     pub fn canonical(&self) -> String {
         match self {
             BackendSpec::Analytic(p) => {

@@ -291,3 +291,33 @@ fn columns_are_identical_on_one_and_two_threads() {
     assert!(differs);
     assert_eq!(f.clamped(), 0);
 }
+
+#[test]
+fn recorded_visible_fractions_change_no_entry() {
+    let (scene, vis, analysis, p) = analytic_for("multi-cubes", "analytic:budget=1024");
+    let cached = AnalyticColumns::new(&scene, &vis, &analysis, p);
+    let fresh = AnalyticColumns::new(&scene, &vis, &analysis, AnalyticParams { cache_mib: 0, ..p });
+    let n = scene.len();
+    let (mut a, mut b) = (vec![0.0; n], vec![0.0; n]);
+    // Columns and rows, new and again, in an order where later ones find their pairs in the
+    // records of earlier ones.
+    let lines = [(3, true), (50, true), (3, true), (77, false), (50, false), (77, true), (n - 1, true), (3, false)];
+    for (p, column) in lines {
+        if column {
+            cached.fill_column(p, &mut a);
+            fresh.fill_column(p, &mut b);
+        } else {
+            cached.fill_row(p, &mut a);
+            fresh.fill_row(p, &mut b);
+        }
+        let same = a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits());
+        assert!(same, "{} {p} differs with recorded visibility", if column { "column" } else { "row" });
+    }
+    let figures = cached.visibility_cache().unwrap();
+    assert_eq!(figures.records, 4, "{figures:?}");
+    assert!(figures.reused > 0 && figures.bytes > 0 && figures.refused == 0, "{figures:?}");
+    assert_eq!(fresh.visibility_cache().unwrap().records, 0);
+    // A scene without occlusion traces nothing and records nothing.
+    let (scene, vis, analysis, p) = analytic_for("furnace:res=2", "analytic");
+    assert!(AnalyticColumns::new(&scene, &vis, &analysis, p).visibility_cache().is_none());
+}

@@ -8,7 +8,9 @@
 use super::closed_forms::perpendicular;
 use radiosity_core::math::cosine_direction;
 use radiosity_core::{Material, MaterialId, ObjectId, Patch, Real, Scene, Spectrum, Vec3};
+use radiosity_ff::ff_point_polygon::point_to_polygon;
 use radiosity_ff::pair_visibility::{RayBudget, visible_fraction};
+use radiosity_ff::quadrature::gauss_legendre;
 use radiosity_ff::{AnalyticColumns, BackendSpec};
 use radiosity_geom::{SceneAnalysis, SceneBuilder, Visibility};
 use rand::{Rng, SeedableRng};
@@ -236,4 +238,62 @@ fn stiff_scenes_get_rays_in_proportion_to_their_amplification_squared() {
         assert_eq!(stiffness_factor(rho), factor, "ρ̄ = {rho}");
     }
     assert_eq!(stiffness_factor(Real::NAN), 1);
+}
+
+/// A unit square at `z = 0` facing up, and one at `z = 10`, five units aside, facing down:
+/// small against their distance, so their few segments are drawn jointly by rejection from
+/// uniform points of both.
+fn distant_squares() -> (Patch, Patch) {
+    let (m, o) = (MaterialId(0), ObjectId(0));
+    let square = |x: Real, z: Real, up: bool| {
+        let mut v =
+            [Vec3::new(x, 0.0, z), Vec3::new(x + 1.0, 0.0, z), Vec3::new(x + 1.0, 1.0, z), Vec3::new(x, 1.0, z)];
+        if !up {
+            v.reverse();
+        }
+        Patch::quad(v, m, o).unwrap()
+    };
+    let (a, b) = (square(0.0, 0.0, true), square(5.0, 10.0, false));
+    assert!(a.normal().z > 0.9 && b.normal().z < -0.9);
+    (a, b)
+}
+
+#[test]
+fn few_rays_between_distant_patches_are_unbiased() {
+    // Only segments from the half of the lower square nearer the upper one are clear. The
+    // exact kernel-weighted fraction, from Lambert's formula integrated over each half, is
+    // above the area fraction 0.5 because the nearer half sees more of the upper square.
+    let (a, b) = distant_squares();
+    let nodes = gauss_legendre(16);
+    let half = |from: Real| {
+        let mut sum = 0.0;
+        for &(s, ws) in &nodes {
+            for &(t, wt) in &nodes {
+                let x = Vec3::new(from + 0.5 * s, t, 0.0);
+                sum += ws * wt * point_to_polygon(x, a.normal(), b.vertices());
+            }
+        }
+        sum
+    };
+    let exact = half(0.5) / (half(0.0) + half(0.5));
+    let trials = 100_000;
+    let clear = (0..trials as u64)
+        .map(|seed| {
+            let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+            let mut nearer_half = |x: Vec3, _: usize, _: Vec3, _: usize| x.x > 0.5;
+            visible_fraction(
+                (&a, 0),
+                (&b, 1),
+                1e-3,
+                RayBudget { rays: 1, per_unit: 0 },
+                1e-12,
+                &mut rng,
+                &mut nearer_half,
+            )
+        })
+        .sum::<Real>();
+    let mean = clear / trials as Real;
+    let standard_error = (exact * (1.0 - exact) / trials as Real).sqrt();
+    assert!(exact - 0.5 > 10.0 * standard_error, "the case cannot tell the kernel from the area: {exact}");
+    assert!((mean - exact).abs() < 4.0 * standard_error, "{mean} against {exact} ± {standard_error}");
 }

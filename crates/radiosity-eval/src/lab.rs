@@ -61,13 +61,12 @@ use crate::reference_kind::{MEMORY_VARIABLE, MemoryBudget, ReferenceKind, gib, m
 use crate::reference_shooting::{ShootingParams, solve_by_shooting};
 use crate::table::TableRow;
 use radiosity_core::{ColumnSource, LinearSystem, Real};
-use radiosity_ff::{Backend, BackendSpec, FfError, StoredMatrix};
+use radiosity_ff::{Backend, BackendSpec, FfError};
 use radiosity_geom::{GeomError, PreparedScene, SceneReport};
 use radiosity_solvers::{
     Executor, Observer, Problem, Record, ResidualBound, Solver, SolverError, State, StopRule, StopRules,
 };
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 use thiserror::Error;
 
@@ -290,7 +289,7 @@ impl<'p> Lab<'p> {
     /// taken for the old one). `serves_rows` says
     /// whether [`ColumnSource::fill_row`] gives exact rows of the matrix its columns assemble.
     /// Solvers read its columns rounded to `f32`, as a stored matrix holds them, so that a
-    /// `matrix` reference (assembled column by column) solves exactly their system.
+    /// `matrix` reference solves exactly their system.
     pub fn with_source(
         prepared: &'p PreparedScene,
         backend: &str,
@@ -760,28 +759,7 @@ fn assemble(
     pair: Option<&(dyn Fn(usize, usize) -> Real + Sync)>,
     progress: &dyn Progress,
 ) -> Result<FormFactors, LabError> {
-    let n = source.patch_count() as u64;
-    let done = AtomicU64::new(0);
-    let matrix = match pair {
-        Some(pair) => {
-            progress.begin("assembling the matrix (each pair once)", n * (n + 1) / 2, "pairs");
-            let m = StoredMatrix::assemble_reciprocal(system.areas(), pair, &|k| {
-                let k = done.fetch_max(k as u64, Ordering::Relaxed).max(k as u64);
-                progress.advance(k, "");
-            });
-            progress.end();
-            m?.0
-        }
-        None => {
-            progress.begin("assembling the matrix", n, "columns");
-            let m = StoredMatrix::assemble(source, &|_| {
-                let k = done.fetch_add(1, Ordering::Relaxed) + 1;
-                progress.advance(k, "");
-            });
-            progress.end();
-            m
-        }
-    };
+    let (matrix, _) = crate::backends::assemble_matrix(system.areas(), source, pair, progress)?;
     Ok(FormFactors::from_stored(matrix))
 }
 

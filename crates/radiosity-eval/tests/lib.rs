@@ -1,8 +1,9 @@
-//! Integration tests of radiosity-eval: reference solutions against closed forms (furnace,
+//! Integration tests of radiosity-eval: `--ff matrix` assembly, reference solutions against closed forms (furnace,
 //! two facing patches, the unit cube), the certified bound against true errors, metrics on
 //! hand-made vectors, tables under snapshot tests, pictures and glTF files of solved scenes,
 //! and the path tracer against closed forms and beside the discrete solution.
 
+mod backends;
 mod examples;
 mod gltf_export;
 mod lab;

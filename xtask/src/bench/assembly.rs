@@ -35,7 +35,7 @@ pub(crate) fn run(config: &Config, prepared: &PreparedScene) -> Result<String> {
     // (label, rays, by reciprocity)
     let mut cases: Vec<(String, usize, bool)> =
         config.assembly_rays.iter().map(|&k| ("each pair once (reciprocity)".to_string(), k, true)).collect();
-    cases.push(("column by column (as `--ff matrix`)".to_string(), 1, false));
+    cases.push(("column by column".to_string(), 1, false));
     for (label, rays, reciprocal) in cases {
         let spec = BackendSpec::parse(&format!("analytic:rays={rays}"))?;
         let BackendSpec::Analytic(params) = spec else { bail!("analytic:rays={rays} is not an analytic backend") };
@@ -84,8 +84,8 @@ pub(crate) fn run(config: &Config, prepared: &PreparedScene) -> Result<String> {
         out,
         "The analytic backend's full matrix of `{}` ({n} patches, {} entries), assembled on {threads} threads \
          (the global rayon pool). \"Each pair once\" computes the entry whose receiver is the smaller patch and \
-         derives the other by reciprocity (`StoredMatrix::assemble_reciprocal`); \"column by column\" computes \
-         every column, so every pair twice. Bytes are those of the stored entries.\n",
+         derives the other by reciprocity (`StoredMatrix::assemble_reciprocal`, what `--ff matrix` does); \"column by \
+         column\" computes every column, so every pair twice. Bytes are those of the stored entries.\n",
         config.scene,
         sig((n * n) as f64, 4),
     );

@@ -1,5 +1,6 @@
-//! `cargo xtask bench [--out FILE.md] [--quick] [--only SECTIONS] [--runs N]`: the
-//! performance figures, as one Markdown report of medians over several runs.
+//! `cargo xtask bench [--out FILE.md] [--json FILE.json] [--quick] [--only SECTIONS] [--runs N]`:
+//! the performance figures, as one Markdown report of medians over several runs, and with
+//! `--json` the same medians under stable keys ([`BenchJson`]).
 //!
 //! Form factors dominate the cost of radiosity, so speed is measured where it is spent and
 //! against what limits it:
@@ -56,6 +57,8 @@ use crate::experiment::prepare;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use radiosity_geom::PreparedScene;
+use serde::Serialize;
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -72,6 +75,11 @@ pub struct Args {
     /// Also write the Markdown report to this file.
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
+    /// Also write the figures as JSON to this file, under stable keys: `machine`, `columns`
+    /// (backend, columns_per_second by thread count, rays_per_column, raw_share) and `e2e`
+    /// (method, backend, seconds_to by e_rms, columns_to_1e-3, peak_bytes).
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
     /// A smoke test: a small scene, few columns, small backends, few runs (figures mean nothing).
     #[arg(long)]
     quick: bool,
@@ -205,6 +213,71 @@ fn sections(only: Option<&str>) -> Result<Vec<&'static str>> {
     Ok(SECTIONS.iter().copied().filter(|s| chosen.contains(s)).collect())
 }
 
+/// The figures of `--json FILE`, under keys that stay the same from run to run (medians, as
+/// in the Markdown report; `null` where a figure was not measured or not reached).
+#[derive(Debug, Default, Serialize)]
+pub(crate) struct BenchJson {
+    /// The machine and build.
+    machine: Machine,
+    /// The bench scene and its patch count, when a section measured on it.
+    scene: Option<SceneJson>,
+    /// Section 1, one entry per backend.
+    pub(crate) columns: Vec<ColumnsJson>,
+    /// Section 4, one entry per method and backend.
+    pub(crate) e2e: Vec<E2eJson>,
+}
+
+/// The machine the figures were taken on.
+#[derive(Debug, Default, Serialize)]
+struct Machine {
+    cores: usize,
+    rayon_threads: usize,
+    os: &'static str,
+    arch: &'static str,
+    release: bool,
+}
+
+/// The bench scene.
+#[derive(Debug, Serialize)]
+struct SceneJson {
+    name: String,
+    patches: usize,
+}
+
+/// One backend's columns per second (section 1).
+#[derive(Debug, Serialize)]
+pub(crate) struct ColumnsJson {
+    /// The canonical backend argument.
+    pub(crate) backend: String,
+    /// Columns per second by thread count (`"1"`, `"2"`: columns in parallel on a dedicated
+    /// pool).
+    pub(crate) columns_per_second: BTreeMap<String, f64>,
+    /// Rays (segments) traced per column.
+    pub(crate) rays_per_column: f64,
+    /// Pipeline rays per second over raw obvhs rays per second on the same rays, 2 threads.
+    pub(crate) raw_share: f64,
+    /// Analytic: columns per second when every pair's visible fraction is recorded, one at a
+    /// time on 2 threads.
+    pub(crate) recorded_columns_per_second: Option<f64>,
+}
+
+/// One method's time to accuracy (section 4).
+#[derive(Debug, Serialize)]
+pub(crate) struct E2eJson {
+    pub(crate) method: String,
+    pub(crate) backend: String,
+    /// Wall seconds from scene load to e_rms ≤ `"1e-1"`, `"1e-2"`, `"1e-3"`.
+    pub(crate) seconds_to: BTreeMap<String, Option<f64>>,
+    #[serde(rename = "columns_to_1e-3")]
+    pub(crate) columns_to_1e_3: Option<f64>,
+    /// The largest peak resident memory over the runs.
+    pub(crate) peak_bytes: Option<u64>,
+}
+
+/// `analytic`'s columns per second on `office`, 2 threads, before the throughput work
+/// (`docs/bench-office.md` of that time): its target is twice as many.
+const COLUMNS_BEFORE: f64 = 58.8;
+
 /// What the sections found that the performance targets are judged on.
 #[derive(Default)]
 pub(crate) struct Findings {
@@ -215,6 +288,8 @@ pub(crate) struct Findings {
     fastest: Vec<(f64, String, Option<f64>)>,
     /// The largest peak resident memory of an end-to-end run, and its method.
     peak_memory: Option<(u64, String)>,
+    /// Everything `--json` writes.
+    pub(crate) json: BenchJson,
 }
 
 /// Runs `bench` (or, with the hidden child arguments, one end-to-end case).
@@ -230,7 +305,7 @@ pub fn run(args: &Args) -> Result<()> {
         return e2e::child(scene, solver, ff, reference, args.max_seconds.unwrap_or(300.0));
     }
     let sections = sections(args.only.as_deref())?;
-    if let Some(out) = &args.out {
+    for out in [&args.out, &args.json].into_iter().flatten() {
         check_output_file(out)?;
     }
     let config = Config::new(args)?;
@@ -261,6 +336,19 @@ pub fn run(args: &Args) -> Result<()> {
     print!("{report}");
     if let Some(out) = &args.out {
         std::fs::write(out, &report).with_context(|| format!("cannot write {}", out.display()))?;
+    }
+    if let Some(out) = &args.json {
+        let mut json = findings.json;
+        json.machine = Machine {
+            cores: std::thread::available_parallelism().map_or(0, |n| n.get()),
+            rayon_threads: rayon::current_num_threads(),
+            os: std::env::consts::OS,
+            arch: std::env::consts::ARCH,
+            release: !cfg!(debug_assertions),
+        };
+        json.scene = prepared.as_ref().map(|p| SceneJson { name: config.scene.clone(), patches: p.loaded.scene.len() });
+        let text = serde_json::to_string_pretty(&json)?;
+        std::fs::write(out, text + "\n").with_context(|| format!("cannot write {}", out.display()))?;
     }
     Ok(())
 }
@@ -293,7 +381,11 @@ fn header(config: &Config, prepared: Option<&PreparedScene>, sections: &[&str]) 
 
 /// The performance targets beside the measurements.
 fn targets(findings: &Findings, scene: &str) -> String {
-    if findings.analytic_ratio.is_none() && findings.fastest.is_empty() && findings.peak_memory.is_none() {
+    if findings.analytic_ratio.is_none()
+        && findings.fastest.is_empty()
+        && findings.peak_memory.is_none()
+        && findings.json.columns.is_empty()
+    {
         return String::new();
     }
     let mut out = String::from("## Targets\n\n| target | measured | met |\n|---|---|---|\n");
@@ -319,6 +411,44 @@ fn targets(findings: &Findings, scene: &str) -> String {
                 out,
                 "| `{scene}`: {what} in ≤ {limit} s of wall time from scene load | {measured} | {} |",
                 verdict(seconds.is_some_and(|s| s <= limit))
+            );
+        }
+    }
+    if let Some(c) = findings.json.columns.iter().find(|c| c.backend.starts_with("analytic:") && scene == "office") {
+        let rate = c.columns_per_second.get("2").copied().unwrap_or(f64::NAN);
+        let _ = writeln!(
+            out,
+            "| `office`: `analytic` at its defaults computes ≥ {} columns/s on 2 threads (twice the {} measured \
+             before the throughput work) | {} | {} |",
+            sig(2.0 * COLUMNS_BEFORE, 3),
+            sig(COLUMNS_BEFORE, 3),
+            sig(rate, 3),
+            verdict(rate >= 2.0 * COLUMNS_BEFORE)
+        );
+    }
+    if let Some(matrix) = findings.json.e2e.iter().find(|e| e.backend == "matrix") {
+        for (threshold, limit) in [("1e-2", 0.3), ("1e-3", 0.8)] {
+            let best = findings
+                .json
+                .e2e
+                .iter()
+                .filter(|e| e.backend != "matrix")
+                .filter_map(|e| Some((e.seconds_to.get(threshold).copied().flatten()?, &e.method)))
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            let Some(gs) = matrix.seconds_to.get(threshold).copied().flatten() else { continue };
+            let (measured, met) = match best {
+                Some((s, method)) => (
+                    format!("{} (`{method}` {} against {})", sig(s / gs, 2), duration(s), duration(gs)),
+                    s <= limit * gs,
+                ),
+                None => ("no shooting method reached it".to_string(), false),
+            };
+            let _ = writeln!(
+                out,
+                "| `{scene}`: the best shooting method reaches e_rms {threshold} in ≤ {limit}× the time of \
+                 `{}` over the reciprocally assembled matrix | {measured} | {} |",
+                matrix.method,
+                verdict(met)
             );
         }
     }

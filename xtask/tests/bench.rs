@@ -38,11 +38,23 @@ fn seconds(cell: &str) -> f64 {
 #[test]
 fn quick_bench_reports_every_section_with_sane_figures() {
     let out = std::env::temp_dir().join(format!("radiosity-bench-{}.md", std::process::id()));
-    let args = ["bench", "--quick", "--scene", "cornell:res=2", "--out", out.to_str().unwrap()];
+    let json_out = out.with_extension("json");
+    let args = [
+        "bench",
+        "--quick",
+        "--scene",
+        "cornell:res=2",
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+        json_out.to_str().unwrap(),
+    ];
     let stdout = xtask(&args).success().get_output().stdout.clone();
     let report = String::from_utf8(stdout).unwrap();
     assert_eq!(std::fs::read_to_string(&out).unwrap(), report);
     std::fs::remove_file(&out).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json_out).unwrap()).unwrap();
+    std::fs::remove_file(&json_out).unwrap();
     assert!(report.contains("Smoke test") && report.contains("cores available"), "{report}");
 
     // 1. Three backends, each on 1 thread, 2 threads and 2 threads one column at a time.
@@ -92,6 +104,32 @@ fn quick_bench_reports_every_section_with_sane_figures() {
         assert!(row[8].ends_with("MB") || row[8] == "n/a", "{row:?}");
     }
     assert!(report.contains("## Targets"), "{report}");
+
+    // --json: the same figures under the stable keys, one entry per backend and per method.
+    assert!(json["machine"]["cores"].as_u64().unwrap() >= 1, "{json}");
+    assert_eq!(json["scene"]["name"], "cornell:res=2");
+    let columns = json["columns"].as_array().unwrap();
+    let backends: Vec<&str> = columns.iter().map(|c| c["backend"].as_str().unwrap()).collect();
+    assert!(backends.len() == 3 && backends[0].starts_with("analytic:") && backends[1].starts_with("hemicube:"));
+    let printed = table(&report, "## 1.");
+    for (c, rows) in columns.iter().zip(printed.chunks(3)) {
+        for (threads, row) in [("1", &rows[0]), ("2", &rows[1])] {
+            let rate = c["columns_per_second"][threads].as_f64().unwrap();
+            assert!((rate / number(&row[2]) - 1.0).abs() < 0.01, "{threads} threads: {rate} against {row:?}");
+        }
+        let share = c["raw_share"].as_f64().unwrap();
+        assert!((100.0 * share - number(&rows[1][8])).abs() <= 1.0, "raw share {share} against {:?}", rows[1]);
+        assert!(c["rays_per_column"].as_f64().unwrap() > 0.0, "{c}");
+    }
+    let e2e = json["e2e"].as_array().unwrap();
+    let methods: Vec<&str> = e2e.iter().map(|e| e["method"].as_str().unwrap()).collect();
+    assert_eq!(methods, ["pr", "xu", "xu-g10-m40", "gauss-seidel"], "{json}");
+    for (e, row) in e2e.iter().zip(&rows) {
+        let to = |t: &str| e["seconds_to"][t].as_f64().unwrap_or_else(|| panic!("no seconds to {t} in {e}"));
+        assert!(0.0 < to("1e-1") && to("1e-1") <= to("1e-2") && to("1e-2") <= to("1e-3"), "{e}");
+        assert!((to("1e-3") / seconds(&row[4]) - 1.0).abs() < 0.05, "{e} against {row:?}");
+        assert!(e["columns_to_1e-3"].as_f64().unwrap() > 0.0 && e.get("peak_bytes").is_some(), "{e}");
+    }
 }
 
 #[test]

@@ -10,7 +10,7 @@
 //! time out of its wall clock, which starts with the child's. It prints its figures as one JSON line, with `VmHWM` from `/proc/self/status`
 //! (the high-water mark of its resident memory; absent where `/proc` is not).
 
-use super::{Config, Findings, duration, human_bytes, median, progress, run_child, sig};
+use super::{Config, E2eJson, Findings, duration, human_bytes, median, progress, run_child, sig};
 use crate::bars::Bars;
 use crate::experiment::prepare;
 use anyhow::{Context, Result, bail};
@@ -175,8 +175,8 @@ pub(crate) fn run(config: &Config, prepared: &PreparedScene, findings: &mut Find
         out,
         "Wall time from the start of the scene load (load, BVH, analysis, form-factor setup, solve) until e_rms \
          first falls to each threshold, measured in a child process per run, the time spent measuring e_rms taken \
-         out. Analytic form factors at their defaults; `matrix` assembles them all first, column by column and \
-         fresh (never from `target/ff-cache`), and its setup is that assembly. Runs stop at e_rms ≤ 1e-3 or after \
+         out. Analytic form factors at their defaults; `matrix` assembles them all first, each pair once by \
+         reciprocity and fresh (never from `target/ff-cache`), and its setup is that assembly. Runs stop at e_rms ≤ 1e-3 or after \
          {} s of solver time. Peak memory is the child's `VmHWM` (largest over the runs). Reference: {method}, \
          solved in {} before the runs; {certificate}.\n",
         sig(config.max_seconds, 3),
@@ -209,6 +209,20 @@ pub(crate) fn run(config: &Config, prepared: &PreparedScene, findings: &mut Find
                 findings.peak_memory = Some((p, format!("{solver} over {ff}")));
             }
         }
+        findings.json.e2e.push(E2eJson {
+            method: solver.clone(),
+            backend: ff.clone(),
+            seconds_to: THRESHOLDS
+                .iter()
+                .enumerate()
+                .map(|(k, t)| {
+                    let times: Vec<Real> = runs.iter().filter_map(|r| r.reached.get(k).map(|x| x.seconds)).collect();
+                    (format!("{t:.0e}"), (times.len() == runs.len()).then(|| median(&times)))
+                })
+                .collect(),
+            columns_to_1e_3: (columns.len() == runs.len()).then(|| median(&columns)),
+            peak_bytes: peak,
+        });
         let last = runs.last().map_or(Real::NAN, |r| r.e_rms);
         let _ = writeln!(
             out,

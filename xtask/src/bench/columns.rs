@@ -266,7 +266,8 @@ pub(crate) fn run(config: &Config, prepared: &PreparedScene, findings: &mut Find
             backend: spec.canonical(),
             columns_per_second: [("1".to_string(), per_second(0)), ("2".to_string(), per_second(1))].into(),
             rays_per_column: per_column,
-            raw_share: rate(&|r| r.raw[3] / r.columns[1]),
+            // As the table's ratio: the median pipeline rate over the median raw rate.
+            raw_share: rate(&|r| rays / r.columns[1]) / rate(&|r| rays / r.raw[3]),
             recorded_columns_per_second: matches!(spec, BackendSpec::Analytic(_))
                 .then(|| rate(&|r| columns.len() as f64 / r.recorded)),
         });

@@ -60,7 +60,7 @@
 //! are drawn from a Xoshiro256++ stream keyed by the seed and the unordered pair, so
 //! `V_ij = V_ji` exactly and every column is the same whatever the thread that computes it.
 
-use crate::ff_point_polygon::{MAX_CLIPPED, clip_above, distance_to_polygon, point_to_polygon, point_to_polygon_x4};
+use crate::ff_point_polygon::{MAX_CLIPPED, clip_above, distance_to_polygon, point_to_polygon, point_to_polygon_each};
 use crate::guard::ClampCounter;
 use crate::pair_visibility::{self, RayBudget};
 use crate::quadrature::{Panel, for_each_point_in, gauss_legendre, order_for, parametrisation};
@@ -353,22 +353,24 @@ impl<'a> AnalyticColumns<'a> {
         // Four points at a time on SIMD lanes ([`point_to_polygon_x4`], bit for bit the
         // one-point values), summed in the rule's order.
         let mut sum = 0.0;
-        let mut batch = [(Vec3::ZERO, 0.0); 4];
+        let (mut points, mut weights) = ([Vec3::ZERO; 4], [0.0; 4]);
         let mut filled = 0;
+        let flush = |points: &[Vec3], weights: &[Real], sum: &mut Real| {
+            let mut values = [0.0; 4];
+            point_to_polygon_each(points, pi.normal(), pj.vertices(), &mut values[..points.len()]);
+            for (w, f) in weights.iter().zip(values) {
+                *sum += w * f;
+            }
+        };
         for_each_point_in(pi, panel, &self.nodes[order - 1], |x, w| {
-            batch[filled] = (x, w);
+            (points[filled], weights[filled]) = (x, w);
             filled += 1;
             if filled == 4 {
-                let values = point_to_polygon_x4(batch.map(|(x, _)| x), pi.normal(), pj.vertices());
-                for ((_, w), f) in batch.iter().zip(values) {
-                    sum += w * f;
-                }
+                flush(&points, &weights, &mut sum);
                 filled = 0;
             }
         });
-        for &(x, w) in &batch[..filled] {
-            sum += w * point_to_polygon(x, pi.normal(), pj.vertices());
-        }
+        flush(&points[..filled], &weights[..filled], &mut sum);
         sum
     }
 

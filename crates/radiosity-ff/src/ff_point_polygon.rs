@@ -59,6 +59,20 @@ pub fn point_to_polygon(x: Vec3, n: Vec3, polygon: &[Vec3]) -> Real {
     lambert(x, n, &clipped[..count])
 }
 
+/// `out[k] = point_to_polygon(x[k], n, polygon)` for every point (`out` as long as `x`):
+/// four at a time with [`point_to_polygon_x4`], the last few one at a time, so bit for bit
+/// the one-point values.
+pub fn point_to_polygon_each(x: &[Vec3], n: Vec3, polygon: &[Vec3], out: &mut [Real]) {
+    let mut points = x.chunks_exact(4);
+    let mut values = out.chunks_exact_mut(4);
+    for (four, value) in (&mut points).zip(&mut values) {
+        value.copy_from_slice(&point_to_polygon_x4([four[0], four[1], four[2], four[3]], n, polygon));
+    }
+    for (&p, value) in points.remainder().iter().zip(values.into_remainder()) {
+        *value = point_to_polygon(p, n, polygon);
+    }
+}
+
 /// The form factors from the differential areas at the four points `x`, all with unit
 /// normal `n`, to the convex polygon `polygon` (3 or 4 vertices, either orientation): lane
 /// `l` is bit for bit `point_to_polygon(x[l], n, polygon)` (module documentation, "Four

@@ -167,7 +167,7 @@
 //! The samples come from the caller's random stream, keyed by the unordered pair, so `V_ab =
 //! V_ba` exactly and a pair's value does not depend on the thread or column that computes it.
 
-use crate::ff_point_polygon::{MAX_CLIPPED, clip_above, point_to_polygon, point_to_polygon_x4};
+use crate::ff_point_polygon::{MAX_CLIPPED, clip_above, point_to_polygon, point_to_polygon_each, point_to_polygon_x4};
 use crate::sobol::scrambled_sobol;
 use crate::solid_angle::{SphericalPolygon, pick_fan_triangle};
 use radiosity_core::{Patch, Real, Vec3};
@@ -444,21 +444,14 @@ impl Pair {
         let midpoints = (0..corners.len()).map(|e| 0.5 * (corners[e] + corners[(e + 1) % corners.len()]));
         let inside = |p: Vec3| p + (centre - p) * INSIDE;
         // Corners and midpoints, four at a time on SIMD lanes, then the centre.
-        let mut points = [centre; 2 * MAX_CLIPPED];
+        let mut points = [centre; 2 * MAX_CLIPPED + 1];
         let count = 2 * corners.len();
         for (slot, p) in points.iter_mut().zip(corners.iter().copied().chain(midpoints)) {
             *slot = inside(p);
         }
         let mut values = [0.0; 2 * MAX_CLIPPED + 1];
-        let mut k = 0;
-        while k + 4 <= count {
-            values[k..k + 4].copy_from_slice(&pair.seen_from_x4(std::array::from_fn(|l| points[k + l])));
-            k += 4;
-        }
-        for (value, &x) in values[k..count].iter_mut().zip(&points[k..count]) {
-            *value = pair.seen_from(x);
-        }
-        values[count] = pair.seen_from(centre);
+        points[count] = centre;
+        point_to_polygon_each(&points[..=count], pair.na, pair.upper.polygon(), &mut values[..=count]);
         let (smallest, largest) =
             values[..=count].iter().fold((Real::INFINITY, 0.0), |(lo, hi): (Real, Real), &f| (lo.min(f), hi.max(f)));
         pair.bound = (FEW_MARGIN * largest).min(1.0);
@@ -522,11 +515,9 @@ impl Pair {
         let mut batch = [(Vec3::ZERO, 0.0, (0.0, 0.0)); 4];
         let mut filled = 0;
         let mut flush = |batch: &[(Vec3, Real, (Real, Real))], rng: &mut R| {
-            let weights = if batch.len() == 4 {
-                self.seen_from_x4(std::array::from_fn(|l| batch[l].0))
-            } else {
-                std::array::from_fn(|l| batch.get(l).map_or(0.0, |b| self.seen_from(b.0)))
-            };
+            let mut weights = [0.0; 4];
+            let points: [Vec3; 4] = std::array::from_fn(|l| batch.get(l).map_or(Vec3::ZERO, |b| b.0));
+            point_to_polygon_each(&points[..batch.len()], self.na, upper, &mut weights[..batch.len()]);
             for (&(x, density, direction), seen) in batch.iter().zip(weights) {
                 let weight = seen / density;
                 if weight <= 0.0 {

@@ -235,6 +235,12 @@ fn bad_backends_are_refused() {
         &["solve", "--scene", "furnace:res=2", "--solver", "pr", "--ff", "matrix:of=hemicube:res=3"],
         &["backend 'hemicube'", "res=3"],
     );
+    // Conjugate gradients need reciprocal form factors: refused in one sentence that names
+    // the solvers that need none.
+    refused(
+        &["solve", "--scene", "furnace:res=2", "--solver", "cg", "--ff", "hemicube:res=16"],
+        &["cg cannot solve this system", "state no reciprocity bound", "gmres-30 and bicgstab need no symmetry"],
+    );
     let e = failure(&["solve", "--scene", "furnace:res=2", "--solver", "pr", "--ff", "matrix:of=matrix"]);
     assert!(e.contains("of=matrix") && e.contains("assembled from a column backend"), "{e}");
     let e = failure(&["solve", "--scene", "furnace:res=2", "--solver", "pr", "--ff", "analytic:order"]);

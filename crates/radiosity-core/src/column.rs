@@ -13,6 +13,15 @@
 //! solvers then solve exactly the system the reference solves. Others leave the default, and
 //! callers fall back on reciprocity.
 //!
+//! A source may also state how reciprocal its entries are ([`ColumnSource::reciprocity_bound`]):
+//! `Some(δ)` promises `|A_i F_ij − A_j F_ji| ≤ δ · max(A_i F_ij, A_j F_ji)` for every pair,
+//! with the areas of the system it was built for. Solvers whose hypothesis is reciprocity
+//! (conjugate gradients on the symmetrized system) read it and refuse a source that states
+//! none, which is the default: a hemicube or Monte Carlo column is reciprocal only on average.
+//! Entries computed once per pair in `f64`, the other by reciprocity, state
+//! [`F64_PAIR_RECIPROCITY`]; rounding them to `f32` adds [`F32_ROUNDING`]
+//! ([`reciprocity_after_f32`]).
+//!
 //! Implementations must be `Sync`, so columns can be computed in parallel. A blanket
 //! `impl ColumnSource for &T` lets wrappers borrow a backend (the ripgrep `Matcher` pattern).
 //!
@@ -39,6 +48,58 @@ pub trait ColumnSource: Sync {
     fn fill_row(&self, _i: usize, _row: &mut [Real]) -> bool {
         false
     }
+
+    /// A bound `δ` on the relative reciprocity error of every pair,
+    /// `|A_i F_ij − A_j F_ji| ≤ δ · max(A_i F_ij, A_j F_ji)` with the areas of the system the
+    /// source was built for, when the source knows one (module doc); `None` (the default) when
+    /// it states none.
+    fn reciprocity_bound(&self) -> Option<Real> {
+        None
+    }
+}
+
+/// The reciprocity bound of entries computed once per pair in `f64`, the other entry taken
+/// as `F_ji = F_ij A_i / A_j`: a product and a quotient, each rounded, `2⁻⁵²` between them,
+/// doubled for slack.
+pub const F64_PAIR_RECIPROCITY: Real = 2.0 * Real::EPSILON;
+
+/// What rounding both entries of a pair to `f32` adds to a reciprocity bound: each moves by
+/// at most half of `f32::EPSILON` of its value, so `|a' − b'| ≤ |a − b| + ε_f32 max(a, b)`.
+pub const F32_ROUNDING: Real = f32::EPSILON as Real;
+
+/// The reciprocity bound of a source's entries once rounded to `f32` ([`F32_ROUNDING`]).
+pub fn reciprocity_after_f32(bound: Option<Real>) -> Option<Real> {
+    bound.map(|b| b + F32_ROUNDING)
+}
+
+/// The largest relative reciprocity error `|A_i F_ij − A_j F_ji| / max(A_i F_ij, A_j F_ji)`
+/// over the pairs of `f` (0 for pairs whose entries are both zero; infinite when an entry is
+/// not finite), with patch areas `area`:
+/// what a source in memory can state as its [`ColumnSource::reciprocity_bound`]. Reads every
+/// column, so for small systems and tests.
+pub fn measured_reciprocity(f: &(impl ColumnSource + ?Sized), area: &[Real]) -> Result<Real, CoreError> {
+    let n = f.patch_count();
+    if area.len() != n {
+        return Err(CoreError::SizeMismatch { what: "patch areas", expected: n, found: area.len() });
+    }
+    let mut columns = vec![0.0; n * n];
+    for (j, column) in columns.chunks_exact_mut(n.max(1)).enumerate().take(n) {
+        f.fill_column(j, column);
+    }
+    if columns.iter().any(|v| !v.is_finite()) {
+        return Ok(Real::INFINITY);
+    }
+    let mut worst: Real = 0.0;
+    for j in 0..n {
+        for i in j + 1..n {
+            let (a, b) = (area[i] * columns[j * n + i], area[j] * columns[i * n + j]);
+            let scale = a.abs().max(b.abs());
+            if scale > 0.0 {
+                worst = worst.max((a - b).abs() / scale);
+            }
+        }
+    }
+    Ok(worst)
 }
 
 impl<T: ColumnSource + ?Sized> ColumnSource for &T {
@@ -52,6 +113,10 @@ impl<T: ColumnSource + ?Sized> ColumnSource for &T {
 
     fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
         (**self).fill_row(i, row)
+    }
+
+    fn reciprocity_bound(&self) -> Option<Real> {
+        (**self).reciprocity_bound()
     }
 }
 
@@ -67,6 +132,10 @@ impl<T: ColumnSource + ?Sized> ColumnSource for Box<T> {
     fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
         (**self).fill_row(i, row)
     }
+
+    fn reciprocity_bound(&self) -> Option<Real> {
+        (**self).reciprocity_bound()
+    }
 }
 
 impl<T: ColumnSource + ?Sized + Send> ColumnSource for std::sync::Arc<T> {
@@ -81,6 +150,10 @@ impl<T: ColumnSource + ?Sized + Send> ColumnSource for std::sync::Arc<T> {
     fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
         (**self).fill_row(i, row)
     }
+
+    fn reciprocity_bound(&self) -> Option<Real> {
+        (**self).reciprocity_bound()
+    }
 }
 
 /// A form-factor matrix held in memory, column-major.
@@ -88,6 +161,7 @@ impl<T: ColumnSource + ?Sized + Send> ColumnSource for std::sync::Arc<T> {
 pub struct DenseColumns {
     n: usize,
     columns: Vec<Real>,
+    reciprocity: Option<Real>,
 }
 
 impl DenseColumns {
@@ -102,7 +176,7 @@ impl DenseColumns {
                 columns[j * n + i] = rows[i * n + j];
             }
         }
-        Ok(DenseColumns { n, columns })
+        Ok(DenseColumns { n, columns, reciprocity: None })
     }
 
     /// From a function of `(i, j)` giving `F_ij`.
@@ -113,7 +187,7 @@ impl DenseColumns {
                 columns[j * n + i] = f(i, j);
             }
         }
-        DenseColumns { n, columns }
+        DenseColumns { n, columns, reciprocity: None }
     }
 
     /// `F_ij`.
@@ -124,6 +198,13 @@ impl DenseColumns {
     /// Column `j` as a slice.
     pub fn column(&self, j: usize) -> &[Real] {
         &self.columns[j * self.n..(j + 1) * self.n]
+    }
+
+    /// The same matrix, stating as its reciprocity bound the error measured with patch areas
+    /// `area` ([`measured_reciprocity`]); refuses areas of the wrong length.
+    pub fn with_measured_reciprocity(mut self, area: &[Real]) -> Result<DenseColumns, CoreError> {
+        self.reciprocity = Some(measured_reciprocity(&self, area)?);
+        Ok(self)
     }
 }
 
@@ -141,6 +222,10 @@ impl ColumnSource for DenseColumns {
             *f = self.get(i, j);
         }
         true
+    }
+
+    fn reciprocity_bound(&self) -> Option<Real> {
+        self.reciprocity
     }
 }
 
@@ -217,5 +302,9 @@ impl<S: ColumnSource> ColumnSource for CountingColumns<S> {
         self.columns.fetch_add(1, Ordering::Relaxed);
         self.nanos.fetch_add(nanos, Ordering::Relaxed);
         true
+    }
+
+    fn reciprocity_bound(&self) -> Option<Real> {
+        self.inner.reciprocity_bound()
     }
 }

@@ -32,7 +32,7 @@ pub mod scene;
 pub mod spectrum;
 pub mod system;
 
-pub use column::{ColumnSource, ColumnStats, CountingColumns, DenseColumns};
+pub use column::{ColumnSource, ColumnStats, CountingColumns, DenseColumns, measured_reciprocity};
 pub use error::CoreError;
 pub use math::{Real, Vec3};
 pub use patch::{Patch, PatchShape};

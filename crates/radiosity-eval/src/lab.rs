@@ -549,7 +549,9 @@ impl<'p> Lab<'p> {
             clock: Instant::now(),
             evaluator: evaluator.as_ref(),
             solver: name.clone(),
-            every: plan.every.unwrap_or((target / 100).max(1)),
+            // A step that is a whole product by F is a sweep's worth of columns: every one is
+            // recorded.
+            every: plan.every.unwrap_or(if solver.step_is_sweep() { 1 } else { (target / 100).max(1) }),
             marks: if plan.marks { vec![n / 4, n / 2, n, 2 * n] } else { Vec::new() },
             points: Vec::new(),
             rows: Vec::new(),

@@ -21,6 +21,7 @@
 //! ([`FormFactors`]) add in the same order and give bit-identical results.
 
 use crate::error::EvalError;
+use radiosity_core::column::reciprocity_after_f32;
 use radiosity_core::{ColumnSource, LinearSystem, Real};
 use radiosity_ff::StoredMatrix;
 use rayon::prelude::*;
@@ -35,6 +36,8 @@ const BLOCK: usize = 128;
 pub struct FormFactors {
     n: usize,
     entries: Entries,
+    /// The reciprocity bound the entries satisfy ([`ColumnSource::reciprocity_bound`]).
+    reciprocity: Option<Real>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -42,7 +45,7 @@ enum Entries {
     /// Row-major `f64`: `F_ij` at `i * n + j`.
     Dense(Vec<Real>),
     /// A stored matrix of `f32` values, column-major.
-    Stored(StoredMatrix),
+    Stored(Box<StoredMatrix>),
 }
 
 impl FormFactors {
@@ -54,7 +57,11 @@ impl FormFactors {
 
     /// Holds a stored matrix of `radiosity-ff` as it is (`f32` values, sums in `f64`).
     pub fn from_stored(matrix: StoredMatrix) -> FormFactors {
-        FormFactors { n: matrix.len(), entries: Entries::Stored(matrix) }
+        FormFactors {
+            n: matrix.len(),
+            reciprocity: matrix.reciprocity_bound(),
+            entries: Entries::Stored(Box::new(matrix)),
+        }
     }
 
     /// The number of patches `n`.
@@ -107,7 +114,8 @@ impl FormFactors {
     /// rescaled system to round-off, whatever the backend's closure error was. That is what
     /// lets a stiff furnace (`ρ = 0.999`, where a row-sum error `δ` moves the answer by about
     /// `δ / (1 − ρ)`) test solvers against a closed form. It breaks reciprocity by the spread
-    /// of the factors, which the caller reports. `radiosity-ff`'s stored-matrix rebalancing
+    /// of the factors, which the caller reports, and which the matrix's reciprocity bound then
+    /// includes (`hi / lo − 1` beside the bound it had). `radiosity-ff`'s stored-matrix rebalancing
     /// does the same in `f32`, which leaves row sums off by about 1e-7: too much at `ρ =
     /// 0.999`.
     pub fn close_rows(&mut self) -> (Real, Real) {
@@ -130,6 +138,9 @@ impl FormFactors {
                 hi = Real::max(hi, factor);
             }
         }
+        // `A_i F_ij s_i` against `A_j F_ji s_j`: the factors' ratio, at most `hi / lo`, moves
+        // the pair's error by at most `hi / lo − 1` of the larger, beside the error it had.
+        self.reciprocity = self.reciprocity.map(|b| (1.0 + b) * (hi / lo) - 1.0);
         (lo, hi)
     }
 
@@ -170,6 +181,10 @@ impl ColumnSource for FormFactors {
         }
         true
     }
+
+    fn reciprocity_bound(&self) -> Option<Real> {
+        self.reciprocity
+    }
 }
 
 /// A column source whose entries are rounded to `f32`, as a stored matrix holds them: a lab's
@@ -192,6 +207,10 @@ impl<S: ColumnSource> ColumnSource for F32Columns<S> {
         row.iter_mut().for_each(|v| *v = Real::from(*v as f32));
         exact
     }
+
+    fn reciprocity_bound(&self) -> Option<Real> {
+        reciprocity_after_f32(self.0.reciprocity_bound())
+    }
 }
 
 fn assemble_dyn(f: &dyn ColumnSource, max_bytes: usize) -> Result<FormFactors, EvalError> {
@@ -209,7 +228,7 @@ fn assemble_dyn(f: &dyn ColumnSource, max_bytes: usize) -> Result<FormFactors, E
             }
         });
     })?;
-    Ok(FormFactors { n, entries: Entries::Dense(rows) })
+    Ok(FormFactors { n, entries: Entries::Dense(rows), reciprocity: f.reciprocity_bound() })
 }
 
 /// Fetches the columns of `f` in blocks of [`BLOCK`] (each block in parallel), checks every

@@ -5,13 +5,15 @@
 //! ## The suite
 //!
 //! [`CASES`]: closed boxes with `ρ = 0.99` and `0.999`, channels with `ρ` of 0.99, 0.5 and 0,
+//! a box inside a closed box at `ρ = 0.999`,
 //! patch areas 1e6 apart, a tiny emitter of 1e6, a box touching the floor along its edges
 //! and one 1e-6 above it, a thin slab, and one scene at coordinate scales 1e-4 and 1e4 (the
 //! scenes are `furnace` and `inner-box`, whose module docs describe them). Each runs on
 //! [`BACKENDS`]: `analytic`, the same with every row rescaled to sum to 1 in `f64` (closed
 //! scenes only, see [`FormFactors::close_rows`]), `hemicube`, `montecarlo` and
-//! `matrix:rebalance=true`. Every solver of `POINT_SOLVERS`, `GROUP_SOLVERS` and
-//! `BEYOND_PAPER_SOLVERS` runs on each.
+//! `matrix:rebalance=true`. Every solver of `POINT_SOLVERS`, `GROUP_SOLVERS`,
+//! `BEYOND_PAPER_SOLVERS` and `KRYLOV_SOLVERS` runs on each (`cg` refuses, in one sentence,
+//! the backends that state no reciprocity bound or one above its limit).
 //!
 //! ## How a run is judged
 //!
@@ -47,8 +49,8 @@ use radiosity_core::{LinearSystem, Real};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
 use radiosity_solvers::{
-    BEYOND_PAPER_SOLVERS, Executor, GROUP_SOLVERS, NoObserver, Observer, POINT_SOLVERS, Problem, Record,
-    SolverRegistry, State, StopRule, StopRules, TerminationReason,
+    BEYOND_PAPER_SOLVERS, Executor, GROUP_SOLVERS, KRYLOV_SOLVERS, NoObserver, Observer, POINT_SOLVERS, Problem,
+    Record, SolverRegistry, State, StopRule, StopRules, TerminationReason,
 };
 use rayon::prelude::*;
 use std::fmt::Write as _;
@@ -78,6 +80,11 @@ pub const CASES: &[Case] = &[
     Case { key: "rho-0.99", scene: "furnace:res=3:rho=0.99", what: "closed box, ρ = 0.99" },
     Case { key: "rho-0.999", scene: "furnace:res=3:rho=0.999", what: "closed box, ρ = 0.999" },
     Case { key: "channels", scene: "furnace:res=3:rho=0.99/0.5/0", what: "channels with ρ of 0.99, 0.5 and 0" },
+    Case {
+        key: "inner-rho-0.999",
+        scene: "inner-box:rho=0.999",
+        what: "a box inside a closed box, ρ = 0.999: occluded and stiff",
+    },
     Case {
         key: "area-ratio",
         scene: "inner-box:res=2:size=5e-4:height=5e-4",
@@ -140,9 +147,16 @@ pub fn select<T: Copy>(
     Ok(chosen)
 }
 
-/// Every point, group and beyond-the-paper solver, by name: the suite's default solvers.
+/// Every point, group, beyond-the-paper and Krylov solver, by name: the suite's default
+/// solvers.
 pub fn all_solvers() -> Vec<String> {
-    POINT_SOLVERS.iter().chain(&GROUP_SOLVERS).chain(&BEYOND_PAPER_SOLVERS).map(|s| s.to_string()).collect()
+    POINT_SOLVERS
+        .iter()
+        .chain(&GROUP_SOLVERS)
+        .chain(&BEYOND_PAPER_SOLVERS)
+        .chain(&KRYLOV_SOLVERS)
+        .map(|s| s.to_string())
+        .collect()
 }
 
 /// The suite to run: cases, backends and solvers (built by name from a registry, so that a

@@ -1,4 +1,4 @@
-//! Scene-level tests: every point solver on built-in scenes with analytic form factors,
+//! Scene-level tests: every point, group and Krylov solver on built-in scenes with analytic form factors,
 //! measured against the exact reference of the same discrete system, and convergence
 //! tables of those runs under snapshot tests.
 //!
@@ -12,8 +12,8 @@ use radiosity_eval::{ConvergenceTable, Evaluator, FormFactors, ReferenceParams, 
 use radiosity_ff::{Backend, BackendSpec, FormFactorInput};
 use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
 use radiosity_solvers::{
-    BEYOND_PAPER_SOLVERS, Executor, GROUP_SOLVERS, NoObserver, Observer, POINT_SOLVERS, Problem, Run, State, StopRules,
-    solver_by_name,
+    BEYOND_PAPER_SOLVERS, Executor, GROUP_SOLVERS, KRYLOV_SOLVERS, NoObserver, Observer, POINT_SOLVERS, Problem, Run,
+    State, StopRules, solver_by_name,
 };
 use std::collections::HashMap;
 use std::panic::{self, AssertUnwindSafe};
@@ -106,7 +106,7 @@ impl Observer for RmsObserver<'_> {
 fn check_reaches_reference(scene: &str) {
     let fixture = fixture(scene);
     let mut failures = Vec::new();
-    for &name in POINT_SOLVERS.iter().chain(&GROUP_SOLVERS).chain(&BEYOND_PAPER_SOLVERS) {
+    for &name in POINT_SOLVERS.iter().chain(&GROUP_SOLVERS).chain(&BEYOND_PAPER_SOLVERS).chain(&KRYLOV_SOLVERS) {
         let rules = StopRules { step_cap: STEP_CAP, ..StopRules::parse(RMS_TARGET).unwrap() };
         // The fixture is only read, so a panic cannot leave it half-updated.
         let attempt = panic::catch_unwind(AssertUnwindSafe(|| fixture.run(name, rules, &mut RmsObserver(fixture))));

@@ -67,6 +67,7 @@ use crate::quadrature::{Panel, for_each_point_in, gauss_legendre, order_for, par
 use crate::spec::AnalyticParams;
 use crate::traced::ShadowSegment;
 use crate::visibility_cache::{CacheFigures, Record, VisibilityCache};
+use radiosity_core::column::F64_PAIR_RECIPROCITY;
 use radiosity_core::{ColumnSource, Patch, Real, Scene, Vec3};
 use radiosity_geom::{SceneAnalysis, Visibility};
 use rand::SeedableRng;
@@ -467,5 +468,12 @@ impl ColumnSource for AnalyticColumns<'_> {
     fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
         self.fill_line(i, row, false);
         true
+    }
+
+    /// Each unordered pair is integrated once and the other entry taken by reciprocity in
+    /// `f64`; the guard's clamping into `[0, 1]` (counted by [`AnalyticColumns::clamped`])
+    /// is the one exception, and moves a pair's entries only where the estimate left `[0, 1]`.
+    fn reciprocity_bound(&self) -> Option<Real> {
+        Some(F64_PAIR_RECIPROCITY)
     }
 }

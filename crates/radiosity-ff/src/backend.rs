@@ -104,4 +104,8 @@ impl ColumnSource for Backend<'_> {
     fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
         self.source().fill_row(i, row)
     }
+
+    fn reciprocity_bound(&self) -> Option<Real> {
+        self.source().reciprocity_bound()
+    }
 }

@@ -103,6 +103,7 @@
 
 use crate::error::FfError;
 use crate::guard::{MatrixFigures, matrix_figures};
+use radiosity_core::column::reciprocity_after_f32;
 use radiosity_core::{ColumnSource, Real};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -115,7 +116,7 @@ use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 pub const MAGIC: &str = "radiosity-ff stored form-factor matrix";
 
 /// The version of the file layout; files of another version are refused.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 
 /// How a [`StoredMatrix`] holds its entries.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -161,6 +162,10 @@ pub struct StoredMatrix {
     /// column (19 s a Gauss–Seidel sweep on `office`) where CSR reads it in place. It costs
     /// as much memory again as the sparse entries, and only once a row is asked for.
     row_major: OnceLock<CsMatI<f32, u32>>,
+    /// The reciprocity bound the entries satisfy ([`ColumnSource::reciprocity_bound`]):
+    /// measured on the `f32` entries after assembly by reciprocity and after rebalancing, the
+    /// source's own bound plus `f32` rounding after assembly column by column.
+    reciprocity: Option<Real>,
 }
 
 /// What [`StoredMatrix::rebalance`] did.
@@ -325,7 +330,7 @@ impl Builder {
                 Entries::Sparse(matrix)
             }
         };
-        StoredMatrix { n, nonzeros: self.nonzeros, entries, row_major: OnceLock::new() }
+        StoredMatrix { n, nonzeros: self.nonzeros, entries, row_major: OnceLock::new(), reciprocity: None }
     }
 }
 
@@ -376,7 +381,9 @@ impl StoredMatrix {
                 .collect();
             builder.push(Block::from_columns(columns));
         }
-        builder.finish()
+        let mut matrix = builder.finish();
+        matrix.reciprocity = reciprocity_after_f32(source.reciprocity_bound());
+        matrix
     }
 
     /// Assembles the matrix by reciprocity (see the module documentation): for every
@@ -455,7 +462,10 @@ impl StoredMatrix {
             }
             Entries::Dense(e)
         };
-        Ok((StoredMatrix { n, nonzeros, entries, row_major: OnceLock::new() }, clamped.load(Ordering::Relaxed)))
+        let mut matrix = StoredMatrix { n, nonzeros, entries, row_major: OnceLock::new(), reciprocity: None };
+        // Measured, not assumed: clamping and `f32` rounding each move a pair's entries.
+        matrix.reciprocity = Some(matrix.figures(area).max_reciprocity_error);
+        Ok((matrix, clamped.load(Ordering::Relaxed)))
     }
 
     /// The number of patches `n`.
@@ -694,6 +704,7 @@ impl StoredMatrix {
                 }
             }
         }
+        self.reciprocity = Some(self.figures(area).max_reciprocity_error);
         Ok(RebalanceReport {
             symmetrised,
             max_change: change.max_abs,
@@ -714,6 +725,7 @@ impl StoredMatrix {
             key: key.to_string(),
             n: self.n as u64,
             nonzeros: self.nonzeros as u64,
+            reciprocity: self.reciprocity,
             body_len: [0; 8],
             body_checksum: [0; 8],
         };
@@ -772,7 +784,7 @@ impl StoredMatrix {
         if nonzeros as u64 != header.nonzeros {
             return Err(refuse(format!("{nonzeros} non-zero entries where the header promises {}", header.nonzeros)));
         }
-        Ok(StoredMatrix { n, nonzeros, entries, row_major: OnceLock::new() })
+        Ok(StoredMatrix { n, nonzeros, entries, row_major: OnceLock::new(), reciprocity: header.reciprocity })
     }
 }
 
@@ -841,6 +853,7 @@ struct Header {
     key: String,
     n: u64,
     nonzeros: u64,
+    reciprocity: Option<Real>,
     body_len: [u8; 8],
     body_checksum: [u8; 8],
 }
@@ -909,7 +922,8 @@ fn merge<'a>(
 /// Two matrices are equal when their entries are, whether or not a row-major copy was built.
 impl PartialEq for StoredMatrix {
     fn eq(&self, other: &StoredMatrix) -> bool {
-        (self.n, self.nonzeros, &self.entries) == (other.n, other.nonzeros, &other.entries)
+        (self.n, self.nonzeros, &self.entries, self.reciprocity)
+            == (other.n, other.nonzeros, &other.entries, other.reciprocity)
     }
 }
 
@@ -965,6 +979,10 @@ impl ColumnSource for StoredMatrix {
             }
         }
         true
+    }
+
+    fn reciprocity_bound(&self) -> Option<Real> {
+        self.reciprocity
     }
 }
 

@@ -67,6 +67,16 @@ pub enum SolverError {
         /// The known name nearest to the one given, when one is near enough to be a typo.
         suggestion: Option<String>,
     },
+    /// A solver whose hypothesis this system or these form factors do not satisfy, refused
+    /// before its first step or stopped when the hypothesis is seen to fail (conjugate
+    /// gradients on form factors that are not reciprocal, [`crate::cg`]).
+    #[error("{solver} cannot solve this system: {reason}")]
+    NotApplicable {
+        /// The solver.
+        solver: String,
+        /// Why, in one sentence.
+        reason: String,
+    },
     /// A stop rule that needs the error against a reference (`rms=`) in a run whose observer
     /// does not measure it ([`crate::Observer::measures_error`]): the rule could never hold.
     #[error("the stop rule {rule} needs e_rms against a reference solution, which this run does not measure")]

@@ -135,6 +135,14 @@ pub trait Solver {
         false
     }
 
+    /// Whether one step is a whole matrix–vector product, up to `n` columns (the Krylov
+    /// solvers, [`crate::krylov`]), rather than one shot or one gathered patch. The step cap
+    /// then counts each step as `n` steps, so that it allows as many columns as it allows
+    /// a gathering solver, and a lab records every step.
+    fn step_is_sweep(&self) -> bool {
+        false
+    }
+
     /// The solver's own figures so far (group steps, condition numbers, fallbacks; see
     /// [`crate::record`]); the executor stores them in [`Run::record`] at the end of a run.
     /// Empty by default.
@@ -324,12 +332,14 @@ impl<'s> Executor<'s> {
         let mut error = observer.observe_init(&self.solver.name(), &state);
         let mut watch = Watch::new();
         // The cap guards runs whose rules cannot be met; an explicit `steps=` or `columns=`
-        // beyond it raises it (one step costs at least one column or none).
+        // beyond it raises it (one step costs at least one column or none). A step that is a
+        // whole matrix–vector product counts as n steps.
         let explicit = self.rules.rules.iter().filter_map(|r| match *r {
             StopRule::Steps(c) | StopRule::Columns(c) => Some(c.resolve(n)),
             _ => None,
         });
-        let cap = explicit.fold((self.rules.step_cap * n as f64).ceil() as u64, u64::max);
+        let per_step = if self.solver.step_is_sweep() { n.max(1) as f64 } else { 1.0 };
+        let cap = explicit.fold((self.rules.step_cap * n as f64 / per_step).ceil() as u64, u64::max);
         let termination = loop {
             if let Some(reason) = self.check(problem, &state, error, n, &mut watch)? {
                 break reason;

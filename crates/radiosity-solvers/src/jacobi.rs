@@ -14,7 +14,7 @@ use crate::error::SolverError;
 use crate::executor::Solver;
 use crate::gathering::{SweepResidual, gather, relax};
 use crate::problem::Problem;
-use crate::registry::{ParseSolverError, SolverParams, no_params, split_params};
+use crate::registry::{ParseSolverError, SolverParams, plain_name};
 use crate::residual_bound::{ResidualBound, SweepChanges};
 use crate::state::State;
 use radiosity_core::Real;
@@ -28,11 +28,7 @@ impl FromStr for JacobiParams {
     type Err = ParseSolverError;
 
     fn from_str(name: &str) -> Result<JacobiParams, ParseSolverError> {
-        let (head, params) = split_params(name);
-        if head != "jacobi" {
-            return Err(ParseSolverError::OtherFamily);
-        }
-        no_params(head, params)?;
+        plain_name(name, "jacobi")?;
         Ok(JacobiParams)
     }
 }

@@ -21,7 +21,10 @@
 //! - group gathering `group-jacobi-gM`, `group-gs-gM` ([`GroupGatheringParams`]) and group
 //!   shooting `group-S-gM` ([`GroupShootingParams`]);
 //! - group-accelerated shooting, the paper's method: `pr-g30`, `xu-g30-m480:f=10`
-//!   ([`GroupAcceleratedParams`]).
+//!   ([`GroupAcceleratedParams`]);
+//! - Krylov methods, the numerical analyst's comparators, whose step is one product by `F`:
+//!   `cg` on the symmetrized system ([`CgParams`]), `gmres-K` ([`GmresParams`]) and
+//!   `bicgstab` ([`BicgstabParams`]).
 //!
 //! A researcher's own solver goes beside them, typed ([`SolverRegistry::register`]) or as a
 //! closure ([`SolverRegistry::register_fn`]).
@@ -72,16 +75,20 @@
 //! assert_eq!(run.record.count("group_steps"), Some(4));
 //! ```
 
+pub mod bicgstab;
+pub mod cg;
 pub mod error;
 pub mod executor;
 pub mod feda;
 pub mod gathering;
 pub mod gauss_seidel;
+pub mod gmres;
 pub mod group_accelerated;
 pub mod group_gathering;
 pub mod group_shooting;
 pub mod group_step;
 pub mod jacobi;
+pub mod krylov;
 pub mod memory;
 pub mod overshooting;
 pub mod problem;
@@ -97,9 +104,12 @@ pub mod state;
 pub mod stop;
 pub mod xu;
 
+pub use bicgstab::{Bicgstab, BicgstabParams};
+pub use cg::{CgParams, ConjugateGradients};
 pub use error::SolverError;
 pub use executor::{Every, Executor, NoObserver, Observer, Run, Solver};
 pub use gauss_seidel::GaussSeidelParams;
+pub use gmres::{Gmres, GmresParams};
 pub use group_accelerated::{
     COLUMN_OPERATIONS_PER_ROOT_PATCH, Frequency, GroupAccelerated, GroupAcceleratedParams, GroupBuilding,
     column_operations,
@@ -154,6 +164,10 @@ pub const GROUP_SOLVERS: [&str; 10] = [
 /// tests.
 pub const BEYOND_PAPER_SOLVERS: [&str; 3] =
     ["xu-g30-m480:f=10:groups=interaction", "xu-g30-m480:f=10:inner=gs", "xu-g30-m480:f=10:adaptive=0.1"];
+
+/// The Krylov solvers, by canonical name (DESIGN §7's comparators): run by the scene-level
+/// tests and the stress suite.
+pub const KRYLOV_SOLVERS: [&str; 3] = ["cg", "gmres-30", "bicgstab"];
 
 /// The solver a command-line name designates, from the built-in families
 /// ([`SolverRegistry::builtin`], built once): a thin wrapper over [`SolverRegistry::build`].

@@ -119,6 +119,13 @@ impl<'a> Problem<'a> {
         }
     }
 
+    /// The reciprocity bound the form factors state
+    /// ([`ColumnSource::reciprocity_bound`]), if any: what conjugate gradients on the
+    /// symmetrized system need ([`crate::cg`]).
+    pub fn reciprocity_bound(&self) -> Option<Real> {
+        self.columns.reciprocity_bound()
+    }
+
     /// Columns computed so far.
     pub fn columns_fetched(&self) -> u64 {
         self.fetched.get()

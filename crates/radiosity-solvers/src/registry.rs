@@ -18,7 +18,8 @@
 //!
 //! The built-in families ([`SolverRegistry::builtin`]), in this order: [`JacobiParams`],
 //! [`GaussSeidelParams`], [`PointShootingParams`], [`GroupGatheringParams`],
-//! [`GroupShootingParams`] and [`GroupAcceleratedParams`]. Library users add their own,
+//! [`GroupShootingParams`], [`GroupAcceleratedParams`], [`CgParams`], [`GmresParams`] and
+//! [`BicgstabParams`]. Library users add their own,
 //! typed ([`SolverRegistry::register`]) or as a closure ([`SolverRegistry::register_fn`]);
 //! built-in families come first, so a new family cannot change what a built-in name means
 //! unless the user starts from [`SolverRegistry::empty`].
@@ -33,9 +34,12 @@
 //! - Damerau 1964, "A technique for computer detection and correction of spelling errors",
 //!   Communications of the ACM 7(3).
 
+use crate::bicgstab::BicgstabParams;
+use crate::cg::CgParams;
 use crate::error::SolverError;
 use crate::executor::Solver;
 use crate::gauss_seidel::GaussSeidelParams;
+use crate::gmres::GmresParams;
 use crate::group_accelerated::GroupAcceleratedParams;
 use crate::group_gathering::GroupGatheringParams;
 use crate::group_shooting::GroupShootingParams;
@@ -140,7 +144,7 @@ impl SolverRegistry {
         SolverRegistry::default()
     }
 
-    /// The built-in families (module doc). Cheap: six entries.
+    /// The built-in families (module doc). Cheap: nine entries.
     pub fn builtin() -> SolverRegistry {
         let mut registry = SolverRegistry::empty();
         registry
@@ -149,7 +153,10 @@ impl SolverRegistry {
             .register::<PointShootingParams>()
             .register::<GroupGatheringParams>()
             .register::<GroupShootingParams>()
-            .register::<GroupAcceleratedParams>();
+            .register::<GroupAcceleratedParams>()
+            .register::<CgParams>()
+            .register::<GmresParams>()
+            .register::<BicgstabParams>();
         registry
     }
 
@@ -313,6 +320,16 @@ pub(crate) fn split_size<'a>(name: &'a str, marker: &str) -> Option<(&'a str, us
         return None;
     }
     Some((head, size.parse().ok()?))
+}
+
+/// Claims `name` for a family of one plain name, `plain`, that takes no parameters:
+/// [`ParseSolverError::OtherFamily`] for another head, a refusal for parameters.
+pub(crate) fn plain_name(name: &str, plain: &str) -> Result<(), ParseSolverError> {
+    let (head, params) = split_params(name);
+    if head != plain {
+        return Err(ParseSolverError::OtherFamily);
+    }
+    no_params(head, params)
 }
 
 /// Refuses parameters for a family that takes none.

@@ -30,7 +30,8 @@ fn reciprocal(
         if i == j { diagonal * w } else { w * w }
     };
     let max_row = (0..n).map(|i| (0..n).map(|j| g(i, j)).sum::<Real>() / area[i]).fold(0.0, Real::max);
-    let f = DenseColumns::from_fn(n, |i, j| row * g(i, j) / area[i] / max_row);
+    let f =
+        DenseColumns::from_fn(n, |i, j| row * g(i, j) / area[i] / max_row).with_measured_reciprocity(&area).unwrap();
     let rho: Vec<Real> = (0..3 * n).map(rho).collect();
     let e: Vec<Real> = (0..3 * n).map(|idx| if (idx / 3) % 3 == 1 { 1.0 + (idx % 3) as Real } else { 0.0 }).collect();
     (LinearSystem::new(Channels::Rgb, area, rho, e).unwrap(), f)
@@ -202,7 +203,13 @@ fn check<'a>(name: &str, system: &'a LinearSystem, f: &'a DenseColumns, steps: &
 /// inner Gauss–Seidel, adaptive and interaction groups, timed frequencies, spatial groups,
 /// one group holding every patch).
 fn every_name() -> Vec<String> {
-    let listed: Vec<&str> = POINT_SOLVERS.iter().chain(&GROUP_SOLVERS).chain(&BEYOND_PAPER_SOLVERS).copied().collect();
+    let listed: Vec<&str> = POINT_SOLVERS
+        .iter()
+        .chain(&GROUP_SOLVERS)
+        .chain(&BEYOND_PAPER_SOLVERS)
+        .chain(&KRYLOV_SOLVERS)
+        .copied()
+        .collect();
     let scaled = listed.iter().map(|s| s.replace("g30", "g4").replace("m480", "m8"));
     let examples = SolverRegistry::builtin().entries().iter().flat_map(|e| e.examples().to_vec()).collect::<Vec<_>>();
     let extra = [
@@ -226,6 +233,8 @@ fn every_name() -> Vec<String> {
         "group-jacobi-g3:groups=spatial",
         "group-gs-g12",
         "group-jacobi-g12",
+        "gmres-1",
+        "gmres-4",
     ];
     let mut names: Vec<String> = listed.iter().map(|s| s.to_string()).chain(scaled).chain(examples).collect();
     names.extend(extra.map(String::from));

@@ -56,6 +56,11 @@ pub trait ColumnSource: Sync {
     fn reciprocity_bound(&self) -> Option<Real> {
         None
     }
+
+    /// Forgets whatever the source keeps to make later columns cheaper than the first ones
+    /// (the analytic backend's record of visible fractions), so that runs measured one after
+    /// another each start from the same cost; no entry changes. The default keeps nothing.
+    fn reset_memory(&self) {}
 }
 
 /// The reciprocity bound of entries computed once per pair in `f64`, the other entry taken
@@ -118,6 +123,10 @@ impl<T: ColumnSource + ?Sized> ColumnSource for &T {
     fn reciprocity_bound(&self) -> Option<Real> {
         (**self).reciprocity_bound()
     }
+
+    fn reset_memory(&self) {
+        (**self).reset_memory()
+    }
 }
 
 impl<T: ColumnSource + ?Sized> ColumnSource for Box<T> {
@@ -136,6 +145,10 @@ impl<T: ColumnSource + ?Sized> ColumnSource for Box<T> {
     fn reciprocity_bound(&self) -> Option<Real> {
         (**self).reciprocity_bound()
     }
+
+    fn reset_memory(&self) {
+        (**self).reset_memory()
+    }
 }
 
 impl<T: ColumnSource + ?Sized + Send> ColumnSource for std::sync::Arc<T> {
@@ -153,6 +166,10 @@ impl<T: ColumnSource + ?Sized + Send> ColumnSource for std::sync::Arc<T> {
 
     fn reciprocity_bound(&self) -> Option<Real> {
         (**self).reciprocity_bound()
+    }
+
+    fn reset_memory(&self) {
+        (**self).reset_memory()
     }
 }
 
@@ -306,5 +323,9 @@ impl<S: ColumnSource> ColumnSource for CountingColumns<S> {
 
     fn reciprocity_bound(&self) -> Option<Real> {
         self.inner.reciprocity_bound()
+    }
+
+    fn reset_memory(&self) {
+        self.inner.reset_memory()
     }
 }

@@ -560,6 +560,10 @@ impl<'p> Lab<'p> {
             by_columns: unit == "columns",
         };
         progress.begin(&name, target, unit);
+        // Every run starts from columns as costly as the first ones: what an earlier run left
+        // in the source's memory (the analytic backend's visible fractions) would make later
+        // solvers look faster.
+        self.source.reset_memory();
         let problem = Problem::new(&self.system, &*self.source)?.with_patch_order(&self.order)?;
         let run = Executor::new(solver, rules.clone()).run(&problem, &mut recorder);
         progress.end();

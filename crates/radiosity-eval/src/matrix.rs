@@ -211,6 +211,10 @@ impl<S: ColumnSource> ColumnSource for F32Columns<S> {
     fn reciprocity_bound(&self) -> Option<Real> {
         reciprocity_after_f32(self.0.reciprocity_bound())
     }
+
+    fn reset_memory(&self) {
+        self.0.reset_memory()
+    }
 }
 
 fn assemble_dyn(f: &dyn ColumnSource, max_bytes: usize) -> Result<FormFactors, EvalError> {

@@ -257,3 +257,40 @@ fn memory_budgets_and_kinds_parse_or_say_why_not() {
     let e = "matrx".parse::<ReferenceKind>().unwrap_err().to_string();
     assert!(e.contains("auto, matrix, shooting or none"), "{e}");
 }
+
+/// A source that counts how often it is asked to forget what it keeps.
+struct Forgetting<S> {
+    inner: S,
+    resets: std::sync::Arc<std::sync::atomic::AtomicUsize>,
+}
+
+impl<S: ColumnSource> ColumnSource for Forgetting<S> {
+    fn patch_count(&self) -> usize {
+        self.inner.patch_count()
+    }
+
+    fn fill_column(&self, j: usize, column: &mut [f64]) {
+        self.inner.fill_column(j, column)
+    }
+
+    fn reset_memory(&self) {
+        self.resets.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    }
+}
+
+#[test]
+fn every_run_of_a_lab_starts_from_a_source_that_forgot_earlier_runs() {
+    // Otherwise the analytic backend's record of visible fractions, filled by one solver,
+    // would make the next one's columns cheaper and its seconds flattering.
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let inner = radiosity_eval::backends::fresh_backend(&scene, &analytic(), &NoProgress).unwrap();
+    let resets = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    let source = Box::new(Forgetting { inner, resets: resets.clone() });
+    let lab = Lab::with_source(&scene, "forgetting", source, true, LabOptions::default(), &NoProgress).unwrap();
+    let rules = StopRules::parse("columns=n").unwrap();
+    for (k, name) in ["xu", "gmres-30", "gauss-seidel"].into_iter().enumerate() {
+        let mut solver = SolverRegistry::builtin().build(name).unwrap();
+        lab.run(solver.as_mut(), &rules, &RecordPlan::default(), &NoProgress).unwrap();
+        assert_eq!(resets.load(std::sync::atomic::Ordering::Relaxed), k + 1, "{name}");
+    }
+}

@@ -73,6 +73,7 @@ use radiosity_geom::{SceneAnalysis, Visibility};
 use rand::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
+use std::sync::{Arc, RwLock};
 
 /// Areas of a pair closer than this, relative to the larger, count as equal when choosing the
 /// patch a pair is integrated over (the lower index then).
@@ -105,8 +106,12 @@ pub struct AnalyticColumns<'a> {
     tolerance: Real,
     clamped: ClampCounter,
     /// The visible fractions of the pairs of every column and row computed so far, while
-    /// their budget lasts ([`crate::visibility_cache`]); none when no ray is traced.
-    cache: Option<VisibilityCache>,
+    /// their budget lasts ([`crate::visibility_cache`]); none when no ray is traced. Behind a
+    /// lock only so that [`ColumnSource::reset_memory`] can start a fresh one: each line takes
+    /// its own handle once.
+    cache: Option<RwLock<Arc<VisibilityCache>>>,
+    /// The cache's budget in bytes.
+    cache_bytes: usize,
 }
 
 impl<'a> AnalyticColumns<'a> {
@@ -128,16 +133,22 @@ impl<'a> AnalyticColumns<'a> {
             params,
             tolerance: PLANE_TOLERANCE * scene.diagonal(),
             clamped: ClampCounter::default(),
-            cache: analysis
-                .occlusion
-                .value
-                .then(|| VisibilityCache::new(scene.len(), params.cache_mib.saturating_mul(1 << 20))),
+            cache: analysis.occlusion.value.then(|| {
+                RwLock::new(Arc::new(VisibilityCache::new(scene.len(), params.cache_mib.saturating_mul(1 << 20))))
+            }),
+            cache_bytes: params.cache_mib.saturating_mul(1 << 20),
         }
     }
 
     /// What the record of visible fractions holds and has saved, when rays are traced.
     pub fn visibility_cache(&self) -> Option<CacheFigures> {
-        self.cache.as_ref().map(VisibilityCache::figures)
+        self.cache_handle().map(|c| c.figures())
+    }
+
+    /// The current record of visible fractions, when rays are traced.
+    fn cache_handle(&self) -> Option<Arc<VisibilityCache>> {
+        // A poisoned lock only means a column panicked elsewhere; the records stay valid.
+        self.cache.as_ref().map(|lock| lock.read().unwrap_or_else(|e| e.into_inner()).clone())
     }
 
     /// Shadow rays per unit of unoccluded form factor in this scene: `budget` times the
@@ -181,7 +192,8 @@ impl<'a> AnalyticColumns<'a> {
             let (i, j) = if column { (k, p) } else { (p, k) };
             self.pair_known(i, j, known)
         };
-        let cache = self.cache.as_ref();
+        let handle = self.cache_handle();
+        let cache = handle.as_deref();
         let own = cache.and_then(|c| c.record(p));
         let keep = cache.is_some_and(|c| own.is_none() && c.has_room(n));
         let known = |k: usize| match (cache, own) {
@@ -475,5 +487,13 @@ impl ColumnSource for AnalyticColumns<'_> {
     /// is the one exception, and moves a pair's entries only where the estimate left `[0, 1]`.
     fn reciprocity_bound(&self) -> Option<Real> {
         Some(F64_PAIR_RECIPROCITY)
+    }
+
+    /// Starts an empty record of visible fractions: later columns cost what the first ones did.
+    fn reset_memory(&self) {
+        if let Some(lock) = &self.cache {
+            let fresh = Arc::new(VisibilityCache::new(self.scene.len(), self.cache_bytes));
+            *lock.write().unwrap_or_else(|e| e.into_inner()) = fresh;
+        }
     }
 }

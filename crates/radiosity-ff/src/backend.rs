@@ -108,4 +108,8 @@ impl ColumnSource for Backend<'_> {
     fn reciprocity_bound(&self) -> Option<Real> {
         self.source().reciprocity_bound()
     }
+
+    fn reset_memory(&self) {
+        self.source().reset_memory()
+    }
 }

@@ -317,6 +317,15 @@ fn recorded_visible_fractions_change_no_entry() {
     assert_eq!(figures.records, 4, "{figures:?}");
     assert!(figures.reused > 0 && figures.bytes > 0 && figures.refused == 0, "{figures:?}");
     assert_eq!(fresh.visibility_cache().unwrap().records, 0);
+    // Forgetting the records starts afresh (a lab does so before every run) and changes no
+    // entry.
+    cached.reset_memory();
+    let figures = cached.visibility_cache().unwrap();
+    assert_eq!((figures.records, figures.reused, figures.bytes), (0, 0, 0), "{figures:?}");
+    cached.fill_column(50, &mut a);
+    fresh.fill_column(50, &mut b);
+    assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
+    assert_eq!(cached.visibility_cache().unwrap().reused, 0, "nothing left to reuse");
     // A scene without occlusion traces nothing and records nothing.
     let (scene, vis, analysis, p) = analytic_for("furnace:res=2", "analytic");
     assert!(AnalyticColumns::new(&scene, &vis, &analysis, p).visibility_cache().is_none());

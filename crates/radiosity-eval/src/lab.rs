@@ -652,13 +652,19 @@ impl<'p> Lab<'p> {
     }
 
     /// Runs every solver in turn under the same rules and recording: the comparison that
-    /// [`Comparison::write`] reports.
+    /// [`Comparison::write`] reports. A solver that refuses these form factors
+    /// ([`Solver::applicable`]) stops the comparison before anything runs.
     pub fn compare(
         &self,
         solvers: Vec<Box<dyn Solver>>,
         rules: &StopRules,
         progress: &dyn Progress,
     ) -> Result<Comparison, LabError> {
+        // A solver whose hypothesis these form factors break is refused before any runs.
+        let problem = Problem::new(&self.system, &*self.source)?;
+        for solver in &solvers {
+            solver.applicable(&problem)?;
+        }
         let mut outcomes = Vec::with_capacity(solvers.len());
         for mut solver in solvers {
             outcomes.push(self.run(solver.as_mut(), rules, &RecordPlan::default(), progress)?);

@@ -294,3 +294,19 @@ fn every_run_of_a_lab_starts_from_a_source_that_forgot_earlier_runs() {
         assert_eq!(resets.load(std::sync::atomic::Ordering::Relaxed), k + 1, "{name}");
     }
 }
+
+#[test]
+fn a_comparison_refuses_a_solver_these_form_factors_do_not_suit_before_running_any() {
+    // The wrapper states no reciprocity bound, so `cg` cannot run: nothing runs, not even
+    // `xu` before it (a run would have asked the source to forget).
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let inner = radiosity_eval::backends::fresh_backend(&scene, &analytic(), &NoProgress).unwrap();
+    let resets = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    let source = Box::new(Forgetting { inner, resets: resets.clone() });
+    let lab = Lab::with_source(&scene, "forgetting", source, true, LabOptions::default(), &NoProgress).unwrap();
+    let registry = SolverRegistry::builtin();
+    let solvers = vec![registry.build("xu").unwrap(), registry.build("cg").unwrap()];
+    let e = lab.compare(solvers, &StopRules::parse("columns=n").unwrap(), &NoProgress).err().unwrap();
+    assert!(e.to_string().contains("cg cannot solve this system"), "{e}");
+    assert_eq!(resets.load(std::sync::atomic::Ordering::Relaxed), 0);
+}

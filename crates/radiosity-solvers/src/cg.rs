@@ -110,25 +110,26 @@ impl Solver for ConjugateGradients {
         "cg".into()
     }
 
-    fn init(&mut self, problem: &Problem<'_>, _state: &mut State) -> Result<(), SolverError> {
+    fn applicable(&self, problem: &Problem<'_>) -> Result<(), SolverError> {
         let refuse = |reason: String| SolverError::NotApplicable { solver: "cg".into(), reason };
         const NEED: &str = "cg solves the symmetrized system diag(A/ρ)(I − ρF), which needs reciprocal form factors \
              (A_i F_ij = A_j F_ji)";
-        self.reciprocity = match problem.reciprocity_bound() {
-            None => {
-                return Err(refuse(format!(
-                    "{NEED}, and these form factors state no reciprocity bound (hemicube and Monte Carlo columns are \
-                     reciprocal only on average); gmres-30 and bicgstab need no symmetry"
-                )));
-            }
-            Some(b) if b.is_nan() || b > RECIPROCITY_LIMIT => {
-                return Err(refuse(format!(
-                    "{NEED}, and these form factors are reciprocal only to a relative {b:.2e}, above the \
-                     {RECIPROCITY_LIMIT:e} cg accepts; gmres-30 and bicgstab need no symmetry"
-                )));
-            }
-            Some(b) => b,
-        };
+        match problem.reciprocity_bound() {
+            None => Err(refuse(format!(
+                "{NEED}, and these form factors state no reciprocity bound (hemicube and Monte Carlo columns are \
+                 reciprocal only on average); gmres-30 and bicgstab need no symmetry"
+            ))),
+            Some(b) if b.is_nan() || b > RECIPROCITY_LIMIT => Err(refuse(format!(
+                "{NEED}, and these form factors are reciprocal only to a relative {b:.2e}, above the \
+                 {RECIPROCITY_LIMIT:e} cg accepts; gmres-30 and bicgstab need no symmetry"
+            ))),
+            Some(_) => Ok(()),
+        }
+    }
+
+    fn init(&mut self, problem: &Problem<'_>, _state: &mut State) -> Result<(), SolverError> {
+        self.applicable(problem)?;
+        self.reciprocity = problem.reciprocity_bound().unwrap_or(Real::INFINITY);
         let k = problem.channels();
         let (areas, rho) = (problem.system().areas(), problem.system().reflectivities());
         self.weights =

@@ -109,6 +109,14 @@ pub trait Solver {
     /// The solver's name, as on the command line (`pr`, `sor-1.2`).
     fn name(&self) -> String;
 
+    /// Refuses, before any work, a problem whose form factors do not satisfy the solver's
+    /// hypothesis ([`SolverError::NotApplicable`]; `cg` needs reciprocity). Cheap: it computes
+    /// no column, so a caller can ask every solver before running any. The executor asks
+    /// before [`Solver::init`]. Every problem is accepted by default.
+    fn applicable(&self, _problem: &Problem<'_>) -> Result<(), SolverError> {
+        Ok(())
+    }
+
     /// Prepares the state before the first step (the state starts at `B = ΔB = E`).
     fn init(&mut self, _problem: &Problem<'_>, _state: &mut State) -> Result<(), SolverError> {
         Ok(())
@@ -325,6 +333,7 @@ impl<'s> Executor<'s> {
         let n = problem.n();
         let mut state = State::from_emission(problem.system().emissions(), problem.channels());
         let start_ff = problem.ff_seconds();
+        self.solver.applicable(problem)?;
         let start = Instant::now();
         self.solver.init(problem, &mut state)?;
         self.account(problem, &mut state, start.elapsed().as_secs_f64(), start_ff);

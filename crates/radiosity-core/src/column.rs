@@ -69,8 +69,10 @@ pub trait ColumnSource: Sync {
 pub const F64_PAIR_RECIPROCITY: Real = 2.0 * Real::EPSILON;
 
 /// What rounding both entries of a pair to `f32` adds to a reciprocity bound: each moves by
-/// at most half of `f32::EPSILON` of its value, so `|a' − b'| ≤ |a − b| + ε_f32 max(a, b)`.
-pub const F32_ROUNDING: Real = f32::EPSILON as Real;
+/// at most half of `ε_f32 = f32::EPSILON` of its value, so `|a' − b'| ≤ |a − b| + ε_f32
+/// max(a, b)`, and `max(a', b')` is at least `(1 − ε_f32 / 2) max(a, b)`; half as much again
+/// covers both with room to spare.
+pub const F32_ROUNDING: Real = 1.5 * f32::EPSILON as Real;
 
 /// The reciprocity bound of a source's entries once rounded to `f32` ([`F32_ROUNDING`]).
 pub fn reciprocity_after_f32(bound: Option<Real>) -> Option<Real> {

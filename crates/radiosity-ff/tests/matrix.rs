@@ -327,7 +327,7 @@ fn a_stored_matrix_states_the_reciprocity_it_has_and_keeps_it_in_its_file() {
     // Column by column: the source's bound plus f32 rounding; none from a source that states none.
     let m = assemble(&stated);
     let bound = m.reciprocity_bound().unwrap();
-    assert!(bound >= f32::EPSILON as Real && bound < 2.0 * f32::EPSILON as Real, "{bound:e}");
+    assert!(bound >= radiosity_core::column::F32_ROUNDING && bound < 2.0 * f32::EPSILON as Real, "{bound:e}");
     let measured = radiosity_core::measured_reciprocity(&m, &area).unwrap();
     assert!(measured <= bound, "measured {measured:e} above the stated {bound:e}");
     assert_eq!(assemble(&random_matrix(n, 0.5)).reciprocity_bound(), None);

@@ -62,7 +62,7 @@ use crate::state::State;
 use radiosity_core::Real;
 use std::str::FromStr;
 
-/// The largest reciprocity bound `cg` accepts: `f32` storage (about 1.2e-7) passes, rows
+/// The largest reciprocity bound `cg` accepts: `f32` storage (about 1.8e-7) passes, rows
 /// rescaled by factors that differ by more than 1e-6 do not.
 pub const RECIPROCITY_LIMIT: Real = 1e-6;
 

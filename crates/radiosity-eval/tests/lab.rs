@@ -278,15 +278,21 @@ impl<S: ColumnSource> ColumnSource for Forgetting<S> {
     }
 }
 
+/// A lab over the analytic columns of `scene`, wrapped in a [`Forgetting`] (which states no
+/// reciprocity bound), and its count of resets.
+fn forgetting_lab(scene: &PreparedScene) -> (Lab<'_>, std::sync::Arc<std::sync::atomic::AtomicUsize>) {
+    let inner = radiosity_eval::backends::fresh_backend(scene, &analytic(), &NoProgress).unwrap();
+    let resets = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    let source = Box::new(Forgetting { inner, resets: resets.clone() });
+    (Lab::with_source(scene, "forgetting", source, true, LabOptions::default(), &NoProgress).unwrap(), resets)
+}
+
 #[test]
 fn every_run_of_a_lab_starts_from_a_source_that_forgot_earlier_runs() {
     // Otherwise the analytic backend's record of visible fractions, filled by one solver,
     // would make the next one's columns cheaper and its seconds flattering.
     let scene = PreparedScene::load("cornell:res=2").unwrap();
-    let inner = radiosity_eval::backends::fresh_backend(&scene, &analytic(), &NoProgress).unwrap();
-    let resets = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
-    let source = Box::new(Forgetting { inner, resets: resets.clone() });
-    let lab = Lab::with_source(&scene, "forgetting", source, true, LabOptions::default(), &NoProgress).unwrap();
+    let (lab, resets) = forgetting_lab(&scene);
     let rules = StopRules::parse("columns=n").unwrap();
     for (k, name) in ["xu", "gmres-30", "gauss-seidel"].into_iter().enumerate() {
         let mut solver = SolverRegistry::builtin().build(name).unwrap();
@@ -300,10 +306,7 @@ fn a_comparison_refuses_a_solver_these_form_factors_do_not_suit_before_running_a
     // The wrapper states no reciprocity bound, so `cg` cannot run: nothing runs, not even
     // `xu` before it (a run would have asked the source to forget).
     let scene = PreparedScene::load("cornell:res=2").unwrap();
-    let inner = radiosity_eval::backends::fresh_backend(&scene, &analytic(), &NoProgress).unwrap();
-    let resets = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
-    let source = Box::new(Forgetting { inner, resets: resets.clone() });
-    let lab = Lab::with_source(&scene, "forgetting", source, true, LabOptions::default(), &NoProgress).unwrap();
+    let (lab, resets) = forgetting_lab(&scene);
     let registry = SolverRegistry::builtin();
     let solvers = vec![registry.build("xu").unwrap(), registry.build("cg").unwrap()];
     let e = lab.compare(solvers, &StopRules::parse("columns=n").unwrap(), &NoProgress).err().unwrap();

@@ -89,13 +89,14 @@ pub struct Bicgstab {
 }
 
 impl Bicgstab {
-    /// Starts channel `c` again from its current residual: `r̂ = p = r`, `ϱ = ⟨r, r⟩`.
-    fn restart_channel(&mut self, c: usize, k: usize) {
-        for (idx, r) in self.residual.iter().enumerate().filter(|(idx, _)| idx % k == c) {
-            self.shadow[idx] = *r;
-            self.direction[idx] = *r;
+    /// Starts channel `c` of `k` again from its current residual: `r̂ = p = r`, `ϱ = ⟨r, r⟩`
+    /// (given as `rr`).
+    fn restart_channel(&mut self, c: usize, k: usize, rr: Real) {
+        for idx in (c..self.residual.len()).step_by(k) {
+            self.shadow[idx] = self.residual[idx];
+            self.direction[idx] = self.residual[idx];
         }
-        self.rho[c] = dots(&self.weights, &self.residual, &self.residual, k)[c];
+        self.rho[c] = rr;
     }
 }
 
@@ -151,21 +152,20 @@ impl Solver for Bicgstab {
                     if rr[c] == 0.0 {
                         // Solved: nothing left to move along.
                         self.rho[c] = 0.0;
-                        for (idx, p) in self.direction.iter_mut().enumerate() {
-                            if idx % k == c {
-                                *p = 0.0;
-                            }
+                        for idx in (c..len).step_by(k) {
+                            self.direction[idx] = 0.0;
                         }
                         continue;
                     }
                     if self.rho[c] == 0.0 || rho[c] == 0.0 || omega[c] == 0.0 || self.alpha[c] == 0.0 {
                         self.breakdowns += 1;
-                        self.restart_channel(c, k);
+                        self.restart_channel(c, k, rr[c]);
                         continue;
                     }
                     let beta = (rho[c] / self.rho[c]) * (self.alpha[c] / omega[c]);
-                    for (idx, p) in self.direction.iter_mut().enumerate().filter(|(idx, _)| idx % k == c) {
-                        *p = self.residual[idx] + beta * (*p - omega[c] * self.v[idx]);
+                    for idx in (c..len).step_by(k) {
+                        let p = self.direction[idx];
+                        self.direction[idx] = self.residual[idx] + beta * (p - omega[c] * self.v[idx]);
                     }
                     self.rho[c] = rho[c];
                 }

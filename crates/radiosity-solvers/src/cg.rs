@@ -128,7 +128,7 @@ impl Solver for ConjugateGradients {
     }
 
     fn init(&mut self, problem: &Problem<'_>, _state: &mut State) -> Result<(), SolverError> {
-        self.applicable(problem)?;
+        // The executor asked `applicable` first, so the bound is stated and within the limit.
         self.reciprocity = problem.reciprocity_bound().unwrap_or(Real::INFINITY);
         let k = problem.channels();
         let (areas, rho) = (problem.system().areas(), problem.system().reflectivities());

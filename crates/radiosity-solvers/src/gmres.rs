@@ -233,14 +233,11 @@ impl Gmres {
     /// with `y` the least-squares solution of its rotated system.
     fn display(&mut self, state: &mut State) {
         let k = state.channels;
-        state.radiosity.clone_from(&self.start);
-        self.residual.clone_from(&self.start_residual);
-        for c in 0..k {
-            let ch = &self.channels[c];
+        // Per basis vector l, the coefficient of each channel in x (`y_l`) and in r (`(H̄ y)_l`).
+        let mut in_x = vec![vec![0.0; k]; self.basis.len()];
+        let mut in_r = vec![vec![0.0; k]; self.basis.len()];
+        for (c, ch) in self.channels.iter().enumerate() {
             let steps = ch.r.len();
-            if steps == 0 {
-                continue;
-            }
             // Back substitution on the upper-triangular R y = g.
             let mut y = vec![0.0; steps];
             for i in (0..steps).rev() {
@@ -250,24 +247,18 @@ impl Gmres {
                 }
                 y[i] = if ch.r[i][i] != 0.0 { s / ch.r[i][i] } else { 0.0 };
             }
-            // H̄ y, of length steps + 1.
-            let mut hy = vec![0.0; steps + 1];
             for (l, yl) in y.iter().enumerate() {
+                in_x[l][c] = *yl;
                 for (i, h) in ch.h[l].iter().enumerate() {
-                    hy[i] += h * yl;
+                    in_r[i][c] -= h * yl;
                 }
             }
-            for (idx, (x, r)) in state.radiosity.iter_mut().zip(self.residual.iter_mut()).enumerate() {
-                if idx % k != c {
-                    continue;
-                }
-                for (l, yl) in y.iter().enumerate() {
-                    *x += yl * self.basis[l][idx];
-                }
-                for (i, h) in hy.iter().enumerate() {
-                    *r -= h * self.basis[i][idx];
-                }
-            }
+        }
+        state.radiosity.clone_from(&self.start);
+        self.residual.clone_from(&self.start_residual);
+        for ((v, a), b) in self.basis.iter().zip(&in_x).zip(&in_r) {
+            axpy(a, v, &mut state.radiosity);
+            axpy(b, v, &mut self.residual);
         }
         state.unshot.clone_from(&self.residual);
     }

@@ -1,6 +1,7 @@
 //! Integration tests of radiosity-ff: backends against closed forms, closure, reciprocity,
 //! determinism and the guard rails.
 
+mod allocation;
 mod analytic;
 mod closed_forms;
 mod hemicube;

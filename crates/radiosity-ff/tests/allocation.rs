@@ -1,0 +1,78 @@
+//! Computing a pair of the analytic backend allocates nothing, whatever its number of shadow
+//! rays: the quadrature, the probe, the grid, the Sobol net and the Latin hypercubes all live
+//! on the stack, so a column's cost is its arithmetic and its rays.
+//!
+//! `allocation-counter` makes the test binary's allocator count the allocations of each
+//! thread; every other test of the binary allocates through it unchanged.
+
+use radiosity_core::{MaterialId, ObjectId, Patch, Real, Vec3};
+use radiosity_ff::pair_visibility::{RayBudget, visible_fraction};
+use radiosity_ff::{AnalyticColumns, BackendSpec};
+use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
+use rand::SeedableRng;
+use rand_xoshiro::Xoshiro256PlusPlus;
+
+/// The allocations `f` makes on this thread, and its value.
+fn allocations_of<T>(f: impl FnOnce() -> T) -> (u64, T) {
+    let mut value = None;
+    let info = allocation_counter::measure(|| value = Some(f()));
+    (info.count_total, value.expect("measured"))
+}
+
+#[test]
+fn the_counter_counts() {
+    // Without it, a zero below could mean a counter that was never installed.
+    let (allocated, v) = allocations_of(|| vec![1u8; 10]);
+    assert_eq!((allocated, v.len()), (1, 10));
+}
+
+#[test]
+fn visible_fractions_allocate_nothing_at_any_ray_count() {
+    // A floor and a wall sharing an edge, half of the floor hidden, so that the probes of
+    // large budgets disagree and the estimate takes all of its rays, from 1 to 2^20.
+    let (m, o) = (MaterialId(0), ObjectId(0));
+    let quad = |v: [[Real; 3]; 4]| Patch::quad(v.map(Vec3::from), m, o).unwrap();
+    let floor = quad([[0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 0.0, 0.0]]);
+    let wall = quad([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]]);
+    for rays in [1, 2, 15, 16, 17, 255, 256, 1000, 4096, 65_536, 1 << 20] {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(rays as u64);
+        let mut traced = 0usize;
+        let mut half = |x: Vec3, _: usize, _: Vec3, _: usize| {
+            traced += 1;
+            x.z <= 0.5
+        };
+        let budget = RayBudget { rays, per_unit: 0 };
+        let (allocated, v) =
+            allocations_of(|| visible_fraction((&floor, 0), (&wall, 1), 0.2, budget, 1e-12, &mut rng, &mut half));
+        assert_eq!(allocated, 0, "{rays} rays allocated {allocated} times");
+        assert!((0.0..=1.0).contains(&v), "{rays} rays: {v}");
+        if rays >= 256 {
+            // The probe disagreed, and every ray of the budget was drawn.
+            assert!(v > 0.0 && v < 1.0, "{rays} rays: {v}");
+            assert!(traced >= rays, "{rays} rays, {traced} traced");
+        }
+    }
+}
+
+#[test]
+fn analytic_pairs_allocate_nothing_on_an_occluded_scene() {
+    // Every pair of a few columns of multi-cubes at four times the default budget: distant
+    // pairs with one ray, neighbours with thousands, touching pairs graded into panels, and
+    // pairs cut by each other's planes.
+    let scene = load_scene("multi-cubes").unwrap().scene;
+    let vis = Visibility::new(&scene);
+    let analysis = SceneAnalysis::new(&scene, &vis);
+    assert!(analysis.occlusion.value);
+    let BackendSpec::Analytic(params) = BackendSpec::parse("analytic:budget=98304").unwrap() else { unreachable!() };
+    let f = AnalyticColumns::new(&scene, &vis, &analysis, params);
+    let n = scene.len();
+    let mut nonzero = 0;
+    for j in (0..n).step_by(n / 7) {
+        for i in 0..n {
+            let (allocated, value) = allocations_of(|| f.pair(i, j));
+            assert_eq!(allocated, 0, "pair ({i}, {j}) allocated {allocated} times");
+            nonzero += usize::from(value > 0.0);
+        }
+    }
+    assert!(nonzero > n, "{nonzero} non-zero pairs");
+}

@@ -2,8 +2,11 @@
 //! the performance figures, as one Markdown report of medians over several runs, and with
 //! `--json` the same medians under stable keys ([`BenchJson`]).
 //!
-//! Form factors dominate the cost of radiosity, so speed is measured where it is spent and
-//! against what limits it:
+//! The measurements, their medians, their Markdown and their JSON keys are the library's
+//! ([`radiosity_eval::bench`]); this module parses the arguments, runs the sections with
+//! progress bars, runs the end-to-end and scale cases in child processes ([`children`]) and
+//! judges the targets. Form factors dominate the cost of radiosity, so speed is measured where
+//! it is spent and against what limits it:
 //!
 //! 1. **`columns`**: form-factor columns per second for each backend on `office`, on 1 and 2
 //!    threads (dedicated rayon pools), over a fixed, seeded sample of columns spread over the
@@ -47,18 +50,19 @@
 //! smoke test of a few seconds whose figures mean nothing.
 
 mod assembly;
-mod columns;
-mod e2e;
+mod children;
 mod lu;
-mod scale;
 
+use crate::bars::Bars;
 use crate::experiment::check_output_file;
 use crate::experiment::prepare;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
+use radiosity_eval::bench::columns::ColumnsParams;
+use radiosity_eval::bench::report_text::{duration, human_bytes, sig};
+use radiosity_eval::bench::{BenchJson, Machine, SceneJson, columns};
+use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
-use serde::Serialize;
-use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -213,67 +217,6 @@ fn sections(only: Option<&str>) -> Result<Vec<&'static str>> {
     Ok(SECTIONS.iter().copied().filter(|s| chosen.contains(s)).collect())
 }
 
-/// The figures of `--json FILE`, under keys that stay the same from run to run (medians, as
-/// in the Markdown report; `null` where a figure was not measured or not reached).
-#[derive(Debug, Default, Serialize)]
-pub(crate) struct BenchJson {
-    /// The machine and build.
-    machine: Machine,
-    /// The bench scene and its patch count, when a section measured on it.
-    scene: Option<SceneJson>,
-    /// Section 1, one entry per backend.
-    pub(crate) columns: Vec<ColumnsJson>,
-    /// Section 4, one entry per method and backend.
-    pub(crate) e2e: Vec<E2eJson>,
-}
-
-/// The machine the figures were taken on.
-#[derive(Debug, Default, Serialize)]
-struct Machine {
-    cores: usize,
-    rayon_threads: usize,
-    os: &'static str,
-    arch: &'static str,
-    release: bool,
-}
-
-/// The bench scene.
-#[derive(Debug, Serialize)]
-struct SceneJson {
-    name: String,
-    patches: usize,
-}
-
-/// One backend's columns per second (section 1).
-#[derive(Debug, Serialize)]
-pub(crate) struct ColumnsJson {
-    /// The canonical backend argument.
-    pub(crate) backend: String,
-    /// Columns per second by thread count (`"1"`, `"2"`: columns in parallel on a dedicated
-    /// pool).
-    pub(crate) columns_per_second: BTreeMap<String, f64>,
-    /// Rays (segments) traced per column.
-    pub(crate) rays_per_column: f64,
-    /// Pipeline rays per second over raw obvhs rays per second on the same rays, 2 threads.
-    pub(crate) raw_share: f64,
-    /// Analytic: columns per second when every pair's visible fraction is recorded, one at a
-    /// time on 2 threads.
-    pub(crate) recorded_columns_per_second: Option<f64>,
-}
-
-/// One method's time to accuracy (section 4).
-#[derive(Debug, Serialize)]
-pub(crate) struct E2eJson {
-    pub(crate) method: String,
-    pub(crate) backend: String,
-    /// Wall seconds from scene load to e_rms ≤ `"1e-1"`, `"1e-2"`, `"1e-3"`.
-    pub(crate) seconds_to: BTreeMap<String, Option<f64>>,
-    #[serde(rename = "columns_to_1e-3")]
-    pub(crate) columns_to_1e_3: Option<f64>,
-    /// The largest peak resident memory over the runs.
-    pub(crate) peak_bytes: Option<u64>,
-}
-
 /// `analytic`'s columns per second on `office`, 2 threads, before the throughput work
 /// (`docs/bench-office.md` of that time): its target is twice as many.
 const COLUMNS_BEFORE: f64 = 58.8;
@@ -296,13 +239,13 @@ pub(crate) struct Findings {
 pub fn run(args: &Args) -> Result<()> {
     if let Some(solver) = &args.child_scale {
         let Some(scene) = &args.scene else { bail!("a scale child run needs --scene") };
-        return scale::child(scene, solver, args.max_seconds.unwrap_or(120.0));
+        return children::scale_child(scene, solver, args.max_seconds.unwrap_or(120.0));
     }
     if let Some(solver) = &args.child_solver {
         let (Some(ff), Some(reference), Some(scene)) = (&args.child_ff, &args.child_reference, &args.scene) else {
             bail!("an end-to-end child run needs --scene, --child-ff and --child-reference");
         };
-        return e2e::child(scene, solver, ff, reference, args.max_seconds.unwrap_or(300.0));
+        return children::e2e_child(scene, solver, ff, reference, args.max_seconds.unwrap_or(300.0));
     }
     let sections = sections(args.only.as_deref())?;
     for out in [&args.out, &args.json].into_iter().flatten() {
@@ -317,16 +260,31 @@ pub fn run(args: &Args) -> Result<()> {
     for section in &sections {
         body += &match *section {
             "lu" => lu::run(&config)?,
-            "scale" => scale::run(&config)?,
+            "scale" => children::scale(&config)?,
             on_scene => {
                 let scene = match prepared {
                     Some(ref scene) => scene,
                     None => prepared.insert(prepare(&config.scene)?),
                 };
                 match on_scene {
-                    "columns" => columns::run(&config, scene, &mut findings)?,
+                    "columns" => {
+                        let params = ColumnsParams {
+                            backends: config
+                                .backends
+                                .iter()
+                                .map(|b| BackendSpec::parse(b))
+                                .collect::<Result<_, _>>()?,
+                            columns: config.columns,
+                            runs: config.runs_cheap,
+                            min_seconds: config.min_seconds,
+                        };
+                        let section = columns::run(scene, &config.scene, &params, &Bars::new())?;
+                        findings.analytic_ratio = section.analytic_ratio;
+                        findings.json.columns = section.json;
+                        section.markdown
+                    }
                     "assembly" => assembly::run(&config, scene)?,
-                    _ => e2e::run(&config, scene, &mut findings)?,
+                    _ => children::e2e(&config, scene, &mut findings)?,
                 }
             }
         };
@@ -339,13 +297,7 @@ pub fn run(args: &Args) -> Result<()> {
     }
     if let Some(out) = &args.json {
         let mut json = findings.json;
-        json.machine = Machine {
-            cores: std::thread::available_parallelism().map_or(0, |n| n.get()),
-            rayon_threads: rayon::current_num_threads(),
-            os: std::env::consts::OS,
-            arch: std::env::consts::ARCH,
-            release: !cfg!(debug_assertions),
-        };
+        json.machine = Machine::this();
         json.scene = prepared.as_ref().map(|p| SceneJson { name: config.scene.clone(), patches: p.loaded.scene.len() });
         let text = serde_json::to_string_pretty(&json)?;
         std::fs::write(out, text + "\n").with_context(|| format!("cannot write {}", out.display()))?;
@@ -464,56 +416,6 @@ fn targets(findings: &Findings, scene: &str) -> String {
     out
 }
 
-/// The median of `values` (the mean of the middle two for an even count); NaN when empty.
-pub(crate) fn median(values: &[f64]) -> f64 {
-    let mut v: Vec<f64> = values.iter().copied().filter(|x| !x.is_nan()).collect();
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    let k = v.len();
-    if k % 2 == 1 { v[k / 2] } else { 0.5 * (v[k / 2 - 1] + v[k / 2]) }
-}
-
-/// `x` with `digits` significant digits, without exponent for everyday magnitudes.
-pub(crate) fn sig(x: f64, digits: usize) -> String {
-    if !x.is_finite() {
-        return "—".to_string();
-    }
-    if x == 0.0 {
-        return "0".to_string();
-    }
-    let magnitude = x.abs().log10().floor() as i32;
-    if !(-4..=9).contains(&magnitude) {
-        return format!("{:.*e}", digits.saturating_sub(1), x);
-    }
-    let decimals = (digits as i32 - 1 - magnitude).max(0) as usize;
-    let text = format!("{x:.decimals$}");
-    // Thousands separators for large integers make tables easier to read.
-    if decimals == 0 && x.abs() >= 10_000.0 {
-        let digits: Vec<char> = text.trim_start_matches('-').chars().collect();
-        let mut grouped = String::new();
-        for (k, c) in digits.iter().enumerate() {
-            if k > 0 && (digits.len() - k) % 3 == 0 {
-                grouped.push(',');
-            }
-            grouped.push(*c);
-        }
-        return if x < 0.0 { format!("-{grouped}") } else { grouped };
-    }
-    text
-}
-
-/// `bytes` in kB, MB or GB (powers of ten, as the 2 GB target).
-pub(crate) fn human_bytes(bytes: u64) -> String {
-    let b = bytes as f64;
-    match bytes {
-        0..1_000_000 => format!("{} kB", sig(b / 1e3, 3)),
-        1_000_000..1_000_000_000 => format!("{} MB", sig(b / 1e6, 3)),
-        _ => format!("{} GB", sig(b / 1e9, 3)),
-    }
-}
-
 /// A progress bar on stderr over `len` steps, hidden when stderr is not a terminal.
 pub(crate) fn progress(len: u64, prefix: &str) -> ProgressBar {
     let bar = if std::io::stderr().is_terminal() { ProgressBar::new(len) } else { ProgressBar::hidden() };
@@ -522,39 +424,4 @@ pub(crate) fn progress(len: u64, prefix: &str) -> ProgressBar {
     }
     bar.set_prefix(prefix.to_string());
     bar
-}
-
-/// Runs this executable again with `args` (a child case of a section, in its own process so
-/// that its peak memory is its own) and reads the JSON line it prints last; `what` names the
-/// case in errors.
-pub(crate) fn run_child<T: serde::de::DeserializeOwned>(args: &[String], what: &str) -> Result<T> {
-    let exe = std::env::current_exe().context("cannot find this executable to run the child cases")?;
-    let output = std::process::Command::new(exe).args(args).output().with_context(|| format!("cannot start {what}"))?;
-    if !output.status.success() {
-        let stderr = String::from_utf8_lossy(&output.stderr);
-        let why = stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("no message");
-        bail!("{what} failed: {}", why.trim_start_matches("error: "));
-    }
-    let stdout = String::from_utf8_lossy(&output.stdout);
-    let line = stdout.lines().rev().find(|l| l.starts_with('{')).unwrap_or_default();
-    serde_json::from_str(line).with_context(|| format!("{what} printed no report"))
-}
-
-/// A rayon pool of `threads` threads.
-pub(crate) fn pool(threads: usize) -> Result<rayon::ThreadPool> {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .with_context(|| format!("cannot start a pool of {threads} threads"))
-}
-
-/// Seconds in µs, ms or s.
-pub(crate) fn duration(seconds: f64) -> String {
-    if seconds < 1e-3 {
-        format!("{} µs", sig(seconds * 1e6, 3))
-    } else if seconds < 1.0 {
-        format!("{} ms", sig(seconds * 1e3, 3))
-    } else {
-        format!("{} s", sig(seconds, 3))
-    }
 }

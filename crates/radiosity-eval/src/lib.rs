@@ -20,7 +20,10 @@
 //! - [`path_trace`](mod@path_trace): each object's area-mean radiosity estimated by Monte Carlo
 //!   path tracing over the BVH, with its standard error: a truth of the continuous problem;
 //! - [`validate`](mod@validate): those path-traced means beside the discrete reference at
-//!   increasing mesh resolution, which separates discretization error from solver error.
+//!   increasing mesh resolution, which separates discretization error from solver error;
+//! - [`bench`]: columns per second against the ray-tracing limit, time and memory from scene
+//!   load to accuracy, and the cost of a column as scenes grow, with their medians, Markdown
+//!   sections and the JSON keys of `cargo xtask bench --json`.
 //!
 //! With `xtask`, it is the only crate that will write files; it writes to any
 //! [`std::io::Write`] and leaves opening files to its callers.
@@ -44,6 +47,7 @@
 //! ```
 
 pub mod backends;
+pub mod bench;
 pub mod cache;
 pub mod compare;
 pub mod error;

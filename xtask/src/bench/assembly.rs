@@ -1,9 +1,11 @@
 //! Section 2: assembling the full analytic matrix with each pair computed once (reciprocity),
 //! at k = 1 and k = 4 shadow rays per pair, beside column-by-column assembly.
 
-use super::{Config, human_bytes, median, progress, sig};
+use super::{Config, progress};
 use anyhow::{Result, bail};
 use radiosity_core::Real;
+use radiosity_eval::bench::median;
+use radiosity_eval::bench::report_text::{human_bytes, sig};
 use radiosity_ff::guard::MatrixFigures;
 use radiosity_ff::matrix::Storage;
 use radiosity_ff::{AnalyticColumns, BackendSpec, StoredMatrix};

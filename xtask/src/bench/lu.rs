@@ -7,10 +7,12 @@
 //! ones of the condition estimate, two right-hand sides on one factorisation, sequentially,
 //! as `group_step` solves one channel.
 
-use super::{Config, duration, median, progress};
+use super::{Config, progress};
 use anyhow::{Result, bail};
 use radiosity_core::Real;
 use radiosity_core::dense_lu::lu_solve_columns;
+use radiosity_eval::bench::median;
+use radiosity_eval::bench::report_text::duration;
 use std::fmt::Write as _;
 use std::hint::black_box;
 use std::time::Instant;

@@ -1,10 +1,10 @@
-//! Section `scale`: the cost of a column and of a certified answer as the scene grows, with no
+//! The cost of a column and of a certified answer as the scene grows, with no
 //! matrix anywhere (`--reference none`).
 //!
 //! For `office` at `size` 0.186, 0.093 and 0.05 (10 990, 33 179 and 95 832 patches) and the
 //! largest real scene of `../shared/scenes` cut finer (`office.mgf` at `size=0.007`, 114 042
-//! patches), each method runs in a child process (this executable, re-invoked) for at most
-//! `--max-seconds` of solver time: from scene load, its setup (load, BVH, analysis, backend),
+//! patches), [`scale_run`] runs one method for a given solver time (`cargo xtask bench --only
+//! scale` runs each case in a process of its own, so that its peak memory is its own): from scene load, its setup (load, BVH, analysis, backend),
 //! seconds per column and columns per second, its peak resident memory (`VmHWM`), the
 //! certified bound at the end, and the wall time from scene load to a certified bound of 1e-1
 //! and 1e-2 ([`radiosity_eval::SolverBound`], the bound every recorded step carries). The
@@ -12,18 +12,20 @@
 //! `log(seconds per column)` against `log n`): a column computes `n` pairs, so the exponent
 //! should be about 1.
 
-use super::{Config, duration, human_bytes, median, progress, run_child, sig};
-use anyhow::Result;
+use super::report_text::{duration, human_bytes, sig};
+use super::{median, peak_rss};
+use crate::lab::LabError;
+use crate::{Lab, LabOptions, NoProgress, RecordPlan, ReferenceKind};
 use radiosity_core::Real;
-use radiosity_eval::{Lab, LabOptions, NoProgress, RecordPlan, ReferenceKind};
 use radiosity_ff::BackendSpec;
-use radiosity_solvers::{SolverRegistry, StopRules};
+use radiosity_geom::PreparedScene;
+use radiosity_solvers::{Solver, StopRules};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::time::Instant;
 
 /// The scenes of the section: three office sizes, then the largest real scene.
-pub(crate) const SCENES: [&str; 4] = [
+pub const SCENES: [&str; 4] = [
     "office:size=0.186",
     "office:size=0.093",
     "office:size=0.05",
@@ -31,42 +33,49 @@ pub(crate) const SCENES: [&str; 4] = [
 ];
 
 /// The certified bounds timed.
-const BOUNDS: [Real; 2] = [1e-1, 1e-2];
+pub const BOUNDS: [Real; 2] = [1e-1, 1e-2];
 
-/// What one child reports.
+/// What one run reports.
 #[derive(Clone, Debug, Serialize, Deserialize)]
-struct ScaleReport {
-    patches: usize,
+pub struct ScaleReport {
+    /// The scene's patches.
+    pub patches: usize,
     /// Load, BVH and analysis.
-    scene_seconds: Real,
+    pub scene_seconds: Real,
     /// The lab's setup (backend, no reference).
-    backend_seconds: Real,
-    columns: u64,
+    pub backend_seconds: Real,
+    /// Columns computed.
+    pub columns: u64,
     /// The run's seconds (form factors and solving).
-    seconds: Real,
+    pub seconds: Real,
     /// Of which form factors.
-    ff_seconds: Real,
+    pub ff_seconds: Real,
     /// The certified relative bound at the end.
-    bound: Real,
+    pub bound: Real,
     /// Wall seconds from scene load to each bound of [`BOUNDS`] reached, and the columns then.
-    reached: Vec<(Real, Real, u64)>,
-    peak_rss: Option<u64>,
+    pub reached: Vec<(Real, Real, u64)>,
+    /// Peak resident memory in bytes.
+    pub peak_rss: Option<u64>,
 }
 
-/// Runs one case in this process and prints its report as JSON.
-pub(crate) fn child(scene: &str, solver: &str, max_seconds: Real) -> Result<()> {
+/// Runs `solver` on `prepared` with no reference and no matrix for `max_seconds` of solver
+/// time, timing from `start`, the instant the caller began loading the scene, which took
+/// `scene_seconds`.
+pub fn scale_run(
+    prepared: &PreparedScene,
+    start: Instant,
+    scene_seconds: Real,
+    solver: &mut dyn Solver,
+    max_seconds: Real,
+) -> Result<ScaleReport, LabError> {
     let rules = StopRules::parse(&format!("time={}ms", (max_seconds * 1e3).ceil() as u64))?;
-    let mut solver = SolverRegistry::builtin().build(solver)?;
-    let start = Instant::now();
-    let prepared = crate::experiment::prepare(scene)?;
-    let scene_seconds = start.elapsed().as_secs_f64();
     let options = LabOptions::default().with_reference(ReferenceKind::None).with_residuals(false);
-    let lab = Lab::new(&prepared, &BackendSpec::parse("analytic")?, options, &NoProgress)?;
+    let lab = Lab::new(prepared, &BackendSpec::parse("analytic")?, options, &NoProgress)?;
     let backend_seconds = start.elapsed().as_secs_f64() - scene_seconds;
     let setup = start.elapsed().as_secs_f64();
-    let o = lab.run(solver.as_mut(), &rules, &RecordPlan::errors_only(), &NoProgress)?;
+    let o = lab.run(solver, &rules, &RecordPlan::errors_only(), &NoProgress)?;
     let reached = BOUNDS.iter().filter_map(|&b| o.bound_reached(b).map(|p| (b, setup + p.wall, p.columns))).collect();
-    let report = ScaleReport {
+    Ok(ScaleReport {
         patches: lab.n(),
         scene_seconds,
         backend_seconds,
@@ -75,49 +84,24 @@ pub(crate) fn child(scene: &str, solver: &str, max_seconds: Real) -> Result<()> 
         ff_seconds: o.state.ff_seconds,
         bound: o.last.bound.unwrap_or(Real::NAN),
         reached,
-        peak_rss: super::e2e::peak_rss(),
-    };
-    println!("{}", serde_json::to_string(&report)?);
-    Ok(())
+        peak_rss: peak_rss(),
+    })
 }
 
-fn spawn(scene: &str, solver: &str, max_seconds: Real) -> Result<ScaleReport> {
-    let args = ["bench", "--scene", scene, "--child-scale", solver, "--max-seconds", &max_seconds.to_string()];
-    run_child(&args.map(String::from), &format!("the scale run of {solver} on {scene}"))
-}
+/// One case's runs: its scene, its solver and each run's report.
+pub type ScaleCase = (String, String, Vec<ScaleReport>);
 
-/// Runs the section.
-pub(crate) fn run(config: &Config) -> Result<String> {
-    let scenes: Vec<&str> = if config.quick { vec!["cornell:res=4", "cornell:res=8"] } else { SCENES.to_vec() };
-    let solvers = &config.solvers;
-    let bar = progress((scenes.len() * solvers.len() * config.runs_heavy) as u64, "scale");
-    let mut rows = Vec::new();
-    for scene in &scenes {
-        for solver in solvers {
-            let mut runs = Vec::new();
-            for r in 0..config.runs_heavy {
-                bar.set_message(format!("{solver} on {scene}, run {}/{}", r + 1, config.runs_heavy));
-                runs.push(spawn(scene, solver, config.scale_seconds)?);
-                bar.inc(1);
-            }
-            rows.push((scene.to_string(), solver.clone(), runs));
-        }
-    }
-    bar.finish_and_clear();
-    Ok(report(config, &rows))
-}
-
-type Row = (String, String, Vec<ScaleReport>);
-
-fn report(config: &Config, rows: &[Row]) -> String {
+/// The section from every case's runs, each stopped after `max_seconds` of solver time; the
+/// growth exponent is fitted for each of `solvers` over the office sizes.
+pub fn report(rows: &[ScaleCase], solvers: &[String], max_seconds: Real) -> String {
     let mut out = String::from("## Scale: columns and certified bounds without a matrix\n\n");
     let _ = writeln!(
         out,
         "Each run is a child process with `--reference none`, stopped after {} of solver time; wall times \
          count from scene load. Seconds per column are the run's form-factor seconds over its columns. \
          Medians of {} run(s).\n",
-        duration(config.scale_seconds),
-        config.runs_heavy
+        duration(max_seconds),
+        rows.first().map_or(0, |r| r.2.len())
     );
     let _ = writeln!(
         out,
@@ -162,7 +146,7 @@ fn report(config: &Config, rows: &[Row]) -> String {
     out.push('\n');
     // The growth exponent over the office sizes, per method.
     let mut fits = Vec::new();
-    for solver in &config.solvers {
+    for solver in solvers {
         let points: Vec<(f64, f64)> = per_column
             .iter()
             .zip(rows)
@@ -184,8 +168,8 @@ fn report(config: &Config, rows: &[Row]) -> String {
     out
 }
 
-/// The least-squares slope of `points` (x, y).
-fn slope(points: &[(f64, f64)]) -> f64 {
+/// The least-squares slope of `points` (x, y): the exponent of a power law fitted in log–log.
+pub fn slope(points: &[(f64, f64)]) -> f64 {
     let k = points.len() as f64;
     let (sx, sy) = points.iter().fold((0.0, 0.0), |(a, b), (x, y)| (a + x, b + y));
     let (mx, my) = (sx / k, sy / k);

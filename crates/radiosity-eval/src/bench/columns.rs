@@ -1,8 +1,19 @@
-//! Section 1: columns per second for each backend, on 1 and 2 threads, against the rate at
-//! which the same rays are traced straight through the BVH.
+//! Columns per second for each backend, on 1 and 2 threads, against the rate at which the same
+//! rays are traced straight through the BVH.
+//!
+//! The columns are a fixed, seeded sample spread over the scene ([`sample`]), timed as computed
+//! for the first time (the analytic backend's record of visible fractions is off, since the
+//! passes repeat the sample). The rays are those the columns trace, listed by
+//! [`radiosity_ff::ColumnRays`] without computing the columns, traced once through
+//! [`Visibility`] (the exact `f64` queries the backends call) and once with obvhs's own `f32`
+//! triangle test ([`RawTracer`]). Pipeline rays per second over raw rays per second is how
+//! close the backend gets to the ray-tracing limit; the time to list the rays, which runs the
+//! column's code without tracing, says where the rest goes.
 
-use super::{ColumnsJson, Config, Findings, median, pool, sig};
-use anyhow::{Context, Result};
+use super::report_text::{percent, sig};
+use super::{ColumnsJson, median};
+use crate::lab::LabError;
+use crate::progress::Progress;
 use radiosity_core::ColumnSource;
 use radiosity_ff::{AnalyticParams, Backend, BackendSpec, ColumnRays, FormFactorInput, TracedRays};
 use radiosity_geom::PreparedScene;
@@ -18,12 +29,12 @@ use std::time::Instant;
 const CHUNK_RAYS: usize = 2_000_000;
 
 /// The seed of the column sample.
-const SAMPLE_SEED: u64 = 0x5EED;
+pub const SAMPLE_SEED: u64 = 0x5EED;
 
 /// `count` distinct columns spread over `0..n`: one drawn (seeded) from each of `count`
 /// equal strata of the index range, in increasing order. Patches are numbered object by
 /// object, so every object of the scene is represented.
-pub(crate) fn sample(n: usize, count: usize, seed: u64) -> Vec<usize> {
+pub fn sample(n: usize, count: usize, seed: u64) -> Vec<usize> {
     if count >= n {
         return (0..n).collect();
     }
@@ -60,13 +71,15 @@ fn per_pass<T>(min_seconds: f64, mut work: impl FnMut() -> T) -> (f64, T) {
     }
 }
 
-/// Seconds to compute every column of `sample`, in parallel over the current pool.
-fn time_parallel(backend: &Backend<'_>, sample: &[usize], n: usize, min_seconds: f64) -> f64 {
+/// Seconds to compute every column of `sample` of `source`, in parallel over the current pool:
+/// the fastest of the passes made until `min_seconds` have passed (one at least).
+pub fn time_parallel<S: ColumnSource + Sync + ?Sized>(source: &S, sample: &[usize], min_seconds: f64) -> f64 {
+    let n = source.patch_count();
     per_pass(min_seconds, || {
         sample.par_iter().with_max_len(1).for_each_init(
             || vec![0.0; n],
             |column, &j| {
-                backend.fill_column(j, column);
+                source.fill_column(j, column);
                 black_box(&column);
             },
         )
@@ -74,13 +87,14 @@ fn time_parallel(backend: &Backend<'_>, sample: &[usize], n: usize, min_seconds:
     .0
 }
 
-/// Seconds to compute every column of `sample` one after another, as a solver asks for them
-/// (a backend may still use the pool inside a column).
-fn time_sequential(backend: &Backend<'_>, sample: &[usize], n: usize, min_seconds: f64) -> f64 {
-    let mut column = vec![0.0; n];
+/// Seconds to compute every column of `sample` of `source` one after another, as a solver asks
+/// for them (a backend may still use the pool inside a column): the fastest pass, as
+/// [`time_parallel`].
+pub fn time_sequential<S: ColumnSource + ?Sized>(source: &S, sample: &[usize], min_seconds: f64) -> f64 {
+    let mut column = vec![0.0; source.patch_count()];
     per_pass(min_seconds, || {
         for &j in sample {
-            backend.fill_column(j, &mut column);
+            source.fill_column(j, &mut column);
             black_box(&column);
         }
     })
@@ -122,34 +136,34 @@ fn trace_raw(raw: &RawTracer<'_>, rays: &TracedRays, min_seconds: f64) -> (f64, 
 }
 
 /// One run's seconds for one backend.
-#[derive(Clone, Copy, Default)]
-struct Run {
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ColumnRun {
     /// Columns: 1 thread; 2 threads, columns in parallel; 2 threads, one column at a time.
-    columns: [f64; 3],
+    pub columns: [f64; 3],
     /// Raw rays: `Visibility` on 1 and 2 threads, obvhs `f32` on 1 and 2 threads.
-    raw: [f64; 4],
+    pub raw: [f64; 4],
     /// Listing the rays (analytic: the kernel, sampling and bookkeeping of the columns
     /// without their tracing), on one thread.
-    listing: f64,
+    pub listing: f64,
     /// Analytic: the sample's columns again, one at a time on 2 threads, with every pair's
     /// visible fraction recorded by the first pass.
-    recorded: f64,
+    pub recorded: f64,
     /// Rays in the sample.
-    rays: usize,
+    pub rays: usize,
     /// Segments found clear (or rays hitting a front) by `Visibility` and by obvhs.
-    agree: (usize, usize),
+    pub agree: (usize, usize),
 }
 
-/// Measures one backend once.
-fn measure(
+/// Measures the backend `spec` once on the columns of `sample`, with `pools` of 1 and 2
+/// threads; timed measurements shorter than `min_seconds` are repeated and the fastest kept.
+pub fn measure(
     spec: &BackendSpec,
     input: FormFactorInput<'_>,
     raw: &RawTracer<'_>,
     sample: &[usize],
     pools: &[rayon::ThreadPool; 2],
     min_seconds: f64,
-) -> Result<Run> {
-    let n = input.scene.len();
+) -> Result<ColumnRun, LabError> {
     // Columns are timed as computed for the first time: the passes repeat the sample, and
     // with its visible fractions recorded a repeated column traces nothing. The record
     // changes no entry, so the backend is the same one.
@@ -160,20 +174,21 @@ fn measure(
     let backend = Backend::columns(&first_time, input);
     // One column untimed first: the BVH and the backend's tables paged in and cached.
     if let Some(&j) = sample.first() {
-        pools[1].install(|| time_sequential(&backend, &[j], n, 0.0));
+        pools[1].install(|| time_sequential(&backend, &[j], 0.0));
     }
-    let mut run = Run::default();
-    run.columns[0] = pools[0].install(|| time_parallel(&backend, sample, n, min_seconds));
-    run.columns[1] = pools[1].install(|| time_parallel(&backend, sample, n, min_seconds));
-    run.columns[2] = pools[1].install(|| time_sequential(&backend, sample, n, min_seconds));
+    let mut run = ColumnRun::default();
+    run.columns[0] = pools[0].install(|| time_parallel(&backend, sample, min_seconds));
+    run.columns[1] = pools[1].install(|| time_parallel(&backend, sample, min_seconds));
+    run.columns[2] = pools[1].install(|| time_sequential(&backend, sample, min_seconds));
     if matches!(spec, BackendSpec::Analytic(_)) {
         let recorded = Backend::columns(spec, input);
-        pools[1].install(|| time_sequential(&recorded, sample, n, 0.0));
-        run.recorded = pools[1].install(|| time_sequential(&recorded, sample, n, min_seconds));
+        pools[1].install(|| time_sequential(&recorded, sample, 0.0));
+        run.recorded = pools[1].install(|| time_sequential(&recorded, sample, min_seconds));
     }
-    let rays = ColumnRays::new(spec, input).context("a stored matrix traces no rays")?;
+    let rays = ColumnRays::new(spec, input)
+        .ok_or_else(|| LabError::Invalid(format!("{} traces no rays to measure", spec.canonical())))?;
     let mut chunk = rays.empty();
-    let flush = |chunk: &mut TracedRays, run: &mut Run| {
+    let flush = |chunk: &mut TracedRays, run: &mut ColumnRun| {
         run.rays += chunk.len();
         let (t, clear_exact) = pools[0].install(|| trace_exact(input.visibility, chunk, min_seconds));
         run.raw[0] += t;
@@ -199,26 +214,66 @@ fn measure(
     Ok(run)
 }
 
-/// Runs section 1.
-pub(crate) fn run(config: &Config, prepared: &PreparedScene, findings: &mut Findings) -> Result<String> {
-    let scene = &prepared.loaded.scene;
-    let n = scene.len();
+/// What the columns section measures.
+#[derive(Clone, Debug)]
+pub struct ColumnsParams {
+    /// The backends.
+    pub backends: Vec<BackendSpec>,
+    /// Columns in the sample ([`sample`]).
+    pub columns: usize,
+    /// Runs of every measurement; the figures are their medians.
+    pub runs: usize,
+    /// The shortest timed measurement: shorter ones are repeated and the fastest kept.
+    pub min_seconds: f64,
+}
+
+/// The columns section: its Markdown, its JSON entries and what the targets are judged on.
+#[derive(Debug)]
+pub struct ColumnsSection {
+    /// The section, headed `## 1. Columns per second against the ray-tracing limit`.
+    pub markdown: String,
+    /// One entry per backend.
+    pub json: Vec<ColumnsJson>,
+    /// Analytic with one ray at least per pair: pipeline rays/s over raw obvhs rays/s, and over
+    /// raw `Visibility` rays/s, on 2 threads.
+    pub analytic_ratio: Option<(f64, f64)>,
+}
+
+/// A rayon pool of `threads` threads.
+fn pool(threads: usize) -> Result<rayon::ThreadPool, LabError> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| LabError::Invalid(format!("cannot start a pool of {threads} threads: {e}")))
+}
+
+/// Measures every backend of `params` on `prepared` (named `scene` in the text) and writes the
+/// section: `params.runs` runs of [`measure`] each, their medians.
+pub fn run(
+    prepared: &PreparedScene,
+    scene: &str,
+    params: &ColumnsParams,
+    progress: &dyn Progress,
+) -> Result<ColumnsSection, LabError> {
+    let n = prepared.loaded.scene.len();
     let input = prepared.into();
     let raw = prepared.visibility.raw_tracer();
-    let columns = sample(n, config.columns, SAMPLE_SEED);
+    let columns = sample(n, params.columns, SAMPLE_SEED);
     let pools = [pool(1)?, pool(2)?];
-    let specs: Vec<BackendSpec> = config.backends.iter().map(|b| BackendSpec::parse(b)).collect::<Result<_, _>>()?;
-    let bar = super::progress((specs.len() * config.runs_cheap) as u64, "columns");
-    let mut runs: Vec<Vec<Run>> = vec![Vec::new(); specs.len()];
-    for r in 0..config.runs_cheap {
+    let specs = &params.backends;
+    progress.begin("columns", (specs.len() * params.runs) as u64, "runs");
+    let mut runs: Vec<Vec<ColumnRun>> = vec![Vec::new(); specs.len()];
+    for r in 0..params.runs {
         for (b, spec) in specs.iter().enumerate() {
-            bar.set_message(format!("{} (run {}/{})", spec.canonical(), r + 1, config.runs_cheap));
-            runs[b].push(measure(spec, input, &raw, &columns, &pools, config.min_seconds)?);
-            bar.inc(1);
+            progress.advance(
+                (r * specs.len() + b) as u64,
+                &format!("{} (run {}/{})", spec.canonical(), r + 1, params.runs),
+            );
+            runs[b].push(measure(spec, input, &raw, &columns, &pools, params.min_seconds)?);
         }
     }
-    bar.finish_and_clear();
-
+    progress.end();
+    let mut section = ColumnsSection { markdown: String::new(), json: Vec::new(), analytic_ratio: None };
     let mut out = String::from("## 1. Columns per second against the ray-tracing limit\n\n");
     let _ = writeln!(
         out,
@@ -229,7 +284,7 @@ pub(crate) fn run(config: &Config, prepared: &PreparedScene, findings: &mut Find
          rays/s ÷ raw rays/s on the same threads. Dedicated rayon pools of 1 and 2 threads; \"one at a time\" \
          computes the columns one after another on 2 threads, as a solver asks for them.\n",
         columns.len(),
-        config.scene,
+        scene,
         columns.len()
     );
     out += "| backend | threads | columns/s | rays/column | pipeline rays/s | raw `Visibility` rays/s | ratio | raw \
@@ -238,7 +293,7 @@ pub(crate) fn run(config: &Config, prepared: &PreparedScene, findings: &mut Find
     for (spec, runs) in specs.iter().zip(&runs) {
         let rays = runs[0].rays as f64;
         let per_column = rays / columns.len() as f64;
-        let rate = |f: &dyn Fn(&Run) -> f64| median(&runs.iter().map(f).collect::<Vec<_>>());
+        let rate = |f: &dyn Fn(&ColumnRun) -> f64| median(&runs.iter().map(f).collect::<Vec<_>>());
         let kind = if matches!(spec, BackendSpec::Analytic(_)) { "segments" } else { "rays" };
         for (row, label, raw_index) in [(0, "1", 0), (1, "2", 1), (2, "2, one at a time", 1)] {
             let cps = rate(&|r| columns.len() as f64 / r.columns[row]);
@@ -253,16 +308,16 @@ pub(crate) fn run(config: &Config, prepared: &PreparedScene, findings: &mut Find
                 sig(per_column, 4),
                 sig(pipeline, 3),
                 sig(exact, 3),
-                ratio(pipeline, exact),
+                percent(pipeline, exact),
                 sig(obvhs, 3),
-                ratio(pipeline, obvhs),
+                percent(pipeline, obvhs),
             );
             if row == 1 && matches!(spec, BackendSpec::Analytic(p) if p.rays == 1) && rays > 0.0 {
-                findings.analytic_ratio = Some((pipeline / obvhs, pipeline / exact));
+                section.analytic_ratio = Some((pipeline / obvhs, pipeline / exact));
             }
         }
         let per_second = |row: usize| rate(&|r| columns.len() as f64 / r.columns[row]);
-        findings.json.columns.push(ColumnsJson {
+        section.json.push(ColumnsJson {
             backend: spec.canonical(),
             columns_per_second: [("1".to_string(), per_second(0)), ("2".to_string(), per_second(1))].into(),
             rays_per_column: per_column,
@@ -308,10 +363,6 @@ pub(crate) fn run(config: &Config, prepared: &PreparedScene, findings: &mut Find
         out += &notes;
         out.push('\n');
     }
-    Ok(out)
-}
-
-/// `a / b` as a percentage.
-fn ratio(a: f64, b: f64) -> String {
-    if a.is_finite() && b.is_finite() && b > 0.0 { format!("{}%", sig(100.0 * a / b, 2)) } else { "—".to_string() }
+    section.markdown = out;
+    Ok(section)
 }

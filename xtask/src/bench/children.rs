@@ -1,0 +1,142 @@
+//! The end-to-end and scale sections, each case in a child process of its own (this
+//! executable, `bench` with hidden arguments), so that its peak memory is its own and nothing
+//! it allocates is left to the next. The child measures with the library
+//! ([`radiosity_eval::bench::e2e::time_to_accuracy`], [`radiosity_eval::bench::scale::scale_run`])
+//! and prints its report as one JSON line, which the parent reads back.
+
+use super::{Config, Findings, progress};
+use crate::bars::Bars;
+use crate::experiment::prepare;
+use anyhow::{Context, Result, bail};
+use radiosity_core::Real;
+use radiosity_eval::bench::e2e::{self, EndToEndReport, ReferenceNote};
+use radiosity_eval::bench::scale::{self, ScaleReport};
+use radiosity_eval::{Lab, LabOptions};
+use radiosity_ff::BackendSpec;
+use radiosity_geom::PreparedScene;
+use radiosity_solvers::SolverRegistry;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Runs this executable again with `args` and reads the JSON line it prints last; `what` names
+/// the case in errors.
+fn run_child<T: serde::de::DeserializeOwned>(args: &[String], what: &str) -> Result<T> {
+    let exe = std::env::current_exe().context("cannot find this executable to run the child cases")?;
+    let output = std::process::Command::new(exe).args(args).output().with_context(|| format!("cannot start {what}"))?;
+    if !output.status.success() {
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        let why = stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("no message");
+        bail!("{what} failed: {}", why.trim_start_matches("error: "));
+    }
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let line = stdout.lines().rev().find(|l| l.starts_with('{')).unwrap_or_default();
+    serde_json::from_str(line).with_context(|| format!("{what} printed no report"))
+}
+
+/// The child of an end-to-end case: loads the scene on the clock, runs the case and prints
+/// its report.
+pub(crate) fn e2e_child(scene: &str, solver: &str, ff: &str, reference: &Path, max_seconds: Real) -> Result<()> {
+    let spec = BackendSpec::parse(ff)?;
+    let mut solver = SolverRegistry::builtin().build(solver)?;
+    let bytes = std::fs::read(reference).with_context(|| format!("cannot read {}", reference.display()))?;
+    let star: Vec<Real> =
+        bytes.chunks_exact(8).map(|c| Real::from_le_bytes(c.try_into().expect("chunks of 8 bytes"))).collect();
+    let start = Instant::now();
+    let prepared = prepare(scene)?;
+    let scene_seconds = start.elapsed().as_secs_f64();
+    let report = e2e::time_to_accuracy(&prepared, start, scene_seconds, solver.as_mut(), &spec, &star, max_seconds)
+        .with_context(|| format!("the reference in {} and scene {scene}", reference.display()))?;
+    println!("{}", serde_json::to_string(&report)?);
+    Ok(())
+}
+
+/// The child of a scale case.
+pub(crate) fn scale_child(scene: &str, solver: &str, max_seconds: Real) -> Result<()> {
+    let mut solver = SolverRegistry::builtin().build(solver)?;
+    let start = Instant::now();
+    let prepared = prepare(scene)?;
+    let scene_seconds = start.elapsed().as_secs_f64();
+    let report = scale::scale_run(&prepared, start, scene_seconds, solver.as_mut(), max_seconds)?;
+    println!("{}", serde_json::to_string(&report)?);
+    Ok(())
+}
+
+/// A file removed when dropped.
+struct TempFile(PathBuf);
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
+/// Runs the end-to-end section: the reference once, outside every timed run, then every case
+/// `--runs` times in its own process.
+pub(crate) fn e2e(config: &Config, prepared: &PreparedScene, findings: &mut Findings) -> Result<String> {
+    let spinner = progress(1, "reference");
+    spinner.set_message("solved once, outside every timed run");
+    let start = Instant::now();
+    let experiment = Lab::new(prepared, &BackendSpec::parse("analytic")?, LabOptions::default(), &Bars::new())?;
+    let seconds = start.elapsed().as_secs_f64();
+    let reference = experiment.reference().context("the end-to-end runs need a reference")?;
+    let note = ReferenceNote {
+        method: reference.method().to_string(),
+        certificate: reference.certificate().to_string(),
+        seconds,
+    };
+    let file = TempFile(std::env::temp_dir().join(format!("radiosity-bench-reference-{}.bin", std::process::id())));
+    let bytes: Vec<u8> = reference.values().iter().flat_map(|v| v.to_le_bytes()).collect();
+    std::fs::write(&file.0, bytes).with_context(|| format!("cannot write {}", file.0.display()))?;
+    // The stored reference matrix is not kept while the runs are timed.
+    drop(experiment);
+    spinner.finish_and_clear();
+
+    let mut cases: Vec<(String, String)> = config.solvers.iter().map(|s| (s.clone(), "analytic".to_string())).collect();
+    cases.push(("gauss-seidel".to_string(), "matrix".to_string()));
+    let bar = progress((cases.len() * config.runs_heavy) as u64, "end-to-end");
+    let mut results: Vec<Vec<EndToEndReport>> = Vec::new();
+    for (solver, ff) in &cases {
+        let mut runs = Vec::new();
+        for r in 0..config.runs_heavy {
+            bar.set_message(format!("{solver} over {ff}, run {}/{}", r + 1, config.runs_heavy));
+            let mut args: Vec<String> = ["bench", "--scene", &config.scene, "--child-solver", solver, "--child-ff", ff]
+                .iter()
+                .map(|s| s.to_string())
+                .collect();
+            args.extend(["--child-reference".to_string(), file.0.display().to_string()]);
+            args.extend(["--max-seconds".to_string(), config.max_seconds.to_string()]);
+            runs.push(run_child(&args, &format!("the end-to-end run of {solver} over {ff}"))?);
+            bar.inc(1);
+        }
+        results.push(runs);
+    }
+    bar.finish_and_clear();
+    let section = e2e::report(&cases, &results, &note, config.max_seconds);
+    findings.fastest = section.fastest;
+    findings.peak_memory = section.peak_memory;
+    findings.json.e2e = section.json;
+    Ok(section.markdown)
+}
+
+/// Runs the scale section, every case `--runs` times in its own process.
+pub(crate) fn scale(config: &Config) -> Result<String> {
+    let scenes: Vec<&str> = if config.quick { vec!["cornell:res=4", "cornell:res=8"] } else { scale::SCENES.to_vec() };
+    let solvers = &config.solvers;
+    let bar = progress((scenes.len() * solvers.len() * config.runs_heavy) as u64, "scale");
+    let mut rows = Vec::new();
+    for scene in &scenes {
+        for solver in solvers {
+            let mut runs: Vec<ScaleReport> = Vec::new();
+            for r in 0..config.runs_heavy {
+                bar.set_message(format!("{solver} on {scene}, run {}/{}", r + 1, config.runs_heavy));
+                let seconds = config.scale_seconds.to_string();
+                let args = ["bench", "--scene", scene, "--child-scale", solver, "--max-seconds", &seconds];
+                runs.push(run_child(&args.map(String::from), &format!("the scale run of {solver} on {scene}"))?);
+                bar.inc(1);
+            }
+            rows.push((scene.to_string(), solver.clone(), runs));
+        }
+    }
+    bar.finish_and_clear();
+    Ok(scale::report(&rows, solvers, config.scale_seconds))
+}

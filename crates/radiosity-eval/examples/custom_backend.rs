@@ -15,14 +15,15 @@ use std::error::Error;
 use std::path::{Path, PathBuf};
 
 /// Point-to-disc form factors between patch centroids, no visibility.
-struct CentroidDisc {
+pub struct CentroidDisc {
     centroid: Vec<Vec3>,
     normal: Vec<Vec3>,
     area: Vec<Real>,
 }
 
 impl CentroidDisc {
-    fn new(scene: &Scene) -> CentroidDisc {
+    /// The scene's centroids, normals and areas.
+    pub fn new(scene: &Scene) -> CentroidDisc {
         let patches = scene.patches();
         CentroidDisc {
             centroid: patches.iter().map(|p| p.centroid()).collect(),

@@ -1,13 +1,17 @@
-//! The examples in `examples/` run and write what `cargo xtask compare` writes; and a
-//! comparison with the automatic group frequency gives the same table twice.
+//! The examples in `examples/` run and write what `cargo xtask compare` writes, or time a
+//! backend with the bench's library functions; and a comparison with the automatic group
+//! frequency gives the same table twice.
 
 #[allow(dead_code)]
 #[path = "../examples/custom_solver.rs"]
 mod custom_solver;
 
 #[allow(dead_code)]
-#[path = "../examples/custom_backend.rs"]
-mod custom_backend;
+#[path = "../examples/time_backend.rs"]
+mod time_backend;
+
+// The timing example brings the backend of one's own with it.
+use time_backend::custom_backend;
 
 use radiosity_eval::{Lab, LabOptions, NoProgress};
 use radiosity_ff::BackendSpec;
@@ -64,6 +68,21 @@ fn custom_backend_runs_under_the_built_in_solvers() {
     let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
     assert!(report.contains("form factors `centroid-disc`"), "{report}");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_backend_of_ones_own_is_timed_beside_the_analytic_one() {
+    let (timings, table) = time_backend::measure("cornell:res=2").unwrap();
+    assert_eq!(timings.iter().map(|t| t.backend.as_str()).collect::<Vec<_>>(), ["analytic", "centroid-disc"]);
+    for t in &timings {
+        assert!(t.columns_per_second > 0.0 && t.columns_per_second.is_finite(), "{table}");
+        // xu reaches every threshold against its own system's reference, in order.
+        let reached: Vec<f64> = t.run.reached.iter().map(|r| r.e_rms).collect();
+        assert_eq!(reached, [1e-1, 1e-2, 1e-3], "{} in\n{table}", t.backend);
+        assert!(t.run.reached.windows(2).all(|w| w[0].seconds <= w[1].seconds && w[0].columns <= w[1].columns));
+        assert!(t.run.e_rms <= 1e-3, "{table}");
+    }
+    assert!(table.contains("| `centroid-disc` |"), "{table}");
 }
 
 /// Two comparisons with the automatic group frequency give the same table, timings aside:

@@ -72,7 +72,9 @@ fn per_pass<T>(min_seconds: f64, mut work: impl FnMut() -> T) -> (f64, T) {
 }
 
 /// Seconds to compute every column of `sample` of `source`, in parallel over the current pool:
-/// the fastest of the passes made until `min_seconds` have passed (one at least).
+/// the fastest of the passes made until `min_seconds` have passed (one at least). A source
+/// that makes later columns cheaper ([`ColumnSource::reset_memory`]) is not reset between
+/// passes: time it with its memory off, as [`measure`] does, or in one pass.
 pub fn time_parallel<S: ColumnSource + Sync + ?Sized>(source: &S, sample: &[usize], min_seconds: f64) -> f64 {
     let n = source.patch_count();
     per_pass(min_seconds, || {

@@ -17,7 +17,7 @@ use crate::backends::fresh_backend;
 use crate::lab::{LabError, Recorder};
 use crate::metrics::errors_against;
 use crate::progress::NoProgress;
-use radiosity_core::{LinearSystem, Real};
+use radiosity_core::{ColumnSource, LinearSystem, Real};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
 use radiosity_solvers::{Executor, Problem, Solver, StopRules};
@@ -76,7 +76,7 @@ pub struct EndToEndReport {
 /// Runs `solver` on `prepared` over the backend `spec` until e_rms ≤ 1e-3 against the
 /// reference `star` (patch-major, as [`LinearSystem`]) or for `max_seconds` of solver time,
 /// timing from `start`, the instant the caller began loading the scene, which took
-/// `scene_seconds`.
+/// `scene_seconds`. The backend's setup (for `matrix`, the assembly, fresh) is on the clock.
 pub fn time_to_accuracy(
     prepared: &PreparedScene,
     start: Instant,
@@ -86,19 +86,29 @@ pub fn time_to_accuracy(
     star: &[Real],
     max_seconds: Real,
 ) -> Result<EndToEndReport, LabError> {
+    // A reference of another scene is refused before any form factor is computed.
+    check_reference(&LinearSystem::from_scene(&prepared.loaded.scene), star)?;
+    let backend = fresh_backend(prepared, spec, &NoProgress)?;
+    time_to_accuracy_over(prepared, start, scene_seconds, solver, &backend, star, max_seconds)
+}
+
+/// [`time_to_accuracy`] over any column source, a researcher's own included, set up by the
+/// caller after `start` (its setup counts as the time from `start` less `scene_seconds`).
+pub fn time_to_accuracy_over(
+    prepared: &PreparedScene,
+    start: Instant,
+    scene_seconds: Real,
+    solver: &mut dyn Solver,
+    source: &dyn ColumnSource,
+    star: &[Real],
+    max_seconds: Real,
+) -> Result<EndToEndReport, LabError> {
     let rules = StopRules::parse(&format!("rms={},time={}ms", THRESHOLDS[2], (max_seconds * 1e3).ceil() as u64))?;
     let system = LinearSystem::from_scene(&prepared.loaded.scene);
-    if star.len() != system.len() * system.channels().count() {
-        return Err(LabError::Invalid(format!(
-            "the reference has {} values, not the {} of this scene's system",
-            star.len(),
-            system.len() * system.channels().count()
-        )));
-    }
-    let backend = fresh_backend(prepared, spec, &NoProgress)?;
+    check_reference(&system, star)?;
     let order = radiosity_geom::spatial_order(&prepared.loaded.scene);
     let backend_seconds = start.elapsed().as_secs_f64() - scene_seconds;
-    let problem = Problem::new(&system, &backend)?.with_patch_order(&order)?;
+    let problem = Problem::new(&system, source)?.with_patch_order(&order)?;
     let mut recorder = Recorder::errors(&system, star, start);
     let run = Executor::new(solver, rules).run(&problem, &mut recorder)?;
     let measurement = recorder.overhead();
@@ -120,6 +130,19 @@ pub fn time_to_accuracy(
         measurement,
         peak_rss: peak_rss(),
     })
+}
+
+/// Refuses a reference that is not one of `system`'s.
+fn check_reference(system: &LinearSystem, star: &[Real]) -> Result<(), LabError> {
+    let expected = system.len() * system.channels().count();
+    if star.len() == expected {
+        Ok(())
+    } else {
+        Err(LabError::Invalid(format!(
+            "the reference has {} values, not the {expected} of this scene's system",
+            star.len()
+        )))
+    }
 }
 
 /// The section's figures besides its Markdown: what the targets are judged on.

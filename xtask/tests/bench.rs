@@ -72,6 +72,19 @@ fn quick_bench_reports_every_section_with_sane_figures() {
     }
     assert!(rows[0][0].starts_with("`analytic") && rows[3][0].starts_with("`hemicube"), "{rows:?}");
     assert!(report.contains("listing its segments"), "{report}");
+    // The analytic column's time by sampling path: every pair of the sample is on one row, and
+    // the shares of pairs and of time each add up to the whole (to the rounding of the cells).
+    let paths: Vec<Vec<String>> = table(&report.replace("\n  |", "\n|"), "Where the column's time goes");
+    let names: Vec<&str> = paths.iter().map(|r| r[0].as_str()).collect();
+    assert_eq!(
+        names,
+        ["no ray traced", "few rays, both ends jointly", "few rays, Lambert and Arvo", "16 rays or more, probed"]
+    );
+    for column in [1, 3] {
+        let total: f64 = paths.iter().map(|r| number(&r[column])).sum();
+        assert!((total - 100.0).abs() <= 2.0, "column {column} adds up to {total}: {paths:?}");
+    }
+    assert_eq!(number(&paths[0][2]), 0.0, "{paths:?}");
 
     // 2. Each pair once at k = 1 and 4, and column by column: exact reciprocity for the former.
     let rows = table(&report, "## 2.");

@@ -62,7 +62,7 @@
 
 use crate::ff_point_polygon::{MAX_CLIPPED, clip_above, distance_to_polygon, point_to_polygon, point_to_polygon_each};
 use crate::guard::ClampCounter;
-use crate::pair_visibility::{self, RayBudget};
+use crate::pair_visibility::{self, RayBudget, SamplingPath};
 use crate::quadrature::{Panel, for_each_point_in, gauss_legendre, order_for, parametrisation};
 use crate::spec::AnalyticParams;
 use crate::traced::ShadowSegment;
@@ -263,12 +263,25 @@ impl<'a> AnalyticColumns<'a> {
         known: Option<Real>,
         trace: &mut impl FnMut(Vec3, usize, Vec3, usize) -> bool,
     ) -> (Real, Option<Real>) {
+        let Some(Roles { s, l, larger, unoccluded }) = self.roles(i, j) else { return (0.0, None) };
+        match self.visibility {
+            Some(_) => {
+                let v = known.unwrap_or_else(|| self.visible_fraction(s, l, larger, trace));
+                (unoccluded * v, Some(v))
+            }
+            None => (unoccluded, None),
+        }
+    }
+
+    /// The roles of the pair `(i, j)` and its unoccluded factors; `None` when `F_ij` is zero
+    /// before visibility (`i = j`, either patch behind the other, or no flux).
+    fn roles(&self, i: usize, j: usize) -> Option<Roles> {
         if i == j {
-            return (0.0, None);
+            return None;
         }
         let (pi, pj) = (&self.scene.patches()[i], &self.scene.patches()[j]);
         if behind(pj, pi, self.tolerance) || behind(pi, pj, self.tolerance) {
-            return (0.0, None);
+            return None;
         }
         // One rule for the unordered pair: integrate over the smaller patch (the lower index
         // on a tie) and take the other entry by reciprocity, so `A_i F_ij = A_j F_ji` holds to
@@ -280,17 +293,36 @@ impl<'a> AnalyticColumns<'a> {
         // The pair's larger entry, the unoccluded factor of its smaller patch.
         let larger = if smaller { self.unoccluded(i, j, pi, pj) } else { self.unoccluded(j, i, pj, pi) };
         if larger == 0.0 {
-            return (0.0, None);
+            return None;
         }
         let unoccluded = if smaller { larger } else { larger * aj / ai };
         let (s, l) = if smaller { (i, j) } else { (j, i) };
-        match self.visibility {
-            Some(_) => {
-                let v = known.unwrap_or_else(|| self.visible_fraction(s, l, larger, trace));
-                (unoccluded * v, Some(v))
-            }
-            None => (unoccluded, None),
-        }
+        Some(Roles { s, l, larger, unoccluded })
+    }
+
+    /// `F_ij` before clamping, computed afresh as [`AnalyticColumns::pair`] does, and the
+    /// shadow rays it traced: what a benchmark times pair by pair.
+    pub fn pair_counting_rays(&self, i: usize, j: usize) -> (Real, usize) {
+        let Some(vis) = self.visibility else { return (self.pair(i, j), 0) };
+        let mut rays = 0;
+        let value = self
+            .pair_traced(i, j, None, &mut |p, from, q, to| {
+                rays += 1;
+                vis.unoccluded_between(p, from, q, to)
+            })
+            .0;
+        (value, rays)
+    }
+
+    /// How the visible fraction of the pair `(i, j)` is sampled
+    /// ([`pair_visibility::sampling_path`]), found without sampling; `None` when it traces no
+    /// ray (no visibility needed, or `F_ij` zero before visibility).
+    pub fn sampling_path(&self, i: usize, j: usize) -> Option<SamplingPath> {
+        self.visibility?;
+        let Roles { s, l, larger, .. } = self.roles(i, j)?;
+        let patches = self.scene.patches();
+        let budget = RayBudget { rays: self.params.rays, per_unit: self.budget };
+        pair_visibility::sampling_path(&patches[s], &patches[l], larger, budget, self.tolerance)
     }
 
     /// `(1/A_i) ∫_{A_i} F(dA_x → P_j) dA_x`.
@@ -433,6 +465,16 @@ fn stiffest_channel(scene: &Scene) -> Real {
 fn pair_rng(seed: u64, lo: usize, hi: usize) -> Xoshiro256PlusPlus {
     let pair = ((lo as u64) << 32) | hi as u64;
     Xoshiro256PlusPlus::seed_from_u64(pair ^ seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).rotate_left(29))
+}
+
+/// The roles of a pair whose entries are not zero before visibility: the smaller patch `s`
+/// (integrated over, its points stratified), the larger `l`, the larger entry `F_sl`
+/// unoccluded, and the asked-for entry unoccluded.
+struct Roles {
+    s: usize,
+    l: usize,
+    larger: Real,
+    unoccluded: Real,
 }
 
 /// The shooting patch of a pair, with its reach (centroid to farthest vertex).

@@ -292,14 +292,8 @@ pub fn visible_fraction(
     rng: &mut impl Rng,
     trace: &mut impl FnMut(Vec3, usize, Vec3, usize) -> bool,
 ) -> Real {
-    // L: a in front of b's plane; H: b in front of a's plane (a hair forward, so points on a
-    // plane count as behind it).
+    let Some((lower, upper)) = facing_parts(a, b, tolerance) else { return 1.0 };
     let (na, nb) = (a.normal(), b.normal());
-    let lower = Region::clipped(a.vertices(), b.vertices()[0] + nb * tolerance, nb);
-    let upper = Region::clipped(b.vertices(), a.vertices()[0] + na * tolerance, na);
-    if lower.area() <= 0.0 || upper.area() <= 0.0 {
-        return 1.0;
-    }
     let mut sums = Sums::default();
     let k = budget.rays(u);
     let joint = Joint::new(&lower, &upper, na, nb);
@@ -328,6 +322,56 @@ pub fn visible_fraction(
         }
     }
     if sums.total > 0.0 { sums.visible / sums.total } else { 1.0 }
+}
+
+/// `L` and `H` of the pair `(a, b)`: `a` in front of `b`'s plane and `b` in front of `a`'s, each
+/// plane moved a hair (`tolerance`) forward so that points on it count as behind; `None` when
+/// either is empty, and no segment is drawn.
+fn facing_parts(a: &Patch, b: &Patch, tolerance: Real) -> Option<(Region, Region)> {
+    let (na, nb) = (a.normal(), b.normal());
+    let lower = Region::clipped(a.vertices(), b.vertices()[0] + nb * tolerance, nb);
+    let upper = Region::clipped(b.vertices(), a.vertices()[0] + na * tolerance, na);
+    (lower.area() > 0.0 && upper.area() > 0.0).then_some((lower, upper))
+}
+
+/// How [`visible_fraction`] samples a pair (module documentation).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum SamplingPath {
+    /// Fewer than 16 rays, both ends drawn together by rejection against a bound on the kernel
+    /// ("Few rays", pairs small against their distance).
+    Joint,
+    /// Fewer than 16 rays, `x` by rejection against Lambert's formula and `y` by Arvo's map
+    /// ("Few rays", the other pairs).
+    Kernel,
+    /// 16 rays or more: a probe from the grid, then fresh segments ("Many rays", "Probes").
+    Probed,
+}
+
+impl SamplingPath {
+    /// Every path, in the order above.
+    pub const ALL: [SamplingPath; 3] = [SamplingPath::Joint, SamplingPath::Kernel, SamplingPath::Probed];
+
+    /// A short name for reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            SamplingPath::Joint => "few rays, both ends jointly",
+            SamplingPath::Kernel => "few rays, Lambert and Arvo",
+            SamplingPath::Probed => "16 rays or more, probed",
+        }
+    }
+}
+
+/// The path [`visible_fraction`] takes for the same arguments, without drawing anything; `None`
+/// when it draws no segment (`L` or `H` empty).
+pub fn sampling_path(a: &Patch, b: &Patch, u: Real, budget: RayBudget, tolerance: Real) -> Option<SamplingPath> {
+    let (lower, upper) = facing_parts(a, b, tolerance)?;
+    Some(if budget.rays(u) >= PROBED {
+        SamplingPath::Probed
+    } else if Joint::new(&lower, &upper, a.normal(), b.normal()).is_some() {
+        SamplingPath::Joint
+    } else {
+        SamplingPath::Kernel
+    })
 }
 
 /// The segments of the probe of a pair given `k ≥ 16` rays, and of its estimate when the

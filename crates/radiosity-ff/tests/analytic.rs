@@ -4,6 +4,7 @@
 use super::closed_forms::*;
 use radiosity_core::{ColumnSource, Material, Real, Scene, Spectrum, Vec3};
 use radiosity_ff::ff_point_polygon::point_to_polygon;
+use radiosity_ff::pair_visibility::SamplingPath;
 use radiosity_ff::quadrature::{gauss_legendre, patch_rule};
 use radiosity_ff::{AnalyticColumns, AnalyticParams, BackendSpec};
 use radiosity_geom::{SceneAnalysis, SceneBuilder, Visibility, load_scene};
@@ -329,4 +330,31 @@ fn recorded_visible_fractions_change_no_entry() {
     // A scene without occlusion traces nothing and records nothing.
     let (scene, vis, analysis, p) = analytic_for("furnace:res=2", "analytic");
     assert!(AnalyticColumns::new(&scene, &vis, &analysis, p).visibility_cache().is_none());
+}
+
+#[test]
+fn sampling_paths_say_how_many_rays_a_pair_traces() {
+    // Every pair of a few multi-cubes columns: the path found without sampling agrees with the
+    // rays the pair then traces, and counting them changes no entry.
+    let (scene, vis, analysis, p) = analytic_for("multi-cubes", "analytic");
+    let f = AnalyticColumns::new(&scene, &vis, &analysis, p);
+    let n = scene.len();
+    let mut seen = std::collections::BTreeSet::new();
+    for j in (0..n).step_by(n / 5) {
+        for i in 0..n {
+            let (value, rays) = f.pair_counting_rays(i, j);
+            assert_eq!(value.to_bits(), f.pair(i, j).to_bits(), "({i}, {j})");
+            let path = f.sampling_path(i, j);
+            match path {
+                None => assert_eq!(rays, 0, "({i}, {j})"),
+                Some(SamplingPath::Joint | SamplingPath::Kernel) => {
+                    assert!((1..16).contains(&rays), "({i}, {j}): {rays}")
+                }
+                // A probe of ⌈√k⌉ ≥ 4 segments, then as many fresh ones at least.
+                Some(SamplingPath::Probed) => assert!(rays >= 8, "({i}, {j}): {rays}"),
+            }
+            seen.insert(path);
+        }
+    }
+    assert_eq!(seen.len(), 4, "{seen:?}");
 }

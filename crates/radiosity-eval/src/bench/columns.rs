@@ -10,12 +10,13 @@
 //! close the backend gets to the ray-tracing limit; the time to list the rays, which runs the
 //! column's code without tracing, says where the rest goes.
 
-use super::report_text::{percent, sig};
+use super::report_text::{duration, percent, sig};
 use super::{ColumnsJson, median};
 use crate::lab::LabError;
 use crate::progress::Progress;
 use radiosity_core::ColumnSource;
-use radiosity_ff::{AnalyticParams, Backend, BackendSpec, ColumnRays, FormFactorInput, TracedRays};
+use radiosity_ff::pair_visibility::SamplingPath;
+use radiosity_ff::{AnalyticColumns, AnalyticParams, Backend, BackendSpec, ColumnRays, FormFactorInput, TracedRays};
 use radiosity_geom::PreparedScene;
 use radiosity_geom::Visibility;
 use radiosity_geom::visibility::RawTracer;
@@ -138,7 +139,7 @@ fn trace_raw(raw: &RawTracer<'_>, rays: &TracedRays, min_seconds: f64) -> (f64, 
 }
 
 /// One run's seconds for one backend.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub struct ColumnRun {
     /// Columns: 1 thread; 2 threads, columns in parallel; 2 threads, one column at a time.
     pub columns: [f64; 3],
@@ -154,6 +155,45 @@ pub struct ColumnRun {
     pub rays: usize,
     /// Segments found clear (or rays hitting a front) by `Visibility` and by obvhs.
     pub agree: (usize, usize),
+    /// Analytic: the sample's pairs by how their visibility is sampled, each timed on its own
+    /// on one thread.
+    pub paths: Vec<PathFigures>,
+}
+
+/// The pairs of a column sample that take one sampling path ([`SamplingPath`]; `None`: the
+/// pairs that trace no ray), each timed on its own on the calling thread.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathFigures {
+    /// The path.
+    pub path: Option<SamplingPath>,
+    /// Its pairs.
+    pub pairs: usize,
+    /// The rays they traced.
+    pub rays: usize,
+    /// The seconds they took, kernel and quadrature included.
+    pub seconds: f64,
+}
+
+/// Every pair of the columns of `sample`, timed one at a time on the calling thread and sorted
+/// by sampling path (the path found first, untimed).
+pub fn time_by_sampling_path(analytic: &AnalyticColumns<'_>, sample: &[usize]) -> Vec<PathFigures> {
+    let paths: Vec<Option<SamplingPath>> = std::iter::once(None).chain(SamplingPath::ALL.map(Some)).collect();
+    let mut figures: Vec<PathFigures> =
+        paths.iter().map(|&path| PathFigures { path, pairs: 0, rays: 0, seconds: 0.0 }).collect();
+    for &j in sample {
+        for i in 0..analytic.patch_count() {
+            let path = analytic.sampling_path(i, j);
+            let start = Instant::now();
+            let (value, rays) = analytic.pair_counting_rays(i, j);
+            let seconds = start.elapsed().as_secs_f64();
+            black_box(value);
+            let slot = &mut figures[paths.iter().position(|p| *p == path).unwrap_or(0)];
+            slot.pairs += 1;
+            slot.rays += rays;
+            slot.seconds += seconds;
+        }
+    }
+    figures
 }
 
 /// Measures the backend `spec` once on the columns of `sample`, with `pools` of 1 and 2
@@ -182,7 +222,9 @@ pub fn measure(
     run.columns[0] = pools[0].install(|| time_parallel(&backend, sample, min_seconds));
     run.columns[1] = pools[1].install(|| time_parallel(&backend, sample, min_seconds));
     run.columns[2] = pools[1].install(|| time_sequential(&backend, sample, min_seconds));
-    if matches!(spec, BackendSpec::Analytic(_)) {
+    if let BackendSpec::Analytic(p) = spec {
+        let analytic = AnalyticColumns::new(input.scene, input.visibility, input.analysis, *p);
+        run.paths = time_by_sampling_path(&analytic, sample);
         let recorded = Backend::columns(spec, input);
         pools[1].install(|| time_sequential(&recorded, sample, 0.0));
         run.recorded = pools[1].install(|| time_sequential(&recorded, sample, min_seconds));
@@ -358,6 +400,8 @@ pub fn run(
                 sig(1e3 * recorded, 3),
                 sig(1e3 * rate(&|r| r.columns[2] / columns.len() as f64), 3),
             );
+            let tracing_per_ray = rate(&|r| r.raw[0] / r.rays.max(1) as f64);
+            notes += &path_table(runs, tracing_per_ray);
         }
     }
     out.push('\n');
@@ -367,4 +411,37 @@ pub fn run(
     }
     section.markdown = out;
     Ok(section)
+}
+
+/// Where an analytic column's time goes, by sampling path: the medians over `runs` of each
+/// path's pairs timed one by one, beside the time their rays take traced raw through
+/// `Visibility` at `tracing_per_ray` seconds a ray.
+fn path_table(runs: &[ColumnRun], tracing_per_ray: f64) -> String {
+    let Some(first) = runs.first() else { return String::new() };
+    let pairs: usize = first.paths.iter().map(|p| p.pairs).sum();
+    let total = median(&runs.iter().map(|r| r.paths.iter().map(|p| p.seconds).sum()).collect::<Vec<_>>());
+    let mut out = String::from(
+        "\n  Where the column's time goes, each pair of the sample timed on its own on 1 thread (medians), by how \
+         its visibility is sampled (`radiosity_ff::pair_visibility::SamplingPath`); \"tracing\" is its rays at the \
+         raw `Visibility` rate of the same rays, the rest is kernel, quadrature and sampling:\n\n  \
+         | pairs | share of pairs | rays per pair | share of the time | per ray | tracing | the rest |\n  \
+         |---|--:|--:|--:|--:|--:|--:|\n",
+    );
+    for (k, path) in first.paths.iter().enumerate() {
+        let seconds = median(&runs.iter().map(|r| r.paths.get(k).map_or(f64::NAN, |p| p.seconds)).collect::<Vec<_>>());
+        let tracing = path.rays as f64 * tracing_per_ray;
+        let per_ray = |s: f64| if path.rays > 0 { duration(s / path.rays as f64) } else { "—".to_string() };
+        let _ = writeln!(
+            out,
+            "  | {} | {} | {} | {} | {} | {} | {} |",
+            path.path.map_or("no ray traced", SamplingPath::name),
+            percent(path.pairs as f64, pairs as f64),
+            sig(path.rays as f64 / path.pairs.max(1) as f64, 3),
+            percent(seconds, total),
+            per_ray(seconds),
+            per_ray(tracing),
+            per_ray(seconds - tracing),
+        );
+    }
+    out
 }

@@ -297,14 +297,15 @@ pub fn visible_fraction(
     let mut sums = Sums::default();
     let k = budget.rays(u);
     let joint = Joint::new(&lower, &upper, na, nb);
-    if let (true, Some(joint)) = (k < PROBED, &joint) {
+    let path = path_for(k, joint.is_some());
+    if let (SamplingPath::Joint, Some(joint)) = (path, &joint) {
         // A pair small against its distance, with few rays: no bound by Lambert's formula,
         // no grid (module documentation, "Few rays").
         joint.sample(k, rng, &mut |x, y| trace(x, ia, y, ib), &mut sums);
         return if sums.total > 0.0 { sums.visible / sums.total } else { 1.0 };
     }
     let pair = Pair::new(lower, upper, na, ia, ib);
-    if k < PROBED {
+    if path == SamplingPath::Kernel {
         pair.sample_few(k, rng, trace, &mut sums);
     } else {
         // Decide with the probe, estimate with fresh segments: the estimate's expectation is
@@ -365,13 +366,17 @@ impl SamplingPath {
 /// when it draws no segment (`L` or `H` empty).
 pub fn sampling_path(a: &Patch, b: &Patch, u: Real, budget: RayBudget, tolerance: Real) -> Option<SamplingPath> {
     let (lower, upper) = facing_parts(a, b, tolerance)?;
-    Some(if budget.rays(u) >= PROBED {
-        SamplingPath::Probed
-    } else if Joint::new(&lower, &upper, a.normal(), b.normal()).is_some() {
-        SamplingPath::Joint
-    } else {
-        SamplingPath::Kernel
-    })
+    Some(path_for(budget.rays(u), Joint::new(&lower, &upper, a.normal(), b.normal()).is_some()))
+}
+
+/// The path of a pair given `k` rays, `joint` when both its ends may be drawn together: the one
+/// decision [`visible_fraction`] and [`sampling_path`] share.
+fn path_for(k: usize, joint: bool) -> SamplingPath {
+    match (k < PROBED, joint) {
+        (true, true) => SamplingPath::Joint,
+        (true, false) => SamplingPath::Kernel,
+        (false, _) => SamplingPath::Probed,
+    }
 }
 
 /// The segments of the probe of a pair given `k ≥ 16` rays, and of its estimate when the

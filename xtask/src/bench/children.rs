@@ -44,8 +44,7 @@ pub(crate) fn e2e_child(scene: &str, solver: &str, ff: &str, reference: &Path, m
     let start = Instant::now();
     let prepared = prepare(scene)?;
     let scene_seconds = start.elapsed().as_secs_f64();
-    let report = e2e::time_to_accuracy(&prepared, start, scene_seconds, solver.as_mut(), &spec, &star, max_seconds)
-        .with_context(|| format!("the reference in {} and scene {scene}", reference.display()))?;
+    let report = e2e::time_to_accuracy(&prepared, start, scene_seconds, solver.as_mut(), &spec, &star, max_seconds)?;
     println!("{}", serde_json::to_string(&report)?);
     Ok(())
 }

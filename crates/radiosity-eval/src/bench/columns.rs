@@ -175,7 +175,8 @@ pub struct PathFigures {
 }
 
 /// Every pair of the columns of `sample`, timed one at a time on the calling thread and grouped
-/// by sampling path (the path found first, untimed; the pairs that trace no ray first).
+/// by sampling path (the path found first, untimed, which computes the pair's unoccluded factor
+/// once more outside the timing; the pairs that trace no ray first).
 pub fn time_by_sampling_path(analytic: &AnalyticColumns<'_>, sample: &[usize]) -> Vec<PathFigures> {
     let paths: Vec<Option<SamplingPath>> = std::iter::once(None).chain(SamplingPath::ALL.map(Some)).collect();
     let mut figures: Vec<PathFigures> =

@@ -61,6 +61,16 @@ pub trait ColumnSource: Sync {
     /// (the analytic backend's record of visible fractions), so that runs measured one after
     /// another each start from the same cost; no entry changes. The default keeps nothing.
     fn reset_memory(&self) {}
+
+    /// Writes `F x` into `out` and returns `true` when the source multiplies a whole vector
+    /// cheaper than its `n` columns (a stored matrix: one pass over its entries); returns
+    /// `false`, leaving `out` unspecified, otherwise (the default), and callers sum columns
+    /// ([`crate::operator::multiply`]). `x` and `out` are patch-major with `channels` channels,
+    /// of length `patch_count() · channels`; the product must be the one the columns give, up
+    /// to the order of summation, and deterministic whatever the thread count.
+    fn multiply(&self, _x: &[Real], _channels: usize, _out: &mut [Real]) -> bool {
+        false
+    }
 }
 
 /// The reciprocity bound of entries computed once per pair in `f64`, the other entry taken
@@ -129,6 +139,10 @@ impl<T: ColumnSource + ?Sized> ColumnSource for &T {
     fn reset_memory(&self) {
         (**self).reset_memory()
     }
+
+    fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
+        (**self).multiply(x, channels, out)
+    }
 }
 
 impl<T: ColumnSource + ?Sized> ColumnSource for Box<T> {
@@ -151,6 +165,10 @@ impl<T: ColumnSource + ?Sized> ColumnSource for Box<T> {
     fn reset_memory(&self) {
         (**self).reset_memory()
     }
+
+    fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
+        (**self).multiply(x, channels, out)
+    }
 }
 
 impl<T: ColumnSource + ?Sized + Send> ColumnSource for std::sync::Arc<T> {
@@ -172,6 +190,10 @@ impl<T: ColumnSource + ?Sized + Send> ColumnSource for std::sync::Arc<T> {
 
     fn reset_memory(&self) {
         (**self).reset_memory()
+    }
+
+    fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
+        (**self).multiply(x, channels, out)
     }
 }
 
@@ -329,5 +351,14 @@ impl<S: ColumnSource> ColumnSource for CountingColumns<S> {
 
     fn reset_memory(&self) {
         self.inner.reset_memory()
+    }
+
+    /// Counts a product's time, not as a column.
+    fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
+        let start = Instant::now();
+        let done = self.inner.multiply(x, channels, out);
+        let nanos = start.elapsed().as_nanos().min(u64::MAX as u128) as u64;
+        self.nanos.fetch_add(nanos, Ordering::Relaxed);
+        done
     }
 }

@@ -9,7 +9,9 @@
 //! - [`Scene`]: patches plus the materials and objects they reference;
 //! - [`LinearSystem`]: areas, reflectivities and emissions per channel, the data of
 //!   `B_i = E_i + ρ_i Σ_j F_ij B_j`;
-//! - [`ColumnSource`]: "fill column j of F", the only thing a solver knows about form factors.
+//! - [`ColumnSource`]: "fill column j of F", the only thing a solver knows about form factors;
+//! - [`RadiosityOperator`]: `F·x`, `(I − diag(ρ) F)·x` and the residual over any source, also
+//!   as faer's `LinOp` (scipy's `LinearOperator`, in Rust).
 //!
 //! ```
 //! use radiosity_core::{ColumnSource, CountingColumns, DenseColumns};
@@ -26,7 +28,10 @@
 pub mod column;
 pub mod dense_lu;
 pub mod error;
+pub mod faer_operator;
+pub mod ids;
 pub mod math;
+pub mod operator;
 pub mod patch;
 pub mod scene;
 pub mod spectrum;
@@ -34,8 +39,11 @@ pub mod system;
 
 pub use column::{ColumnSource, ColumnStats, CountingColumns, DenseColumns, measured_reciprocity};
 pub use error::CoreError;
+pub use faer_operator::SymmetrizedOperator;
 pub use math::{Real, Vec3};
+pub use operator::{Product, RadiosityOperator, multiply, residual_from_product};
 pub use patch::{Patch, PatchShape};
-pub use scene::{Material, MaterialId, ObjectId, Scene};
+pub use ids::{MaterialId, ObjectId};
+pub use scene::{Material, Scene};
 pub use spectrum::{Channels, Spectrum};
 pub use system::LinearSystem;

@@ -13,7 +13,7 @@
 
 use crate::error::CoreError;
 use crate::math::{Real, Vec3};
-use crate::scene::{MaterialId, ObjectId};
+use crate::ids::{MaterialId, ObjectId};
 
 /// Relative area below which a patch counts as degenerate.
 const DEGENERATE_AREA: Real = 1e-12;

@@ -3,20 +3,12 @@
 //! A [`Scene`] is validated on construction: it has at least one patch, every reflectivity is
 //! in `[0, 1)` and every emission finite and non-negative, and every patch refers to an
 //! existing material and object. Reflectivity and emission belong to materials; a patch reads
-//! them through its [`MaterialId`], so there is one source of truth per surface.
+//! them through its [`MaterialId`](crate::MaterialId), so there is one source of truth per surface.
 
 use crate::error::CoreError;
 use crate::math::{Real, Vec3, bounding_diagonal};
 use crate::patch::Patch;
 use crate::spectrum::{Channels, Spectrum};
-
-/// Index of a material in [`Scene::materials`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct MaterialId(pub u32);
-
-/// Index of an object name in [`Scene::objects`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct ObjectId(pub u32);
 
 /// A diffuse material: what fraction of incident light a surface reflects, and what it emits.
 #[derive(Clone, Debug, PartialEq)]
@@ -105,12 +97,12 @@ impl Scene {
         self.patches.is_empty()
     }
 
-    /// The materials, indexed by [`MaterialId`].
+    /// The materials, indexed by [`MaterialId`](crate::MaterialId).
     pub fn materials(&self) -> &[Material] {
         &self.materials
     }
 
-    /// The object names, indexed by [`ObjectId`].
+    /// The object names, indexed by [`ObjectId`](crate::ObjectId).
     pub fn objects(&self) -> &[String] {
         &self.objects
     }

@@ -4,6 +4,8 @@
 use approx::assert_relative_eq;
 use radiosity_core::*;
 
+mod operator;
+
 const M: MaterialId = MaterialId(0);
 const O: ObjectId = ObjectId(0);
 

@@ -64,16 +64,69 @@ use crate::ff_point_polygon::{MAX_CLIPPED, clip_above, distance_to_polygon, poin
 use crate::guard::ClampCounter;
 use crate::pair_visibility::{self, RayBudget, SamplingPath};
 use crate::quadrature::{Panel, for_each_point_in, gauss_legendre, order_for, parametrisation};
-use crate::spec::AnalyticParams;
-use crate::traced::ShadowSegment;
+use crate::rays::ShadowSegment;
 use crate::visibility_cache::{CacheFigures, Record, VisibilityCache};
 use radiosity_core::column::F64_PAIR_RECIPROCITY;
 use radiosity_core::{ColumnSource, Patch, Real, Scene, Vec3};
-use radiosity_geom::{SceneAnalysis, Visibility};
+use radiosity_geom::{ParamDoc, SceneAnalysis, Visibility};
 use rand::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
 use std::sync::{Arc, RwLock};
+
+/// Parameters of the analytic backend.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AnalyticParams {
+    /// The largest number of Gauss–Legendre points per direction on the receiving patch.
+    pub order: usize,
+    /// The relative quadrature error each pair's order is chosen to meet (1 = centroid).
+    pub tolerance: f64,
+    /// The fewest shadow rays of a pair, when the scene needs visibility.
+    pub rays: usize,
+    /// The shadow rays of a partially visible pair whose larger unoccluded form factor is 1:
+    /// a pair gets `budget` times its larger unoccluded form factor, at least `rays`, and
+    /// stiff scenes more ([`crate::pair_visibility::stiffness_factor`]).
+    pub budget: usize,
+    /// Seed of the jittered shadow rays.
+    pub seed: u64,
+    /// Mebibytes of recorded visible fractions, so that a pair is traced once
+    /// ([`crate::visibility_cache`]; 0: none). It changes no entry, so the canonical argument
+    /// leaves it out and caches of matrices and references ignore it.
+    pub cache_mib: usize,
+}
+
+/// Parameters of `analytic`.
+pub const ANALYTIC_PARAMS: &[ParamDoc] = &[
+    ParamDoc {
+        key: "order",
+        default: "8",
+        doc: "largest Gauss-Legendre order on the receiver, 1 to 32 (1 = centroid only)",
+    },
+    ParamDoc { key: "tol", default: "1e-3", doc: "relative quadrature error each pair's order aims at, in (0, 1]" },
+    ParamDoc {
+        key: "rays",
+        default: "1",
+        doc: "fewest shadow rays per pair, 1 to 2^20 (none when nothing can occlude)",
+    },
+    ParamDoc {
+        key: "budget",
+        default: "24576",
+        doc: "shadow rays of a partly visible pair per unit of its larger unoccluded form factor, 0 to 2^24 \
+              (times ((1 - 0.8) / (1 - mean ρ))², at most 64, in scenes whose mean ρ exceeds 0.8)",
+    },
+    ParamDoc { key: "seed", default: "0", doc: "seed of the jittered shadow rays" },
+    ParamDoc {
+        key: "cache",
+        default: "256",
+        doc: "MiB of recorded visible fractions, so that no pair is traced twice, 0 to 2^20 (changes no value)",
+    },
+];
+
+impl Default for AnalyticParams {
+    fn default() -> Self {
+        AnalyticParams { order: 8, tolerance: 1e-3, rays: 1, budget: 24576, seed: 0, cache_mib: 256 }
+    }
+}
 
 /// Areas of a pair closer than this, relative to the larger, count as equal when choosing the
 /// patch a pair is integrated over (the lower index then).

@@ -85,13 +85,27 @@
 //!   1993, ch. 4 (the hemicube, its aliasing, random rotation about the normal).
 
 use crate::guard::ClampCounter;
-use crate::spec::HemicubeParams;
 use radiosity_core::{ColumnSource, Real, Scene, Vec3};
-use radiosity_geom::Visibility;
+use radiosity_geom::{ParamDoc, Visibility};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use std::f64::consts::{PI, TAU};
+
+/// Parameters of the hemicube backend.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HemicubeParams {
+    /// Pixels along each edge of the hemicube's top face.
+    pub resolution: usize,
+    /// Seed of the random rotation about the normal.
+    pub seed: u64,
+}
+
+/// Parameters of `hemicube`.
+pub const HEMICUBE_PARAMS: &[ParamDoc] = &[
+    ParamDoc { key: "res", default: "128", doc: "pixels along an edge of the top face, 2 to 4096 (even)" },
+    ParamDoc { key: "seed", default: "0", doc: "seed of the random rotation about the normal" },
+];
 
 /// Pixels traced per parallel block (bounds the memory of one column's hits).
 const BLOCK: usize = 1 << 16;

@@ -78,7 +78,7 @@
 //!
 //! - The analytic backend is exactly reciprocal (each pair is integrated once), so
 //!   symmetrising changes nothing, and its rows are as close to 1 as its visibility estimate
-//!   makes them (README, "Form factors"); rescaling them would move whole rows, which is not
+//!   makes them (docs/form-factors.md); rescaling them would move whole rows, which is not
 //!   more accurate: a larger `budget` is.
 //! - Hemicube and Monte Carlo estimate each row on its own, so an entry can be zero one way
 //!   and not the other (reciprocity error 1). Symmetrising averages the two estimates of each

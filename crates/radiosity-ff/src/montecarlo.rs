@@ -71,14 +71,28 @@
 //!   34(5), 1997.
 
 use crate::guard::ClampCounter;
-use crate::spec::MonteCarloParams;
 use radiosity_core::math::cosine_direction;
 use radiosity_core::{ColumnSource, Patch, Real, Scene, Vec3};
-use radiosity_geom::Visibility;
+use radiosity_geom::{ParamDoc, Visibility};
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
+
+/// Parameters of the Monte Carlo backend.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MonteCarloParams {
+    /// Cosine-weighted rays shot from each patch.
+    pub rays: usize,
+    /// Seed of the rays.
+    pub seed: u64,
+}
+
+/// Parameters of `montecarlo`.
+pub const MONTECARLO_PARAMS: &[ParamDoc] = &[
+    ParamDoc { key: "rays", default: "10000", doc: "cosine-weighted rays per shooting patch, 1 to 10^9" },
+    ParamDoc { key: "seed", default: "0", doc: "seed of the rays" },
+];
 
 /// The largest Latin hypercube batch, in rays.
 pub const MAX_BATCH: usize = 4096;

@@ -6,46 +6,10 @@
 //! `matrix:of=hemicube:res=64:rebalance=true`.
 
 use crate::error::FfError;
+pub use crate::analytic::{ANALYTIC_PARAMS, AnalyticParams};
+pub use crate::hemicube::{HEMICUBE_PARAMS, HemicubeParams};
+pub use crate::montecarlo::{MONTECARLO_PARAMS, MonteCarloParams};
 use radiosity_geom::{KeyValueParams, ParamDoc};
-
-/// Parameters of the analytic backend.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct AnalyticParams {
-    /// The largest number of Gauss–Legendre points per direction on the receiving patch.
-    pub order: usize,
-    /// The relative quadrature error each pair's order is chosen to meet (1 = centroid).
-    pub tolerance: f64,
-    /// The fewest shadow rays of a pair, when the scene needs visibility.
-    pub rays: usize,
-    /// The shadow rays of a partially visible pair whose larger unoccluded form factor is 1:
-    /// a pair gets `budget` times its larger unoccluded form factor, at least `rays`, and
-    /// stiff scenes more ([`crate::pair_visibility::stiffness_factor`]).
-    pub budget: usize,
-    /// Seed of the jittered shadow rays.
-    pub seed: u64,
-    /// Mebibytes of recorded visible fractions, so that a pair is traced once
-    /// ([`crate::visibility_cache`]; 0: none). It changes no entry, so the canonical argument
-    /// leaves it out and caches of matrices and references ignore it.
-    pub cache_mib: usize,
-}
-
-/// Parameters of the hemicube backend.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct HemicubeParams {
-    /// Pixels along each edge of the hemicube's top face.
-    pub resolution: usize,
-    /// Seed of the random rotation about the normal.
-    pub seed: u64,
-}
-
-/// Parameters of the Monte Carlo backend.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MonteCarloParams {
-    /// Cosine-weighted rays shot from each patch.
-    pub rays: usize,
-    /// Seed of the rays.
-    pub seed: u64,
-}
 
 /// A parsed backend argument.
 #[derive(Clone, Debug, PartialEq)]
@@ -65,45 +29,6 @@ pub enum BackendSpec {
     },
 }
 
-/// Parameters of `analytic`.
-pub const ANALYTIC_PARAMS: &[ParamDoc] = &[
-    ParamDoc {
-        key: "order",
-        default: "8",
-        doc: "largest Gauss-Legendre order on the receiver, 1 to 32 (1 = centroid only)",
-    },
-    ParamDoc { key: "tol", default: "1e-3", doc: "relative quadrature error each pair's order aims at, in (0, 1]" },
-    ParamDoc {
-        key: "rays",
-        default: "1",
-        doc: "fewest shadow rays per pair, 1 to 2^20 (none when nothing can occlude)",
-    },
-    ParamDoc {
-        key: "budget",
-        default: "24576",
-        doc: "shadow rays of a partly visible pair per unit of its larger unoccluded form factor, 0 to 2^24 \
-              (times ((1 - 0.8) / (1 - mean ρ))², at most 64, in scenes whose mean ρ exceeds 0.8)",
-    },
-    ParamDoc { key: "seed", default: "0", doc: "seed of the jittered shadow rays" },
-    ParamDoc {
-        key: "cache",
-        default: "256",
-        doc: "MiB of recorded visible fractions, so that no pair is traced twice, 0 to 2^20 (changes no value)",
-    },
-];
-
-/// Parameters of `hemicube`.
-pub const HEMICUBE_PARAMS: &[ParamDoc] = &[
-    ParamDoc { key: "res", default: "128", doc: "pixels along an edge of the top face, 2 to 4096 (even)" },
-    ParamDoc { key: "seed", default: "0", doc: "seed of the random rotation about the normal" },
-];
-
-/// Parameters of `montecarlo`.
-pub const MONTECARLO_PARAMS: &[ParamDoc] = &[
-    ParamDoc { key: "rays", default: "10000", doc: "cosine-weighted rays per shooting patch, 1 to 10^9" },
-    ParamDoc { key: "seed", default: "0", doc: "seed of the rays" },
-];
-
 /// Parameters of `matrix` (others go to the backend named by `of`).
 pub const MATRIX_PARAMS: &[ParamDoc] = &[
     ParamDoc { key: "of", default: "analytic", doc: "the backend whose matrix is assembled and stored" },
@@ -116,12 +41,6 @@ pub const MATRIX_PARAMS: &[ParamDoc] = &[
 
 /// The backend names, in the order listed to users.
 pub const BACKENDS: &[&str] = &["analytic", "hemicube", "montecarlo", "matrix"];
-
-impl Default for AnalyticParams {
-    fn default() -> Self {
-        AnalyticParams { order: 8, tolerance: 1e-3, rays: 1, budget: 24576, seed: 0, cache_mib: 256 }
-    }
-}
 
 impl BackendSpec {
     /// Parses `NAME[:key=value…]`.

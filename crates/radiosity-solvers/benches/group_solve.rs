@@ -10,8 +10,7 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_main};
 use radiosity_core::{Channels, DenseColumns, LinearSystem, Real};
-use radiosity_solvers::group_step::{InnerSolve, group_shot};
-use radiosity_solvers::{Problem, State};
+use radiosity_solvers::{InnerSolve, Problem, State, group_shot};
 use std::hint::black_box;
 use std::time::Duration;
 

@@ -34,8 +34,8 @@ pub enum SolverError {
         /// What is wrong with it.
         reason: String,
     },
-    /// A group gathering system `Φ_rr δ = R` that LU cannot solve ([`crate::group_gathering`];
-    /// group shooting falls back to point shots instead, [`crate::group_step`]).
+    /// A group gathering system `Φ_rr δ = R` that LU cannot solve ([`crate::GroupGathering`];
+    /// group shooting falls back to point shots instead, [`crate::group_shot`]).
     #[error(
         "step {step}: the group system of {size} patches is singular in channel {channel} (pivot {pivot} is {value}); \
          are the form factors' rows summing far above 1?"
@@ -69,7 +69,7 @@ pub enum SolverError {
     },
     /// A solver whose hypothesis this system or these form factors do not satisfy, refused
     /// before its first step or stopped when the hypothesis is seen to fail (conjugate
-    /// gradients on form factors that are not reciprocal, [`crate::cg`]).
+    /// gradients on form factors that are not reciprocal, [`crate::ConjugateGradients`]).
     #[error("{solver} cannot solve this system: {reason}")]
     NotApplicable {
         /// The solver.

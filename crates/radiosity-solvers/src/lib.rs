@@ -4,11 +4,14 @@
 //! Built after argmin: a [`Solver`] defines one step, the [`Executor`] loops until a stop
 //! rule ([`StopRules`]) holds and calls [`Observer`]s on the initial state, between steps and
 //! on the finished run, outside the timed region ([`Every`] thins them out). Each solver
-//! lives in its own module, whose documentation gives its update rule and references; what a
-//! solver alone knows (its group steps, their condition numbers and fallbacks) comes back in
-//! the run's [`Record`]. Every built-in solver also bounds, at no extra column, the residual
-//! of the radiosity it displays ([`Solver::residual_bound`], [`residual_bound`]). This crate
-//! depends on `radiosity-core` only and is tested on small in-memory matrices.
+//! lives in its own module, in a folder by family (`run`, `gathering`, `shooting`, `group`,
+//! `krylov`), whose documentation gives its update rule and references; the modules are
+//! private (`cargo doc --document-private-items` shows them) and everything public is
+//! re-exported at the crate root. What a solver alone knows (its group steps, their condition
+//! numbers and fallbacks) comes back in the run's [`Record`]. Every built-in solver also
+//! bounds, at no extra column, the residual of the radiosity it displays
+//! ([`Solver::residual_bound`], [`ResidualBound`]). This crate depends on `radiosity-core`
+//! only and is tested on small in-memory matrices.
 //!
 //! Solvers are built from their command-line names by a [`SolverRegistry`], which tries its
 //! families of names in order; each family is a parameter struct ([`SolverParams`]:
@@ -75,57 +78,43 @@
 //! assert_eq!(run.record.count("group_steps"), Some(4));
 //! ```
 
-pub mod bicgstab;
-pub mod cg;
-pub mod error;
-pub mod executor;
-pub mod feda;
-pub mod gathering;
-pub mod gauss_seidel;
-pub mod gmres;
-pub mod group_accelerated;
-pub mod group_gathering;
-pub mod group_shooting;
-pub mod group_step;
-pub mod jacobi;
-pub mod krylov;
-pub mod memory;
-pub mod overshooting;
-pub mod problem;
-pub mod progressive;
-pub mod record;
-pub mod registry;
-pub mod relax;
-pub mod residual_bound;
-pub mod shao;
-pub mod shooting;
-pub mod southwell;
-pub mod state;
-pub mod stop;
-pub mod xu;
+mod error;
+mod gathering;
+mod group;
+mod krylov;
+mod naming;
+mod registry;
+mod run;
+mod shooting;
 
-pub use bicgstab::{Bicgstab, BicgstabParams};
-pub use cg::{CgParams, ConjugateGradients};
-pub use error::SolverError;
-pub use executor::{Every, Executor, NoObserver, Observer, Run, Solver};
-pub use gauss_seidel::GaussSeidelParams;
-pub use gmres::{Gmres, GmresParams};
-pub use group_accelerated::{
-    COLUMN_OPERATIONS_PER_ROOT_PATCH, Frequency, GroupAccelerated, GroupAcceleratedParams, GroupBuilding,
-    column_operations,
+pub use error::{MESSAGE_WIDTH, SolverError};
+pub use gathering::gauss_seidel::{GaussSeidel, GaussSeidelParams};
+pub use gathering::jacobi::{Jacobi, JacobiParams};
+pub use group::group_accelerated::{
+    COLUMN_OPERATIONS_PER_ROOT_PATCH, DEFAULT_TARGET, Frequency, GroupAccelerated, GroupAcceleratedParams,
+    GroupBuilding, MIN_ADAPTIVE_GROUP, column_operations,
 };
-pub use group_gathering::{GroupGathering, GroupGatheringParams};
-pub use group_shooting::{GroupShooting, GroupShootingParams};
-pub use group_step::{GroupStats, InnerSolve};
-pub use jacobi::JacobiParams;
-pub use memory::ColumnMemory;
-pub use overshooting::{Overshoot, PointShootingParams, ShootingMethod};
-pub use problem::Problem;
-pub use record::{Record, Value};
-pub use registry::{ParseSolverError, SolverEntry, SolverParams, SolverRegistry};
-pub use residual_bound::{ResidualBound, area_norms};
-pub use state::State;
-pub use stop::{Count, StopRule, StopRules, TerminationReason};
+pub use group::group_gathering::{GroupGathering, GroupGatheringParams, Partition, Sweep};
+pub use group::group_shooting::{GroupShooting, GroupShootingParams};
+pub use group::group_step::{CONDITION_LIMIT, GroupShot, GroupStats, InnerSolve, group_shot};
+pub use group::memory::ColumnMemory;
+pub use krylov::bicgstab::{Bicgstab, BicgstabParams};
+pub use krylov::cg::{CgParams, ConjugateGradients};
+pub use krylov::gmres::{Gmres, GmresParams};
+pub use naming::{ParseSolverError, SolverParams};
+pub use registry::{SolverEntry, SolverRegistry};
+pub use run::executor::{DIVERGENCE_FACTOR, DIVERGENCE_FLOOR, Every, Executor, NoObserver, Observer, Run, Solver};
+pub use run::problem::Problem;
+pub use run::record::{Entries, Record, Value};
+pub use run::residual_bound::{ResidualBound, area_norms};
+pub use run::state::State;
+pub use run::stop::{Count, StopRule, StopRules, TerminationReason};
+pub use shooting::overshooting::overshoot::{AmbientTerm, Overshoot, RowTerm};
+pub use shooting::overshooting::step::{Overshooting, PointShootingParams, ShootingMethod};
+pub use shooting::overshooting::xu::XuParts;
+pub use shooting::progressive::ProgressiveRefinement;
+pub use shooting::rule::unshot_power;
+pub use shooting::southwell::Southwell;
 
 /// The point solvers, by canonical name: every one of them is run by the scene-level tests
 /// and snapshots.

@@ -34,51 +34,20 @@
 //! - Damerau 1964, "A technique for computer detection and correction of spelling errors",
 //!   Communications of the ACM 7(3).
 
-use crate::bicgstab::BicgstabParams;
-use crate::cg::CgParams;
 use crate::error::SolverError;
-use crate::executor::Solver;
-use crate::gauss_seidel::GaussSeidelParams;
-use crate::gmres::GmresParams;
-use crate::group_accelerated::GroupAcceleratedParams;
-use crate::group_gathering::GroupGatheringParams;
-use crate::group_shooting::GroupShootingParams;
-use crate::jacobi::JacobiParams;
-use crate::overshooting::PointShootingParams;
+use crate::gathering::gauss_seidel::GaussSeidelParams;
+use crate::gathering::jacobi::JacobiParams;
+use crate::group::group_accelerated::GroupAcceleratedParams;
+use crate::group::group_gathering::GroupGatheringParams;
+use crate::group::group_shooting::GroupShootingParams;
+use crate::krylov::bicgstab::BicgstabParams;
+use crate::krylov::cg::CgParams;
+use crate::krylov::gmres::GmresParams;
+use crate::naming::{ParseSolverError, SolverParams, named, split_params};
+use crate::run::executor::Solver;
+use crate::shooting::overshooting::step::PointShootingParams;
 use std::fmt;
-use std::str::FromStr;
 use std::sync::{Arc, OnceLock};
-use thiserror::Error;
-
-/// Why a family's `FromStr` did not give parameters.
-#[derive(Debug, Error, Clone, PartialEq)]
-#[non_exhaustive]
-pub enum ParseSolverError {
-    /// The name is not one of this family's: another family may take it.
-    #[error("the name is not one of this solver family's")]
-    OtherFamily,
-    /// The name is this family's, but its parameters are refused (the message names the solver
-    /// as written).
-    #[error(transparent)]
-    Refused(#[from] SolverError),
-}
-
-/// A family of solver names and its parameters: the typed constructor of a solver.
-///
-/// `FromStr` reads a command-line name (module doc); [`SolverParams::build`] makes the solver.
-/// The constants describe the family to users.
-pub trait SolverParams: FromStr<Err = ParseSolverError> {
-    /// The family's names, with placeholders (`gauss-seidel, sor-ω`).
-    const SYNTAX: &'static str;
-    /// What the family does, in one line.
-    const HELP: &'static str;
-    /// Names of the family as users write them, the first ones the most common.
-    const EXAMPLES: &'static [&'static str];
-
-    /// The solver these parameters designate. Parameters out of range are
-    /// [`SolverError::BadParams`].
-    fn build(&self) -> Result<Box<dyn Solver>, SolverError>;
-}
 
 /// What a registry entry does with a name: `Ok(None)` when the name is not its own.
 type BuildFn = dyn Fn(&str) -> Result<Option<Box<dyn Solver>>, SolverError> + Send + Sync;
@@ -295,55 +264,4 @@ pub fn suggestion_distance(length: usize) -> usize {
 pub(crate) fn builtin() -> &'static SolverRegistry {
     static BUILTIN: OnceLock<SolverRegistry> = OnceLock::new();
     BUILTIN.get_or_init(SolverRegistry::builtin)
-}
-
-/// Gives a [`SolverError::BadParams`] that does not name its solver the beginning
-/// `solver 'name': `.
-pub(crate) fn named(name: &str, e: SolverError) -> SolverError {
-    match e {
-        SolverError::BadParams(reason) if !reason.starts_with("solver '") => {
-            SolverError::BadParams(format!("solver '{name}': {reason}"))
-        }
-        e => e,
-    }
-}
-
-/// Splits `head:params` at the first colon (`params` empty without one).
-pub(crate) fn split_params(name: &str) -> (&str, &str) {
-    name.split_once(':').unwrap_or((name, ""))
-}
-
-/// Splits `head-gM` into `head` and `M` (with `marker` `-g`; `-m` for a memory).
-pub(crate) fn split_size<'a>(name: &'a str, marker: &str) -> Option<(&'a str, usize)> {
-    let (head, size) = name.rsplit_once(marker)?;
-    if size.is_empty() || !size.bytes().all(|b| b.is_ascii_digit()) {
-        return None;
-    }
-    Some((head, size.parse().ok()?))
-}
-
-/// Claims `name` for a family of one plain name, `plain`, that takes no parameters:
-/// [`ParseSolverError::OtherFamily`] for another head, a refusal for parameters.
-pub(crate) fn plain_name(name: &str, plain: &str) -> Result<(), ParseSolverError> {
-    let (head, params) = split_params(name);
-    if head != plain {
-        return Err(ParseSolverError::OtherFamily);
-    }
-    no_params(head, params)
-}
-
-/// Refuses parameters for a family that takes none.
-pub(crate) fn no_params(head: &str, params: &str) -> Result<(), ParseSolverError> {
-    if params.is_empty() {
-        Ok(())
-    } else {
-        Err(SolverError::BadParams(format!("solver '{head}' takes no parameters, not '{params}'")).into())
-    }
-}
-
-/// `params` if they build a solver, or the refusal, naming the solver as written (`name`):
-/// the check that lets `FromStr` refuse parameters out of range, not only bad syntax.
-pub(crate) fn validated<P: SolverParams>(name: &str, params: P) -> Result<P, ParseSolverError> {
-    params.build().map_err(|e| ParseSolverError::Refused(named(name, e)))?;
-    Ok(params)
 }

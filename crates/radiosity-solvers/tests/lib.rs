@@ -586,8 +586,6 @@ fn inner_gauss_seidel_solves_the_group_as_lu_does() {
 // Guard rails: the condition of group systems, their fallback, and divergence.
 
 use radiosity_core::dense_lu::{lu_solve, lu_solve_columns};
-use radiosity_solvers::executor::{DIVERGENCE_FACTOR, DIVERGENCE_FLOOR};
-use radiosity_solvers::group_step::{CONDITION_LIMIT, InnerSolve, group_shot};
 
 #[test]
 fn lu_solves_several_right_hand_sides_with_one_factorisation() {
@@ -902,7 +900,7 @@ impl Solver for Rogue {
     }
 
     fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real> {
-        Some(self.script.get(state.step as usize).copied().unwrap_or_else(|| shooting::unshot_power(problem, state)))
+        Some(self.script.get(state.step as usize).copied().unwrap_or_else(|| unshot_power(problem, state)))
     }
 }
 
@@ -948,7 +946,6 @@ fn the_divergence_rule_measures_rises_from_a_floor_under_the_minimum() {
 
 // The registry: families of names, typed parameters, a user's own solver, suggestions.
 
-use radiosity_solvers::group_accelerated::DEFAULT_TARGET;
 use std::str::FromStr;
 
 #[test]
@@ -982,14 +979,14 @@ fn typed_parameters_parse_their_family_and_no_other() {
     assert_eq!("group-gs-g30".parse::<PointShootingParams>(), Err(ParseSolverError::OtherFamily));
     assert_eq!(
         "group-xu-g4".parse::<GroupShootingParams>(),
-        Ok(GroupShootingParams { method: ShootingMethod::Xu(xu::XuParts::BOTH), group: 4 })
+        Ok(GroupShootingParams { method: ShootingMethod::Xu(XuParts::BOTH), group: 4 })
     );
     assert_eq!("group-gs-g4".parse::<GroupShootingParams>(), Err(ParseSolverError::OtherFamily));
     let gathering = "group-gs-g8:groups=spatial".parse::<GroupGatheringParams>().unwrap();
-    assert_eq!((gathering.group, gathering.partition), (8, group_gathering::Partition::Spatial));
+    assert_eq!((gathering.group, gathering.partition), (8, Partition::Spatial));
     // Group acceleration: the parameters, the name as written and the canonical one.
     let p = GroupAcceleratedParams::from_str("xu-g30-m480:f=10:groups=interaction").unwrap();
-    assert_eq!(p.method, ShootingMethod::Xu(xu::XuParts::BOTH));
+    assert_eq!(p.method, ShootingMethod::Xu(XuParts::BOTH));
     assert_eq!((p.group, p.memory, p.frequency), (30, 480, Frequency::Fixed(10)));
     assert_eq!(p.building, GroupBuilding::Interaction);
     assert_eq!(p.canonical_name(), "xu-g30-m480:f=10:groups=interaction");

@@ -1,5 +1,5 @@
 //! The solvers' bounds on the residual of their displayed radiosity
-//! ([`radiosity_solvers::residual_bound`]), checked against the exact residual after every step.
+//! ([`radiosity_solvers::ResidualBound`]), checked against the exact residual after every step.
 
 use super::{assert_unshot_is_the_residual, bad_group};
 use radiosity_core::{Channels, DenseColumns, LinearSystem, Real};

@@ -35,14 +35,14 @@
 //! `q = A p`, `α = ⟨r, r⟩_W / ⟨p, q⟩_W`, `x += α p`, `r −= α q`,
 //! `β = ⟨r', r'⟩_W / ⟨r, r⟩_W`, `p = r' + β p`,
 //!
-//! per channel, one product `F p` for all channels ([`crate::krylov`]). The error
+//! per channel, one product `F p` for all channels ([`crate::krylov::operator`]). The error
 //! `x − B*` falls in the energy norm of `S` at least as
 //! `2 ((√κ − 1) / (√κ + 1))^k` with `κ` the condition number of `A` in that norm, at most
 //! `(1 + ρ_max) / (1 − ρ_max)` when rows sum to at most 1 (Saad 2003, §6.11.3).
 //!
 //! faer's matrix-free solvers (`faer::matrix_free::conjugate_gradient`) run the whole
 //! iteration inside one call, so the executor could not stop, time or observe them step by
-//! step; the recurrence above is a few lines on the [`crate::krylov`] operator instead.
+//! step; the recurrence above is a few lines on the [`crate::krylov::operator`] operator instead.
 //!
 //! ## References
 //!
@@ -52,13 +52,13 @@
 //!   (preconditioned CG).
 
 use crate::error::SolverError;
-use crate::executor::Solver;
-use crate::krylov::{self, Operator, axpy, dots};
-use crate::problem::Problem;
-use crate::record::Record;
-use crate::registry::{ParseSolverError, SolverParams, plain_name};
-use crate::residual_bound::ResidualBound;
-use crate::state::State;
+use crate::krylov::operator::{self, Operator, axpy, dots};
+use crate::naming::{ParseSolverError, SolverParams, plain_name};
+use crate::run::executor::Solver;
+use crate::run::problem::Problem;
+use crate::run::record::Record;
+use crate::run::residual_bound::ResidualBound;
+use crate::run::state::State;
 use radiosity_core::Real;
 use std::str::FromStr;
 
@@ -187,15 +187,15 @@ impl Solver for ConjugateGradients {
         }
         self.rr = rr;
         state.unshot.clone_from(&self.residual);
-        krylov::check_finite(state)
+        operator::check_finite(state)
     }
 
     fn residual_power(&self, problem: &Problem<'_>, _state: &State) -> Option<Real> {
-        krylov::power_once_known(problem, &self.residual, self.started)
+        operator::power_once_known(problem, &self.residual, self.started)
     }
 
     fn residual_bound(&self, problem: &Problem<'_>, _state: &State) -> Option<ResidualBound> {
-        Some(krylov::bound_once_known(problem, &self.residual, self.started))
+        Some(operator::bound_once_known(problem, &self.residual, self.started))
     }
 
     fn step_is_sweep(&self) -> bool {

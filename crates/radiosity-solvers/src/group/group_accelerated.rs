@@ -3,10 +3,10 @@
 //!
 //! ## Rule
 //!
-//! A point shooting method (PR or an overshooting variant, [`crate::overshooting`]) keeps the
-//! columns it computes in a memory of `K` columns ([`ColumnMemory`], least recently used
-//! evicted; `K = m` by default). A shooter whose column is stored costs no new column. Every
-//! `f` point steps, a *group step* ([`crate::group_step`]) runs on the `m` stored patches with
+//! A point shooting method (PR or an overshooting variant, [`crate::shooting::overshooting::step`])
+//! keeps the columns it computes in a memory of `K` columns ([`ColumnMemory`], least recently used
+//! evicted; `K = m` by default). A shooter whose column is stored costs no new column. Every `f`
+//! point steps, a *group step* ([`crate::group::group_step`]) runs on the `m` stored patches with
 //! the largest `A_k Σ_c |ΔB_kc + ΔB⁺_kc|`, their overshoots computed exactly from their stored
 //! columns: it computes no column at all. With `K = m` the group is the last `m` shooters (the
 //! paper's "first approach", §4.1); with `K > m` it is the best `m` of everything stored (its
@@ -28,8 +28,8 @@
 //!   is due, so the group holds the newest shooter; `steps=` counts shots, the paper's axis.
 //!   A group step costs no column. Its seconds are reported apart ([`State::group_seconds`]).
 //! - **Point selection uses estimates.** Selection among all patches uses the estimated
-//!   overshoot of [`crate::overshooting`]; making it exact for the stored patches (their rows
-//!   are known) costs `O(n K)` a step and, measured on multi-cubes with `xu-g30-m480`,
+//!   overshoot of [`crate::shooting::overshooting::step`]; making it exact for the stored
+//!   patches (their rows are known) costs `O(n K)` a step and, measured on multi-cubes with `xu-g30-m480`,
 //!   changed no choice in `n` steps. Group selection is over stored patches only, and exact.
 //!
 //! ## The cost model of `:f=auto`
@@ -46,7 +46,7 @@
 //! - building `Φ_rr`: `m² k`;
 //! - solving it: `(⌊2m³/3⌋ + 4m²) k` for the LU with its two right-hand sides, as
 //!   [`radiosity_core::dense_lu::solve_m_matrix`] does it, or the inner Gauss–Seidel's counted
-//!   sweeps, `m²` each ([`crate::group_step`]);
+//!   sweeps, `m²` each ([`crate::group::group_step`]);
 //! - shooting `y` to every patch: `n m k`.
 //!
 //! Work linear in `n k` (the ambient sums, the selection values) is left out. An operation is
@@ -87,23 +87,25 @@
 //!
 //! ## Record
 //!
-//! The solver records its group steps ([`crate::group_step::GroupStats`]: `group_steps`,
+//! The solver records its group steps ([`crate::group::group_step::GroupStats`]: `group_steps`,
 //! `group_size_mean`, `group_size_max`, `group_condition`, `group_fallbacks`), the counted
 //! operations of them all (`group_operations`, the model's `ops_group` summed) and the point
 //! steps between the last group step and the next (`group_period`, 0 before the first).
 
 use crate::error::SolverError;
-use crate::executor::Solver;
-use crate::group_shooting::shoot_group;
-use crate::group_step::{GroupStats, InnerSolve};
-use crate::memory::ColumnMemory;
-use crate::overshooting::{Ambient, OvershootTracker, ShootingMethod, argmax, shoot_with_overshoot, top};
-use crate::problem::Problem;
-use crate::record::Record;
-use crate::registry::{ParseSolverError, SolverParams, named, split_params, split_size, validated};
-use crate::residual_bound::{self, ResidualBound};
-use crate::shooting::unshot_power;
-use crate::state::State;
+use crate::group::group_shooting::shoot_group;
+use crate::group::group_step::{GroupStats, InnerSolve};
+use crate::group::memory::ColumnMemory;
+use crate::naming::{ParseSolverError, SolverParams, named, split_params, split_size, validated};
+use crate::run::executor::Solver;
+use crate::run::problem::Problem;
+use crate::run::record::Record;
+use crate::run::residual_bound::{self, ResidualBound};
+use crate::run::state::State;
+use crate::shooting::overshooting::step::{
+    Ambient, OvershootTracker, ShootingMethod, argmax, shoot_with_overshoot, top,
+};
+use crate::shooting::rule::unshot_power;
 use radiosity_core::Real;
 use std::str::FromStr;
 use std::time::Instant;

@@ -12,12 +12,12 @@
 //! and `B_r += δ_r`; the rows that give `R_r` give `F_rr` too.
 //!
 //! - `group-jacobi-gM`: every group of a sweep gathers from the radiosity at the start of the
-//!   sweep (eq. 3), as [`crate::jacobi`] does for patches.
+//!   sweep (eq. 3), as [`crate::gathering::jacobi`] does for patches.
 //! - `group-gs-gM`: groups in order, each gathering from the latest radiosity (eq. 4), as
-//!   [`crate::gauss_seidel`] does for patches.
+//!   [`crate::gathering::gauss_seidel`] does for patches.
 //!
 //! `state.unshot` keeps the last change of each patch. The solver records its group steps
-//! ([`crate::group_step::GroupStats`]): `group_steps`, `group_size_mean`, `group_size_max`,
+//! ([`crate::group::group_step::GroupStats`]): `group_steps`, `group_size_mean`, `group_size_max`,
 //! `group_condition` (`κ_∞(Φ_rr)`, the largest met, from `1` as a second right-hand side
 //! of each group solve; infinite for a group whose `Φ_rr` is not a nonsingular M-matrix) and `group_fallbacks` (always 0: a singular group system is an error here,
 //! [`SolverError::SingularGroup`]). The residual reported is the sum over
@@ -52,14 +52,14 @@
 //!   Gauss–Seidel).
 
 use crate::error::SolverError;
-use crate::executor::Solver;
-use crate::gathering::{SweepResidual, gather, relax};
-use crate::group_step::{GroupShot, GroupStats};
-use crate::problem::Problem;
-use crate::record::Record;
-use crate::registry::{ParseSolverError, SolverParams, split_params, split_size, validated};
-use crate::residual_bound::{ResidualBound, SweepChanges};
-use crate::state::State;
+use crate::gathering::rule::{SweepResidual, gather, relax};
+use crate::group::group_step::{GroupShot, GroupStats};
+use crate::naming::{ParseSolverError, SolverParams, split_params, split_size, validated};
+use crate::run::executor::Solver;
+use crate::run::problem::Problem;
+use crate::run::record::Record;
+use crate::run::residual_bound::{ResidualBound, SweepChanges};
+use crate::run::state::State;
 use radiosity_core::Real;
 use radiosity_core::dense_lu::{SingularPivot, lu_solve_columns, m_matrix_condition};
 use std::str::FromStr;

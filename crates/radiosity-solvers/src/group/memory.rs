@@ -7,7 +7,7 @@
 //! the last `m` distinct shooters (Rousselle & Renaud's "first approach"); `M > m` is their
 //! optimised variant.
 
-use crate::problem::Problem;
+use crate::run::problem::Problem;
 use radiosity_core::Real;
 
 /// Up to `capacity` columns of F, by patch, evicting the least recently used.

@@ -21,7 +21,7 @@
 //! by the method's recurrences (and recomputed from `F` where the method says so). Its first
 //! step computes `r_0 = ρ F E` (one product, emitters' columns only) and leaves `B = E`.
 //! Before it the solver knows no residual power, and its residual bound
-//! ([`crate::residual_bound`]) is that of `B = E`: `r(E) = ρ F E`, so `d = E`, `e = 0`, and
+//! ([`crate::run::residual_bound`]) is that of `B = E`: `r(E) = ρ F E`, so `d = E`, `e = 0`, and
 //! the residual is non-negative. After it the residual power the executor watches is
 //! `Σ A |r| / Σ A E` and the bound is `d = 0`, `e = r`: the residual itself, elementwise.
 //!
@@ -43,10 +43,10 @@
 //! - Greenbaum 1997, *Iterative Methods for Solving Linear Systems*, SIAM.
 
 use crate::error::SolverError;
-use crate::problem::Problem;
-use crate::record::Record;
-use crate::residual_bound::{ResidualBound, area_norms};
-use crate::state::State;
+use crate::run::problem::Problem;
+use crate::run::record::Record;
+use crate::run::residual_bound::{ResidualBound, area_norms};
+use crate::run::state::State;
 use radiosity_core::Real;
 
 /// Applies `F` and `A = I − diag(ρ) F` through a problem's columns, counting what it did.

@@ -1,8 +1,8 @@
 //! `pr`: progressive refinement, shooting from the patch with the most unshot power.
 //!
 //! Rule: pick `j = argmax_j A_j Σ_c |ΔB_jc|` (the lowest index on ties), shoot `s = ΔB_j`
-//! ([`crate::shooting::shoot`]), then `ΔB_j = ρ_j F_jj s`, the shooter's own share (zero for
-//! planar patches, [`crate::shooting::own_share`]). Each step costs one column.
+//! ([`crate::shooting::rule::shoot`]), then `ΔB_j = ρ_j F_jj s`, the shooter's own share (zero for
+//! planar patches, [`crate::shooting::rule::own_share`]). Each step costs one column.
 //!
 //! ## References
 //!
@@ -12,11 +12,11 @@
 //!   iteration with an area-weighted choice.
 
 use crate::error::SolverError;
-use crate::executor::Solver;
-use crate::problem::Problem;
-use crate::residual_bound::{self, ResidualBound};
-use crate::shooting::{own_share, set_unshot, shoot, unshot_power};
-use crate::state::State;
+use crate::run::executor::Solver;
+use crate::run::problem::Problem;
+use crate::run::residual_bound::{self, ResidualBound};
+use crate::run::state::State;
+use crate::shooting::rule::{own_share, set_unshot, shoot, unshot_power};
 use radiosity_core::Real;
 
 /// Progressive refinement.

@@ -20,7 +20,7 @@
 //! Cost: one `m × m` LU per channel (`O(m³)`), and `O(n m)` per channel for the update. The
 //! columns must already be in hand: this step computes none. The step counts its operations
 //! ([`GroupShot::operations`]), for a frequency rule that must not depend on the clock
-//! ([`crate::group_accelerated`]): per channel `m²` to build `Φ_rr`, `⌊2m³/3⌋ + 4m²` for the
+//! ([`crate::group::group_accelerated`]): per channel `m²` to build `Φ_rr`, `⌊2m³/3⌋ + 4m²` for the
 //! LU with its two right-hand sides (as [`radiosity_core::dense_lu::solve_m_matrix`] does
 //! it), or for the inner Gauss–Seidel `m²` for the bound and `m²` per sweep and per residual
 //! check, and `n m` to shoot `y` to every patch (the fallback's point shots cost the same).
@@ -74,7 +74,7 @@
 //! it ([`GroupShot::fell_back`]), and the solvers count it as `group_fallbacks` in their record
 //! ([`GroupStats`]). A system whose groups are not M-matrices is not physical as
 //! a whole either (the spectral radius of `ρ F` is at least that of any principal block): its
-//! runs end as diverged ([`crate::executor`]).
+//! runs end as diverged ([`crate::run::executor`]).
 //!
 //! ## Inner Gauss–Seidel
 //!
@@ -108,10 +108,10 @@
 //!   (convergence of Gauss–Seidel for diagonally dominant matrices).
 
 use crate::error::SolverError;
-use crate::problem::Problem;
-use crate::record::Record;
-use crate::shooting::{receive, set_unshot, shoot_column};
-use crate::state::State;
+use crate::run::problem::Problem;
+use crate::run::record::Record;
+use crate::run::state::State;
+use crate::shooting::rule::{receive, set_unshot, shoot_column};
 use radiosity_core::Real;
 use radiosity_core::dense_lu::solve_m_matrix;
 

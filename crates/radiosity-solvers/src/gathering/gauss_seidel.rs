@@ -12,12 +12,12 @@
 //! - Young 1971, *Iterative Solution of Large Linear Systems* (SOR).
 
 use crate::error::SolverError;
-use crate::executor::Solver;
-use crate::gathering::{SweepResidual, gather, relax};
-use crate::problem::Problem;
-use crate::registry::{ParseSolverError, SolverParams, no_params, split_params, validated};
-use crate::residual_bound::{ResidualBound, SweepChanges};
-use crate::state::State;
+use crate::gathering::rule::{SweepResidual, gather, relax};
+use crate::naming::{ParseSolverError, SolverParams, no_params, split_params, validated};
+use crate::run::executor::Solver;
+use crate::run::problem::Problem;
+use crate::run::residual_bound::{ResidualBound, SweepChanges};
+use crate::run::state::State;
 use radiosity_core::Real;
 use std::str::FromStr;
 

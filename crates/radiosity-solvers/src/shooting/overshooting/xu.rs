@@ -13,7 +13,7 @@
 //! separately switchable: `xu-direct` keeps only the row term, `xu-ambient` only the ambient
 //! term, so what each contributes can be measured.
 //!
-//! The step is the shared overshooting step ([`crate::overshooting`]), which also says how the
+//! The step is the shared overshooting step ([`super::step`]), which also says how the
 //! row term is estimated for selection.
 //!
 //! ## References
@@ -21,7 +21,7 @@
 //! - Xu & Fussell 1994, "A fast solver of radiosity equation systems", Pacific Graphics.
 //! - Rousselle & Renaud, "Group accelerated shooting methods for radiosity", §2.
 
-use crate::overshooting::{AmbientTerm, Overshoot, RowTerm};
+use crate::shooting::overshooting::overshoot::{AmbientTerm, Overshoot, RowTerm};
 
 /// Which parts of Xu's overshoot to use.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -15,8 +15,8 @@
 //! 3e-14 but stayed 3.7e-6 (e_rms) from the reference.
 
 use crate::error::SolverError;
-use crate::problem::Problem;
-use crate::state::State;
+use crate::run::problem::Problem;
+use crate::run::state::State;
 use radiosity_core::Real;
 
 /// The residual bookkeeping of a sweep.

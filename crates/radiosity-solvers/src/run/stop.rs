@@ -5,7 +5,7 @@
 //! `time=30s` (`ms`, `s` or `min`). Every run ends even if no rule can hold any more: at
 //! round-off convergence (nothing left to shoot or gather), at a step cap of `20n` steps,
 //! raised to the largest `steps=` or `columns=` rule given, or when the residual power shows
-//! that the iteration diverges ([`crate::executor`]).
+//! that the iteration diverges ([`crate::run::executor`]).
 
 use crate::error::SolverError;
 use radiosity_core::Real;
@@ -173,7 +173,7 @@ pub enum TerminationReason {
     RoundOff,
     /// The step cap was reached before any rule held.
     StepCap(u64),
-    /// The residual power rose far above its minimum ([`crate::executor`]): the iteration
+    /// The residual power rose far above its minimum ([`crate::Executor`]): the iteration
     /// diverges, usually because the form factors are not physical (`ρ F` row sums above 1).
     /// The run's state is returned as it stands.
     Diverged {

@@ -11,12 +11,12 @@
 //! - Saad 2003, *Iterative Methods for Sparse Linear Systems*, §4.1.
 
 use crate::error::SolverError;
-use crate::executor::Solver;
-use crate::gathering::{SweepResidual, gather, relax};
-use crate::problem::Problem;
-use crate::registry::{ParseSolverError, SolverParams, plain_name};
-use crate::residual_bound::{ResidualBound, SweepChanges};
-use crate::state::State;
+use crate::gathering::rule::{SweepResidual, gather, relax};
+use crate::naming::{ParseSolverError, SolverParams, plain_name};
+use crate::run::executor::Solver;
+use crate::run::problem::Problem;
+use crate::run::residual_bound::{ResidualBound, SweepChanges};
+use crate::run::state::State;
 use radiosity_core::Real;
 use std::str::FromStr;
 

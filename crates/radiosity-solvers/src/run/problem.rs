@@ -121,7 +121,7 @@ impl<'a> Problem<'a> {
 
     /// The reciprocity bound the form factors state
     /// ([`ColumnSource::reciprocity_bound`]), if any: what conjugate gradients on the
-    /// symmetrized system need ([`crate::cg`]).
+    /// symmetrized system need ([`crate::ConjugateGradients`]).
     pub fn reciprocity_bound(&self) -> Option<Real> {
         self.columns.reciprocity_bound()
     }
@@ -132,7 +132,7 @@ impl<'a> Problem<'a> {
     }
 
     /// Records that a solver served a column from its own memory instead of computing it
-    /// ([`crate::memory::ColumnMemory`] calls this): it costs no column, and is counted apart.
+    /// ([`crate::ColumnMemory`] calls this): it costs no column, and is counted apart.
     pub fn note_reuse(&self) {
         self.reused.set(self.reused.get() + 1);
     }

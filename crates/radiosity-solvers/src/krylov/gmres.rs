@@ -2,8 +2,8 @@
 //!
 //! ## Rule
 //!
-//! Per channel, on `A B = E` with `A = I − diag(ρ) F` ([`crate::krylov`]), in the area inner
-//! product `⟨u, v⟩ = Σ_i A_i u_i v_i` (the norm closest to the metrics, which weigh patches
+//! Per channel, on `A B = E` with `A = I − diag(ρ) F` ([`crate::krylov::operator`]), in the
+//! area inner product `⟨u, v⟩ = Σ_i A_i u_i v_i` (the norm closest to the metrics, which weigh patches
 //! by area). A cycle starts from `x_0` with the residual `r_0 = E − A x_0` computed from `F`
 //! (one product: the first step, and the first step of every cycle after it), `β = ‖r_0‖`,
 //! `v_1 = r_0 / β`. Step `m` of the cycle is one Arnoldi step:
@@ -31,13 +31,13 @@
 //!   orthogonalization process", Comput. Math. Appl. 50 ("twice is enough").
 
 use crate::error::SolverError;
-use crate::executor::Solver;
-use crate::krylov::{self, Operator, area_weights, axpy, dots};
-use crate::problem::Problem;
-use crate::record::Record;
-use crate::registry::{ParseSolverError, SolverParams, no_params, split_params, validated};
-use crate::residual_bound::ResidualBound;
-use crate::state::State;
+use crate::krylov::operator::{self, Operator, area_weights, axpy, dots};
+use crate::naming::{ParseSolverError, SolverParams, no_params, split_params, validated};
+use crate::run::executor::Solver;
+use crate::run::problem::Problem;
+use crate::run::record::Record;
+use crate::run::residual_bound::ResidualBound;
+use crate::run::state::State;
 use radiosity_core::Real;
 use std::str::FromStr;
 
@@ -226,7 +226,7 @@ impl Gmres {
         if self.basis.len() > self.restart || self.channels.iter().all(|ch| !ch.active) {
             self.restart_next = true;
         }
-        krylov::check_finite(state)
+        operator::check_finite(state)
     }
 
     /// `x = x_0 + V y` and `r = r_0 − V H̄ y` for every channel that took a step this cycle,
@@ -287,11 +287,11 @@ impl Solver for Gmres {
     }
 
     fn residual_power(&self, problem: &Problem<'_>, _state: &State) -> Option<Real> {
-        krylov::power_once_known(problem, &self.residual, self.started)
+        operator::power_once_known(problem, &self.residual, self.started)
     }
 
     fn residual_bound(&self, problem: &Problem<'_>, _state: &State) -> Option<ResidualBound> {
-        Some(krylov::bound_once_known(problem, &self.residual, self.started))
+        Some(operator::bound_once_known(problem, &self.residual, self.started))
     }
 
     fn step_is_sweep(&self) -> bool {

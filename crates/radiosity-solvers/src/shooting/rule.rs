@@ -10,8 +10,8 @@
 //! by `s`, which changes `r_j(x)` by `ρ_j F_jj s − s`.
 
 use crate::error::SolverError;
-use crate::problem::Problem;
-use crate::state::State;
+use crate::run::problem::Problem;
+use crate::run::state::State;
 use radiosity_core::Real;
 
 /// Shoots `amount` (one value per channel) from patch `j`, using `column` as scratch space.

@@ -2,7 +2,7 @@
 //!
 //! ## Rule
 //!
-//! Per channel, on `A B = E` with `A = I − diag(ρ) F` ([`crate::krylov`]), with the area
+//! Per channel, on `A B = E` with `A = I − diag(ρ) F` ([`crate::krylov::operator`]), with the area
 //! inner product `⟨u, v⟩ = Σ_i A_i u_i v_i`. From `x_0 = E`, the first step computes
 //! `r_0 = ρ F E` and sets the shadow residual `r̂ = r_0`, `p = r_0`, `ϱ = ⟨r̂, r_0⟩`. Each
 //! iteration then takes two steps, one product each:
@@ -23,13 +23,13 @@
 //! - Saad 2003, *Iterative Methods for Sparse Linear Systems*, 2nd ed., §7.4.2.
 
 use crate::error::SolverError;
-use crate::executor::Solver;
-use crate::krylov::{self, Operator, area_weights, axpy, dots};
-use crate::problem::Problem;
-use crate::record::Record;
-use crate::registry::{ParseSolverError, SolverParams, plain_name};
-use crate::residual_bound::ResidualBound;
-use crate::state::State;
+use crate::krylov::operator::{self, Operator, area_weights, axpy, dots};
+use crate::naming::{ParseSolverError, SolverParams, plain_name};
+use crate::run::executor::Solver;
+use crate::run::problem::Problem;
+use crate::run::record::Record;
+use crate::run::residual_bound::ResidualBound;
+use crate::run::state::State;
 use radiosity_core::Real;
 use std::str::FromStr;
 
@@ -173,15 +173,15 @@ impl Solver for Bicgstab {
             }
         }
         state.unshot.clone_from(&self.residual);
-        krylov::check_finite(state)
+        operator::check_finite(state)
     }
 
     fn residual_power(&self, problem: &Problem<'_>, _state: &State) -> Option<Real> {
-        krylov::power_once_known(problem, &self.residual, self.phase != Phase::Start)
+        operator::power_once_known(problem, &self.residual, self.phase != Phase::Start)
     }
 
     fn residual_bound(&self, problem: &Problem<'_>, _state: &State) -> Option<ResidualBound> {
-        Some(krylov::bound_once_known(problem, &self.residual, self.phase != Phase::Start))
+        Some(operator::bound_once_known(problem, &self.residual, self.phase != Phase::Start))
     }
 
     fn step_is_sweep(&self) -> bool {

@@ -3,12 +3,11 @@
 //!
 //! ## Rule
 //!
-//! Pick `j = argmax_j A_j Σ_c |ΔB_jc + ΔB⁺_jc|` (lowest index on ties), shoot
-//! `s = ΔB_j + ΔB⁺_j` ([`crate::shooting::shoot_column`]), then set `ΔB_j = −ΔB⁺_j` (plus the
-//! shooter's own share `ρ_j F_jj s`, zero for planar patches, [`crate::shooting::own_share`]).
-//! The shot radiosity `x = B − ΔB` grows by `s` at `j`, and `ΔB` stays exactly the residual of
-//! `x` whatever `ΔB⁺` is: the overshoot changes the speed, never the fixed point. One column a
-//! step.
+//! Pick `j = argmax_j A_j Σ_c |ΔB_jc + ΔB⁺_jc|` (lowest index on ties), shoot `s = ΔB_j + ΔB⁺_j`
+//! ([`crate::shooting::rule::shoot_column`]), then set `ΔB_j = −ΔB⁺_j` (plus the shooter's own
+//! share `ρ_j F_jj s`, zero for planar patches, [`crate::shooting::rule::own_share`]). The shot
+//! radiosity `x = B − ΔB` grows by `s` at `j`, and `ΔB` stays exactly the residual of `x` whatever
+//! `ΔB⁺` is: the overshoot changes the speed, never the fixed point. One column a step.
 //!
 //! Every variant's overshoot is a sum of three terms, per channel `c`:
 //!
@@ -51,16 +50,17 @@
 //! - Rousselle & Renaud, "Group accelerated shooting methods for radiosity", §2.
 
 use crate::error::SolverError;
-use crate::executor::Solver;
-use crate::problem::Problem;
-use crate::progressive::ProgressiveRefinement;
-use crate::registry::{ParseSolverError, SolverParams, named, no_params, split_params, validated};
-use crate::residual_bound::{self, ResidualBound};
-use crate::shooting::{own_share, set_unshot, shoot_column, unshot_power};
-use crate::southwell::Southwell;
-use crate::state::State;
-use crate::xu::XuParts;
-use crate::{feda, relax, shao, xu};
+use crate::naming::{ParseSolverError, SolverParams, named, no_params, split_params, validated};
+use crate::run::executor::Solver;
+use crate::run::problem::Problem;
+use crate::run::residual_bound::{self, ResidualBound};
+use crate::run::state::State;
+use crate::shooting::overshooting::overshoot::{AmbientTerm, Overshoot, RowTerm};
+use crate::shooting::overshooting::xu::XuParts;
+use crate::shooting::overshooting::{feda, relax, shao, xu};
+use crate::shooting::progressive::ProgressiveRefinement;
+use crate::shooting::rule::{own_share, set_unshot, shoot_column, unshot_power};
+use crate::shooting::southwell::Southwell;
 use radiosity_core::Real;
 use std::str::FromStr;
 
@@ -70,17 +70,19 @@ use std::str::FromStr;
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum ShootingMethod {
-    /// Southwell: the largest `|ΔB|`, no overshoot ([`crate::southwell`]).
+    /// Southwell: the largest `|ΔB|`, no overshoot ([`crate::Southwell`]).
     Southwell,
-    /// Progressive refinement: the largest `A |ΔB|`, no overshoot ([`crate::progressive`]).
+    /// Progressive refinement: the largest `A |ΔB|`, no overshoot
+    /// ([`crate::ProgressiveRefinement`]).
     Pr,
-    /// Feda's ambient overshoot ([`crate::feda`]).
+    /// Feda's ambient overshoot, `ΔB⁺_j = ρ_j R̄ ΔB̄` (Feda & Purgathofer 1992).
     Feda,
-    /// Shao's positive gather ([`crate::shao`]).
+    /// Shao's positive gather, `ΔB⁺_j = ρ_j Σ_k F_jk max(ΔB_k, 0)` (Shao & Badler 1993).
     Shao,
-    /// Xu's overshoot with the parts chosen ([`crate::xu`]).
+    /// Xu's overshoot with the parts chosen ([`XuParts`]; after Xu & Fussell 1994).
     Xu(XuParts),
-    /// Over-relaxation by `ω` in `(0, 2)` ([`crate::relax`]).
+    /// Over-relaxation by `ω` in `(0, 2)`, `ΔB⁺_j = (ω − 1) ΔB_j` (Gortler, Cohen & Slusallek
+    /// 1993).
     Relax(Real),
 }
 
@@ -168,42 +170,6 @@ impl SolverParams for PointShootingParams {
             method => Box::new(Overshooting::new(method.name(), method.overshoot())?),
         })
     }
-}
-
-/// A sum along the shooter's own row.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum RowTerm {
-    /// `Σ_k F_jk ΔB_k`.
-    Signed,
-    /// `Σ_k F_jk max(ΔB_k, 0)`.
-    Positive,
-}
-
-/// The ambient term's weight `a_c` on `ΔB̄_c`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum AmbientTerm {
-    /// No ambient term.
-    Off,
-    /// `a = R̄ = 1/(1 − ρ̄)`: all future bounces of the ambient light (Feda).
-    AllBounces,
-    /// `a = ρ̄ R̄`: the bounces after the first (Xu's second part).
-    LaterBounces,
-}
-
-/// Which terms an overshooting variant uses; all off is PR.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Overshoot {
-    /// The row term, if any.
-    pub row: Option<RowTerm>,
-    /// The ambient term.
-    pub ambient: AmbientTerm,
-    /// `ω`: the relaxation term is `(ω − 1) ΔB_j` (1 for none).
-    pub omega: Real,
-}
-
-impl Overshoot {
-    /// No overshoot: progressive refinement.
-    pub const NONE: Overshoot = Overshoot { row: None, ambient: AmbientTerm::Off, omega: 1.0 };
 }
 
 /// The overshoot of a shooting method, and what it remembers to estimate it for selection:

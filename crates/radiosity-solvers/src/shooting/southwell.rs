@@ -2,8 +2,8 @@
 //!
 //! Rule: pick `j = argmax_j Σ_c |ΔB_jc|` (the residual of the shot radiosity, not weighted
 //! by area; the lowest index on ties), shoot `s = ΔB_j`, then `ΔB_j = ρ_j F_jj s`, the
-//! shooter's own share (zero for planar patches, [`crate::shooting::own_share`]). One column a
-//! step.
+//! shooter's own share (zero for planar patches, [`crate::shooting::rule::own_share`]). One
+//! column a step.
 //!
 //! ## References
 //!
@@ -11,12 +11,12 @@
 //! - Gortler, Cohen & Slusallek 1993, "Radiosity and relaxation methods", IEEE CG&A.
 
 use crate::error::SolverError;
-use crate::executor::Solver;
-use crate::problem::Problem;
-use crate::progressive::{select, shoot_all};
-use crate::residual_bound::{self, ResidualBound};
-use crate::shooting::unshot_power;
-use crate::state::State;
+use crate::run::executor::Solver;
+use crate::run::problem::Problem;
+use crate::run::residual_bound::{self, ResidualBound};
+use crate::run::state::State;
+use crate::shooting::progressive::{select, shoot_all};
+use crate::shooting::rule::unshot_power;
 use radiosity_core::Real;
 
 /// Southwell iteration.

@@ -5,12 +5,12 @@
 //!
 //! Each step builds the group from the `m` patches with the largest selection values
 //! (`A_j Σ_c |ΔB_jc + ΔB⁺_jc|`, without `A_j` for Southwell; the overshoot estimated as in
-//! [`crate::overshooting`]), fetches their `m` columns, computes each member's exact overshoot
-//! from its own column, and runs the group step of [`crate::group_step`]. A step costs `m`
-//! columns, fewer when a member's column is still held from the previous step (the last `m`
-//! columns are kept, and a column served again is counted as reused).
+//! [`crate::shooting::overshooting::step`]), fetches their `m` columns, computes each member's
+//! exact overshoot from its own column, and runs the group step of [`crate::group::group_step`]. A
+//! step costs `m` columns, fewer when a member's column is still held from the previous step (the
+//! last `m` columns are kept, and a column served again is counted as reused).
 //!
-//! The solver records its group steps ([`crate::group_step::GroupStats`]: `group_steps`,
+//! The solver records its group steps ([`crate::group::group_step::GroupStats`]: `group_steps`,
 //! `group_size_mean`, `group_size_max`, `group_condition`, `group_fallbacks`).
 //!
 //! ## References
@@ -19,16 +19,17 @@
 //!   PR and group overshooting, groups built dynamically).
 
 use crate::error::SolverError;
-use crate::executor::Solver;
-use crate::group_step::{GroupShot, GroupStats, InnerSolve, group_shot};
-use crate::memory::ColumnMemory;
-use crate::overshooting::{Ambient, Overshoot, OvershootTracker, ShootingMethod, top};
-use crate::problem::Problem;
-use crate::record::Record;
-use crate::registry::{ParseSolverError, SolverParams, named, no_params, split_params, split_size, validated};
-use crate::residual_bound::{self, ResidualBound};
-use crate::shooting::unshot_power;
-use crate::state::State;
+use crate::group::group_step::{GroupShot, GroupStats, InnerSolve, group_shot};
+use crate::group::memory::ColumnMemory;
+use crate::naming::{ParseSolverError, SolverParams, named, no_params, split_params, split_size, validated};
+use crate::run::executor::Solver;
+use crate::run::problem::Problem;
+use crate::run::record::Record;
+use crate::run::residual_bound::{self, ResidualBound};
+use crate::run::state::State;
+use crate::shooting::overshooting::overshoot::Overshoot;
+use crate::shooting::overshooting::step::{Ambient, OvershootTracker, ShootingMethod, top};
+use crate::shooting::rule::unshot_power;
 use radiosity_core::Real;
 use std::str::FromStr;
 use std::time::Instant;

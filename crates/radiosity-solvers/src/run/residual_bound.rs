@@ -25,12 +25,12 @@
 //! - **Shooting** (`southwell`, `pr`, `feda`, `shao`, `xu`, `xu-direct`, `xu-ambient`,
 //!   `relax-ω`, group shooting `group-S-gM`, group-accelerated `S-gM[-mK]…`): every step keeps
 //!   `ΔB = state.unshot` exactly the residual of the shot radiosity `x = B − ΔB`
-//!   ([`crate::overshooting`], [`crate::group_step`]: a point shot, an overshooting shot, a
-//!   group solve by LU or by the inner Gauss–Seidel, which keeps its own residual as unshot,
-//!   and the fallback's point shots). So `B = x + ΔB` and
+//!   ([`crate::shooting::overshooting::step`], [`crate::group::group_step`]: a point shot, an
+//!   overshooting shot, a group solve by LU or by the inner Gauss–Seidel, which keeps its own
+//!   residual as unshot, and the fallback's point shots). So `B = x + ΔB` and
 //!   `r(B) = r(x) + ρ F ΔB − ΔB = ρ F ΔB` exactly: `d = ΔB`, `e = 0`.
 //!   The shooter's own share of its shot (`ρ_j F_jj s`, non-zero only for a patch that sees
-//!   itself) stays unshot ([`crate::shooting::own_share`]); before this was so, a point shot
+//!   itself) stays unshot ([`crate::shooting::rule::own_share`]); before this was so, a point shot
 //!   cleared it, and with `F_jj > 0` `ΔB` was not the residual of `x`.
 //! - **Gauss–Seidel** (`gauss-seidel`, ω = 1) with `u = state.unshot`, each patch's last
 //!   change. Gathering patch `i` moves `B_i` by its residual `c_i`, which leaves
@@ -82,13 +82,13 @@
 //! The derivations hold in exact arithmetic. In floating point the invariants drift by
 //! round-off: about `ε ‖B‖_A` a step for the vectors updated, and, for a group step solved by
 //! LU, the group system's own residual, up to about `κ_∞(Φ_rr) ε ‖s_r‖` (at most
-//! [`crate::group_step::CONDITION_LIMIT`]` · ε`, 2e-6 relative, for a group that is trusted;
+//! [`crate::group::group_step::CONDITION_LIMIT`]` · ε`, 2e-6 relative, for a group that is trusted;
 //! physical groups are far better conditioned). Gathering solvers' bounds are about the system
-//! whose rows they gather ([`crate::gathering`]): the column system exactly only when the
+//! whose rows they gather ([`crate::gathering::rule`]): the column system exactly only when the
 //! source gives exact rows.
 
-use crate::problem::Problem;
-use crate::state::State;
+use crate::run::problem::Problem;
+use crate::run::state::State;
 use radiosity_core::Real;
 
 /// What a solver knows, without extra columns, that bounds the residual of its displayed

@@ -6,8 +6,8 @@
 //! report: [`crate::Solver::record`] returns a [`Record`], and the executor stores it in
 //! [`crate::Run::record`]. A caller prints every entry in order, or asks for the keys it
 //! knows ([`Record::count`], [`Record::real`]). The keys of the built-in solvers are listed
-//! where they are recorded ([`crate::group_step::GroupStats`],
-//! [`crate::group_accelerated`]).
+//! where they are recorded ([`crate::group::group_step::GroupStats`],
+//! [`crate::group::group_accelerated`]).
 
 use radiosity_core::Real;
 use std::fmt;

@@ -14,7 +14,7 @@
 //! ([`Observer::wants_residual_bound`]) also gets, just before each of the first two, the
 //! solver's bound on the residual of the displayed radiosity
 //! ([`Observer::observe_residual_bound`], [`Solver::residual_bound`],
-//! [`crate::residual_bound`]). [`Every`] (or [`Observer::every`]) passes on only the steps
+//! [`crate::run::residual_bound`]). [`Every`] (or [`Observer::every`]) passes on only the steps
 //! that are multiples of `n`. The `rms=` rule stops on the e_rms an observer returns; a run
 //! with such a rule and an observer that does not measure it ([`Observer::measures_error`]
 //! false) is refused before its first step ([`SolverError::ErrorNotMeasured`]), since the
@@ -45,11 +45,11 @@
 //! sum overflowed, the run ends as diverged, with an infinite residual.
 
 use crate::error::SolverError;
-use crate::problem::Problem;
-use crate::record::Record;
-use crate::residual_bound::ResidualBound;
-use crate::state::State;
-use crate::stop::{StopRule, StopRules, TerminationReason};
+use crate::run::problem::Problem;
+use crate::run::record::Record;
+use crate::run::residual_bound::ResidualBound;
+use crate::run::state::State;
+use crate::run::stop::{StopRule, StopRules, TerminationReason};
 use radiosity_core::Real;
 use std::time::{Duration, Instant};
 
@@ -144,7 +144,7 @@ pub trait Solver {
     }
 
     /// Whether one step is a whole matrix–vector product, up to `n` columns (the Krylov
-    /// solvers, [`crate::krylov`]), rather than one shot or one gathered patch. The step cap
+    /// solvers, such as [`crate::Gmres`]), rather than one shot or one gathered patch. The step cap
     /// then counts each step as `n` steps, so that it allows as many columns as it allows
     /// a gathering solver, and a lab records every step.
     fn step_is_sweep(&self) -> bool {
@@ -152,7 +152,7 @@ pub trait Solver {
     }
 
     /// The solver's own figures so far (group steps, condition numbers, fallbacks; see
-    /// [`crate::record`]); the executor stores them in [`Run::record`] at the end of a run.
+    /// [`Record`]); the executor stores them in [`Run::record`] at the end of a run.
     /// Empty by default.
     fn record(&self) -> Record {
         Record::new()

@@ -1,0 +1,12 @@
+//! What every solver runs on, whatever its family: the problem it reads form factors from,
+//! the state it updates, the stop rules, the executor that loops, the solver's own record and
+//! its residual bound.
+//!
+//! Nothing here imports a solver family: the families import this room, never the reverse.
+
+pub(crate) mod executor;
+pub(crate) mod problem;
+pub(crate) mod record;
+pub(crate) mod residual_bound;
+pub(crate) mod state;
+pub(crate) mod stop;

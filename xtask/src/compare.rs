@@ -8,7 +8,7 @@
 use crate::bars::Bars;
 use crate::experiment::{ReferenceArg, check_measurable, check_out_dir, default_out, lab, prepare};
 use anyhow::{Result, bail};
-use radiosity_eval::Comparison;
+use radiosity_eval::{ColumnCost, Comparison};
 use radiosity_eval::reference_kind::ReferenceKind;
 use radiosity_ff::BackendSpec;
 use radiosity_solvers::{Solver, SolverRegistry, StopRules};
@@ -37,6 +37,11 @@ pub struct Args {
     /// The output folder (default `results/<scene>-<date-time>/`).
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
+    /// How solvers pay for their columns: `charged` reads them from the stored matrix of a
+    /// `matrix` reference and charges each the backend's measured median column time;
+    /// `computed` computes every column when a solver asks for it.
+    #[arg(long, value_name = "HOW", default_value = "charged", value_parser = ["charged", "computed"])]
+    columns: String,
 }
 
 /// A comparison whose arguments were all checked before any geometry is built.
@@ -47,6 +52,7 @@ pub struct Plan {
     spec: BackendSpec,
     rules: StopRules,
     kind: ReferenceKind,
+    columns: ColumnCost,
 }
 
 impl Plan {
@@ -65,7 +71,13 @@ impl Plan {
         }
         let rules = StopRules::parse(until)?;
         check_measurable(&rules, kind)?;
-        Ok(Plan { scene: scene.to_string(), solvers, spec, rules, kind })
+        Ok(Plan { scene: scene.to_string(), solvers, spec, rules, kind, columns: ColumnCost::default() })
+    }
+
+    /// Sets how solvers pay for their columns ([`ColumnCost`]).
+    pub fn with_columns(mut self, columns: ColumnCost) -> Plan {
+        self.columns = columns;
+        self
     }
 
     /// The form-factor backend every solver runs on.
@@ -79,7 +91,7 @@ impl Plan {
         radiosity_eval::lab::require_emitters(&prepared)?;
         let report = prepared.report();
         eprintln!("{}: {} patches; left out: {}", report.scene, report.patches, report.left_out_phrase());
-        let lab = lab(&prepared, &self.spec, true, self.kind)?;
+        let lab = lab(&prepared, &self.spec, true, self.kind, self.columns)?;
         let comparison = lab.compare(self.solvers, &self.rules, &Bars::new())?;
         comparison.write(out)?;
         Ok(comparison)
@@ -88,11 +100,14 @@ impl Plan {
 
 /// Runs `compare`.
 pub fn run(args: &Args) -> Result<()> {
-    let plan = Plan::new(&args.scene, &args.solvers, &args.ff, &args.until, args.reference.parse()?)?;
+    let columns = if args.columns == "computed" { ColumnCost::Computed } else { ColumnCost::Charged };
+    let plan =
+        Plan::new(&args.scene, &args.solvers, &args.ff, &args.until, args.reference.parse()?)?.with_columns(columns);
     let out = args.out.clone().unwrap_or_else(|| default_out(&args.scene));
     check_out_dir(&out)?;
     let comparison = plan.execute(&out)?;
     print!("{}", comparison.summary());
+    println!("seconds: {}", comparison.seconds_phrase());
     println!("wrote {} (report.md, convergence.csv and plots)", out.display());
     Ok(())
 }

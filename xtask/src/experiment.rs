@@ -5,7 +5,7 @@
 use crate::bars::Bars;
 use anyhow::{Result, bail};
 use radiosity_eval::reference_kind::ReferenceKind;
-use radiosity_eval::{Cache, FinalMetrics, Lab, LabOptions, Progress};
+use radiosity_eval::{Cache, ColumnCost, FinalMetrics, Lab, LabOptions, Progress};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
 use radiosity_solvers::{Solver, SolverError, SolverRegistry, StopRules};
@@ -125,8 +125,13 @@ pub fn lab<'p>(
     spec: &BackendSpec,
     residuals: bool,
     kind: ReferenceKind,
+    columns: ColumnCost,
 ) -> Result<Lab<'p>> {
-    let options = LabOptions::default().with_residuals(residuals).with_cache(Some(cache())).with_reference(kind);
+    let options = LabOptions::default()
+        .with_residuals(residuals)
+        .with_cache(Some(cache()))
+        .with_reference(kind)
+        .with_columns(columns);
     let lab = Lab::new(prepared, spec, options, &Bars::new())?;
     let chosen = lab.chosen();
     // Only the choice that costs a long run is announced; reports say which was used.
@@ -198,7 +203,7 @@ pub fn solved_rgb(
         ReferenceKind::Auto if solver.is_some() && !rules.needs_error() => ReferenceKind::None,
         kind => kind,
     };
-    let lab = lab(prepared, spec, false, kind)?;
+    let lab = lab(prepared, spec, false, kind, ColumnCost::default())?;
     let rgb = match solver {
         None => lab.radiosity_rgb(None, rules, &Bars::new())?,
         Some(mut solver) => {

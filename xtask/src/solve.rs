@@ -131,7 +131,7 @@ pub fn run(args: &Args) -> Result<()> {
         check_output_file(out)?;
     }
     let prepared = prepare(&args.run.scene)?;
-    let lab = lab(&prepared, &spec, false, kind)?;
+    let lab = lab(&prepared, &spec, false, kind, radiosity_eval::ColumnCost::default())?;
     let outcome = match solver {
         // `reference` is the exact solution itself: its cost is assembling F and solving it.
         None => Outcome {

@@ -13,7 +13,7 @@
 //! parameter and the assembly agree.
 
 use crate::cache::{Cache, Lookup, scene_key};
-use crate::lab::LabError;
+use crate::error::LabError;
 use crate::progress::Progress;
 use radiosity_core::{ColumnSource, Real};
 use radiosity_ff::guard::MatrixFigures;

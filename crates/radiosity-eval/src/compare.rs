@@ -8,14 +8,39 @@
 //!
 //! Measurement never counts as solver time: it is reported apart (see [`crate::lab`]).
 
-use crate::lab::{ChosenReference, Lab, LabError, Outcome, Point, ReferenceOrigin};
+use crate::error::LabError;
+use crate::lab::{ChosenReference, ColumnCharge, Lab, Outcome, Point, RecordPlan, ReferenceOrigin};
+use crate::progress::Progress;
 use crate::plot::{Curve, PlotSpec, write_png, write_svg};
 use crate::table::{ConvergenceTable, round_significant};
 use radiosity_core::Real;
 use radiosity_geom::SceneReport;
-use radiosity_solvers::{StopRules, Value};
+use radiosity_solvers::{Problem, Solver, StopRules, Value};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+
+impl Lab<'_> {
+    /// Runs every solver in turn under the same rules and recording: the comparison that
+    /// [`Comparison::write`] reports. A solver that refuses these form factors
+    /// ([`Solver::applicable`]) stops the comparison before anything runs.
+    pub fn compare(
+        &self,
+        solvers: Vec<Box<dyn Solver>>,
+        rules: &StopRules,
+        progress: &dyn Progress,
+    ) -> Result<Comparison, LabError> {
+        // A solver whose hypothesis these form factors break is refused before any runs.
+        let problem = Problem::new(self.system(), self.source())?;
+        for solver in &solvers {
+            solver.applicable(&problem)?;
+        }
+        let mut outcomes = Vec::with_capacity(solvers.len());
+        for mut solver in solvers {
+            outcomes.push(self.run(solver.as_mut(), rules, &RecordPlan::default(), progress)?);
+        }
+        Ok(Comparison::new(self, rules, outcomes))
+    }
+}
 
 /// What a comparison measured, with what it needs to report it.
 #[derive(Clone, Debug)]
@@ -38,6 +63,9 @@ pub struct Comparison {
     pub reference_origin: ReferenceOrigin,
     /// One per solver, in order.
     pub outcomes: Vec<Outcome>,
+    /// What each column was charged, when the lab served columns from its stored matrix
+    /// (`None`: every column was computed and timed).
+    pub charge: Option<ColumnCharge>,
 }
 
 /// The files a comparison wrote.
@@ -62,6 +90,7 @@ impl Comparison {
             reference_certificate: lab.reference().map(|r| r.certificate().to_string()),
             reference_origin: lab.origin().clone(),
             outcomes,
+            charge: lab.charge().copied(),
         }
     }
 
@@ -157,6 +186,7 @@ impl Comparison {
             n, self.scene.mean_reflectivity, self.backend, self.rules
         );
         let _ = writeln!(md, "- Left out by the scene analysis: {}.", self.scene.left_out_phrase());
+        let _ = writeln!(md, "- Seconds: {}.", self.seconds_phrase());
         let origin = match &self.reference_origin {
             ReferenceOrigin::Solved { assembly_seconds, solve_seconds } if *assembly_seconds > 0.0 => {
                 format!("F assembled in {assembly_seconds:.2} s, solved in {solve_seconds:.2} s")
@@ -233,6 +263,15 @@ impl Comparison {
             let _ = writeln!(md, "![{title}]({stem}.png)\n");
         }
         md
+    }
+
+    /// How the seconds of every run were counted: columns computed and timed, or read from
+    /// the stored matrix and charged ([`ColumnCharge`]).
+    pub fn seconds_phrase(&self) -> String {
+        match &self.charge {
+            Some(charge) => format!("solving timed, {}", charge.describe()),
+            None => "form factors and solving, every column computed when a solver asked for it".into(),
+        }
     }
 
     /// The compact table for the terminal: with a reference, e_rms and the certified bound;

@@ -3,6 +3,9 @@
 //! made or written.
 
 use radiosity_core::Real;
+use radiosity_ff::FfError;
+use radiosity_geom::GeomError;
+use radiosity_solvers::SolverError;
 use thiserror::Error;
 
 /// What can go wrong while solving a reference or measuring a vector against it. Messages
@@ -148,4 +151,46 @@ pub enum EvalError {
         /// Why, as the operating system says it.
         message: String,
     },
+}
+
+/// What can stop an experiment: bad input at any layer, or a file that cannot be written.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum LabError {
+    /// The scene could not be loaded.
+    #[error(transparent)]
+    Scene(#[from] GeomError),
+    /// The form factors could not be computed.
+    #[error(transparent)]
+    FormFactors(#[from] FfError),
+    /// A solver refused its input or stopped with an error.
+    #[error(transparent)]
+    Solver(#[from] SolverError),
+    /// A reference or a metric could not be computed.
+    #[error(transparent)]
+    Eval(#[from] EvalError),
+    /// The scene emits nothing, so there is no error to measure.
+    #[error(
+        "scene '{0}' emits no light (no patch has an emission above 0), so its radiosity is zero everywhere and \
+         there is no error to measure"
+    )]
+    NoEmitters(String),
+    /// A file or folder could not be written.
+    #[error("cannot write {path}: {message}")]
+    Write {
+        /// The file or folder.
+        path: String,
+        /// Why.
+        message: String,
+    },
+    /// Arguments that make no sense together.
+    #[error("{0}")]
+    Invalid(String),
+}
+
+impl LabError {
+    /// The error for writing `path`.
+    pub fn write(path: &std::path::Path, e: impl std::fmt::Display) -> LabError {
+        LabError::Write { path: path.display().to_string(), message: e.to_string() }
+    }
 }

@@ -51,66 +51,23 @@
 //! depend on the cache.
 
 use crate::cache::{Cache, Lookup, scene_key};
-use crate::compare::Comparison;
-use crate::error::EvalError;
-use crate::matrix::{F32Columns, FormFactors};
-use crate::metrics::{Contraction, Evaluator, SolverBound, errors, errors_against};
+use crate::error::LabError;
+use crate::matrix::{F32Columns, FormFactors, StoredColumns};
+use crate::certificate::{Contraction, SolverBound, relative_without_reference};
+use crate::metrics::{Evaluator, errors, errors_against};
 use crate::progress::Progress;
 use crate::reference::{ReferenceParams, ReferenceSolution};
 use crate::reference_kind::{MEMORY_VARIABLE, MemoryBudget, ReferenceKind, gib, matrix_bytes};
 use crate::reference_shooting::{ShootingParams, solve_by_shooting};
 use crate::table::TableRow;
 use radiosity_core::{ColumnSource, LinearSystem, Real};
-use radiosity_ff::{Backend, BackendSpec, FfError};
-use radiosity_geom::{GeomError, PreparedScene, SceneReport};
+use radiosity_ff::{Backend, BackendSpec};
+use radiosity_geom::{PreparedScene, SceneReport};
 use radiosity_solvers::{
-    Executor, Observer, Problem, Record, ResidualBound, Solver, SolverError, State, StopRule, StopRules,
+    Executor, Observer, Problem, Record, ResidualBound, Solver, State, StopRule, StopRules,
 };
 use std::sync::Arc;
 use std::time::Instant;
-use thiserror::Error;
-
-/// What can stop an experiment: bad input at any layer, or a file that cannot be written.
-#[derive(Debug, Error)]
-#[non_exhaustive]
-pub enum LabError {
-    /// The scene could not be loaded.
-    #[error(transparent)]
-    Scene(#[from] GeomError),
-    /// The form factors could not be computed.
-    #[error(transparent)]
-    FormFactors(#[from] FfError),
-    /// A solver refused its input or stopped with an error.
-    #[error(transparent)]
-    Solver(#[from] SolverError),
-    /// A reference or a metric could not be computed.
-    #[error(transparent)]
-    Eval(#[from] EvalError),
-    /// The scene emits nothing, so there is no error to measure.
-    #[error(
-        "scene '{0}' emits no light (no patch has an emission above 0), so its radiosity is zero everywhere and \
-         there is no error to measure"
-    )]
-    NoEmitters(String),
-    /// A file or folder could not be written.
-    #[error("cannot write {path}: {message}")]
-    Write {
-        /// The file or folder.
-        path: String,
-        /// Why.
-        message: String,
-    },
-    /// Arguments that make no sense together.
-    #[error("{0}")]
-    Invalid(String),
-}
-
-impl LabError {
-    /// The error for writing `path`.
-    pub fn write(path: &std::path::Path, e: impl std::fmt::Display) -> LabError {
-        LabError::Write { path: path.display().to_string(), message: e.to_string() }
-    }
-}
 
 /// How a lab is set up.
 #[derive(Clone, Debug)]
@@ -130,6 +87,74 @@ pub struct LabOptions {
     pub shooting: ShootingParams,
     /// The memory a stored matrix may take; `None`: [`MemoryBudget::from_env`].
     pub memory: Option<MemoryBudget>,
+    /// How solvers pay for their columns (default [`ColumnCost::Charged`]).
+    pub columns: ColumnCost,
+}
+
+/// How a lab's solvers pay for the columns (and rows) of F they fetch.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum ColumnCost {
+    /// Every column is computed through the backend when a solver asks for it, and its time is
+    /// the run's form-factor time.
+    Computed,
+    /// Where the lab keeps the stored matrix of a geometric backend (a `matrix` reference),
+    /// solvers read their columns from it, the same `f32` entries the backend's columns give,
+    /// and each column fetched is charged the backend's median time for a fresh column,
+    /// measured once on a seeded sample ([`ColumnCharge`]). Elsewhere as `Computed`.
+    #[default]
+    Charged,
+}
+
+/// What each column a solver fetches is charged, when a lab serves columns from its stored
+/// matrix ([`ColumnCost::Charged`]): the median time of a fresh column of the backend, one
+/// column at a time (as solvers fetch them), over a seeded sample, measured with the
+/// backend's memory of earlier columns forgotten first.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct ColumnCharge {
+    /// Seconds charged for each column or row fetched.
+    pub seconds_per_column: Real,
+    /// Columns timed.
+    pub sampled: usize,
+}
+
+impl ColumnCharge {
+    /// Columns timed to measure the charge.
+    pub const SAMPLE: usize = 8;
+
+    /// Times [`ColumnCharge::SAMPLE`] seeded fresh columns of `source` (fewer when it has
+    /// fewer patches), one at a time, and takes the median.
+    pub fn measure(source: &dyn ColumnSource) -> ColumnCharge {
+        let n = source.patch_count();
+        let sample = crate::bench::columns::sample(n, Self::SAMPLE.min(n), 0);
+        source.reset_memory();
+        let mut column = vec![0.0; n];
+        let times: Vec<f64> = sample
+            .iter()
+            .map(|&j| {
+                let start = Instant::now();
+                source.fill_column(j, &mut column);
+                start.elapsed().as_secs_f64()
+            })
+            .collect();
+        source.reset_memory();
+        ColumnCharge { seconds_per_column: crate::bench::median(&times), sampled: sample.len() }
+    }
+
+    /// The form-factor seconds of `columns` fetched.
+    pub fn seconds(&self, columns: u64) -> Real {
+        columns as Real * self.seconds_per_column
+    }
+
+    /// One sentence saying how a run's columns were paid for, for reports.
+    pub fn describe(&self) -> String {
+        format!(
+            "columns read from the stored matrix, each charged {:.3} ms (median of {} fresh columns of the backend, one at a time)",
+            self.seconds_per_column * 1e3,
+            self.sampled
+        )
+    }
 }
 
 impl Default for LabOptions {
@@ -141,6 +166,7 @@ impl Default for LabOptions {
             kind: ReferenceKind::Auto,
             shooting: ShootingParams::default(),
             memory: None,
+            columns: ColumnCost::default(),
         }
     }
 }
@@ -167,6 +193,12 @@ impl LabOptions {
     /// Sets [`LabOptions::memory`].
     pub fn with_memory(mut self, memory: MemoryBudget) -> Self {
         self.memory = Some(memory);
+        self
+    }
+
+    /// Sets [`LabOptions::columns`].
+    pub fn with_columns(mut self, columns: ColumnCost) -> Self {
+        self.columns = columns;
         self
     }
 
@@ -222,6 +254,7 @@ pub struct Lab<'p> {
     chosen: ChosenReference,
     contraction: Contraction,
     order: Vec<usize>,
+    charge: Option<ColumnCharge>,
 }
 
 /// How the matrix of a lab's source is obtained, when a `matrix` reference needs it.
@@ -265,7 +298,8 @@ impl<'p> Lab<'p> {
                 // The backend and the lab's matrix, held once.
                 let source = matrix.clone();
                 let setup = Lab::setup(prepared, &label, &source, Assembly::Stored(matrix), &options, progress)?;
-                Ok(Lab::finish(prepared, &label, Box::new(source), serves_rows, setup))
+                // The backend is the matrix: its columns cost what they cost.
+                Ok(Lab::finish(prepared, &label, Box::new(source), serves_rows, setup, ColumnCost::Computed))
             }
             Backend::Analytic(analytic) => {
                 let source = F32Columns(Backend::Analytic(analytic));
@@ -274,12 +308,12 @@ impl<'p> Lab<'p> {
                     _ => unreachable!("built analytic above"),
                 };
                 let setup = Lab::setup(prepared, &label, &source, Assembly::Reciprocal(&pair), &options, progress)?;
-                Ok(Lab::finish(prepared, &label, Box::new(source), serves_rows, setup))
+                Ok(Lab::finish(prepared, &label, Box::new(source), serves_rows, setup, options.columns))
             }
             other => {
                 let source = F32Columns(other);
                 let setup = Lab::setup(prepared, &label, &source, Assembly::Columns, &options, progress)?;
-                Ok(Lab::finish(prepared, &label, Box::new(source), serves_rows, setup))
+                Ok(Lab::finish(prepared, &label, Box::new(source), serves_rows, setup, options.columns))
             }
         }
     }
@@ -309,7 +343,7 @@ impl<'p> Lab<'p> {
         }
         let source = F32Columns(source);
         let setup = Lab::setup(prepared, backend, &source, Assembly::Columns, &options, progress)?;
-        Ok(Lab::finish(prepared, backend, Box::new(source), serves_rows, setup))
+        Ok(Lab::finish(prepared, backend, Box::new(source), serves_rows, setup, options.columns))
     }
 
     fn finish(
@@ -318,8 +352,23 @@ impl<'p> Lab<'p> {
         source: Box<dyn ColumnSource + 'p>,
         serves_rows: bool,
         setup: Setup,
+        columns: ColumnCost,
     ) -> Lab<'p> {
         let scene = prepared.scene();
+        // Charged columns: the stored matrix serves them (exact rows too), at the backend's
+        // measured price.
+        let (source, charge) = match (&setup.matrix, columns) {
+            (Some(matrix), ColumnCost::Charged) => {
+                let charge = ColumnCharge::measure(&*source);
+                let stored = StoredColumns {
+                    matrix: matrix.clone(),
+                    rows: serves_rows,
+                    reciprocity: source.reciprocity_bound(),
+                };
+                (Box::new(stored) as Box<dyn ColumnSource + 'p>, Some(charge))
+            }
+            _ => (source, None),
+        };
         Lab {
             prepared,
             report: prepared.report(),
@@ -333,6 +382,7 @@ impl<'p> Lab<'p> {
             chosen: setup.chosen,
             contraction: setup.contraction,
             order: radiosity_geom::spatial_order(scene),
+            charge,
         }
     }
 
@@ -473,6 +523,12 @@ impl<'p> Lab<'p> {
         &*self.source
     }
 
+    /// What each column a solver fetches is charged, when the lab serves them from its stored
+    /// matrix ([`ColumnCost::Charged`]); `None` when solvers compute their columns.
+    pub fn charge(&self) -> Option<&ColumnCharge> {
+        self.charge.as_ref()
+    }
+
     /// The stored matrix, when it is kept ([`LabOptions::residuals`], assembled for the
     /// reference, or the backend itself).
     pub fn matrix(&self) -> Option<&FormFactors> {
@@ -558,6 +614,7 @@ impl<'p> Lab<'p> {
             overhead: 0.0,
             progress: Some(progress),
             by_columns: unit == "columns",
+            charge: self.charge,
         };
         progress.begin(&name, target, unit);
         // Every run starts from columns as costly as the first ones: what an earlier run left
@@ -567,7 +624,10 @@ impl<'p> Lab<'p> {
         let problem = Problem::new(&self.system, &*self.source)?.with_patch_order(&self.order)?;
         let run = Executor::new(solver, rules.clone()).run(&problem, &mut recorder);
         progress.end();
-        let run = run?;
+        let mut run = run?;
+        if let Some(charge) = self.charge {
+            run.state.ff_seconds = charge.seconds(run.state.columns);
+        }
         let solver_residual = solver.residual_power(&problem, &run.state);
         let known = solver.residual_bound(&problem, &run.state);
         let solver_bound =
@@ -651,27 +711,6 @@ impl<'p> Lab<'p> {
         })
     }
 
-    /// Runs every solver in turn under the same rules and recording: the comparison that
-    /// [`Comparison::write`] reports. A solver that refuses these form factors
-    /// ([`Solver::applicable`]) stops the comparison before anything runs.
-    pub fn compare(
-        &self,
-        solvers: Vec<Box<dyn Solver>>,
-        rules: &StopRules,
-        progress: &dyn Progress,
-    ) -> Result<Comparison, LabError> {
-        // A solver whose hypothesis these form factors break is refused before any runs.
-        let problem = Problem::new(&self.system, &*self.source)?;
-        for solver in &solvers {
-            solver.applicable(&problem)?;
-        }
-        let mut outcomes = Vec::with_capacity(solvers.len());
-        for mut solver in solvers {
-            outcomes.push(self.run(solver.as_mut(), rules, &RecordPlan::default(), progress)?);
-        }
-        Ok(Comparison::new(self, rules, outcomes))
-    }
-
     /// The RGB radiosity of every patch after running `solver` under `rules` (the reference
     /// when `solver` is `None`): what renders and exports show. An `rms=` rule is measured.
     pub fn radiosity_rgb(
@@ -696,7 +735,7 @@ fn no_reference() -> LabError {
 /// The F-based certified bound of `b` relative to `Σ A |B*|`, in the reference-free form of
 /// [`SolverBound`] (so that it reads like the solver's own).
 fn matrix_relative_bound(system: &LinearSystem, m: &crate::metrics::Metrics, b: &[Real]) -> Real {
-    crate::metrics::relative_without_reference(system, m.bound.bound, b, false)
+    relative_without_reference(system, m.bound.bound, b, false)
 }
 
 /// Decides the reference: as asked, or for `auto` a stored backend's matrix, else `matrix`
@@ -886,6 +925,8 @@ pub struct Recorder<'a> {
     /// Where each step is reported, if anywhere (no message is formatted otherwise).
     progress: Option<&'a dyn Progress>,
     by_columns: bool,
+    /// The price of a column, when columns are charged rather than timed.
+    charge: Option<ColumnCharge>,
 }
 
 impl<'a> Recorder<'a> {
@@ -908,6 +949,7 @@ impl<'a> Recorder<'a> {
             overhead: 0.0,
             progress: None,
             by_columns: true,
+            charge: None,
         }
     }
 
@@ -941,7 +983,8 @@ impl Observer for Recorder<'_> {
             (Some(known), Some(c)) => SolverBound::new(self.system, c, &known, &state.radiosity).relative,
             _ => Real::NAN,
         };
-        let seconds = state.ff_seconds + state.solve_seconds;
+        let ff_seconds = self.charge.map_or(state.ff_seconds, |c| c.seconds(state.columns));
+        let seconds = ff_seconds + state.solve_seconds;
         let new_mark =
             self.marks.contains(&state.columns) && self.points.last().is_none_or(|p| p.columns != state.columns);
         if state.step % self.every == 0 || new_mark {
@@ -950,7 +993,7 @@ impl Observer for Recorder<'_> {
                 step: state.step,
                 columns: state.columns,
                 seconds,
-                ff_seconds: state.ff_seconds,
+                ff_seconds,
                 e_rms,
                 e_max,
                 residual,

@@ -49,6 +49,7 @@
 pub mod backends;
 pub mod bench;
 pub mod cache;
+pub mod certificate;
 pub mod compare;
 pub mod error;
 pub mod gltf_export;
@@ -71,10 +72,11 @@ pub mod validate;
 
 pub use cache::Cache;
 pub use compare::Comparison;
-pub use error::EvalError;
-pub use lab::{ChosenReference, FinalMetrics, Lab, LabError, LabOptions, Outcome, Point, RecordPlan, ReferenceOrigin};
+pub use error::{EvalError, LabError};
+pub use lab::{ChosenReference, ColumnCharge, ColumnCost, FinalMetrics, Lab, LabOptions, Outcome, Point, RecordPlan, ReferenceOrigin};
 pub use matrix::FormFactors;
-pub use metrics::{Contraction, ErrorBound, Errors, Evaluator, Metrics, Residual, SolverBound};
+pub use certificate::{Contraction, ErrorBound, Residual, SolverBound};
+pub use metrics::{Errors, Evaluator, Metrics};
 pub use path_trace::{ObjectEstimate, PathTraceError, PathTraceParams, PathTraced, path_trace};
 pub use progress::{NoProgress, Progress};
 pub use reference::{Certificate, Method, ReferenceParams, ReferenceSolution};

@@ -40,7 +40,7 @@
 
 use crate::error::EvalError;
 use crate::matrix::{FormFactors, check_sizes};
-use crate::metrics::{Contraction, Residual};
+use crate::certificate::{Contraction, Residual};
 use radiosity_core::dense_lu::{SingularPivot, lu_solve};
 use radiosity_core::{Channels, ColumnSource, LinearSystem, Real};
 use rayon::prelude::*;

@@ -22,7 +22,7 @@
 //! shows the bound as it falls.
 
 use crate::error::EvalError;
-use crate::metrics::{Contraction, SolverBound};
+use crate::certificate::{Contraction, SolverBound};
 use crate::progress::Progress;
 use crate::reference::{Certificate, Method, ReferenceSolution};
 use radiosity_core::{ColumnSource, LinearSystem, Real};

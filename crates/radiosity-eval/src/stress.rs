@@ -39,7 +39,8 @@
 //! Everything written is deterministic (no timings), so the report is snapshot-tested.
 
 use crate::backends::fresh_backend;
-use crate::lab::{LabError, Recorder};
+use crate::error::LabError;
+use crate::lab::Recorder;
 use crate::metrics::errors_against;
 use crate::progress::Progress;
 use crate::table::round_significant;

@@ -35,7 +35,8 @@
 //! over it and finds nothing either.
 
 use crate::cache::Cache;
-use crate::lab::{Lab, LabError, LabOptions, rgb};
+use crate::error::LabError;
+use crate::lab::{Lab, LabOptions, rgb};
 use crate::path_trace::{ObjectEstimate, PathTraceError, PathTraceParams, path_trace};
 use crate::progress::Progress;
 use radiosity_core::{Channels, Real, Scene};

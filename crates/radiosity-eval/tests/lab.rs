@@ -6,7 +6,7 @@
 use radiosity_core::ColumnSource;
 use radiosity_eval::reference_kind::{MemoryBudget, ReferenceKind, parse_bytes};
 use radiosity_eval::reference_shooting::ShootingParams;
-use radiosity_eval::{Cache, Lab, LabOptions, Method, NoProgress, RecordPlan, ReferenceOrigin, ReferenceParams};
+use radiosity_eval::{Cache, ColumnCharge, ColumnCost, Lab, LabOptions, Method, NoProgress, RecordPlan, ReferenceOrigin, ReferenceParams};
 use radiosity_eval::{SolverBound, metrics};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
@@ -284,7 +284,9 @@ fn forgetting_lab(scene: &PreparedScene) -> (Lab<'_>, std::sync::Arc<std::sync::
     let inner = radiosity_eval::backends::fresh_backend(scene, &analytic(), &NoProgress).unwrap();
     let resets = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
     let source = Box::new(Forgetting { inner, resets: resets.clone() });
-    (Lab::with_source(scene, "forgetting", source, true, LabOptions::default(), &NoProgress).unwrap(), resets)
+    // Columns computed through the source: charged ones come from the stored matrix.
+    let options = LabOptions::default().with_columns(ColumnCost::Computed);
+    (Lab::with_source(scene, "forgetting", source, true, options, &NoProgress).unwrap(), resets)
 }
 
 #[test]
@@ -312,4 +314,39 @@ fn a_comparison_refuses_a_solver_these_form_factors_do_not_suit_before_running_a
     let e = lab.compare(solvers, &StopRules::parse("columns=n").unwrap(), &NoProgress).err().unwrap();
     assert!(e.to_string().contains("cg cannot solve this system"), "{e}");
     assert_eq!(resets.load(std::sync::atomic::Ordering::Relaxed), 0);
+}
+
+#[test]
+fn charged_columns_give_the_computed_runs_numbers_at_the_measured_price() {
+    // Occluded, so the analytic columns trace shadow rays; a gathering solver (rows), a
+    // shooting one, a group-accelerated one and a Krylov one.
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let registry = SolverRegistry::builtin();
+    let names = ["gauss-seidel", "xu", "xu-g8-m16:f=4", "gmres-30"];
+    let rules = StopRules::parse("columns=2n").unwrap();
+    let compare = |columns| {
+        let lab = lab(&scene, LabOptions::default().with_columns(columns));
+        let solvers = names.iter().map(|name| registry.build(name).unwrap()).collect();
+        let comparison = lab.compare(solvers, &rules, &NoProgress).unwrap();
+        (comparison, lab.charge().copied())
+    };
+    let (computed, none) = compare(ColumnCost::Computed);
+    let (charged, charge) = compare(ColumnCost::Charged);
+    assert!(none.is_none() && computed.charge.is_none());
+    let charge = charge.expect("a matrix reference is kept, so columns are charged");
+    assert!(charge.seconds_per_column > 0.0 && charge.sampled == ColumnCharge::SAMPLE.min(computed.n as usize));
+    assert_eq!(charged.charge, Some(charge));
+    for (a, b) in computed.outcomes.iter().zip(&charged.outcomes) {
+        assert_eq!((a.state.step, a.state.columns), (b.state.step, b.state.columns), "{}", a.solver);
+        assert_eq!(a.state.radiosity, b.state.radiosity, "{}", a.solver);
+        let e = |o: &radiosity_eval::Outcome| o.points.iter().map(|p| (p.step, p.columns, p.e_rms)).collect::<Vec<_>>();
+        assert_eq!(e(a), e(b), "{}", a.solver);
+        // Every recorded second is the solving time plus the columns at their price.
+        let solve = b.state.solve_seconds;
+        assert!((b.seconds() - (solve + charge.seconds(b.state.columns))).abs() <= 1e-12 * b.seconds().max(1.0));
+        for p in &b.points {
+            assert!(p.seconds >= charge.seconds(p.columns) && p.seconds <= charge.seconds(p.columns) + solve + 1e-12);
+        }
+    }
+    assert!(charged.seconds_phrase().contains("charged"), "{}", charged.seconds_phrase());
 }

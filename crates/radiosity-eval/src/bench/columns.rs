@@ -12,7 +12,7 @@
 
 use super::report_text::{duration, percent, sig};
 use super::{ColumnsJson, median};
-use crate::lab::LabError;
+use crate::error::LabError;
 use crate::progress::Progress;
 use radiosity_core::ColumnSource;
 use radiosity_ff::pair_visibility::SamplingPath;

@@ -14,7 +14,8 @@
 use super::report_text::{duration, human_bytes, sig};
 use super::{E2eJson, median, peak_rss};
 use crate::backends::fresh_backend;
-use crate::lab::{LabError, Recorder};
+use crate::error::LabError;
+use crate::lab::Recorder;
 use crate::metrics::errors_against;
 use crate::progress::NoProgress;
 use radiosity_core::{ColumnSource, LinearSystem, Real};

@@ -14,7 +14,7 @@
 
 use super::report_text::{duration, human_bytes, sig};
 use super::{median, peak_rss};
-use crate::lab::LabError;
+use crate::error::LabError;
 use crate::{Lab, LabOptions, NoProgress, RecordPlan, ReferenceKind};
 use radiosity_core::Real;
 use radiosity_ff::BackendSpec;

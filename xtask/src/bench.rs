@@ -32,9 +32,9 @@
 //!    outside every timed run, and handed to the children in a file; the children compute
 //!    e_rms between steps and subtract that time from the wall time.
 //!
-//! 5. **`scale`** ([`scale`]): `office` at 10 990, 33 179 and 95 832 patches and the largest
-//!    real scene (`office.mgf` cut to 114 042 patches), each method in a child process with
-//!    no reference and no matrix: setup, seconds per column, columns per second, peak memory,
+//! 5. **`scale`** ([`scale`](radiosity_eval::bench::scale)): `office` at 10 990, 33 179 and
+//!    95 832 patches and the largest real scene (`office.mgf` cut to 114 042 patches), each
+//!    method in a child process with no reference and no matrix: setup, seconds per column, columns per second, peak memory,
 //!    and wall time from scene load to a certified bound of 1e-1 and 1e-2, with the growth
 //!    exponent of the time per column in `n`. Not part of a plain `cargo xtask bench`: it
 //!    takes `--max-seconds` (default 120 s) per run and method and scene, about half an hour;
@@ -49,18 +49,18 @@
 //! (a 171-patch Cornell box, a dozen columns, small backends, one end-to-end run) into a
 //! smoke test of a few seconds whose figures mean nothing.
 
-mod assembly;
 mod children;
-mod lu;
 
 use crate::bars::Bars;
 use crate::experiment::check_output_file;
 use crate::experiment::prepare;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
+use radiosity_eval::bench::assembly::AssemblyParams;
 use radiosity_eval::bench::columns::ColumnsParams;
+use radiosity_eval::bench::lu::LuParams;
 use radiosity_eval::bench::report_text::{duration, human_bytes, sig};
-use radiosity_eval::bench::{BenchJson, Machine, SceneJson, columns};
+use radiosity_eval::bench::{BenchJson, Machine, SceneJson, assembly, columns, lu};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
 use std::fmt::Write as _;
@@ -259,7 +259,14 @@ pub fn run(args: &Args) -> Result<()> {
     let mut findings = Findings::default();
     for section in &sections {
         body += &match *section {
-            "lu" => lu::run(&config)?,
+            "lu" => {
+                let params = LuParams {
+                    group_sizes: config.group_sizes.clone(),
+                    runs: config.runs_cheap,
+                    budget: if config.quick { 0.002 } else { 0.05 },
+                };
+                lu::report(&lu::measure(&params, &Bars::new())?)
+            }
             "scale" => children::scale(&config)?,
             on_scene => {
                 let scene = match prepared {
@@ -283,7 +290,11 @@ pub fn run(args: &Args) -> Result<()> {
                         findings.json.columns = section.json;
                         section.markdown
                     }
-                    "assembly" => assembly::run(&config, scene)?,
+                    "assembly" => {
+                        let params = AssemblyParams { rays: config.assembly_rays.clone(), runs: config.runs_heavy };
+                        let assemblies = assembly::measure(scene, &params, &Bars::new())?;
+                        assembly::report(&config.scene, scene.loaded.scene.len(), &assemblies)
+                    }
                     _ => children::e2e(&config, scene, &mut findings)?,
                 }
             }

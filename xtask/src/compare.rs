@@ -1,6 +1,6 @@
 //! `cargo xtask compare [--scene SCENE] [--solvers S1,S2,…] [--ff BACKEND] [--until RULES]
 //! [--reference KIND] [--out DIR]`: runs several solvers on one scene against its reference,
-//! and writes what a researcher reads and shows ([`radiosity_eval::compare`]):
+//! and writes what a researcher reads and shows ([`radiosity_eval::Comparison`]):
 //! `convergence.csv`, `report.md` and plots of e_rms (with `--reference none`, of the
 //! certified bound) against steps, columns and seconds, under `results/<scene>-<date-time>/`
 //! or `--out`. A summary table ends the output.
@@ -8,8 +8,8 @@
 use crate::bars::Bars;
 use crate::experiment::{ReferenceArg, check_measurable, check_out_dir, default_out, lab, prepare};
 use anyhow::{Result, bail};
+use radiosity_eval::ReferenceKind;
 use radiosity_eval::{ColumnCost, Comparison};
-use radiosity_eval::reference_kind::ReferenceKind;
 use radiosity_ff::BackendSpec;
 use radiosity_solvers::{Solver, SolverRegistry, StopRules};
 use std::path::{Path, PathBuf};
@@ -88,7 +88,7 @@ impl Plan {
     /// Runs every solver and writes the report, table and plots into `out`.
     pub fn execute(self, out: &Path) -> Result<Comparison> {
         let prepared = prepare(&self.scene)?;
-        radiosity_eval::lab::require_emitters(&prepared)?;
+        radiosity_eval::require_emitters(&prepared)?;
         let report = prepared.report();
         eprintln!("{}: {} patches; left out: {}", report.scene, report.patches, report.left_out_phrase());
         let lab = lab(&prepared, &self.spec, true, self.kind, self.columns)?;

@@ -4,7 +4,7 @@
 
 use crate::bars::Bars;
 use anyhow::{Result, bail};
-use radiosity_eval::reference_kind::ReferenceKind;
+use radiosity_eval::ReferenceKind;
 use radiosity_eval::{Cache, ColumnCost, FinalMetrics, Lab, LabOptions, Progress};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
@@ -203,7 +203,8 @@ pub fn solved_rgb(
         ReferenceKind::Auto if solver.is_some() && !rules.needs_error() => ReferenceKind::None,
         kind => kind,
     };
-    let lab = lab(prepared, spec, false, kind, ColumnCost::default())?;
+    // One solver's run: its columns are computed, whether or not the reference was cached.
+    let lab = lab(prepared, spec, false, kind, ColumnCost::Computed)?;
     let rgb = match solver {
         None => lab.radiosity_rgb(None, rules, &Bars::new())?,
         Some(mut solver) => {
@@ -217,7 +218,7 @@ pub fn solved_rgb(
                 o.seconds(),
                 error_phrase(&o.last)
             );
-            radiosity_eval::lab::rgb(&o.state)
+            radiosity_eval::rgb(&o.state)
         }
     };
     Ok((rgb, lab.backend().to_string()))

@@ -3,7 +3,7 @@
 //! radiosity as vertex colours, for any glTF viewer (DESIGN §7); no reference is computed
 //! unless `--solver reference`, an `rms=` rule or `--reference` asks for one.
 //!
-//! The file is [`radiosity_eval::gltf_export`]'s: one primitive per material, unlit white
+//! The file is [`radiosity_eval::export_glb`]'s: one primitive per material, unlit white
 //! materials carrying each surface's reflectivity and emission in their extras (so the file
 //! loads back as the same system with `--scene SOLVED.glb`), and colours tone mapped to the
 //! 99th percentile of the vertex luminance. This command checks its arguments before any
@@ -12,7 +12,7 @@
 
 use crate::experiment::{SolveArgs, check_output_file, prepare, solved_rgb};
 use anyhow::{Result, bail};
-use radiosity_eval::gltf_export::{ExportInfo, export_glb};
+use radiosity_eval::{ExportInfo, export_glb};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `export`.

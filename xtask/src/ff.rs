@@ -6,14 +6,14 @@
 //! [`MAX_PATCHES`] patches are refused unless `--force` is given.
 //!
 //! With `--ff matrix…` the assembled (and, with `rebalance=true`, rebalanced) matrix is kept in
-//! the cache ([`radiosity_eval::cache`], `target/ff-cache/` or `$RADIOSITY_CACHE_DIR`) and
+//! the cache ([`radiosity_eval::Cache`], `target/ff-cache/` or `$RADIOSITY_CACHE_DIR`) and
 //! loaded from it next time; a file that is unreadable or has another key is reported as a
 //! warning and replaced.
 
 use crate::bars::Bars;
 use crate::experiment::{cache, prepare};
 use anyhow::{Result, bail};
-use radiosity_eval::backends::{ObtainedMatrix, obtain_matrix};
+use radiosity_eval::{ObtainedMatrix, obtain_matrix};
 use radiosity_ff::guard::MatrixFigures;
 use radiosity_ff::row_diagnosis::{RowDiagnosis, worst_rows};
 use radiosity_ff::{BackendSpec, StoredMatrix};
@@ -96,7 +96,7 @@ struct FfJson<'a> {
     storage: &'static str,
     clamped: Option<u64>,
     seconds: f64,
-    cache: Option<&'a radiosity_eval::backends::CacheUse>,
+    cache: Option<&'a radiosity_eval::CacheUse>,
     worst_rows: &'a [RowDiagnosis],
 }
 

@@ -3,16 +3,17 @@
 //! solved radiosity (no reference is computed unless `--solver reference`, an `rms=` rule or
 //! `--reference` asks for one).
 //!
-//! The picture is [`radiosity_eval::render`]'s: a pinhole camera (each built-in scene's
-//! default, or `--camera`) ray-casting the scene's BVH, smooth shading from the radiosity at
-//! patch corners, exposure to the 95th percentile of the visible luminance and the sRGB curve.
+//! The picture is [`radiosity_eval::render`]'s: a pinhole camera (each built-in scene's preset,
+//! kept with the scene in radiosity-geom, or `--camera`) ray-casting the scene's BVH, smooth
+//! shading from the radiosity at patch corners, exposure to the 95th percentile of the visible
+//! luminance and the sRGB curve.
 //! This command checks its arguments before any geometry is built, solves the scene, and
 //! writes the PNG.
 
 use crate::experiment::{SolveArgs, check_output_file, prepare, solved_rgb};
 use anyhow::{Result, bail};
 use radiosity_core::Real;
-use radiosity_eval::render::{Camera, MAX_SIDE, RenderParams, render};
+use radiosity_eval::{Camera, MAX_SIDE, RenderParams, render};
 use std::path::PathBuf;
 use std::time::Instant;
 

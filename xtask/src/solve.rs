@@ -13,8 +13,8 @@ use crate::bars::Bars;
 use crate::experiment::{SolveArgs, check_output_file, lab, prepare};
 use anyhow::{Context, Result};
 use radiosity_core::Real;
-use radiosity_eval::compare::value_cell;
-use radiosity_eval::lab::rgb;
+use radiosity_eval::rgb;
+use radiosity_eval::value_cell;
 use radiosity_eval::{FinalMetrics, RecordPlan};
 use radiosity_solvers::State;
 use radiosity_solvers::{Record, Value};
@@ -131,7 +131,9 @@ pub fn run(args: &Args) -> Result<()> {
         check_output_file(out)?;
     }
     let prepared = prepare(&args.run.scene)?;
-    let lab = lab(&prepared, &spec, false, kind, radiosity_eval::ColumnCost::default())?;
+    // One solver's run: its columns are computed (and timed), whether or not the reference
+    // was cached and the matrix assembled.
+    let lab = lab(&prepared, &spec, false, kind, radiosity_eval::ColumnCost::Computed)?;
     let outcome = match solver {
         // `reference` is the exact solution itself: its cost is assembling F and solving it.
         None => Outcome {

@@ -12,9 +12,9 @@ use crate::bars::Bars;
 use crate::experiment::cache;
 use anyhow::Result;
 use radiosity_core::Real;
-use radiosity_eval::path_trace::DEFAULT_SAMPLES_PER_OBJECT;
-use radiosity_eval::table::round_significant;
-use radiosity_eval::validate::{DiscreteMean, ObjectValidation};
+use radiosity_eval::DEFAULT_SAMPLES_PER_OBJECT;
+use radiosity_eval::round_significant;
+use radiosity_eval::{DiscreteMean, ObjectValidation};
 use radiosity_eval::{PathTraceParams, ValidateParams, Validation, validate};
 use radiosity_ff::BackendSpec;
 

@@ -7,6 +7,7 @@ use serde_json::Value;
 mod bad_input;
 mod bench;
 mod export;
+mod readme;
 mod render;
 mod stress;
 

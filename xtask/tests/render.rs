@@ -5,7 +5,7 @@ use super::{failure, xtask};
 
 /// The 8-bit RGB pixels of `path`, with its width and height.
 fn read_png(path: &std::path::Path) -> (u32, u32, Vec<[f64; 3]>) {
-    let image = radiosity_eval::png_image::Rgb8::decode(&std::fs::read(path).unwrap()).unwrap();
+    let image = radiosity_eval::Rgb8::decode(&std::fs::read(path).unwrap()).unwrap();
     let pixels = image.enumerate().map(|(_, _, p)| p.map(f64::from)).collect();
     (image.width, image.height, pixels)
 }

@@ -1,8 +1,7 @@
 //! Dense LU with partial pivoting (faer), for the systems `Φ x = b` that the reference solves
 //! whole and group solvers solve on a group.
 //!
-//! faer was measured 17× faster than nalgebra at n = 3400 (the `lu` bench of
-//! radiosity-eval), and is as fast on the small group systems.
+//! faer rather than nalgebra: the `lu` bench compares the two (`docs/bench-office.md`).
 
 use crate::math::Real;
 use faer::dyn_stack::{MemBuffer, MemStack};

@@ -12,8 +12,8 @@
 //! - non-convex quad: consecutive edge turns that disagree in sign with the normal.
 
 use crate::error::CoreError;
-use crate::math::{Real, Vec3};
 use crate::ids::{MaterialId, ObjectId};
+use crate::math::{Real, Vec3};
 
 /// Relative area below which a patch counts as degenerate.
 const DEGENERATE_AREA: Real = 1e-12;

@@ -62,7 +62,7 @@ pub fn measure(scene: &str) -> Result<(Vec<Timing>, String), Box<dyn Error>> {
     // The references are solved before the clocks start.
     let lab = Lab::new(&prepared, &analytic, LabOptions::default(), &NoProgress)?;
     let start = Instant::now();
-    let built_in = radiosity_eval::backends::fresh_backend(&prepared, &analytic, &NoProgress)?;
+    let built_in = radiosity_eval::fresh_backend(&prepared, &analytic, &NoProgress)?;
     let mut timings = vec![time(&prepared, "analytic", &built_in, &lab, start)?];
     let source = Box::new(custom_backend::CentroidDisc::new(prepared.scene()));
     let lab = Lab::with_source(&prepared, "centroid-disc", source, false, LabOptions::default(), &NoProgress)?;

@@ -2,35 +2,46 @@
 //!
 //! Solvers are compared on one thing: how close they get to the exact solution `B*` of the
 //! **same** discrete system `(I − diag(ρ) F) B = E` (DESIGN §3 and §5), for the work they
-//! did. This crate provides:
+//! did. The crate is in rooms by job; every module is private and this page is the whole
+//! public API:
 //!
-//! - [`ReferenceSolution`] ([`reference`](mod@reference)): `B*` by dense LU or by certified Gauss–Seidel,
-//!   with the method used and a [`Certificate`] of its own error;
-//! - [`metrics`]: `e_rms`, `e_max`, the residual power `R` and the certified bound on the
-//!   area-weighted L1 error of any vector, set beside the true error;
-//! - [`ConvergenceTable`] ([`table`]): rows of measured points written as CSV or Markdown
-//!   with floats rounded to fixed significant digits;
-//! - [`FormFactors`] ([`matrix`]): the form-factor matrix fetched once from any
-//!   [`ColumnSource`](radiosity_core::ColumnSource) and held in memory;
-//! - [`plot`]: e_rms against steps, columns or seconds, as SVG and PNG;
-//! - [`render`]: a picture of a solved scene (ray-cast, smoothly shaded with [`shading`],
-//!   tone mapped), as PNG;
-//! - [`gltf_export`]: a solved scene as binary glTF with its radiosity as vertex colours and
-//!   its materials in the extras, so it loads back as the same system;
-//! - [`path_trace`](mod@path_trace): each object's area-mean radiosity estimated by Monte Carlo
-//!   path tracing over the BVH, with its standard error: a truth of the continuous problem;
-//! - [`validate`](mod@validate): those path-traced means beside the discrete reference at
-//!   increasing mesh resolution, which separates discretization error from solver error;
-//! - [`bench`]: columns per second against the ray-tracing limit, time and memory from scene
-//!   load to accuracy, and the cost of a column as scenes grow, with their medians, Markdown
-//!   sections and the JSON keys of `cargo xtask bench --json`.
+//! - **the lab**: [`Lab`] sets a prepared scene up for measurement ([`LabOptions`], how
+//!   columns are paid for: [`ColumnCost`]), runs any solver with a [`Recorder`] into an
+//!   [`Outcome`], and compares many into a [`Comparison`]; [`backend`] builds the backend a
+//!   spec names, stored matrices from the [`Cache`];
+//! - **references and certificates**: [`ReferenceSolution`], `B*` by dense LU or by certified
+//!   Gauss–Seidel, with the method used and a [`Certificate`] of its own error; the choice of
+//!   reference ([`ReferenceKind`], [`MemoryBudget`]) and the shooting reference
+//!   ([`ShootingParams`]); the metrics `e_rms`, `e_max`, the residual power and the certified
+//!   bound of any vector ([`evaluate`], [`Evaluator`], [`SolverBound`]); [`FormFactors`], the
+//!   form-factor matrix fetched once from any [`ColumnSource`](radiosity_core::ColumnSource)
+//!   and held in memory;
+//! - **reports**: a comparison's `convergence.csv`, `report.md`, plots and terminal summary
+//!   ([`Comparison::write`], [`Comparison::summary`]); [`ConvergenceTable`], rows written as
+//!   CSV or Markdown with floats rounded to fixed significant digits; plots of e_rms against
+//!   steps, columns or seconds ([`write_svg`], [`write_png`]); the paper's figures and claims
+//!   ([`paper`]);
+//! - **truth**: each object's area-mean radiosity by Monte Carlo path tracing
+//!   ([`path_trace()`]), and those means beside the discrete reference at increasing mesh
+//!   resolution ([`validate()`]), which separates discretization error from solver error;
+//! - **suites**: the stress suite ([`stress`]) and the performance measurements
+//!   ([`bench`](mod@bench)): columns per second against the ray-tracing limit, matrix
+//!   assembly, group solves, time and memory from scene load to accuracy, and the cost of a
+//!   column as scenes grow;
+//! - **view**: a picture of a solved scene ([`render()`], ray-cast, smoothly shaded with
+//!   [`vertex_radiosity`], tone mapped, as PNG) and the scene as binary glTF with its
+//!   radiosity as vertex colours ([`export_glb`]), which loads back as the same system.
+//!
+//! `bench`, `stress` and `paper` stay public modules: each is a family whose members' short
+//! names (`run`, `report`, `CASES`, `select`, `RULES`, `section`) clash at the root or say
+//! nothing without the family's name.
 //!
 //! With `xtask`, it is the only crate that will write files; it writes to any
 //! [`std::io::Write`] and leaves opening files to its callers.
 //!
 //! ```
 //! use radiosity_core::{Channels, DenseColumns, LinearSystem};
-//! use radiosity_eval::{ReferenceParams, ReferenceSolution, metrics};
+//! use radiosity_eval::{ReferenceParams, ReferenceSolution, evaluate};
 //!
 //! // Two facing patches, each seeing half of its hemisphere covered by the other.
 //! let f = DenseColumns::from_rows(2, &[0.0, 0.5, 0.5, 0.0]).unwrap();
@@ -41,46 +52,54 @@
 //! assert!(reference.certificate().certified);
 //!
 //! // Emission alone (B = E) is 25% off in e_rms, and the certified bound covers its error.
-//! let m = metrics::evaluate(&system, &f, &reference, &[1.0, 0.0]).unwrap();
+//! let m = evaluate(&system, &f, &reference, &[1.0, 0.0]).unwrap();
 //! assert!(m.bound.certified && m.l1_error <= m.bound.bound);
 //! assert!((m.e_rms - 0.25).abs() < 1e-12);
 //! ```
 
-pub mod backends;
-pub mod bench;
-pub mod cache;
-pub mod certificate;
-pub mod compare;
-pub mod error;
-pub mod gltf_export;
-pub mod lab;
-pub mod matrix;
-pub mod metrics;
-pub mod paper;
-pub mod path_trace;
-pub mod plot;
-pub mod png_image;
-pub mod progress;
-pub mod reference;
-pub mod reference_kind;
-pub mod reference_shooting;
-pub mod render;
-pub mod shading;
-pub mod stress;
-pub mod table;
-pub mod validate;
+mod error;
+mod lab;
+mod progress;
+mod reference;
+mod reports;
+mod suites;
+mod truth;
+mod view;
 
-pub use cache::Cache;
-pub use compare::Comparison;
 pub use error::{EvalError, LabError};
-pub use lab::{ChosenReference, ColumnCharge, ColumnCost, FinalMetrics, Lab, LabOptions, Outcome, Point, RecordPlan, ReferenceOrigin};
-pub use matrix::FormFactors;
-pub use certificate::{Contraction, ErrorBound, Residual, SolverBound};
-pub use metrics::{Errors, Evaluator, Metrics};
-pub use path_trace::{ObjectEstimate, PathTraceError, PathTraceParams, PathTraced, path_trace};
+pub use lab::backends::{
+    Assembled, CacheUse, ObtainedMatrix, assemble_matrix, assemble_stored, assembly_of, backend, fresh_backend,
+    obtain_matrix,
+};
+pub use lab::compare::Comparison;
+pub use lab::options::{ColumnCharge, ColumnCost, LabOptions};
+pub use lab::outcome::{FinalMetrics, Outcome};
+pub use lab::recorder::{Point, RecordPlan, Recorder, TableRow};
+pub use lab::run::rgb;
+pub use lab::setup::{ChosenReference, Lab, ReferenceOrigin, require_emitters};
 pub use progress::{NoProgress, Progress};
-pub use reference::{Certificate, Method, ReferenceParams, ReferenceSolution};
-pub use reference_kind::{MemoryBudget, ReferenceKind};
-pub use reference_shooting::ShootingParams;
-pub use table::{ConvergenceTable, TableRow};
-pub use validate::{ValidateError, ValidateParams, Validation, validate};
+pub use reference::cache::{CACHE_DIR_VAR, Cache, Lookup, scene_key};
+pub use reference::certificate::{Contraction, ErrorBound, Residual, SolverBound};
+pub use reference::kind::{MEMORY_VARIABLE, MemoryBudget, ReferenceKind, matrix_bytes, parse_bytes};
+pub use reference::matrix::{F32Columns, FormFactors};
+pub use reference::metrics::{Errors, Evaluator, Metrics, errors, errors_against, evaluate};
+pub use reference::shooting::{ShootingParams, solve_by_shooting};
+pub use reference::solution::{Certificate, Method, ReferenceParams, ReferenceSolution, STORED_FORMAT_VERSION};
+pub use reports::comparison::{Written, value_cell};
+pub use reports::paper;
+pub use reports::plot::{
+    Curve, Marker, PlotSpec, Style, Variant, Y_LABEL, Y_LABEL_SHORT, style_of, write_png, write_svg,
+};
+pub use reports::table::{ConvergenceTable, HEADER, round_significant};
+pub use suites::{bench, stress};
+pub use truth::path_trace::{
+    DEFAULT_SAMPLES_PER_OBJECT, ObjectEstimate, PathTraceError, PathTraceParams, PathTraced, path_trace,
+};
+pub use truth::validate::{
+    DiscreteMean, ObjectValidation, Refinement, Resolution, TraceSummary, ValidateError, ValidateParams, Validation,
+    validate,
+};
+pub use view::gltf_export::{ExportInfo, Glb, export_glb, exposure};
+pub use view::png_image::{Rgb8, write_rgb8};
+pub use view::render::{Camera, DEFAULT_FOV, Image, MAX_SIDE, RenderParams, corner_weights, render, srgb_byte};
+pub use view::shading::{SMOOTH_COSINE, vertex_radiosity};

@@ -4,7 +4,7 @@
 
 use radiosity_core::{ColumnSource, Real};
 use radiosity_eval::NoProgress;
-use radiosity_eval::backends::{assembly_of, obtain_matrix};
+use radiosity_eval::{assembly_of, obtain_matrix};
 use radiosity_ff::{Backend, BackendSpec, StoredMatrix};
 use radiosity_geom::PreparedScene;
 

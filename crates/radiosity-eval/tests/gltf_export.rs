@@ -4,7 +4,7 @@
 
 use radiosity_core::{Channels, LinearSystem, Real, Scene};
 use radiosity_eval::EvalError;
-use radiosity_eval::gltf_export::{ExportInfo, Glb, export_glb, exposure};
+use radiosity_eval::{ExportInfo, Glb, export_glb, exposure};
 use radiosity_eval::{ReferenceParams, ReferenceSolution};
 use radiosity_ff::{Backend, BackendSpec, FormFactorInput};
 use radiosity_geom::{SceneAnalysis, Visibility, load_scene};

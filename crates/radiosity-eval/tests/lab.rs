@@ -4,10 +4,12 @@
 //! dense LU within their certificates, and the cache tells reference kinds apart.
 
 use radiosity_core::ColumnSource;
-use radiosity_eval::reference_kind::{MemoryBudget, ReferenceKind, parse_bytes};
-use radiosity_eval::reference_shooting::ShootingParams;
-use radiosity_eval::{Cache, ColumnCharge, ColumnCost, Lab, LabOptions, Method, NoProgress, RecordPlan, ReferenceOrigin, ReferenceParams};
-use radiosity_eval::{SolverBound, metrics};
+use radiosity_eval::ShootingParams;
+use radiosity_eval::{
+    Cache, ColumnCharge, ColumnCost, Lab, LabOptions, Method, NoProgress, RecordPlan, ReferenceOrigin, ReferenceParams,
+};
+use radiosity_eval::{MemoryBudget, ReferenceKind, parse_bytes};
+use radiosity_eval::{SolverBound, errors};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
 use radiosity_solvers::{Executor, Observer, POINT_SOLVERS, Problem, ResidualBound, SolverRegistry, State, StopRules};
@@ -37,7 +39,7 @@ impl Observer for BoundCheck<'_> {
         let known =
             self.known.take().unwrap_or_else(|| panic!("{} knows no bound at step {}", self.solver, state.step));
         let bound = SolverBound::new(system, self.lab.contraction(), &known, &state.radiosity);
-        let e = metrics::errors(system, reference, &state.radiosity).unwrap();
+        let e = errors(system, reference, &state.radiosity).unwrap();
         let relative = e.l1 / e.reference_l1;
         // Round-off only: the reference itself is certified to 1e-10.
         assert!(
@@ -175,7 +177,7 @@ fn auto_weighs_the_matrix_against_the_memory_budget() {
     assert!(matches!(b.method(), Method::Shooting { .. }), "{}", b.method());
     assert!(b.certificate().certified && b.certificate().relative_bound <= 1e-8, "{}", b.certificate());
     assert!(!b.certificate().contraction.measured);
-    let e = metrics::errors(fits.system(), a, b.values()).unwrap();
+    let e = errors(fits.system(), a, b.values()).unwrap();
     assert!(e.l1 / e.reference_l1 <= b.certificate().relative_bound + a.certificate().relative_bound + 1e-12, "{e:?}");
 }
 
@@ -190,7 +192,7 @@ fn the_stored_matrix_reference_agrees_with_dense_lu() {
     let r = gs.reference().unwrap();
     assert!(matches!(r.method(), Method::GaussSeidel { .. }), "{}", r.method());
     assert!(r.certificate().certified && r.certificate().relative_bound <= 1e-10, "{}", r.certificate());
-    let e = metrics::errors(gs.system(), lu.reference().unwrap(), r.values()).unwrap();
+    let e = errors(gs.system(), lu.reference().unwrap(), r.values()).unwrap();
     assert!(e.l1 / e.reference_l1 <= 1e-10, "{e:?}");
     assert!(gs.matrix().unwrap().stored().is_some(), "no dense f64 copy");
     // Assembled by reciprocity, each pair once, the matrix holds the very columns solvers
@@ -281,7 +283,7 @@ impl<S: ColumnSource> ColumnSource for Forgetting<S> {
 /// A lab over the analytic columns of `scene`, wrapped in a [`Forgetting`] (which states no
 /// reciprocity bound), and its count of resets.
 fn forgetting_lab(scene: &PreparedScene) -> (Lab<'_>, std::sync::Arc<std::sync::atomic::AtomicUsize>) {
-    let inner = radiosity_eval::backends::fresh_backend(scene, &analytic(), &NoProgress).unwrap();
+    let inner = radiosity_eval::fresh_backend(scene, &analytic(), &NoProgress).unwrap();
     let resets = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
     let source = Box::new(Forgetting { inner, resets: resets.clone() });
     // Columns computed through the source: charged ones come from the stored matrix.

@@ -4,7 +4,7 @@ use crate::{cube_form_factors, random_system};
 use approx::assert_relative_eq;
 use radiosity_core::{Channels, ColumnSource, DenseColumns, LinearSystem};
 use radiosity_eval::{
-    EvalError, Evaluator, FormFactors, ReferenceParams, ReferenceSolution, Residual, SolverBound, metrics,
+    EvalError, Evaluator, FormFactors, ReferenceParams, ReferenceSolution, Residual, SolverBound, errors, evaluate,
 };
 use radiosity_solvers::ResidualBound;
 use rand::{Rng, SeedableRng};
@@ -25,7 +25,7 @@ fn pair() -> (LinearSystem, DenseColumns, ReferenceSolution) {
 fn metrics_of_emission_alone_by_hand() {
     let (system, f, reference) = pair();
     let b = [1.0, 0.0];
-    let m = metrics::evaluate(&system, &f, &reference, &b).unwrap();
+    let m = evaluate(&system, &f, &reference, &b).unwrap();
     // Errors (−1/47, −4/47): Σ A d² = 49/47², Σ A B*² = (48² + 3·4²)/47² = 2352/47².
     assert_relative_eq!(m.e_rms, (49.0_f64 / 2352.0).sqrt(), max_relative = 1e-13);
     // max |d| = 4/47 over max B* = 48/47.
@@ -59,7 +59,7 @@ fn the_solvers_bound_by_hand_and_what_the_sign_of_the_residual_buys() {
     let signed = SolverBound::new(&system, &contraction, &known.with_nonnegative_residual(true), &b);
     assert_relative_eq!(signed.relative, 1.0 / 15.0, max_relative = 1e-15);
     // Both hold: the true relative L1 error is (15/564) / (60/47) = 1/48.
-    let e = metrics::errors(&system, &reference, &b).unwrap();
+    let e = errors(&system, &reference, &b).unwrap();
     assert_relative_eq!(e.l1 / e.reference_l1, 1.0 / 48.0, max_relative = 1e-12);
     assert!(e.l1 <= signed.absolute && e.l1 / e.reference_l1 <= signed.relative);
 }
@@ -75,12 +75,12 @@ fn metrics_of_a_hand_made_rgb_vector() {
     let b = [1.5, 2.0, 0.0, 2.0, 3.0, 1.5];
     // d = (0.5, 0, 0, 0, −1, 0.5): Σ A d² = 0.25 + 3 (1 + 0.25) = 4;
     // Σ A B*² = (1 + 4) + 3 (4 + 16 + 1) = 68.
-    let errors = metrics::errors(&system, &reference, &b).unwrap();
+    let errors = errors(&system, &reference, &b).unwrap();
     assert_relative_eq!(errors.e_rms, (4.0_f64 / 68.0).sqrt(), max_relative = 1e-15);
     assert_relative_eq!(errors.e_max, 1.0 / 4.0, max_relative = 1e-15);
     assert_relative_eq!(errors.l1, 0.5 + 3.0 * 1.5, max_relative = 1e-15);
     // r = E − b (F = 0): Σ A |r| = 5; Σ A E = 3 + 3 · 7 = 24.
-    let m = metrics::evaluate(&system, &f, &reference, &b).unwrap();
+    let m = evaluate(&system, &f, &reference, &b).unwrap();
     assert_relative_eq!(m.residual, 5.0 / 24.0, max_relative = 1e-15);
     // κ = 0 and ρ_max = 0.5 per channel: the bound is 2 ‖r‖_A = 10.
     assert_relative_eq!(m.bound.bound, 10.0, max_relative = 1e-15);
@@ -101,7 +101,7 @@ fn streamed_and_stored_residuals_are_identical() {
 
     let reference = ReferenceSolution::solve_matrix(&system, &m, ReferenceParams::default()).unwrap();
     let evaluator = Evaluator::new(&system, &m, &reference).unwrap();
-    assert_eq!(evaluator.evaluate(&b).unwrap(), metrics::evaluate(&system, &f, &reference, &b).unwrap());
+    assert_eq!(evaluator.evaluate(&b).unwrap(), evaluate(&system, &f, &reference, &b).unwrap());
 }
 
 #[test]
@@ -129,7 +129,7 @@ fn the_certified_bound_bounds_the_true_error() {
                         s + magnitude * (s.abs() + 0.01) * u
                     })
                     .collect();
-                let m = metrics::evaluate(system, f, &reference, &b).unwrap();
+                let m = evaluate(system, f, &reference, &b).unwrap();
                 let r = Residual::from_columns(system, f, &b).unwrap();
                 let q = r.contraction().max_factor();
                 assert!(m.bound.certified);
@@ -160,7 +160,7 @@ fn the_certified_bound_bounds_the_true_error() {
             }
             b = next;
             if [1, 5, 40].contains(&sweep) {
-                let m = metrics::evaluate(system, f, &reference, &b).unwrap();
+                let m = evaluate(system, f, &reference, &b).unwrap();
                 // In the closed cube with uniform ρ the bound is attained (all the error is
                 // lost at the rate ρ), so it is checked to round-off.
                 assert!(m.bound.bound >= m.l1_error * (1.0 - 1e-12), "{name} Jacobi {sweep}: {m:?}");
@@ -179,11 +179,11 @@ fn the_certified_bound_bounds_the_true_error() {
 fn sizes_and_dark_scenes_are_errors() {
     let (system, f, reference) = pair();
     assert!(matches!(
-        metrics::evaluate(&system, &f, &reference, &[1.0]),
+        evaluate(&system, &f, &reference, &[1.0]),
         Err(EvalError::SizeMismatch { expected: 2, found: 1, .. })
     ));
     let dark = LinearSystem::new(Channels::Grey, vec![1.0, 3.0], vec![0.5, 0.5], vec![0.0, 0.0]).unwrap();
     let reference = ReferenceSolution::solve(&dark, &f, ReferenceParams::default()).unwrap();
     assert_eq!(reference.values(), &[0.0, 0.0]);
-    assert_eq!(metrics::errors(&dark, &reference, &[0.0, 0.0]), Err(EvalError::ZeroReference));
+    assert_eq!(errors(&dark, &reference, &[0.0, 0.0]), Err(EvalError::ZeroReference));
 }

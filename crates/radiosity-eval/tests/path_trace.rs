@@ -5,7 +5,7 @@
 
 use crate::{ff_adjacent_unit_squares, ff_opposite_unit_squares};
 use radiosity_core::{Material, MaterialId, ObjectId, Patch, Real, Scene, Spectrum, Vec3};
-use radiosity_eval::validate::Refinement;
+use radiosity_eval::Refinement;
 use radiosity_eval::{
     NoProgress, PathTraceError, PathTraceParams, PathTraced, ValidateParams, Validation, path_trace, validate,
 };

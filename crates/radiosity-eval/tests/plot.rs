@@ -4,8 +4,8 @@
 //! on a log scale.
 
 use radiosity_eval::EvalError;
-use radiosity_eval::plot::{Curve, Marker, PlotSpec, Variant, Y_LABEL, Y_LABEL_SHORT, style_of, write_png, write_svg};
-use radiosity_eval::png_image::Rgb8;
+use radiosity_eval::Rgb8;
+use radiosity_eval::{Curve, Marker, PlotSpec, Variant, Y_LABEL, Y_LABEL_SHORT, style_of, write_png, write_svg};
 use std::collections::HashSet;
 
 fn decay(rate: f64) -> Vec<(f64, f64)> {

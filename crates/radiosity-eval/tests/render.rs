@@ -4,7 +4,7 @@
 
 use radiosity_core::{MaterialId, ObjectId, Patch, Real, Vec3};
 use radiosity_eval::EvalError;
-use radiosity_eval::render::{Camera, DEFAULT_FOV, Image, MAX_SIDE, RenderParams, corner_weights, render, srgb_byte};
+use radiosity_eval::{Camera, DEFAULT_FOV, Image, MAX_SIDE, RenderParams, corner_weights, render, srgb_byte};
 use radiosity_geom::Visibility;
 
 fn reproduce(patch: &Patch, s: Real, t: Real) {
@@ -112,7 +112,7 @@ fn png_bytes_decode_to_the_image() {
         .unwrap();
     let mut png = Vec::new();
     image.write_png(&mut png).unwrap();
-    let decoded = radiosity_eval::png_image::Rgb8::decode(&png).unwrap();
+    let decoded = radiosity_eval::Rgb8::decode(&png).unwrap();
     assert_eq!((decoded.width, decoded.height), (40, 40));
     assert_eq!(decoded.pixels, image.pixels);
     // A pixel buffer that does not match the size is refused, not written.

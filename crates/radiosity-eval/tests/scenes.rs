@@ -7,7 +7,7 @@
 //! matrix serves exact rows to gathering methods.
 
 use radiosity_core::{LinearSystem, Real};
-use radiosity_eval::metrics::errors;
+use radiosity_eval::errors;
 use radiosity_eval::{ConvergenceTable, Evaluator, FormFactors, ReferenceParams, ReferenceSolution, TableRow};
 use radiosity_ff::{Backend, BackendSpec, FormFactorInput};
 use radiosity_geom::{SceneAnalysis, Visibility, load_scene};

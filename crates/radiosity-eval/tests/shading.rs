@@ -3,7 +3,7 @@
 
 use radiosity_core::Real;
 use radiosity_eval::EvalError;
-use radiosity_eval::shading::vertex_radiosity;
+use radiosity_eval::vertex_radiosity;
 
 #[test]
 fn grids_are_smoothed_within_the_patch_values_and_creases_kept() {

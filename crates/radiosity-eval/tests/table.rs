@@ -1,7 +1,7 @@
 //! Convergence tables as CSV and Markdown, under snapshot tests, and significant-digit
 //! rounding.
 
-use radiosity_eval::table::round_significant;
+use radiosity_eval::round_significant;
 use radiosity_eval::{ConvergenceTable, TableRow};
 
 fn table() -> ConvergenceTable {

@@ -1,5 +1,5 @@
 //! The `analytic` backend: Lambert's point-to-polygon formula integrated over the receiving
-//! patch, times a visibility estimated with jittered shadow rays.
+//! patch, times a visible fraction estimated with shadow rays ([`crate::pair_visibility`]).
 //!
 //! ## Rule
 //!
@@ -87,7 +87,7 @@ pub struct AnalyticParams {
     /// a pair gets `budget` times its larger unoccluded form factor, at least `rays`, and
     /// stiff scenes more ([`crate::pair_visibility::stiffness_factor`]).
     pub budget: usize,
-    /// Seed of the jittered shadow rays.
+    /// Seed of the shadow rays.
     pub seed: u64,
     /// Mebibytes of recorded visible fractions, so that a pair is traced once
     /// ([`crate::visibility_cache`]; 0: none). It changes no entry, so the canonical argument
@@ -114,7 +114,7 @@ pub const ANALYTIC_PARAMS: &[ParamDoc] = &[
         doc: "shadow rays of a partly visible pair per unit of its larger unoccluded form factor, 0 to 2^24 \
               (times ((1 - 0.8) / (1 - mean ρ))², at most 64, in scenes whose mean ρ exceeds 0.8)",
     },
-    ParamDoc { key: "seed", default: "0", doc: "seed of the jittered shadow rays" },
+    ParamDoc { key: "seed", default: "0", doc: "seed of the shadow rays" },
     ParamDoc {
         key: "cache",
         default: "256",

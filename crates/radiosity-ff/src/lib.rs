@@ -4,7 +4,8 @@
 //! [`BackendSpec`] parsed from `NAME[:key=value…]`:
 //!
 //! - `analytic` ([`analytic`]): Lambert's point-to-polygon formula integrated over the
-//!   receiver, with jittered shadow rays when something can occlude;
+//!   receiver, times each pair's visible fraction, estimated with shadow rays drawn as the
+//!   kernel weighs them ([`pair_visibility`]) when something can occlude;
 //! - `hemicube` ([`hemicube`]): a ray-cast hemicube at the shooter, giving its row;
 //! - `montecarlo` ([`montecarlo`]): cosine-weighted rays from the shooter, giving its row;
 //! - `matrix` ([`matrix`]): the full matrix of another backend, assembled once and stored.
@@ -52,6 +53,6 @@ pub use error::FfError;
 pub use hemicube::HemicubeColumns;
 pub use matrix::StoredMatrix;
 pub use montecarlo::{MonteCarloColumns, RayTally};
-pub use spec::{AnalyticParams, BackendSpec, HemicubeParams, MonteCarloParams};
 pub use rays::{HitRay, ShadowSegment, TracedRays};
+pub use spec::{AnalyticParams, BackendSpec, HemicubeParams, MonteCarloParams};
 pub use traced::ColumnRays;

@@ -85,11 +85,8 @@
 //!   pair, which roughly halves their row-sum spread; this is where rebalancing earns its keep.
 //! - Rescaling rows then breaks reciprocity again, by about the spread of the row factors.
 //!
-//! Storage and time, analytic `order=8:tol=1e-4:rays=1`: `multi-cubes` is 13.5% non-zero,
-//! stored sparse in 245 KiB (dense: 900 KiB), assembled in 0.24 s. `office` (10 990 patches,
-//! `--force`) is 28.8% non-zero, stored sparse in 265.5 MiB (dense: 460.7 MiB), assembled in
-//! 62 s (175 columns/s) with a peak resident memory of 358 MB for the whole command; its cache
-//! file is 208 MB and loads in 0.5–1.7 s.
+//! What the stored matrices of the built-in scenes take and cost is measured in
+//! `docs/form-factors.md` and `docs/bench-office.md`.
 //!
 //! ## Files
 //!

@@ -1,171 +1,76 @@
-//! The visible fraction of a pair of patches, weighted by the form-factor kernel, estimated
-//! with stratified shadow rays and refined adaptively where the first rays disagree.
+//! The visible fraction of a pair of patches, weighted by the form-factor kernel, estimated with
+//! stratified shadow rays and refined adaptively where the first rays disagree.
 //!
-//! ## The quantity
-//!
-//! For patches `a`, `b` the analytic backend computes the unoccluded `U_ab` exactly and
-//! multiplies it by
-//!
-//! `V_ab = ∫_a ∫_b K(x, y) v(x, y) dy dx / ∫_a ∫_b K(x, y) dy dx`,
-//!
-//! `K = cos θ_x cos θ_y / (π r²)` the kernel and `v ∈ {0, 1}` the segment's visibility, so
-//! that `U_ab V_ab` is the occluded form factor (Cohen & Wallace 1993, §4.9; Sillion & Puech
-//! 1994, §3.3). `K` is zero unless `x` is in front of `b`'s plane and `y` in front of `a`'s,
-//! so both integrals run over `L × H`: `a` cut by `b`'s plane and `b` cut by `a`'s, convex
-//! polygons.
+//! For patches `a`, `b` the analytic backend computes the unoccluded `U_ab` exactly and multiplies
+//! it by `V_ab = ∫_a ∫_b K(x, y) v(x, y) dy dx / ∫_a ∫_b K(x, y) dy dx`, with
+//! `K = cos θ_x cos θ_y / (π r²)` the kernel and `v ∈ {0, 1}` the segment's visibility, so that
+//! `U_ab V_ab` is the occluded form factor (Cohen & Wallace 1993, §4.9; Sillion & Puech 1994,
+//! §3.3). `K` is zero unless `x` is in front of `b`'s plane and `y` in front of `a`'s, so both
+//! integrals run over `L × H`: `a` cut by `b`'s plane and `b` cut by `a`'s, convex polygons. The
+//! design's history and its measurements are in `docs/visibility-estimator.md`.
 //!
 //! ## How many rays
 //!
-//! A pair gets `k = max(rays, ⌈budget · u⌉)` segments, `u` its larger unoccluded form factor
-//! (the one of its smaller patch). A row's error is `Σ_j U_ij (V̂_ij − V_ij)`; with the
-//! variance of `V̂` at most about `σ² / k`, giving each pair rays in proportion to `U` makes
-//! a row's variance at most about `σ² Σ_j U_ij / budget`, whatever the sizes of its pairs,
-//! and a row's rays at most `budget · Σ_j U_ij` on top of one per pair. `σ²` is `V (1 − V)
-//! ≤ 1/4` for a pair estimated from its `k` segments and about `0.37` for one whose probe
-//! agreed by chance ("Probes"). The many distant pairs of a large scene get one ray each, the
-//! few near ones hundreds.
+//! A pair gets `k = max(rays, ⌈budget · u⌉)` segments ([`RayBudget`]), `u` its larger unoccluded
+//! form factor. With `V̂`'s variance at most about `σ² / k`, a row's error
+//! `Σ_j U_ij (V̂_ij − V_ij)` has variance at most about `σ² Σ_j U_ij / budget` whatever its pairs'
+//! sizes; `σ²` is `V (1 − V) ≤ 1/4`, or about `0.37` after a chance agreement ("Probes").
 //!
 //! ## Stiff scenes
 //!
-//! An error `δ` in the area-weighted mean row sum moves the solution of a closed scene by about
-//! `δ ρ̄ / (1 − ρ̄)` (DESIGN §5), and the noise in `δ` falls like `1/√budget`. So a scene whose
-//! most reflective channel has area-weighted mean reflectivity `ρ̄ > 0.8` gets the budget
-//! times `((1 − 0.8) / (1 − ρ̄))²`, at most 64: its solution is then as noisy as a scene's at
-//! `ρ̄ = 0.8` up to `ρ̄ = 0.975`, and the factor stays at 64 beyond. On a closed box with a
-//! block at `ρ = 0.99` the mean row sum's seed-to-seed spread was 1e-4 at the plain budget,
-//! which the reference amplifies to 1% of `E/(1 − ρ)`; at its factor of 64 the reference is
-//! within 0.25% of it (three seeds; 32 times left one seed 0.87% off). Scenes
-//! without shadow rays (`V = 1`) spend nothing on it, and the built-in scenes of the paper
-//! (ρ̄ ≤ 0.6) none either.
+//! An error `δ` in the area-weighted mean row sum (its noise falls like `1/√budget`) moves a closed
+//! scene's solution by about `δ ρ̄ / (1 − ρ̄)` (DESIGN §5). So where the most reflective channel's
+//! area-weighted mean `ρ̄` exceeds 0.8, the budget is multiplied by `((1 − 0.8) / (1 − ρ̄))²`,
+//! rounded up, at most 64 ([`stiffness_factor`]): as noisy as at `ρ̄ = 0.8` up to `ρ̄ = 0.975`.
 //!
 //! ## Which patch is which
 //!
-//! The points `x` of the estimates below are drawn on `a`, and `a` is the smaller patch of
-//! the pair: the caller decides by the rule its quadrature uses (areas, the lower index on a
-//! tie), so `(i, j)` and `(j, i)` give the same roles. On `a`, `F(dA_x → H)` averages `u`
-//! and is at most 1, so no point weighs more than `1/u` times the mean. On the larger patch
-//! it averages `u A_a / A_b`, and a small part of that patch near the smaller one can hold
-//! nearly all of the kernel.
+//! The points `x` are drawn on `a`, the smaller patch by the caller's quadrature rule (areas, then
+//! the lower index), so `(i, j)` and `(j, i)` agree. On `a`, `F(dA_x → H) ≤ 1` averages `u`: no
+//! point weighs more than `1/u` times the mean.
 //!
 //! ## Few rays: both ends drawn by the kernel
 //!
-//! With `k < 16`, each segment's ends are drawn in proportion to the kernel, so that each
-//! segment is clear with probability exactly `V` and the estimate, the clear fraction, is
-//! unbiased for any `k`.
-//!
-//! Most such pairs are small against their distance (a pair gets few rays because its
-//! unoccluded factor is small). For them both ends are drawn together, by rejection from
-//! points uniform by area on `L × H` (a Latin hypercube over both squares for the first
-//! proposal of each segment), each kept with probability `K(x, y) / K̂`, where
-//! `K̂ = (max_H n_a · y − min_L n_a · x)(max_L n_b · x − min_H n_b · y) / d⁴` bounds the
-//! kernel over `L × H` (both factors are linear, so their maxima are at vertices, and
-//! `d = |c_L − c_H| − ρ_L − ρ_H`, `ρ` the reach of each polygon from its centre, bounds `r`
-//! from below). The kept pairs `(x, y)` then have density in proportion to `K`, exactly. This
-//! is used when `K̂` is at most twice the kernel between the centres, so that about half the
-//! proposals or more are kept; it costs a few dot products a proposal, where the draw below
-//! costs Lambert's formula for `x` and Arvo's map, with its trigonometry, for `y` (on
-//! `office`, three quarters of the pairs a column traces, and most of its sampling time).
-//!
-//! Otherwise `x` is drawn on `L` in proportion to `F(dA_x → H)` by rejection from uniform
-//! points (bounded by the largest value at `L`'s corners and edge midpoints, moved a hair
-//! inwards, and at its centre, with a margin of 1.25; such pairs are small against their
-//! distance, where `F(dA_x → H)` varies little), and `y` on `H` in proportion to
-//! `cos θ_x cos θ_y / r²` from `x`: a direction uniform in `H`'s solid angle at `x` (Arvo
-//! 1995, [`crate::solid_angle`]) is kept with probability `cos θ_x / max cos θ_x`, the cosine
-//! at `y` and `1/r²` being the solid angle's own measure. The first point and the first
-//! direction tried come from a Latin hypercube over both squares, so that the segments
-//! spread out; a rejected one is redrawn freely. The corners and midpoints are moved inwards
-//! because on `L`'s edge along `b`'s plane, `H` is cut a tolerance away too and
-//! `F(dA_x → H)` falls short of its value just inside: for a floor and a wall sharing an
-//! edge, 0.35 there against 0.5 just inside. The bound then fell below the largest value,
-//! and with only the floor's strip 0.05 wide along the edge visible, the estimate came out 5%
-//! low (9 standard errors over 200 000 segments); it is within 1 standard error now. The
-//! one-ray estimator all this replaces drew both ends uniformly by area, which weights
-//! visibility by area rather than by the kernel (0.5% low in the row sums of a box with a
-//! block), and drew them on the whole patches: a segment to the part of `b` behind `a`'s
-//! plane enters `a`'s own solid and is blocked.
+//! With `k < 16` both ends of a segment are drawn in proportion to the kernel: the clear fraction
+//! is unbiased. Where `K̂`, a bound on the kernel over `L × H`, is at most twice the kernel between
+//! the centres, they are drawn jointly: points uniform on `L × H`, kept with probability
+//! `K(x, y) / K̂`. Otherwise `x` is drawn on `L` in proportion to `F(dA_x → H)` by rejection,
+//! bounded by 1.25 times its largest value at `L`'s centre, corners and edge midpoints (a hair
+//! inside); then a direction uniform in `H`'s solid angle (Arvo 1995, [`crate::solid_angle`]) is
+//! kept with probability `cos θ_x / max cos θ_x`. First proposals come from a Latin hypercube.
 //!
 //! ## Many rays: a point per segment, both ends stratified together
 //!
-//! With `k ≥ 16`, each of the `k` segments has its own `x` and its own direction to `y`,
-//! from the four coordinates of one point of an Owen-scrambled Sobol net ([`crate::sobol`]).
-//! The first two are mapped to `L` (by area) through a density `p` that is constant on the
-//! cells of a grid over `L`'s parameter square and in proportion to the largest
-//! `F(dA_x → H)` at each cell's corners (a hair inside the cell), with at least `10⁻³` of
-//! the largest cell's. The grid has `⌊√k / 4⌋ ∈ [4, 16]` cells a side (`4 side² ≤ k / 4`
-//! evaluations for `k ≥ 256`), and a single cell where `F(dA_x → H)` varies by less than a
-//! factor 2 over the points of the rejection bound above. The last two are the first
-//! direction tried in Arvo's map of `H` seen from `x`, kept by the cosine test above. Then
-//!
-//! `V̂ = Σ w(x) v(x, y) / Σ w(x)`,  `w(x) = F(dA_x → H) / p(x)`,
-//!
-//! with `F(dA_x → H)` Lambert's exact point-to-polygon factor: `y` is drawn in proportion to
-//! the kernel from `x`, and `x` with density `p`, so the weighed sums estimate `∫∫ K v` and
-//! `∫∫ K`. A fully visible pair gives exactly 1 and a hidden one exactly 0, and the one bias
-//! left, of the ratio, falls like `1/k`. The grid only has to follow `F(dA_x → H)` closely
-//! enough that the weights stay near their mean; where it varies fast, near a shared edge,
-//! it draws the points there.
-//!
-//! Why a net over four dimensions: a visibility boundary moves with both ends of a segment
-//! (a desk's edge hides part of the floor from one point of a wall and another part from the
-//! next), so stratifying `x` and the direction each on its own, a Latin hypercube in each of
-//! two squares paired at random as before, leaves their joint variation to chance; the net
-//! stratifies boxes over all four coordinates at once (every box of `2^{d₁} × … × 2^{d₄}`
-//! cells with `Σ d = m − 3` holds 8 of its first `2^m` points), and its variance for such
-//! boundaries falls faster than `1/k` (He & Wang 2015). A rejected direction is redrawn outside
-//! the net. Weighing every direction by its cosine instead of rejecting (`w = Ω(x) cos θ_x /
-//! p(x)`, the direction uniform in the solid angle `Ω(x)`) keeps all of them in the net, but
-//! the cosine's own spread then enters the weights: it helped small patches next to large
-//! ones and hurt large patches facing each other, and was dropped.
-//!
-//! This replaces strata on `b`: `H` cut into up to 64 cells, and `k / 64` points `x`, uniform
-//! on `a` (the lower index), each joined to a point drawn in every cell and weighed by the
-//! cell's factor. That weighed each point's view of `H` exactly but rested on `√k` to
-//! `k / 64` points `x`, which is what counts when visibility changes across `a`, and with `a`
-//! the larger patch a few of them carried nearly all the weight. In a 2 cm slot 7 cm deep of
-//! the MGF classroom, a desk top's underside (0.70 m², the lower index) reaches 5 mm into
-//! the slot's opening, and only that 5 mm strip, 0.85% of the desk top, sees the slot's wall
-//! (0.079 m²) past its other wall: 91 points on the desk top gave a visible fraction of 0.078
-//! on average but spread 0.070 (binomial spread for its 5 866 segments: 0.0035); the
-//! classroom's own draw gave 0.31, above all of 400 others, and the wall's row summed to
-//! 1.076; the test `pair_visibility::a_wall_seeing_a_desk_top_through_a_slot` holds the
-//! case. Two other weights were measured before and dropped: the point-to-point kernel of
-//! each segment, and a cell's factor seen from an independent point; both give a few
-//! segments near a shared edge weights thousands of times the typical one.
+//! With `k ≥ 16` each segment takes `x` and its direction to `y` from one point of a
+//! four-dimensional Sobol net, Owen-scrambled (Owen 1995, [`crate::sobol`]). Two coordinates map to
+//! `L` through a density `p` constant on the cells of a grid over `L`'s parameter square
+//! (`⌊√k / 4⌋ ∈ [4, 16]` a side; one cell where `F(dA_x → H)` varies by less than a factor 2), in
+//! proportion to the largest `F(dA_x → H)` at each cell's corners and at least `10⁻³` of the
+//! largest cell's. Two give the first direction tried in Arvo's map, kept by the cosine test (a
+//! rejected one is redrawn outside the net). Then `V̂ = Σ w(x) v(x, y) / Σ w(x)`,
+//! `w(x) = F(dA_x → H) / p(x)`: fully visible and hidden pairs give exactly 1 and 0, the ratio's
+//! bias falls like `1/k`, and for a boundary that moves with both ends the variance falls faster
+//! than `1/k` (He & Wang 2015).
 //!
 //! ## Probes
 //!
-//! Most pairs of a scene are fully visible or fully hidden, and need no refinement. A pair
-//! given `k ≥ 16` rays is first probed with `m = ⌈√k⌉` segments drawn as for many rays,
-//! from the grid of its `k` (so nearly as the kernel weighs them). When they agree (all
-//! clear or all blocked) the pair is estimated from `m` fresh segments, otherwise from `k`
-//! fresh ones. The estimate never reuses the probe: an estimate from the very segments that
-//! decided to stop is biased (a pair 20% visible whose few probes all happen to be blocked
-//! would count as hidden, and nothing would make up for it; on `multi-cubes`, whose partly
-//! visible pairs are mostly hidden, that put the mean row sum 1.5% low). With the decision
-//! and the estimate independent, the estimate's expectation is `V` whichever way the probe
-//! decided, and a fully visible or hidden pair still comes out exactly 1 or 0. This is the
-//! visibility classification of hierarchical radiosity (Hanrahan, Salzman & Aupperle 1991),
-//! with rays instead of shafts.
+//! A pair given `k ≥ 16` rays is first probed with `m = ⌈√k⌉` segments drawn from its grid: if all
+//! agree, it is estimated from `m` fresh segments, otherwise from `k`. The estimate never reuses
+//! the probe, so it is independent of the decision and its expectation is `V` either way:
+//! hierarchical radiosity's visibility classification (Hanrahan, Salzman & Aupperle 1991), with
+//! rays for shafts. A chance agreement costs variance at most about `e^{−1} / m² = 0.37 / k`. The
+//! random stream is keyed by the unordered pair, so `V_ab = V_ba` exactly.
 //!
-//! The probe's size and how its segments are drawn set the variance a partly visible pair
-//! pays when its probe agrees by chance. If a share `q` of the kernel goes the other way,
-//! that happens with probability about `e^{−qm}` and leaves an estimate from `m` segments,
-//! of variance about `q / m`: at most `e^{−1} / m²` (at `q = 1/m`), which is `0.37 / k` for
-//! `m = √k`, the order of the `k`-segment estimate's own `V (1 − V) / k`. The probes used
-//! before had `k / 16` segments, which gives `95 / k²`, more than that below `k ≈ 400`: on
-//! the MGF classroom, the row sum of a 2 × 8 cm patch (3213, as `PreparedScene` numbers the
-//! scene) spread 0.0059 over 32 seeds with them and 0.0036 with `√k`, for the same number of
-//! segments (8 750 and 8 732 per column). And they were drawn uniformly by area, so that
-//! `q` was the visible share of the area, not of the kernel: for another of the classroom's
-//! slots (patches 5490 and 5266), 0.4% of the area against 7.5% of the kernel, so its 76
-//! probes agreed 71% of the time (0.1% drawn from the grid) and its factor spread 0.0074
-//! (29%) against 0.0011. Giving an agreed pair `4m` fresh segments instead of `m` was
-//! measured too: rows spread 20% less for 77% more segments, a worse trade than a larger
-//! `budget`.
+//! ## References
 //!
-//! The samples come from the caller's random stream, keyed by the unordered pair, so `V_ab =
-//! V_ba` exactly and a pair's value does not depend on the thread or column that computes it.
+//! - M. F. Cohen, J. R. Wallace, *Radiosity and Realistic Image Synthesis*, Academic Press 1993.
+//! - F. X. Sillion, C. Puech, *Radiosity and Global Illumination*, Morgan Kaufmann 1994.
+//! - J. Arvo, "Stratified sampling of spherical triangles", SIGGRAPH 1995, 437–438.
+//! - A. B. Owen, "Randomly permuted (t,m,s)-nets and (t,s)-sequences", Springer 1995, 299–317.
+//! - Z. He, X. Wang, "On the convergence rate of randomized quasi-Monte Carlo for discontinuous
+//!   functions", SIAM J. Numer. Anal. 53(5), 2015.
+//! - P. Hanrahan, D. Salzman, L. Aupperle, "A rapid hierarchical radiosity algorithm", SIGGRAPH
+//!   1991 (Computer Graphics 25(4)), 197–206.
 
 use crate::ff_point_polygon::{MAX_CLIPPED, clip_above, point_to_polygon, point_to_polygon_each, point_to_polygon_x4};
 use crate::sobol::scrambled_sobol;

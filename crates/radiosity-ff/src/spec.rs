@@ -5,8 +5,8 @@
 //! parameters it does not take itself go to that backend:
 //! `matrix:of=hemicube:res=64:rebalance=true`.
 
-use crate::error::FfError;
 pub use crate::analytic::{ANALYTIC_PARAMS, AnalyticParams};
+use crate::error::FfError;
 pub use crate::hemicube::{HEMICUBE_PARAMS, HemicubeParams};
 pub use crate::montecarlo::{MONTECARLO_PARAMS, MonteCarloParams};
 use radiosity_geom::{KeyValueParams, ParamDoc};

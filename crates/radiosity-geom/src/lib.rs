@@ -35,6 +35,7 @@ pub use error::GeomError;
 pub use hidden::{HiddenGeometry, HiddenParams, HiddenPatch, HiddenReason, PartialContact};
 pub use mesh::SceneBuilder;
 pub use prepared::{DecisionReport, GeometryReport, PreparedScene, SceneReport, SetupSeconds};
+pub use scenes::camera::CameraPreset;
 pub use scenes::{BuiltinScene, builtin_scenes};
 pub use spatial_order::spatial_order;
 pub use spec::{KeyValueParams, ParamDoc};

@@ -25,8 +25,9 @@
 use crate::LoadedScene;
 use crate::error::GeomError;
 use crate::mesh::SceneBuilder;
+use crate::scenes::camera::CameraPreset;
 use crate::spec::{KeyValueParams, ParamDoc};
-use radiosity_core::{Material, MaterialId, ObjectId, Spectrum, Vec3};
+use radiosity_core::{Material, MaterialId, ObjectId, Scene, Spectrum, Vec3};
 
 /// One line for scene listings.
 pub const SUMMARY: &str = "the published Cornell box (mm, open front), light in the ceiling, two blocks";
@@ -128,4 +129,16 @@ pub fn build(name: &str, params: &KeyValueParams) -> Result<LoadedScene, GeomErr
         }
     }
     Ok(LoadedScene { scene: b.build()?, warnings: Vec::new() })
+}
+
+/// The camera preset: the published camera (focal length 35 mm, 25 mm film: 39.3°), from in
+/// front of the open side at z = 0, red wall (x ≈ 556) on the left. A closed box
+/// (`front=true`) is seen from just inside its front wall, high, looking down past the blocks.
+pub fn camera(scene: &Scene) -> CameraPreset {
+    let v = Vec3::new;
+    if scene.objects().iter().any(|o| o == "front wall") {
+        CameraPreset { eye: v(278.0, 440.0, 8.0), target: v(278.0, 180.0, 559.2), fov: 72.0 }
+    } else {
+        CameraPreset { eye: v(278.0, 273.0, -800.0), target: v(278.0, 273.0, 0.0), fov: 39.3 }
+    }
 }

@@ -14,8 +14,9 @@
 use crate::LoadedScene;
 use crate::error::GeomError;
 use crate::mesh::{BoxFace, Facing, SceneBuilder};
+use crate::scenes::camera::CameraPreset;
 use crate::spec::{KeyValueParams, ParamDoc};
-use radiosity_core::{Material, Spectrum, Vec3};
+use radiosity_core::{Material, Scene, Spectrum, Vec3};
 
 /// One line for scene listings.
 pub const SUMMARY: &str = "closed box of one material, optional inner block; exact answer E/(1-rho)";
@@ -47,4 +48,14 @@ pub fn build(name: &str, params: &KeyValueParams) -> Result<LoadedScene, GeomErr
         b.axis_box([Vec3::splat(0.3), Vec3::splat(0.7)], &BoxFace::ALL, Facing::Outward, target, material, inner)?;
     }
     Ok(LoadedScene { scene: super::scaled(b.build()?, scale)?, warnings: Vec::new() })
+}
+
+/// The camera preset: inside the closed cube (the unit cube times `scale`, from the bounds of
+/// `scene`), near a top corner, looking across to the opposite bottom corner (past the inner
+/// block, if any).
+pub fn camera(scene: &Scene) -> CameraPreset {
+    let v = Vec3::new;
+    let (lo, hi) = scene.bounds();
+    let size = (hi - lo).max_element();
+    CameraPreset { eye: lo + size * v(0.08, 0.85, 0.08), target: lo + size * v(0.75, 0.3, 0.75), fov: 75.0 }
 }

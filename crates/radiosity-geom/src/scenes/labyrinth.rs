@@ -33,8 +33,9 @@
 use crate::LoadedScene;
 use crate::error::GeomError;
 use crate::mesh::{BoxFace, Facing, SceneBuilder};
+use crate::scenes::camera::CameraPreset;
 use crate::spec::{KeyValueParams, ParamDoc};
-use radiosity_core::{Material, Real, Spectrum, Vec3};
+use radiosity_core::{Material, Real, Scene, Spectrum, Vec3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -248,4 +249,13 @@ pub fn build(name: &str, params: &KeyValueParams) -> Result<LoadedScene, GeomErr
         b.quad_sized(BoxFace::MinY.corners(centre - half, centre + half), size, lamp, object)?;
     }
     Ok(LoadedScene { scene: b.build()?, warnings: Vec::new() })
+}
+
+/// The camera preset: the maze is open to the sky, so it is seen from above its front edge,
+/// looking down at its middle (from the bounds of `scene`, whatever its size).
+pub fn camera(scene: &Scene) -> CameraPreset {
+    let v = Vec3::new;
+    let (lo, hi) = scene.bounds();
+    let (c, size) = ((lo + hi) * 0.5, (hi - lo).max_element());
+    CameraPreset { eye: v(c.x, 0.8 * size, lo.z - 0.25 * size), target: v(c.x, 0.0, c.z), fov: 52.0 }
 }

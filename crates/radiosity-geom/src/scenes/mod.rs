@@ -1,10 +1,12 @@
 //! The built-in scenes, each in its own module with its layout, emitters and colours
-//! documented there, and the registry that finds them by name.
+//! documented there and the camera preset it is best seen from ([`camera`]), and the registry
+//! that finds them by name.
 //!
 //! All built-in scenes are procedural and deterministic: the same name and parameters give
 //! the same patches in the same order (scenes with random layout take a `seed`). The y axis is
 //! up in every built-in scene.
 
+pub mod camera;
 pub mod cornell;
 pub mod furnace;
 pub mod inner_box;
@@ -15,10 +17,12 @@ pub mod office;
 use crate::LoadedScene;
 use crate::error::GeomError;
 use crate::mesh::SceneBuilder;
+use crate::scenes::camera::CameraPreset;
 use crate::spec::{KeyValueParams, ParamDoc};
 use radiosity_core::{Real, Scene, Vec3};
 
-/// A built-in scene: its name, a one-line summary, its parameters and its generator.
+/// A built-in scene: its name, a one-line summary, its parameters, its generator and its
+/// camera preset.
 #[derive(Clone, Copy, Debug)]
 pub struct BuiltinScene {
     /// The name used on the command line.
@@ -28,12 +32,18 @@ pub struct BuiltinScene {
     /// The `key=value` parameters it takes.
     pub params: &'static [ParamDoc],
     generator: fn(&str, &KeyValueParams) -> Result<LoadedScene, GeomError>,
+    camera: Option<fn(&Scene) -> CameraPreset>,
 }
 
 impl BuiltinScene {
     /// Builds the scene; `full_name` (with parameters) becomes the scene's name.
     pub fn build(&self, full_name: &str, params: &KeyValueParams) -> Result<LoadedScene, GeomError> {
         (self.generator)(full_name, params)
+    }
+
+    /// Where to see `scene` (this scene, as built) from, when the scene has a preset.
+    pub fn camera(&self, scene: &Scene) -> Option<CameraPreset> {
+        self.camera.map(|preset| preset(scene))
     }
 }
 
@@ -43,21 +53,43 @@ const BUILTIN: &[BuiltinScene] = &[
         summary: multi_cubes::SUMMARY,
         params: multi_cubes::PARAMS,
         generator: multi_cubes::build,
+        camera: Some(multi_cubes::camera),
     },
     BuiltinScene {
         name: "labyrinth",
         summary: labyrinth::SUMMARY,
         params: labyrinth::PARAMS,
         generator: labyrinth::build,
+        camera: Some(labyrinth::camera),
     },
-    BuiltinScene { name: "office", summary: office::SUMMARY, params: office::PARAMS, generator: office::build },
-    BuiltinScene { name: "cornell", summary: cornell::SUMMARY, params: cornell::PARAMS, generator: cornell::build },
-    BuiltinScene { name: "furnace", summary: furnace::SUMMARY, params: furnace::PARAMS, generator: furnace::build },
+    BuiltinScene {
+        name: "office",
+        summary: office::SUMMARY,
+        params: office::PARAMS,
+        generator: office::build,
+        camera: Some(office::camera),
+    },
+    BuiltinScene {
+        name: "cornell",
+        summary: cornell::SUMMARY,
+        params: cornell::PARAMS,
+        generator: cornell::build,
+        camera: Some(cornell::camera),
+    },
+    BuiltinScene {
+        name: "furnace",
+        summary: furnace::SUMMARY,
+        params: furnace::PARAMS,
+        generator: furnace::build,
+        camera: Some(furnace::camera),
+    },
     BuiltinScene {
         name: "inner-box",
         summary: inner_box::SUMMARY,
         params: inner_box::PARAMS,
         generator: inner_box::build,
+        // None: seen as any scene without a preset is.
+        camera: None,
     },
 ];
 

@@ -18,8 +18,9 @@
 use crate::LoadedScene;
 use crate::error::GeomError;
 use crate::mesh::{BoxFace, Facing, SceneBuilder};
+use crate::scenes::camera::CameraPreset;
 use crate::spec::{KeyValueParams, ParamDoc};
-use radiosity_core::{Material, Spectrum, Vec3};
+use radiosity_core::{Material, Scene, Spectrum, Vec3};
 
 /// One line for scene listings.
 pub const SUMMARY: &str = "the paper's multi-cubes: 64 small cubes inside a large cube, heavy occlusion";
@@ -80,4 +81,11 @@ pub fn build(name: &str, params: &KeyValueParams) -> Result<LoadedScene, GeomErr
         }
     }
     Ok(LoadedScene { scene: b.build()?, warnings: Vec::new() })
+}
+
+/// The camera preset: inside the closed cube [0, 4]³, against the front wall (z = 0) where two
+/// gaps of the lattice cross (x = y = 1), looking up across the cubes to the ceiling light.
+pub fn camera(_scene: &Scene) -> CameraPreset {
+    let v = Vec3::new;
+    CameraPreset { eye: v(1.0, 1.0, 0.05), target: v(3.0, 3.0, 4.0), fov: 80.0 }
 }

@@ -37,8 +37,9 @@
 use crate::LoadedScene;
 use crate::error::GeomError;
 use crate::mesh::{SceneBuilder, divisions};
+use crate::scenes::camera::CameraPreset;
 use crate::spec::{KeyValueParams, ParamDoc};
-use radiosity_core::{Material, MaterialId, ObjectId, Real, Spectrum, Vec3};
+use radiosity_core::{Material, MaterialId, ObjectId, Real, Scene, Spectrum, Vec3};
 
 /// One line for scene listings.
 pub const SUMMARY: &str = "the paper's office: furnished room, ceiling light panels, few occlusions, small patches";
@@ -426,4 +427,11 @@ pub fn build(name: &str, params: &KeyValueParams) -> Result<LoadedScene, GeomErr
         }
     }
     Ok(LoadedScene { scene: b.build()?, warnings: Vec::new() })
+}
+
+/// The camera preset: inside the room [0, 7.2] × [0, 2.7] × [0, 6], at eye height in the front
+/// left corner, looking across the desks to the bookcases and filing cabinets.
+pub fn camera(_scene: &Scene) -> CameraPreset {
+    let v = Vec3::new;
+    CameraPreset { eye: v(0.3, 1.7, 0.3), target: v(5.0, 0.9, 5.0), fov: 70.0 }
 }

@@ -1,0 +1,117 @@
+//! Running a comparison: every solver in turn on one lab, under the same stop rules and
+//! recording ([`Lab::compare`]), and what it measured ([`Comparison`]), which
+//! [`crate::reports`] writes as `convergence.csv`, `report.md`, plots and a terminal summary.
+//! Without a reference (`--reference none`) the certified bound of every step stands in for
+//! e_rms ([`Comparison::metric`]).
+//!
+//! Measurement never counts as solver time: it is reported apart (see [`crate::lab`]).
+
+use crate::error::LabError;
+use crate::lab::options::ColumnCharge;
+use crate::lab::outcome::Outcome;
+use crate::lab::recorder::{Point, RecordPlan};
+use crate::lab::setup::{ChosenReference, Lab, ReferenceOrigin};
+use crate::progress::Progress;
+use radiosity_core::Real;
+use radiosity_geom::SceneReport;
+use radiosity_solvers::{Problem, Solver, StopRules};
+
+impl Lab<'_> {
+    /// Runs every solver in turn under the same rules and recording: the comparison that
+    /// [`Comparison::write`] reports. A solver that refuses these form factors
+    /// ([`Solver::applicable`]) stops the comparison before anything runs.
+    pub fn compare(
+        &self,
+        solvers: Vec<Box<dyn Solver>>,
+        rules: &StopRules,
+        progress: &dyn Progress,
+    ) -> Result<Comparison, LabError> {
+        // A solver whose hypothesis these form factors break is refused before any runs.
+        let problem = Problem::new(self.system(), self.source())?;
+        for solver in &solvers {
+            solver.applicable(&problem)?;
+        }
+        let mut outcomes = Vec::with_capacity(solvers.len());
+        for mut solver in solvers {
+            outcomes.push(self.run(solver.as_mut(), rules, &RecordPlan::default(), progress)?);
+        }
+        Ok(Comparison::new(self, rules, outcomes))
+    }
+}
+
+/// What a comparison measured, with what it needs to report it.
+#[derive(Clone, Debug)]
+pub struct Comparison {
+    /// The scene's report.
+    pub scene: SceneReport,
+    /// Patches.
+    pub n: u64,
+    /// The backend's label.
+    pub backend: String,
+    /// The stop rules every solver ran under, as written.
+    pub rules: String,
+    /// The reference's kind and why it was chosen.
+    pub reference_kind: ChosenReference,
+    /// The reference's method, unless the reference is `none`.
+    pub reference_method: Option<String>,
+    /// The reference's certificate, unless the reference is `none`.
+    pub reference_certificate: Option<String>,
+    /// Where the reference came from.
+    pub reference_origin: ReferenceOrigin,
+    /// One per solver, in order.
+    pub outcomes: Vec<Outcome>,
+    /// What each column was charged, when the lab served columns from its stored matrix
+    /// (`None`: every column was computed and timed).
+    pub charge: Option<ColumnCharge>,
+}
+
+impl Comparison {
+    /// The comparison of `outcomes`, run on `lab` under `rules`.
+    pub fn new(lab: &Lab<'_>, rules: &StopRules, outcomes: Vec<Outcome>) -> Comparison {
+        Comparison {
+            scene: lab.report().clone(),
+            n: lab.n() as u64,
+            backend: lab.backend().to_string(),
+            rules: rules.rules.iter().map(|r| r.to_string()).collect::<Vec<_>>().join(","),
+            reference_kind: lab.chosen().clone(),
+            reference_method: lab.reference().map(|r| r.method().to_string()),
+            reference_certificate: lab.reference().map(|r| r.certificate().to_string()),
+            reference_origin: lab.origin().clone(),
+            outcomes,
+            charge: lab.charge().copied(),
+        }
+    }
+
+    /// The outcome of `solver`, by name.
+    pub fn outcome(&self, solver: &str) -> Option<&Outcome> {
+        self.outcomes.iter().find(|o| o.solver == solver)
+    }
+
+    /// Whether the runs were measured against a reference (otherwise the certified bound
+    /// stands in for e_rms).
+    pub fn has_reference(&self) -> bool {
+        self.reference_method.is_some()
+    }
+
+    /// The name of the curve the tables and plots show: `e_rms`, or `bound` without a
+    /// reference.
+    pub fn metric(&self) -> &'static str {
+        if self.has_reference() { "e_rms" } else { "bound" }
+    }
+
+    /// The shown metric of a point.
+    pub(crate) fn value(&self, p: &Point) -> Real {
+        if self.has_reference() { p.e_rms } else { p.bound }
+    }
+
+    /// The first point of `o` where the shown metric ([`Comparison::metric`]) is at or below
+    /// `target`.
+    pub fn reached<'o>(&self, o: &'o Outcome, target: Real) -> Option<&'o Point> {
+        o.points.iter().find(|p| self.value(p) <= target)
+    }
+
+    /// The shown metric of `o` after `step` steps (the last point if the run ended before).
+    pub fn at_step(&self, o: &Outcome, step: u64) -> Option<Real> {
+        o.points.iter().take_while(|p| p.step <= step).last().map(|p| self.value(p)).filter(|v| !v.is_nan())
+    }
+}

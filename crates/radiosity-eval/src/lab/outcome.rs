@@ -1,0 +1,103 @@
+//! What one run did and measured ([`Outcome`]): its points, its recorded rows, its final state
+//! and the metrics of its final radiosity ([`FinalMetrics`]).
+
+use crate::lab::recorder::{Point, TableRow};
+use radiosity_core::Real;
+use radiosity_solvers::{Record, State};
+
+/// The metrics of a run's final radiosity.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FinalMetrics {
+    /// e_rms against the reference, when there is one.
+    pub e_rms: Option<Real>,
+    /// e_max against the reference, when there is one.
+    pub e_max: Option<Real>,
+    /// The residual power of the displayed radiosity, when F is kept.
+    pub residual: Option<Real>,
+    /// The certified bound on its area-weighted L1 error relative to the reference's L1 norm:
+    /// the solver's own ([`SolverBound`]), or from F's residual when the solver knows none and F
+    /// is kept; `None` when neither is there.
+    ///
+    /// [`SolverBound`]: crate::SolverBound
+    pub bound: Option<Real>,
+    /// The residual power the solver knows without F (for shooting methods, that of the shot
+    /// radiosity), when it knows one.
+    pub solver_residual: Option<Real>,
+}
+
+/// What one run did and measured.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// The solver's name.
+    pub solver: String,
+    /// e_rms after every step.
+    pub points: Vec<Point>,
+    /// Every metric at the planned steps.
+    pub rows: Vec<TableRow>,
+    /// The final state.
+    pub state: State,
+    /// Why the run ended.
+    pub termination: String,
+    /// The solver's own figures (group sizes, condition numbers, fallbacks).
+    pub record: Record,
+    /// Seconds spent measuring, outside the run.
+    pub overhead: Real,
+    /// The final radiosity's metrics.
+    pub last: FinalMetrics,
+}
+
+impl Outcome {
+    /// e_rms after `step` steps (the last point if the run ended before).
+    pub fn at_step(&self, step: u64) -> Option<Real> {
+        self.points.iter().take_while(|p| p.step <= step).last().map(|p| p.e_rms)
+    }
+
+    /// The columns computed after `step` steps.
+    pub fn columns_at_step(&self, step: u64) -> Option<u64> {
+        self.points.iter().take_while(|p| p.step <= step).last().map(|p| p.columns)
+    }
+
+    /// e_rms when `columns` columns had been computed (the first step there).
+    pub fn at_columns(&self, columns: u64) -> Option<Real> {
+        self.at_columns_point(columns).map(|p| p.e_rms)
+    }
+
+    /// The point where `columns` columns had been computed (the first step there).
+    pub fn at_columns_point(&self, columns: u64) -> Option<Point> {
+        self.points.iter().find(|p| p.columns >= columns).filter(|p| p.columns == columns).copied()
+    }
+
+    /// The first point whose certified bound is at or below `target`.
+    pub fn bound_reached(&self, target: Real) -> Option<&Point> {
+        self.points.iter().find(|p| p.bound <= target)
+    }
+
+    /// The first point at or below `target`.
+    pub fn reached(&self, target: Real) -> Option<&Point> {
+        self.points.iter().find(|p| p.e_rms <= target)
+    }
+
+    /// The points where e_rms first fell to each power of ten from 1e-1 down.
+    pub fn reached_powers(&self) -> Vec<(Real, Point)> {
+        let mut out = Vec::new();
+        for k in 1..=15 {
+            let target = 10f64.powi(-k);
+            match self.reached(target) {
+                Some(p) => out.push((target, *p)),
+                None => break,
+            }
+        }
+        out
+    }
+
+    /// The group-solve share of the run's time.
+    pub fn group_share(&self) -> Real {
+        let total = self.state.ff_seconds + self.state.solve_seconds;
+        if total > 0.0 { self.state.group_seconds / total } else { 0.0 }
+    }
+
+    /// The run's own seconds: form factors and solving.
+    pub fn seconds(&self) -> Real {
+        self.state.ff_seconds + self.state.solve_seconds
+    }
+}

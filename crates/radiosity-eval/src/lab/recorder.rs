@@ -1,0 +1,228 @@
+//! The recorder: an observer the executor calls between steps, outside the timed region, that
+//! measures e_rms and the certified bound after every step and every metric at planned steps
+//! ([`RecordPlan`]), its own time kept apart.
+
+use crate::lab::options::ColumnCharge;
+use crate::progress::Progress;
+use crate::reference::certificate::{Contraction, SolverBound, relative_without_reference};
+use crate::reference::metrics::{Evaluator, Metrics, errors_against};
+use radiosity_core::{LinearSystem, Real};
+use radiosity_solvers::{Observer, ResidualBound, State};
+use std::time::Instant;
+
+/// How often a run's metrics are recorded.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct RecordPlan {
+    /// Every metric every this many steps (`None`: about 100 points over the run's budget, and
+    /// every step of a solver whose step is a whole product by F, `Solver::step_is_sweep`).
+    /// e_rms is recorded after every step regardless.
+    pub every: Option<u64>,
+    /// Also record every metric at `n/4`, `n/2`, `n` and `2n` columns.
+    pub marks: bool,
+}
+
+impl Default for RecordPlan {
+    fn default() -> Self {
+        RecordPlan { every: None, marks: true }
+    }
+}
+
+impl RecordPlan {
+    /// Every metric every `steps` steps, and at the marks.
+    pub fn every(steps: u64) -> RecordPlan {
+        RecordPlan { every: Some(steps.max(1)), marks: true }
+    }
+
+    /// e_rms after every step, and every metric only on the initial state: the cheapest
+    /// recording that still serves an `rms=` rule.
+    pub fn errors_only() -> RecordPlan {
+        RecordPlan { every: Some(u64::MAX), marks: false }
+    }
+}
+
+/// One step of a run: where it stood, its e_rms and its certified bound.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Point {
+    /// Steps done.
+    pub step: u64,
+    /// Columns computed.
+    pub columns: u64,
+    /// The run's seconds so far (form factors and solving; measurement excluded).
+    pub seconds: Real,
+    /// Wall seconds since the recorder's clock started (for a lab's runs, when the run was
+    /// set up), its own measuring taken out: the run's seconds and the executor's bookkeeping.
+    pub wall: Real,
+    /// e_rms against the reference (NaN without one).
+    pub e_rms: Real,
+    /// The certified bound on the displayed radiosity's area-weighted L1 error relative to the
+    /// reference's, from what the solver knows without extra columns ([`SolverBound`]); NaN
+    /// when the solver knows none.
+    pub bound: Real,
+}
+
+/// One measured point of a run. Fields are plain data, so rows are written as literals.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TableRow {
+    /// The solver's name (as on the command line, e.g. `pr-g30`).
+    pub solver: String,
+    /// Steps done (shooting steps, or sweeps for gathering methods).
+    pub step: u64,
+    /// Form-factor columns computed.
+    pub columns: u64,
+    /// Wall-clock seconds of the run so far (metrics excluded).
+    pub seconds: Real,
+    /// Seconds spent computing form factors.
+    pub ff_seconds: Real,
+    /// Area-weighted relative RMS error.
+    pub e_rms: Real,
+    /// Largest error relative to the largest reference value.
+    pub e_max: Real,
+    /// Residual power `R`.
+    pub residual: Real,
+    /// The certified bound on the area-weighted L1 error, relative to `Σ A |B|` of the reference
+    /// (infinite where the system is not certifiable; NaN where F was not available).
+    pub bound: Real,
+}
+
+/// Records e_rms and the certified bound after every step and every metric at planned steps
+/// ([`RecordPlan`]), outside the run's timed region, its own time kept apart as measurement.
+pub struct Recorder<'a> {
+    pub(super) system: &'a LinearSystem,
+    /// The exact answer, patch-major like the system's vectors, when there is one.
+    pub(super) reference: Option<&'a [Real]>,
+    /// The contraction the certified bound rests on; no bound without one.
+    pub(super) contraction: Option<&'a Contraction>,
+    /// The solver's residual bound on the state about to be observed.
+    pub(super) known: Option<ResidualBound>,
+    /// Where [`Point::wall`] counts from.
+    pub(super) clock: Instant,
+    pub(super) evaluator: Option<&'a Evaluator<'a>>,
+    pub(super) solver: String,
+    pub(super) every: u64,
+    pub(super) marks: Vec<u64>,
+    pub(super) points: Vec<Point>,
+    pub(super) rows: Vec<TableRow>,
+    pub(super) overhead: Real,
+    /// Where each step is reported, if anywhere (no message is formatted otherwise).
+    pub(super) progress: Option<&'a dyn Progress>,
+    pub(super) by_columns: bool,
+    /// The price of a column, when columns are charged rather than timed.
+    pub(super) charge: Option<ColumnCharge>,
+}
+
+impl<'a> Recorder<'a> {
+    /// A recorder of e_rms after every step against `reference` (patch-major, like the
+    /// system's vectors) and nothing else, for a caller with a reference of its own (read
+    /// from a file, or a closed form); [`Point::wall`] counts from `clock`.
+    pub fn errors(system: &'a LinearSystem, reference: &'a [Real], clock: Instant) -> Recorder<'a> {
+        Recorder {
+            system,
+            reference: Some(reference),
+            contraction: None,
+            known: None,
+            clock,
+            evaluator: None,
+            solver: String::new(),
+            every: u64::MAX,
+            marks: Vec::new(),
+            points: Vec::new(),
+            rows: Vec::new(),
+            overhead: 0.0,
+            progress: None,
+            by_columns: true,
+            charge: None,
+        }
+    }
+
+    /// Also records the certified bound after every step, on `contraction` (measured on a
+    /// stored matrix, or [`Contraction::assumed`]).
+    pub fn with_bound(mut self, contraction: &'a Contraction) -> Recorder<'a> {
+        self.contraction = Some(contraction);
+        self
+    }
+
+    /// The points recorded so far.
+    pub fn points(&self) -> &[Point] {
+        &self.points
+    }
+
+    /// Seconds spent measuring so far.
+    pub fn overhead(&self) -> Real {
+        self.overhead
+    }
+}
+
+impl Observer for Recorder<'_> {
+    fn observe_step(&mut self, state: &State) -> Option<Real> {
+        let start = Instant::now();
+        let errors = match self.reference {
+            Some(reference) => Some(errors_against(self.system, reference, &state.radiosity).ok()?),
+            None => None,
+        };
+        let e_rms = errors.map_or(Real::NAN, |e| e.e_rms);
+        let bound = match (self.known.take(), self.contraction) {
+            (Some(known), Some(c)) => SolverBound::new(self.system, c, &known, &state.radiosity).relative,
+            _ => Real::NAN,
+        };
+        let ff_seconds = self.charge.map_or(state.ff_seconds, |c| c.seconds(state.columns));
+        let seconds = ff_seconds + state.solve_seconds;
+        let new_mark =
+            self.marks.contains(&state.columns) && self.points.last().is_none_or(|p| p.columns != state.columns);
+        if state.step % self.every == 0 || new_mark {
+            let row = |e_max, residual, bound| TableRow {
+                solver: self.solver.clone(),
+                step: state.step,
+                columns: state.columns,
+                seconds,
+                ff_seconds,
+                e_rms,
+                e_max,
+                residual,
+                bound,
+            };
+            match self.evaluator.map(|e| e.evaluate(&state.radiosity)) {
+                Some(Ok(m)) => {
+                    let fallback = if m.bound.certified {
+                        matrix_relative_bound(self.system, &m, &state.radiosity)
+                    } else {
+                        Real::INFINITY
+                    };
+                    self.rows.push(row(m.e_max, m.residual, if bound.is_nan() { fallback } else { bound }))
+                }
+                Some(Err(_)) => {}
+                None => self.rows.push(row(errors.map_or(Real::NAN, |e| e.e_max), Real::NAN, bound)),
+            }
+        }
+        let wall = (start - self.clock).as_secs_f64() - self.overhead;
+        self.points.push(Point { step: state.step, columns: state.columns, seconds, wall, e_rms, bound });
+        if let Some(progress) = self.progress {
+            let message = match (e_rms.is_nan(), bound.is_nan()) {
+                (false, _) => format!("e_rms {e_rms:.2e}"),
+                (true, false) => format!("bound {bound:.2e}"),
+                (true, true) => String::new(),
+            };
+            progress.advance(if self.by_columns { state.columns } else { state.step }, &message);
+        }
+        self.overhead += start.elapsed().as_secs_f64();
+        (!e_rms.is_nan()).then_some(e_rms)
+    }
+
+    fn measures_error(&self) -> bool {
+        self.reference.is_some()
+    }
+
+    fn wants_residual_bound(&self) -> bool {
+        self.contraction.is_some()
+    }
+
+    fn observe_residual_bound(&mut self, _state: &State, bound: Option<&ResidualBound>) {
+        self.known = bound.cloned();
+    }
+}
+
+/// The F-based certified bound of `b` relative to `Σ A |B*|`, in the reference-free form of
+/// [`SolverBound`] (so that it reads like the solver's own).
+pub(crate) fn matrix_relative_bound(system: &LinearSystem, m: &Metrics, b: &[Real]) -> Real {
+    relative_without_reference(system, m.bound.bound, b, false)
+}

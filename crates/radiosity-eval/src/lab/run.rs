@@ -1,0 +1,199 @@
+//! Running one solver in a lab: a [`Recorder`] set up for it, its columns paid for as the lab
+//! says ([`crate::ColumnCost`]), its final metrics; and the reference itself as a final state.
+
+use crate::error::LabError;
+use crate::lab::outcome::{FinalMetrics, Outcome};
+use crate::lab::recorder::{RecordPlan, Recorder, matrix_relative_bound};
+use crate::lab::setup::{Lab, ReferenceOrigin};
+use crate::progress::Progress;
+use crate::reference::certificate::SolverBound;
+use crate::reference::metrics::errors;
+use crate::reference::solution::Method;
+use radiosity_core::Real;
+use radiosity_solvers::{Executor, Problem, Solver, State, StopRule, StopRules};
+use std::time::Instant;
+
+impl Lab<'_> {
+    /// Why `solver` will not converge to the reference on this source, if it will not: it
+    /// gathers along rows the source cannot give exactly.
+    pub fn row_warning(&self, solver: &dyn Solver) -> Option<String> {
+        (solver.gathers_rows() && !self.serves_rows).then(|| {
+            format!(
+                "{} gathers along rows of F, which {} cannot give exactly; they are taken from its columns by \
+                 reciprocity, which these form factors do not satisfy, so the run converges to another system's \
+                 solution, off the reference by as much as their reciprocity error (`cargo xtask ff` reports it)",
+                solver.name(),
+                self.backend
+            )
+        })
+    }
+
+    /// Runs `solver` under `rules`, recording as `plan` says, reporting to `progress`.
+    pub fn run(
+        &self,
+        solver: &mut dyn Solver,
+        rules: &StopRules,
+        plan: &RecordPlan,
+        progress: &dyn Progress,
+    ) -> Result<Outcome, LabError> {
+        if let Some(w) = self.row_warning(solver) {
+            progress.warn(&w);
+        }
+        let name = solver.name();
+        let evaluator = self.evaluator()?;
+        let (target, unit) = progress_target(rules, self.n());
+        let n = self.n() as u64;
+        let mut recorder = Recorder {
+            system: &self.system,
+            reference: self.reference.as_ref().map(|r| r.values()),
+            contraction: Some(&self.contraction),
+            known: None,
+            clock: Instant::now(),
+            evaluator: evaluator.as_ref(),
+            solver: name.clone(),
+            // A step that is a whole product by F is a sweep's worth of columns: every one is
+            // recorded.
+            every: plan.every.unwrap_or(if solver.step_is_sweep() { 1 } else { (target / 100).max(1) }),
+            marks: if plan.marks { vec![n / 4, n / 2, n, 2 * n] } else { Vec::new() },
+            points: Vec::new(),
+            rows: Vec::new(),
+            overhead: 0.0,
+            progress: Some(progress),
+            by_columns: unit == "columns",
+            charge: self.charge,
+        };
+        progress.begin(&name, target, unit);
+        // Every run starts from columns as costly as the first ones: what an earlier run left
+        // in the source's memory (the analytic backend's visible fractions) would make later
+        // solvers look faster.
+        self.source.reset_memory();
+        let problem = Problem::new(&self.system, &*self.source)?.with_patch_order(&self.order)?;
+        let run = Executor::new(solver, rules.clone()).run(&problem, &mut recorder);
+        progress.end();
+        let mut run = run?;
+        if let Some(charge) = self.charge {
+            run.state.ff_seconds = charge.seconds(run.state.columns);
+        }
+        let solver_residual = solver.residual_power(&problem, &run.state);
+        let known = solver.residual_bound(&problem, &run.state);
+        let solver_bound =
+            known.map(|k| SolverBound::new(&self.system, &self.contraction, &k, &run.state.radiosity).relative);
+        let last = match (&evaluator, &self.reference) {
+            (Some(e), _) => {
+                let m = e.evaluate(&run.state.radiosity)?;
+                let matrix_bound =
+                    m.bound.certified.then(|| matrix_relative_bound(&self.system, &m, &run.state.radiosity));
+                FinalMetrics {
+                    e_rms: Some(m.e_rms),
+                    e_max: Some(m.e_max),
+                    residual: Some(m.residual),
+                    bound: solver_bound.or(matrix_bound),
+                    solver_residual,
+                }
+            }
+            (None, Some(reference)) => {
+                let e = errors(&self.system, reference, &run.state.radiosity)?;
+                FinalMetrics {
+                    e_rms: Some(e.e_rms),
+                    e_max: Some(e.e_max),
+                    residual: None,
+                    bound: solver_bound,
+                    solver_residual,
+                }
+            }
+            (None, None) => {
+                FinalMetrics { e_rms: None, e_max: None, residual: None, bound: solver_bound, solver_residual }
+            }
+        };
+        Ok(Outcome {
+            solver: run.solver,
+            points: recorder.points,
+            rows: recorder.rows,
+            termination: run.termination.to_string(),
+            record: run.record,
+            overhead: recorder.overhead,
+            last,
+            state: run.state,
+        })
+    }
+
+    /// The reference as a final state: its cost is assembling F (form-factor time) and
+    /// solving it, or reading it from the cache. Fails when the reference is `none`.
+    pub fn reference_state(&self) -> Result<State, LabError> {
+        let reference = self.reference.as_ref().ok_or_else(no_reference)?;
+        let mut state = State::from_emission(self.system.emissions(), self.system.channels().count());
+        state.radiosity.copy_from_slice(reference.values());
+        state.unshot.fill(0.0);
+        state.columns = match reference.method() {
+            Method::Shooting { columns, .. } => *columns,
+            _ => self.system.len() as u64,
+        };
+        match self.origin {
+            ReferenceOrigin::Solved { assembly_seconds, solve_seconds } => {
+                state.ff_seconds = assembly_seconds;
+                state.solve_seconds = solve_seconds;
+            }
+            ReferenceOrigin::Cached { seconds, .. } => state.solve_seconds = seconds,
+            ReferenceOrigin::NotComputed => {}
+        }
+        Ok(state)
+    }
+
+    /// The metrics of the reference itself (zero error; its residual when F is kept, and its
+    /// certificate's bound).
+    pub fn reference_metrics(&self) -> Result<FinalMetrics, LabError> {
+        let reference = self.reference.as_ref().ok_or_else(no_reference)?;
+        let residual = match self.evaluator()? {
+            Some(e) => Some(e.evaluate(reference.values())?),
+            None => None,
+        };
+        let certificate = reference.certificate();
+        Ok(FinalMetrics {
+            e_rms: Some(0.0),
+            e_max: Some(0.0),
+            residual: residual.map(|m| m.residual),
+            bound: certificate.certified.then_some(certificate.relative_bound),
+            solver_residual: None,
+        })
+    }
+
+    /// The RGB radiosity of every patch after running `solver` under `rules` (the reference
+    /// when `solver` is `None`): what renders and exports show. An `rms=` rule is measured.
+    pub fn radiosity_rgb(
+        &self,
+        solver: Option<&mut dyn Solver>,
+        rules: &StopRules,
+        progress: &dyn Progress,
+    ) -> Result<Vec<[Real; 3]>, LabError> {
+        let state = match solver {
+            None => self.reference_state()?,
+            Some(solver) => self.run(solver, rules, &RecordPlan::errors_only(), progress)?.state,
+        };
+        Ok(rgb(&state))
+    }
+}
+
+/// The error of asking for the reference of a lab without one.
+fn no_reference() -> LabError {
+    LabError::Invalid("there is no reference solution with --reference none".into())
+}
+
+/// The radiosity of every patch of `state` as RGB (a grey channel repeated three times).
+pub fn rgb(state: &State) -> Vec<[Real; 3]> {
+    let k = state.channels;
+    state.radiosity.chunks_exact(k).map(|b| if k == 1 { [b[0]; 3] } else { [b[0], b[1], b[2]] }).collect()
+}
+
+/// The count a run's progress is measured against: its first `columns=` or `steps=` rule
+/// (`2n` columns otherwise), and its unit.
+fn progress_target(rules: &StopRules, n: usize) -> (u64, &'static str) {
+    rules
+        .rules
+        .iter()
+        .find_map(|r| match r {
+            StopRule::Columns(c) => Some((c.resolve(n), "columns")),
+            StopRule::Steps(c) => Some((c.resolve(n), "steps")),
+            _ => None,
+        })
+        .unwrap_or((2 * n as u64, "columns"))
+}

@@ -1,0 +1,240 @@
+//! What a researcher reads and shows of a [`Comparison`]: `convergence.csv` (every metric at
+//! the recorded steps), `report.md` (e_rms at n/4, n/2, n and 2n columns; columns and seconds
+//! to reach e_rms 1e-2 and 1e-3; where the time went; what the scene analysis left out; the
+//! reference, its kind and its certificate) and plots of e_rms against shooting steps (the
+//! paper's axis), columns and wall seconds, as SVG and PNG, and a summary table for the
+//! terminal. Without a reference (`--reference none`) the certified bound of every step takes
+//! e_rms's place in the tables and plots.
+
+use crate::error::LabError;
+use crate::lab::compare::Comparison;
+use crate::lab::outcome::Outcome;
+use crate::lab::recorder::Point;
+use crate::lab::setup::ReferenceOrigin;
+use crate::reports::plot::{Curve, PlotSpec, write_png, write_svg};
+use crate::reports::table::{ConvergenceTable, round_significant};
+use radiosity_core::Real;
+use radiosity_solvers::Value;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// The files a comparison wrote.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Written {
+    /// The folder.
+    pub dir: PathBuf,
+    /// Every file, in the order written.
+    pub files: Vec<PathBuf>,
+}
+
+impl Comparison {
+    /// Every recorded row of every run.
+    pub fn table(&self) -> ConvergenceTable {
+        let mut table = ConvergenceTable::new();
+        for row in self.outcomes.iter().flat_map(|o| &o.rows) {
+            table.push(row.clone());
+        }
+        table
+    }
+
+    /// Writes `convergence.csv`, `report.md` and the plots into `dir` (created if needed).
+    pub fn write(&self, dir: &Path) -> Result<Written, LabError> {
+        std::fs::create_dir_all(dir).map_err(|e| LabError::write(dir, e))?;
+        let mut files = Vec::new();
+        let csv = dir.join("convergence.csv");
+        self.table().write_csv(create(&csv)?).map_err(|e| LabError::write(&csv, e))?;
+        files.push(csv);
+        let plots = self.write_plots(dir, &mut files)?;
+        let md = dir.join("report.md");
+        std::fs::write(&md, self.report_markdown(&plots)).map_err(|e| LabError::write(&md, e))?;
+        files.push(md);
+        Ok(Written { dir: dir.to_path_buf(), files })
+    }
+
+    /// Writes the three plots as SVG and PNG; returns their file stems and titles.
+    fn write_plots(&self, dir: &Path, files: &mut Vec<PathBuf>) -> Result<Vec<(String, String)>, LabError> {
+        type Axis = fn(&Point) -> Real;
+        let axes: [(&str, &str, Axis); 3] = [
+            ("steps", "shooting steps", |p| p.step as Real),
+            ("columns", "form-factor columns computed", |p| p.columns as Real),
+            ("seconds", "wall seconds (form factors and solving)", |p| p.seconds),
+        ];
+        let metric = self.metric();
+        let what = if self.has_reference() { "e_rms" } else { "certified bound" };
+        let mut written = Vec::new();
+        for (axis, x_label, x) in axes {
+            let stem = format!("{metric}-{axis}");
+            let curves: Vec<Curve> = self
+                .outcomes
+                .iter()
+                .map(|o| Curve {
+                    label: o.solver.clone(),
+                    points: o.points.iter().map(|p| (x(p), self.value(p))).filter(|(_, y)| y.is_finite()).collect(),
+                })
+                .collect();
+            let spec = PlotSpec {
+                title: format!("{}: {what} against {x_label}", self.scene.scene),
+                x_label: x_label.into(),
+                size: (800, 500),
+            };
+            let svg = dir.join(format!("{stem}.svg"));
+            write_svg(&curves, &spec, create(&svg)?)?;
+            let png = dir.join(format!("{stem}.png"));
+            write_png(&curves, &spec, create(&png)?)?;
+            files.extend([svg, png]);
+            written.push((stem, spec.title));
+        }
+        Ok(written)
+    }
+
+    /// The Markdown report, linking the plots `plots` (file stems and titles).
+    pub fn report_markdown(&self, plots: &[(String, String)]) -> String {
+        let n = self.n;
+        let mut md = String::new();
+        let _ = writeln!(md, "# Solver comparison on `{}`\n", self.scene.scene);
+        let _ = writeln!(
+            md,
+            "{} patches, mean reflectivity {:.3}; form factors `{}`; every solver run until `{}`.\n",
+            n, self.scene.mean_reflectivity, self.backend, self.rules
+        );
+        let _ = writeln!(md, "- Left out by the scene analysis: {}.", self.scene.left_out_phrase());
+        let _ = writeln!(md, "- Seconds: {}.", self.seconds_phrase());
+        let origin = match &self.reference_origin {
+            ReferenceOrigin::Solved { assembly_seconds, solve_seconds } if *assembly_seconds > 0.0 => {
+                format!("F assembled in {assembly_seconds:.2} s, solved in {solve_seconds:.2} s")
+            }
+            ReferenceOrigin::Solved { solve_seconds, .. } => format!("solved in {solve_seconds:.2} s"),
+            ReferenceOrigin::Cached { seconds, .. } => format!("read from the cache in {seconds:.2} s"),
+            ReferenceOrigin::NotComputed => "not computed".into(),
+        };
+        let kind = &self.reference_kind;
+        match (&self.reference_method, &self.reference_certificate) {
+            (Some(method), Some(certificate)) => {
+                let _ =
+                    writeln!(md, "- Reference `{}` ({}): {method}; {certificate} ({origin}).\n", kind.kind, kind.why);
+            }
+            _ => {
+                let _ = writeln!(
+                    md,
+                    "- Reference `none` ({}): no e_rms; the tables and plots show the certified bound on each step's \
+                     relative L1 error, from what the solver knows without extra columns.\n",
+                    kind.why
+                );
+            }
+        }
+        let metric = self.metric();
+        let _ = writeln!(md, "## {metric} at n/4, n/2, n and 2n columns\n");
+        let _ = writeln!(md, "| solver | n/4 | n/2 | n | 2n |\n|---|--:|--:|--:|--:|");
+        for o in &self.outcomes {
+            let at = |c: u64| cell(o.at_columns_point(c).map(|p| self.value(&p)));
+            let _ = writeln!(md, "| `{}` | {} | {} | {} | {} |", o.solver, at(n / 4), at(n / 2), at(n), at(2 * n));
+        }
+        let _ = writeln!(md, "\n## Columns and seconds to reach {metric} 1e-2 and 1e-3\n");
+        let _ = writeln!(md, "| solver | 1e-2 | 1e-3 |\n|---|--:|--:|");
+        for o in &self.outcomes {
+            let _ =
+                writeln!(md, "| `{}` | {} | {} |", o.solver, self.reached_cell(o, 1e-2), self.reached_cell(o, 1e-3));
+        }
+        let _ = writeln!(md, "\n## Where the time went\n");
+        let _ = writeln!(
+            md,
+            "Form factors and solving are the run's own time; group solving is part of solving; \
+             measurement (e_rms every step, all metrics at about 100 points) is outside the run.\n"
+        );
+        let _ = writeln!(
+            md,
+            "| solver | steps | columns (reused) | form factors | solving | of which groups | measurement | stopped |\n\
+             |---|--:|--:|--:|--:|--:|--:|---|"
+        );
+        for o in &self.outcomes {
+            let s = &o.state;
+            let _ = writeln!(
+                md,
+                "| `{}` | {} | {} ({}) | {:.3} s | {:.3} s | {:.3} s | {:.3} s | {} |",
+                o.solver,
+                s.step,
+                s.columns,
+                s.columns_reused,
+                s.ff_seconds,
+                s.solve_seconds,
+                s.group_seconds,
+                o.overhead,
+                o.termination
+            );
+        }
+        let records: Vec<&Outcome> = self.outcomes.iter().filter(|o| !o.record.is_empty()).collect();
+        if !records.is_empty() {
+            let _ = writeln!(md, "\n## What the solvers recorded\n");
+            for o in records {
+                let items: Vec<String> = o.record.iter().map(|(k, v)| format!("{k} {}", value_cell(v))).collect();
+                let _ = writeln!(md, "- `{}`: {}", o.solver, items.join(", "));
+            }
+        }
+        let _ = writeln!(md, "\n## Plots\n");
+        for (stem, title) in plots {
+            let _ = writeln!(md, "![{title}]({stem}.png)\n");
+        }
+        md
+    }
+
+    /// How the seconds of every run were counted: columns computed and timed, or read from
+    /// the stored matrix and charged ([`ColumnCharge`](crate::ColumnCharge)).
+    pub fn seconds_phrase(&self) -> String {
+        match &self.charge {
+            Some(charge) => format!("solving timed, {}", charge.describe()),
+            None => "form factors and solving, every column computed when a solver asked for it".into(),
+        }
+    }
+
+    /// The compact table for the terminal: with a reference, e_rms and the certified bound;
+    /// without, the bound alone.
+    pub fn summary(&self) -> String {
+        let metric = self.metric();
+        let bound = if self.has_reference() { format!(" {:>10}", "bound end") } else { String::new() };
+        let mut out = format!(
+            "{:<24} {:>8} {:>8} {:>10} {:>10}{bound} {:>10} {:>9}\n",
+            "solver",
+            "steps",
+            "columns",
+            format!("{metric} @n"),
+            format!("{metric} end"),
+            "1e-3 at",
+            "seconds"
+        );
+        for o in &self.outcomes {
+            let bound = if self.has_reference() { format!(" {:>10}", cell(o.last.bound)) } else { String::new() };
+            let _ = writeln!(
+                out,
+                "{:<24} {:>8} {:>8} {:>10} {:>10}{bound} {:>10} {:>9.3}",
+                o.solver,
+                o.state.step,
+                o.state.columns,
+                cell(o.at_columns_point(self.n).map(|p| self.value(&p))),
+                cell(o.points.last().map(|p| self.value(p))),
+                self.reached(o, 1e-3).map_or("—".into(), |p| p.columns.to_string()),
+                o.seconds()
+            );
+        }
+        out
+    }
+
+    fn reached_cell(&self, o: &Outcome, target: Real) -> String {
+        self.reached(o, target).map_or("—".into(), |p| format!("{} / {:.3} s", p.columns, p.seconds))
+    }
+}
+
+fn create(path: &Path) -> Result<std::fs::File, LabError> {
+    std::fs::File::create(path).map_err(|e| LabError::write(path, e))
+}
+
+/// A recorded value: reals to 4 significant digits, everything else as it is.
+pub fn value_cell(value: &Value) -> String {
+    match value {
+        Value::Real(v) => round_significant(*v, 4),
+        other => other.to_string(),
+    }
+}
+
+fn cell(value: Option<Real>) -> String {
+    value.filter(|v| !v.is_nan()).map_or("—".into(), |v| round_significant(v, 3))
+}

@@ -1,0 +1,519 @@
+//! Convergence plots: e_rms on a log scale against steps, columns or seconds, one line per
+//! solver, as SVG and PNG, in the style of the paper's figures 1–3, readable in grey.
+//!
+//! ## Styles
+//!
+//! Every solver is drawn the same way in every plot, whatever else is plotted beside it:
+//! its [`Style`] is a function of its name alone ([`style_of`]), never of its place in the
+//! list. A name is read as a **base method** and a **variant**:
+//!
+//! - the base method (`pr`, `xu`, `feda`, `shao`, `relax`, `southwell`, `gauss-seidel`,
+//!   `jacobi`, `sor`, …; `gs` is `gauss-seidel`, and a trailing number such as the `1.2` of
+//!   `sor-1.2` is a parameter, not a method) picks the colour, from the colour-blind-safe
+//!   palette of Okabe & Ito without its yellow (too pale on white), and the marker shape;
+//! - the variant picks the dash pattern: point methods are solid, group-accelerated `S-gM`
+//!   dashed, its memory variant `S-gM-mK` dotted, and group methods `group-S-gM` (shooting
+//!   and gathering) dash-dotted. Parameters after a `:` (`pr-g30:f=auto`) swap the marker
+//!   between filled and hollow.
+//!
+//! So colour tells the methods apart on screen, and marker and dash tell them apart in grey
+//! or for readers who do not see the colours. Methods the table does not list get their
+//! colour and marker from a stable hash (FNV-1a) of their name. Group and memory sizes do not
+//! enter the style (`pr-g30` looks like `pr-g50`).
+//!
+//! ## Layout
+//!
+//! The legend sits to the right of the data area (below it when the labels are too long to
+//! fit in 40% of the width), so it never covers a curve. The axes start where the data
+//! starts: x runs from the smallest to the largest x plotted, and y, on a log scale, from the
+//! smallest to the largest e_rms, widened by 3% of its span in decades so that the extreme
+//! points do not lie on the frame. The y axis says what e_rms is, the area-weighted relative
+//! RMS error of DESIGN §5 ([`Y_LABEL`]), or just `e_rms (log scale)` ([`Y_LABEL_SHORT`]) on a
+//! plot too short for the long label.
+//!
+//! Drawn with plotters; text uses the DejaVu Sans font embedded in the binary (the `dejavu`
+//! crate), so the PNG looks the same on a machine without fonts. Both formats go to any
+//! [`std::io::Write`]; opening files is the caller's business.
+//!
+//! ## References
+//!
+//! - M. Okabe and K. Ito, *Color Universal Design (CUD): how to make figures and
+//!   presentations that are friendly to colorblind people*, 2008.
+
+use crate::error::EvalError;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use radiosity_core::Real;
+use std::io::Write;
+use std::sync::Once;
+
+/// One solver's curve: `(x, e_rms)` points in order of `x`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Curve {
+    /// The legend label (the solver's name), which also sets the curve's [`Style`].
+    pub label: String,
+    /// The points; those with a non-positive or non-finite error are left out (log scale).
+    pub points: Vec<(Real, Real)>,
+}
+
+/// What a plot shows.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlotSpec {
+    /// The title above the plot.
+    pub title: String,
+    /// The label of the x axis.
+    pub x_label: String,
+    /// Width and height in pixels.
+    pub size: (u32, u32),
+}
+
+/// The label of the y axis.
+pub const Y_LABEL: &str = "e_rms: area-weighted relative RMS error (log scale)";
+/// The label of the y axis of a plot too short for [`Y_LABEL`].
+pub const Y_LABEL_SHORT: &str = "e_rms (log scale)";
+
+/// The shape drawn at a few points of a curve and in its legend entry.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Marker {
+    /// A disc.
+    Circle,
+    /// An upward triangle.
+    Triangle,
+    /// A square.
+    Square,
+    /// A square standing on a corner.
+    Diamond,
+    /// A diagonal cross.
+    Cross,
+    /// An upright cross.
+    Plus,
+}
+
+/// How a family of solvers varies the point method: it sets the dash pattern.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Variant {
+    /// A point method (`pr`, `xu`, `gauss-seidel`): solid.
+    Point,
+    /// Group-accelerated with `M = m` (`pr-g30`): dashed.
+    GroupAccelerated,
+    /// Group-accelerated with a larger memory (`pr-g30-m480`): dotted.
+    GroupAcceleratedMemory,
+    /// Group shooting or gathering (`group-pr-g30`, `group-gs-g30`): dash-dotted.
+    Group,
+}
+
+impl Variant {
+    /// The dash pattern in pixels, alternately drawn and skipped; empty for a solid line.
+    pub fn dashes(self) -> &'static [u32] {
+        match self {
+            Variant::Point => &[],
+            Variant::GroupAccelerated => &[11, 6],
+            Variant::GroupAcceleratedMemory => &[3, 4],
+            Variant::Group => &[12, 4, 3, 4],
+        }
+    }
+}
+
+/// How one solver's curve is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Style {
+    /// Line and marker colour, sRGB.
+    pub colour: [u8; 3],
+    /// The marker's shape.
+    pub marker: Marker,
+    /// Whether the marker is drawn filled (else as an outline).
+    pub filled: bool,
+    /// The variant, which sets the dash pattern ([`Variant::dashes`]).
+    pub variant: Variant,
+}
+
+/// The Okabe–Ito palette without yellow: blue, vermillion, bluish green, reddish purple,
+/// orange, sky blue, black.
+const PALETTE: [[u8; 3]; 7] =
+    [[0, 114, 178], [213, 94, 0], [0, 158, 115], [204, 121, 167], [230, 159, 0], [86, 180, 233], [0, 0, 0]];
+
+/// Marker shapes with their fill, in the order methods take them. Seven colours and nine
+/// markers: the first 63 methods get distinct pairs.
+const MARKERS: [(Marker, bool); 9] = [
+    (Marker::Circle, true),
+    (Marker::Triangle, true),
+    (Marker::Square, true),
+    (Marker::Diamond, true),
+    (Marker::Cross, true),
+    (Marker::Circle, false),
+    (Marker::Triangle, false),
+    (Marker::Square, false),
+    (Marker::Diamond, false),
+];
+
+/// Base methods with a fixed place in the palette, in order.
+const METHODS: [&str; 14] = [
+    "pr",
+    "xu",
+    "feda",
+    "shao",
+    "relax",
+    "southwell",
+    "gauss-seidel",
+    "jacobi",
+    "sor",
+    "xu-direct",
+    "xu-ambient",
+    "cg",
+    "gmres",
+    "bicgstab",
+];
+
+/// The style of the solver called `name`; see the module documentation for the rule.
+pub fn style_of(name: &str) -> Style {
+    let (base, params) = name.split_once(':').map_or((name, ""), |(b, p)| (b, p));
+    let (method, variant) = method_and_variant(base.trim());
+    let method = if method == "gs" { "gauss-seidel" } else { method };
+    let index = METHODS.iter().position(|m| *m == method).unwrap_or_else(|| {
+        // Past the table, so an unknown method does not take a listed one's place by default.
+        METHODS.len() + (fnv1a(method) % (PALETTE.len() * MARKERS.len()) as u64) as usize
+    });
+    let (marker, filled) = MARKERS[index % MARKERS.len()];
+    let (marker, filled) = match (params.trim().is_empty(), marker) {
+        (true, _) => (marker, filled),
+        // A cross has no inside to leave empty: tuned, it stands upright.
+        (false, Marker::Cross) => (Marker::Plus, true),
+        (false, _) => (marker, !filled),
+    };
+    Style { colour: PALETTE[index % PALETTE.len()], marker, filled, variant }
+}
+
+/// The base method and the variant of a solver name without parameters.
+fn method_and_variant(base: &str) -> (&str, Variant) {
+    // Whether `s` is `prefix` followed by digits (`g30`, `m480`).
+    let sized = |s: &str, prefix: char| {
+        s.strip_prefix(prefix).is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
+    };
+    // `s` without a trailing `-gM`, if it has one.
+    let without_group = |s: &str| -> Option<usize> {
+        let (rest, last) = s.rsplit_once('-')?;
+        sized(last, 'g').then_some(rest.len())
+    };
+    if let Some(rest) = base.strip_prefix("group-") {
+        return (without_group(rest).map_or(rest, |end| &rest[..end]), Variant::Group);
+    }
+    if let Some((rest, last)) = base.rsplit_once('-') {
+        if let Some(end) = without_group(rest).filter(|_| sized(last, 'm')) {
+            return (&rest[..end], Variant::GroupAcceleratedMemory);
+        }
+    }
+    if let Some(end) = without_group(base) {
+        return (&base[..end], Variant::GroupAccelerated);
+    }
+    // A point method, perhaps with a numeric parameter (`sor-1.2`, `relax-1.5`, `gmres-30`).
+    match base.rsplit_once('-') {
+        Some((method, last)) if !method.is_empty() && last.parse::<Real>().is_ok() => (method, Variant::Point),
+        _ => (base, Variant::Point),
+    }
+}
+
+/// The 64-bit FNV-1a hash of `text`: stable across runs, platforms and compiler versions.
+fn fnv1a(text: &str) -> u64 {
+    text.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3))
+}
+
+/// Registers the embedded font once.
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // Registration fails only for bytes that are not a font; these are DejaVu Sans.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
+    });
+}
+
+fn plot_error(e: impl std::fmt::Display) -> EvalError {
+    EvalError::Plot(e.to_string())
+}
+
+/// Whether a point can go on the plot.
+fn drawable(&(x, y): &(Real, Real)) -> bool {
+    x.is_finite() && y.is_finite() && y > 0.0
+}
+
+/// The x range and the (padded) y range of the drawable points of `curves`, or `None` when
+/// nothing can be drawn on a log scale.
+fn ranges(curves: &[Curve]) -> Option<((Real, Real), (Real, Real))> {
+    let points = curves.iter().flat_map(|c| c.points.iter()).filter(|p| drawable(p));
+    let (mut x_min, mut x_max, mut y_min, mut y_max) = (Real::INFINITY, Real::NEG_INFINITY, Real::INFINITY, 0.0_f64);
+    for &(x, y) in points {
+        x_min = x_min.min(x);
+        x_max = x_max.max(x);
+        y_min = y_min.min(y);
+        y_max = y_max.max(y);
+    }
+    if y_max <= 0.0 {
+        return None;
+    }
+    if x_max <= x_min {
+        x_max = x_min + 1.0;
+    }
+    // 3% of the span in decades, or a tenth of a decade around a single value.
+    let decades = (y_max / y_min).log10();
+    let pad = 10f64.powf(if decades > 0.0 { 0.03 * decades } else { 0.1 });
+    Some(((x_min, x_max), (y_min / pad, y_max * pad)))
+}
+
+/// A tick label of the log axis spanning `decades`: `1e-5` on decades, and `2e-5`, `5e-5`
+/// between them; every tick (two significant digits) when the axis spans too little for
+/// those to show.
+fn log_label(y: Real, decades: Real) -> String {
+    let exponent = y.log10().floor();
+    let mantissa = y / 10f64.powf(exponent);
+    let whole = (mantissa - mantissa.round()).abs() < 1e-6;
+    // The ticks are 1, 2, …, 9 times a power of ten; near the top of a decade they crowd.
+    if decades < 0.5 {
+        if whole { format!("{y:.0e}") } else { format!("{y:.1e}") }
+    } else if whole && [1.0, 2.0, 5.0, 10.0].contains(&mantissa.round()) {
+        format!("{y:.0e}")
+    } else {
+        String::new()
+    }
+}
+
+/// The text style of labels and the legend.
+fn label_font() -> TextStyle<'static> {
+    ("sans-serif", 13).into_font().color(&BLACK)
+}
+
+/// Where the legend goes.
+enum LegendPlace {
+    /// A column to the right, this many pixels wide.
+    Right(u32),
+    /// Rows below, this many pixels high, with this many entries per row.
+    Below(u32, usize),
+}
+
+/// Length of the line sample in a legend entry, and the gap before its label.
+const SAMPLE: i32 = 40;
+const SAMPLE_GAP: i32 = 8;
+/// Height of one legend row.
+const ROW: i32 = 20;
+
+fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, curves: &[Curve], spec: &PlotSpec) -> Result<(), EvalError>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE).map_err(plot_error)?;
+    let Some(((x_min, x_max), (lo, hi))) = ranges(curves) else {
+        return Err(EvalError::Plot("no positive e_rms to plot".into()));
+    };
+    let font = label_font();
+    let (width, height) = root.dim_in_pixel();
+    let mut widest = 0;
+    for curve in curves {
+        widest = widest.max(root.estimate_text_size(&curve.label, &font).map_err(plot_error)?.0);
+    }
+    let entry = (SAMPLE + SAMPLE_GAP) as u32 + widest + 16;
+    let place = if entry <= width * 2 / 5 {
+        LegendPlace::Right(entry)
+    } else {
+        let per_row = (width / entry.min(width).max(1)).max(1) as usize;
+        let rows = curves.len().div_ceil(per_row) as u32;
+        LegendPlace::Below(rows * ROW as u32 + 12, per_row)
+    };
+    let (plot_area, legend_area) = match place {
+        LegendPlace::Right(w) => root.split_horizontally(width.saturating_sub(w)),
+        LegendPlace::Below(h, _) => root.split_vertically(height.saturating_sub(h)),
+    };
+
+    let mut chart = ChartBuilder::on(&plot_area)
+        .caption(&spec.title, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(64)
+        .build_cartesian_2d(x_min..x_max, (lo..hi).log_scale())
+        .map_err(plot_error)?;
+    let span = x_max - x_min;
+    let decades = (hi / lo).log10();
+    let data_height = chart.plotting_area().dim_in_pixel().1;
+    let long = plot_area.estimate_text_size(Y_LABEL, &font).map_err(plot_error)?.0;
+    let y_label = if long + 8 <= data_height { Y_LABEL } else { Y_LABEL_SHORT };
+    chart
+        .configure_mesh()
+        .x_desc(spec.x_label.as_str())
+        .y_desc(y_label)
+        .axis_desc_style(("sans-serif", 13))
+        // About one x label per 90 pixels, so that four-digit labels do not run together.
+        .x_labels((plot_area.dim_in_pixel().0 / 90).max(2) as usize)
+        .y_max_light_lines(1)
+        .y_label_formatter(&|y| log_label(*y, decades))
+        .x_label_formatter(&|x| if span >= 20.0 { format!("{x:.0}") } else { format!("{x:.2}") })
+        .label_style(("sans-serif", 13))
+        .draw()
+        .map_err(plot_error)?;
+
+    let area = chart.plotting_area().strip_coord_spec();
+    let (bx, by) = area.get_base_pixel();
+    for curve in curves {
+        let style = style_of(&curve.label);
+        let points: Vec<(Real, Real)> = curve
+            .points
+            .iter()
+            .filter(|p| drawable(p))
+            .map(|&(x, y)| {
+                let (px, py) = chart.backend_coord(&(x, y));
+                (Real::from(px - bx), Real::from(py - by))
+            })
+            .collect();
+        draw_line(&area, &points, style)?;
+        // About seven markers per curve, at points that depend on the name, so that curves
+        // running together do not hide each other's markers.
+        if !points.is_empty() {
+            let step = points.len().div_ceil(7).max(1);
+            let phase = (fnv1a(&curve.label) % step as u64) as usize;
+            for &(x, y) in points.iter().skip(phase).step_by(step) {
+                draw_marker(&area, (x.round() as i32, y.round() as i32), style)?;
+            }
+        }
+    }
+
+    // The legend: a framed list of line samples and names, outside the data area.
+    let (lx, ly) = match place {
+        LegendPlace::Right(_) => (4, 40),
+        LegendPlace::Below(..) => (64, 4),
+    };
+    let per_row = match place {
+        LegendPlace::Right(_) => 1,
+        LegendPlace::Below(_, n) => n,
+    };
+    let rows = curves.len().div_ceil(per_row) as i32;
+    let columns = per_row.min(curves.len()) as i32;
+    let frame = [(lx, ly), (lx + columns * entry as i32, ly + rows * ROW + 8)];
+    legend_area.draw(&Rectangle::new(frame, BLACK.mix(0.6).stroke_width(1))).map_err(plot_error)?;
+    for (k, curve) in curves.iter().enumerate() {
+        let style = style_of(&curve.label);
+        let (row, column) = ((k / per_row) as i32, (k % per_row) as i32);
+        let x = lx + 8 + column * entry as i32;
+        let y = ly + 4 + row * ROW + ROW / 2;
+        let sample = [(Real::from(x), Real::from(y)), (Real::from(x + SAMPLE), Real::from(y))];
+        draw_line(&legend_area, &sample, style)?;
+        draw_marker(&legend_area, (x + SAMPLE / 2, y), style)?;
+        let text = font.pos(plotters::style::text_anchor::Pos::new(
+            plotters::style::text_anchor::HPos::Left,
+            plotters::style::text_anchor::VPos::Center,
+        ));
+        legend_area.draw_text(&curve.label, &text, (x + SAMPLE + SAMPLE_GAP, y)).map_err(plot_error)?;
+    }
+    root.present().map_err(plot_error)
+}
+
+/// Draws the polyline `points` (pixels of `area`) with the style's colour and dash pattern.
+fn draw_line<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    points: &[(Real, Real)],
+    style: Style,
+) -> Result<(), EvalError>
+where
+    DB::ErrorType: 'static,
+{
+    let [r, g, b] = style.colour;
+    let stroke = RGBColor(r, g, b).stroke_width(2);
+    for piece in dashes(points, style.variant.dashes()) {
+        let piece: Vec<(i32, i32)> = piece.iter().map(|&(x, y)| (x.round() as i32, y.round() as i32)).collect();
+        area.draw(&PathElement::new(piece, stroke)).map_err(plot_error)?;
+    }
+    Ok(())
+}
+
+/// The drawn pieces of the polyline `points` under the dash `pattern` (lengths in pixels,
+/// alternately drawn and skipped, starting with a drawn one; empty: one solid piece).
+fn dashes(points: &[(Real, Real)], pattern: &[u32]) -> Vec<Vec<(Real, Real)>> {
+    if points.len() < 2 || pattern.is_empty() {
+        return vec![points.to_vec()];
+    }
+    let mut pieces = Vec::new();
+    let mut current = vec![points[0]];
+    let (mut k, mut left) = (0, Real::from(pattern[0]));
+    for pair in points.windows(2) {
+        let (mut start, end) = (pair[0], pair[1]);
+        let mut length = (end.0 - start.0).hypot(end.1 - start.1);
+        while length > left {
+            let f = left / length;
+            let p = (start.0 + f * (end.0 - start.0), start.1 + f * (end.1 - start.1));
+            if k % 2 == 0 {
+                current.push(p);
+                pieces.push(std::mem::take(&mut current));
+            } else {
+                current = vec![p];
+            }
+            length -= left;
+            start = p;
+            k = (k + 1) % pattern.len();
+            left = Real::from(pattern[k]);
+        }
+        left -= length;
+        if k % 2 == 0 {
+            current.push(end);
+        }
+    }
+    if current.len() > 1 {
+        pieces.push(current);
+    }
+    pieces
+}
+
+/// Draws the style's marker centred on `(x, y)` (pixels of `area`).
+fn draw_marker<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    (x, y): (i32, i32),
+    style: Style,
+) -> Result<(), EvalError>
+where
+    DB::ErrorType: 'static,
+{
+    const R: i32 = 4;
+    let [r, g, b] = style.colour;
+    let colour = RGBColor(r, g, b);
+    let shape = if style.filled { colour.filled() } else { colour.stroke_width(2) };
+    let outline = |corners: Vec<(i32, i32)>| -> Result<(), EvalError> {
+        if style.filled {
+            area.draw(&Polygon::new(corners, shape)).map_err(plot_error)
+        } else {
+            let mut closed = corners.clone();
+            closed.push(corners[0]);
+            area.draw(&PathElement::new(closed, shape)).map_err(plot_error)
+        }
+    };
+    match style.marker {
+        Marker::Circle => area.draw(&Circle::new((x, y), R, shape)).map_err(plot_error),
+        Marker::Square => area.draw(&Rectangle::new([(x - R, y - R), (x + R, y + R)], shape)).map_err(plot_error),
+        Marker::Triangle => outline(vec![(x, y - R - 1), (x + R + 1, y + R), (x - R - 1, y + R)]),
+        Marker::Diamond => outline(vec![(x, y - R - 1), (x + R + 1, y), (x, y + R + 1), (x - R - 1, y)]),
+        Marker::Cross | Marker::Plus => {
+            let stroke = colour.stroke_width(2);
+            let arms = if style.marker == Marker::Cross {
+                [[(x - R, y - R), (x + R, y + R)], [(x - R, y + R), (x + R, y - R)]]
+            } else {
+                [[(x - R - 1, y), (x + R + 1, y)], [(x, y - R - 1), (x, y + R + 1)]]
+            };
+            for arm in arms {
+                area.draw(&PathElement::new(arm.to_vec(), stroke)).map_err(plot_error)?;
+            }
+            Ok(())
+        }
+    }
+}
+
+/// Writes the plot of `curves` as SVG.
+pub fn write_svg(curves: &[Curve], spec: &PlotSpec, mut out: impl Write) -> Result<(), EvalError> {
+    register_font();
+    let mut svg = String::new();
+    draw(SVGBackend::with_string(&mut svg, spec.size).into_drawing_area(), curves, spec)?;
+    out.write_all(svg.as_bytes()).map_err(|e| EvalError::Plot(e.to_string()))
+}
+
+/// Writes the plot of `curves` as PNG.
+pub fn write_png(curves: &[Curve], spec: &PlotSpec, out: impl Write) -> Result<(), EvalError> {
+    register_font();
+    let (w, h) = spec.size;
+    let mut pixels = vec![0u8; (w * h * 3) as usize];
+    draw(BitMapBackend::with_buffer(&mut pixels, spec.size).into_drawing_area(), curves, spec)?;
+    crate::view::png_image::write_rgb8(out, &pixels, w, h)
+}

@@ -1,0 +1,50 @@
+//! The stress suite: every solver on every form-factor backend over stiff and extreme scenes,
+//! judged by certified error bounds, with what went wrong and why (`cargo xtask stress` prints
+//! and writes it).
+//!
+//! ## The suite
+//!
+//! [`CASES`]: closed boxes with `ρ = 0.99` and `0.999`, channels with `ρ` of 0.99, 0.5 and 0,
+//! a box inside a closed box at `ρ = 0.999`,
+//! patch areas 1e6 apart, a tiny emitter of 1e6, a box touching the floor along its edges
+//! and one 1e-6 above it, a thin slab, and one scene at coordinate scales 1e-4 and 1e4 (the
+//! scenes are `furnace` and `inner-box`, whose module docs describe them). Each runs on
+//! [`BACKENDS`]: `analytic`, the same with every row rescaled to sum to 1 in `f64` (closed
+//! scenes only, see [`FormFactors::close_rows`]), `hemicube`, `montecarlo` and
+//! `matrix:rebalance=true`. Every solver of `POINT_SOLVERS`, `GROUP_SOLVERS`,
+//! `BEYOND_PAPER_SOLVERS` and `KRYLOV_SOLVERS` runs on each (`cg` refuses, in one sentence,
+//! the backends that state no reciprocity bound or one above its limit).
+//!
+//! ## How a run is judged
+//!
+//! F is assembled once per scene and backend, and every solver reads its columns (and exact
+//! rows) from it, so the suite measures solvers on one system and takes seconds. A run stops
+//! at residual power 1e-13, at round-off, on divergence (the executor's rule), or after
+//! [`STEP_CAP`]`·n` steps. Then:
+//!
+//! - **converged** means the *certified* bound on the final radiosity's relative L1 error,
+//!   `Σ A|r| / (1 − q)` over `Σ A|B|` (DESIGN §5, [`crate::evaluate`]), is at most
+//!   [`CONVERGED`]; no claim rests on the change between iterates or on the solver's own
+//!   estimate. Where `q ≥ 1` (ρ times some row sum of F reaches 1) nothing is certifiable;
+//! - the **exact answer** is the furnace identity `E / (1 − ρ)` where the scene is closed and
+//!   uniform, otherwise the reference solution of the same system; both errors are kept;
+//! - columns to reach e_rms 1e-3 and 1e-6 are counted against the reference;
+//! - non-finite values stop a run with an error naming the step and the patch; negative
+//!   radiosities are counted;
+//! - the **energy** is `Σ A·B` against the same sum for the exact answer;
+//! - group systems report the largest `κ_∞` estimate met and how many fell back to point
+//!   shots; the whole system's `κ_∞ = ‖Φ‖_∞ ‖Φ⁻¹‖_∞` is in each case's header, where
+//!   `‖Φ⁻¹‖_∞ = max (Φ⁻¹ 1)` because `Φ⁻¹ ≥ 0` for an M-matrix (one extra solve).
+//!
+//! Everything written is deterministic (no timings), so the report is snapshot-tested.
+//!
+//! [`FormFactors::close_rows`]: crate::FormFactors::close_rows
+
+mod cases;
+mod judge;
+mod report;
+mod suite;
+
+pub use cases::{BACKENDS, CASES, CONVERGED, Case, RESIDUAL_TARGET, STEP_CAP, SuiteBackend, all_solvers, select};
+pub use judge::StressReport;
+pub use suite::StressSuite;

@@ -1,0 +1,8 @@
+//! Seeing a solved scene: smooth radiosity at patch corners ([`shading`]), a ray-cast picture
+//! through a pinhole camera ([`render`]) written as PNG ([`png_image`]), and the scene as
+//! binary glTF with its radiosity as vertex colours ([`gltf_export`]).
+
+pub(crate) mod gltf_export;
+pub(crate) mod png_image;
+pub(crate) mod render;
+pub(crate) mod shading;

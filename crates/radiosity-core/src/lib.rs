@@ -42,7 +42,9 @@ pub use error::CoreError;
 pub use faer_operator::SymmetrizedOperator;
 pub use ids::{MaterialId, ObjectId};
 pub use math::{Real, Vec3};
-pub use operator::{Product, RadiosityOperator, multiply, residual_from_product};
+pub use operator::{
+    Product, RadiosityOperator, apply_from_product, multiply, multiply_by_columns, residual_from_product,
+};
 pub use patch::{Patch, PatchShape};
 pub use scene::{Material, Scene};
 pub use spectrum::{Channels, Spectrum};

@@ -110,9 +110,7 @@ impl<'a> RadiosityOperator<'a> {
     /// When `x` or `out` is not of length [`RadiosityOperator::dim`].
     pub fn apply(&self, x: &[Real], out: &mut [Real]) -> Product {
         let product = self.f_times(x, out);
-        for ((o, &xv), &r) in out.iter_mut().zip(x).zip(self.system.reflectivities()) {
-            *o = xv - r * *o;
-        }
+        apply_from_product(self.system, x, out);
         product
     }
 
@@ -125,6 +123,20 @@ impl<'a> RadiosityOperator<'a> {
         let product = self.f_times(x, out);
         residual_from_product(self.system, x, out);
         product
+    }
+}
+
+/// Turns `fx = F x` into `A x = x − ρ F x`, in place: for callers that computed the product
+/// themselves ([`multiply_by_columns`]).
+///
+/// # Panics
+///
+/// When `x` or `fx` is not of length `n·k`.
+pub fn apply_from_product(system: &LinearSystem, x: &[Real], fx: &mut [Real]) {
+    let rho = system.reflectivities();
+    assert!(x.len() == rho.len() && fx.len() == rho.len(), "vectors of length n·k");
+    for ((o, &xv), &r) in fx.iter_mut().zip(x).zip(rho) {
+        *o = xv - r * *o;
     }
 }
 
@@ -157,15 +169,35 @@ fn multiply_dyn(f: &dyn ColumnSource, x: &[Real], k: usize, out: &mut [Real]) ->
     if f.multiply(x, k, out) {
         return Product { native: true, ..Product::default() };
     }
+    let mut column = vec![0.0; n];
+    multiply_by_columns(x, k, out, &mut column, |j, column| f.fill_column(j, column))
+}
+
+/// `out = F x` as the sum of the columns `F_{·j} x_j` in index order, each fetched by
+/// `fetch(j, column)` into `column` (of length `n`), leaving out the columns of patches where
+/// `x` is zero in every channel (module doc): the product by columns, for a caller that
+/// fetches columns its own way (a solver's counted problem).
+///
+/// # Panics
+///
+/// When `x` or `out` is not of length `column.len() · channels`.
+pub fn multiply_by_columns(
+    x: &[Real],
+    channels: usize,
+    out: &mut [Real],
+    column: &mut [Real],
+    mut fetch: impl FnMut(usize, &mut [Real]),
+) -> Product {
+    let k = channels;
+    assert!(x.len() == column.len() * k && out.len() == x.len(), "vectors of length n·k");
     out.fill(0.0);
     let mut product = Product::default();
-    let mut column = vec![0.0; n];
     for (j, xj) in x.chunks_exact(k).enumerate() {
         if xj.iter().all(|v| *v == 0.0) {
             product.skipped += 1;
             continue;
         }
-        f.fill_column(j, &mut column);
+        fetch(j, column);
         product.columns += 1;
         for (&fij, o) in column.iter().zip(out.chunks_exact_mut(k)) {
             if fij != 0.0 {

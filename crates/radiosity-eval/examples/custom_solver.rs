@@ -7,7 +7,7 @@ use radiosity_core::Real;
 use radiosity_eval::{Lab, LabOptions, NoProgress};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
-use radiosity_solvers::{Problem, Solver, SolverError, SolverRegistry, State, StopRules};
+use radiosity_solvers::{Problem, Record, Solver, SolverError, SolverRegistry, State, StepKind, StopRules};
 use std::error::Error;
 use std::path::{Path, PathBuf};
 
@@ -30,7 +30,7 @@ impl Solver for DampedJacobi {
         Ok(())
     }
 
-    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
+    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<Record, SolverError> {
         let (i, k, system) = (self.next, problem.channels(), problem.system());
         problem.row(i, &mut self.row);
         for c in 0..k {
@@ -44,15 +44,15 @@ impl Solver for DampedJacobi {
         if self.next == 0 {
             self.old.copy_from_slice(&state.radiosity);
         }
-        Ok(())
+        Ok(Record::new())
     }
 
     fn residual_power(&self, _problem: &Problem<'_>, _state: &State) -> Option<Real> {
         None
     }
 
-    fn gathers_rows(&self) -> bool {
-        true
+    fn step_kind(&self) -> StepKind {
+        StepKind::Gather
     }
 }
 

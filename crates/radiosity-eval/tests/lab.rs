@@ -12,7 +12,9 @@ use radiosity_eval::{MemoryBudget, ReferenceKind, parse_bytes};
 use radiosity_eval::{SolverBound, errors};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
-use radiosity_solvers::{Executor, Observer, POINT_SOLVERS, Problem, ResidualBound, SolverRegistry, State, StopRules};
+use radiosity_solvers::{
+    Executor, Observer, ObserverMode, POINT_SOLVERS, Problem, Record, ResidualBound, SolverRegistry, State, StopRules,
+};
 
 fn analytic() -> BackendSpec {
     BackendSpec::parse("analytic").unwrap()
@@ -33,7 +35,7 @@ struct BoundCheck<'a> {
 }
 
 impl Observer for BoundCheck<'_> {
-    fn observe_step(&mut self, state: &State) -> Option<f64> {
+    fn observe_step(&mut self, state: &State, _figures: &Record) {
         let system = self.lab.system();
         let reference = self.lab.reference().unwrap();
         let known =
@@ -54,7 +56,6 @@ impl Observer for BoundCheck<'_> {
             self.largest_ratio = self.largest_ratio.max(bound.relative / relative);
         }
         self.checked += 1;
-        Some(e.e_rms)
     }
 
     fn wants_residual_bound(&self) -> bool {
@@ -81,7 +82,7 @@ fn the_certified_bound_of_every_step_holds_against_the_reference() {
         let problem = Problem::new(lab.system(), lab.matrix().unwrap()).unwrap();
         let mut check = BoundCheck { lab: &lab, known: None, checked: 0, solver: name.into(), largest_ratio: 0.0 };
         let rules = StopRules::parse("columns=2n").unwrap();
-        Executor::new(solver.as_mut(), rules).run(&problem, &mut check).unwrap();
+        Executor::new(solver.as_mut(), rules).add_observer(&mut check, ObserverMode::Always).run(&problem).unwrap();
         // A step is a patch or a group of up to 16: every one of 2n columns' steps is checked.
         assert!(check.checked > 2 * n / 16, "{name}: {} steps checked", check.checked);
         // Not vacuous: within a modest factor of the true error for the shooting methods.
@@ -336,19 +337,29 @@ fn charged_columns_give_the_computed_runs_numbers_at_the_measured_price() {
     let (charged, charge) = compare(ColumnCost::Charged);
     assert!(none.is_none() && computed.charge.is_none());
     let charge = charge.expect("a matrix reference is kept, so columns are charged");
-    assert!(charge.seconds_per_column > 0.0 && charge.sampled == ColumnCharge::SAMPLE.min(computed.n as usize));
+    assert!(charge.fresh > 0.0 && charge.recorded <= charge.fresh);
+    assert_eq!(charge.sampled, ColumnCharge::SAMPLE.min(computed.n as usize));
     assert_eq!(charged.charge, Some(charge));
     for (a, b) in computed.outcomes.iter().zip(&charged.outcomes) {
         assert_eq!((a.state.step, a.state.columns), (b.state.step, b.state.columns), "{}", a.solver);
         assert_eq!(a.state.radiosity, b.state.radiosity, "{}", a.solver);
         let e = |o: &radiosity_eval::Outcome| o.points.iter().map(|p| (p.step, p.columns, p.e_rms)).collect::<Vec<_>>();
         assert_eq!(e(a), e(b), "{}", a.solver);
-        // Every recorded second is the solving time plus the columns at their price.
-        let solve = b.state.solve_seconds;
-        assert!((b.seconds() - (solve + charge.seconds(b.state.columns))).abs() <= 1e-12 * b.seconds().max(1.0));
-        for p in &b.points {
-            assert!(p.seconds >= charge.seconds(p.columns) && p.seconds <= charge.seconds(p.columns) + solve + 1e-12);
-        }
+        // Between every column recorded and every column fresh; the last point is the run's.
+        let (columns, ff) = (b.state.columns as f64, b.state.ff_seconds);
+        let slack = 1e-9 * ff.max(1e-9);
+        assert!(ff >= charge.recorded * columns - slack && ff <= charge.fresh * columns + slack, "{}", a.solver);
+        assert_eq!(b.points.last().unwrap().seconds, b.seconds(), "{}", a.solver);
     }
+    // Jacobi's first sweep gathers each row once, in order: the k-th has k of its pairs
+    // recorded, so n rows cost n·fresh − (fresh − recorded)(n − 1)/2.
+    let lab = lab(&scene, LabOptions::default());
+    let mut jacobi = registry.build("jacobi").unwrap();
+    let run = lab.run(jacobi.as_mut(), &StopRules::parse("steps=n").unwrap(), &RecordPlan::default(), &NoProgress);
+    let charge = lab.charge().unwrap();
+    let n = lab.n() as f64;
+    let expected = n * charge.fresh - (charge.fresh - charge.recorded) * (n - 1.0) / 2.0;
+    let ff = run.unwrap().state.ff_seconds;
+    assert!((ff - expected).abs() <= 1e-9 * expected, "{ff} against {expected}");
     assert!(charged.seconds_phrase().contains("charged"), "{}", charged.seconds_phrase());
 }

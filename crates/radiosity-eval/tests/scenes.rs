@@ -12,8 +12,8 @@ use radiosity_eval::{ConvergenceTable, Evaluator, FormFactors, ReferenceParams, 
 use radiosity_ff::{Backend, BackendSpec, FormFactorInput};
 use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
 use radiosity_solvers::{
-    BEYOND_PAPER_SOLVERS, Executor, GROUP_SOLVERS, KRYLOV_SOLVERS, NoObserver, Observer, POINT_SOLVERS, Problem, Run,
-    State, StopRules, solver_by_name,
+    BEYOND_PAPER_SOLVERS, Executor, GROUP_SOLVERS, KRYLOV_SOLVERS, Observer, ObserverMode, POINT_SOLVERS, Problem,
+    Record, Run, State, StopRules, solver_by_name,
 };
 use std::collections::HashMap;
 use std::panic::{self, AssertUnwindSafe};
@@ -72,11 +72,17 @@ impl Fixture {
         self.system.len()
     }
 
-    /// Runs solver `name` on the stored form factors.
-    fn run(&self, name: &str, rules: StopRules, observer: &mut dyn Observer) -> Run {
+    /// Runs solver `name` on the stored form factors, watched by `observer` if any; an `rms=`
+    /// rule is fed e_rms of the displayed B against the reference, after every step.
+    fn run(&self, name: &str, rules: StopRules, observer: Option<&mut dyn Observer>) -> Run {
         let mut solver = solver_by_name(name).unwrap_or_else(|e| panic!("{name}: {e}"));
         let problem = Problem::new(&self.system, &self.matrix).unwrap();
-        Executor::new(solver.as_mut(), rules).run(&problem, observer).unwrap_or_else(|e| panic!("{name}: {e}"))
+        let mut monitor = |state: &State| Some(errors(&self.system, &self.reference, &state.radiosity).unwrap().e_rms);
+        let mut executor = Executor::new(solver.as_mut(), rules).monitor(&mut monitor);
+        if let Some(observer) = observer {
+            executor = executor.add_observer(observer, ObserverMode::Always);
+        }
+        executor.run(&problem).unwrap_or_else(|e| panic!("{name}: {e}"))
     }
 }
 
@@ -85,19 +91,6 @@ fn fixture(arg: &str) -> &'static Fixture {
     static FIXTURES: [OnceLock<Fixture>; SCENES.len()] = [const { OnceLock::new() }; SCENES.len()];
     let slot = SCENES.iter().position(|s| *s == arg).unwrap_or_else(|| panic!("{arg} is not in SCENES"));
     FIXTURES[slot].get_or_init(|| Fixture::build(arg))
-}
-
-/// Feeds the `rms=` rule: e_rms of the displayed B against the reference, after every step.
-struct RmsObserver<'a>(&'a Fixture);
-
-impl Observer for RmsObserver<'_> {
-    fn observe_step(&mut self, state: &State) -> Option<Real> {
-        Some(errors(&self.0.system, &self.0.reference, &state.radiosity).unwrap().e_rms)
-    }
-
-    fn measures_error(&self) -> bool {
-        true
-    }
 }
 
 /// Runs every point and group solver on `scene` until e_rms ≤ 1e-9 and checks that each ends
@@ -109,7 +102,7 @@ fn check_reaches_reference(scene: &str) {
     for &name in POINT_SOLVERS.iter().chain(&GROUP_SOLVERS).chain(&BEYOND_PAPER_SOLVERS).chain(&KRYLOV_SOLVERS) {
         let rules = StopRules { step_cap: STEP_CAP, ..StopRules::parse(RMS_TARGET).unwrap() };
         // The fixture is only read, so a panic cannot leave it half-updated.
-        let attempt = panic::catch_unwind(AssertUnwindSafe(|| fixture.run(name, rules, &mut RmsObserver(fixture))));
+        let attempt = panic::catch_unwind(AssertUnwindSafe(|| fixture.run(name, rules, None)));
         let Ok(run) = attempt else {
             failures.push(format!("{name} on {scene}: panicked (message above)"));
             continue;
@@ -159,13 +152,12 @@ struct ColumnRecorder {
 }
 
 impl Observer for ColumnRecorder {
-    fn observe_step(&mut self, state: &State) -> Option<Real> {
+    fn observe_step(&mut self, state: &State, _figures: &Record) {
         for (target, slot) in self.targets.iter().zip(&mut self.recorded) {
             if slot.is_none() && state.columns == *target {
                 *slot = Some(Recorded { step: state.step, columns: state.columns, radiosity: state.radiosity.clone() });
             }
         }
-        None
     }
 }
 
@@ -182,7 +174,7 @@ fn convergence_table(scene: &str) -> String {
     for &name in POINT_SOLVERS.iter() {
         let mut recorder =
             ColumnRecorder { recorded: targets.iter().map(|_| None).collect(), targets: targets.clone() };
-        let run = fixture.run(name, StopRules::parse("columns=2n").unwrap(), &mut recorder);
+        let run = fixture.run(name, StopRules::parse("columns=2n").unwrap(), Some(&mut recorder));
         for (target, recorded) in targets.iter().zip(recorder.recorded) {
             let Some(r) = recorded else {
                 panic!("{name} on {scene}: never at exactly {target} columns; {}", run.termination)
@@ -224,11 +216,10 @@ struct ResidualRecorder<'a> {
 }
 
 impl Observer for ResidualRecorder<'_> {
-    fn observe_step(&mut self, state: &State) -> Option<Real> {
+    fn observe_step(&mut self, state: &State, _figures: &Record) {
         if state.step % self.every == 0 {
             self.residuals.push(self.evaluator.evaluate(&state.radiosity).unwrap().residual);
         }
-        None
     }
 }
 
@@ -246,7 +237,7 @@ fn check_residual_keeps_falling(scene: &str) {
     for &name in shooting.chain(&GROUP_SOLVERS).chain(&BEYOND_PAPER_SOLVERS) {
         let evaluator = Evaluator::new(&fixture.system, &fixture.matrix, &fixture.reference).unwrap();
         let mut recorder = ResidualRecorder { evaluator, every: n, residuals: Vec::new() };
-        fixture.run(name, StopRules::parse("steps=12n").unwrap(), &mut recorder);
+        fixture.run(name, StopRules::parse("steps=12n").unwrap(), Some(&mut recorder));
         let r = &recorder.residuals;
         for k in 1..r.len() {
             // `r[k] >= r[k - 1]` would let a NaN through.
@@ -282,7 +273,7 @@ fn end_table(scene: &str, names: &[&'static str], rule: &str, title: &str) -> (S
     let mut table = ConvergenceTable::new().without_timings();
     let mut e_rms = HashMap::new();
     for &name in names {
-        let run = fixture.run(name, StopRules::parse(rule).unwrap(), &mut NoObserver);
+        let run = fixture.run(name, StopRules::parse(rule).unwrap(), None);
         let m = evaluator.evaluate(&run.state.radiosity).unwrap();
         e_rms.insert(name, m.e_rms);
         table.push(TableRow {

@@ -77,8 +77,19 @@ pub enum SolverError {
         /// Why, in one sentence.
         reason: String,
     },
-    /// A stop rule that needs the error against a reference (`rms=`) in a run whose observer
-    /// does not measure it ([`crate::Observer::measures_error`]): the rule could never hold.
+    /// The method cannot go on from this state (a recurrence that breaks down, a system seen
+    /// not to be positive definite). Returned by [`crate::Solver::next_step`] with the state
+    /// as it was before the step, it ends the run with
+    /// [`crate::TerminationReason::Breakdown`] and the state kept.
+    #[error("{solver} broke down: {reason}")]
+    Breakdown {
+        /// The solver.
+        solver: String,
+        /// Why, in one sentence.
+        reason: String,
+    },
+    /// A stop rule that needs the error against a reference (`rms=`) in a run without an
+    /// error monitor ([`crate::ErrorMonitor`]): the rule could never hold.
     #[error("the stop rule {rule} needs e_rms against a reference solution, which this run does not measure")]
     ErrorNotMeasured {
         /// The rule, as the stop rules show it (`rms=0.001`).

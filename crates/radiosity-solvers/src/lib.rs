@@ -3,7 +3,8 @@
 //!
 //! Built after argmin: a [`Solver`] defines one step, the [`Executor`] loops until a stop
 //! rule ([`StopRules`]) holds and calls [`Observer`]s on the initial state, between steps and
-//! on the finished run, outside the timed region ([`Every`] thins them out). Each solver
+//! on the finished run, outside the timed region, each as its [`ObserverMode`] says; the
+//! `rms=` rule asks a separate [`ErrorMonitor`]. Each solver
 //! lives in its own module, in a folder by family (`run`, `gathering`, `shooting`, `group`,
 //! `krylov`), whose documentation gives its update rule and references; the modules are
 //! private (`cargo doc --document-private-items` shows them) and everything public is
@@ -35,7 +36,7 @@
 //! ```
 //! use radiosity_core::{Channels, DenseColumns, LinearSystem, Real};
 //! use radiosity_solvers::{
-//!     Executor, NoObserver, Problem, Solver, SolverError, SolverRegistry, State, StopRules, TerminationReason,
+//!     Executor, Problem, Record, Solver, SolverError, SolverRegistry, State, StopRules, TerminationReason,
 //! };
 //!
 //! // Two unit patches facing each other, each seeing a fifth of the other.
@@ -49,8 +50,8 @@
 //!     fn name(&self) -> String {
 //!         "idle".into()
 //!     }
-//!     fn next_step(&mut self, _: &Problem<'_>, _: &mut State) -> Result<(), SolverError> {
-//!         Ok(())
+//!     fn next_step(&mut self, _: &Problem<'_>, _: &mut State) -> Result<Record, SolverError> {
+//!         Ok(Record::new())
 //!     }
 //!     fn residual_power(&self, _: &Problem<'_>, _: &State) -> Option<Real> {
 //!         None
@@ -65,7 +66,7 @@
 //!
 //! let mut pr = registry.build("pr").unwrap();
 //! let run = Executor::new(pr.as_mut(), StopRules::parse("residual=1e-12").unwrap())
-//!     .run(&problem, &mut NoObserver)
+//!     .run(&problem)
 //!     .unwrap();
 //! assert!(matches!(run.termination, TerminationReason::Residual(_)));
 //! // B1 = E1 / (1 − ρ² F12 F21).
@@ -74,7 +75,7 @@
 //! // Group shooting records its group steps: here every step is one.
 //! let mut group_pr = registry.build("group-pr-g2").unwrap();
 //! let rules = StopRules::parse("steps=4").unwrap();
-//! let run = Executor::new(group_pr.as_mut(), rules).run(&problem, &mut NoObserver).unwrap();
+//! let run = Executor::new(group_pr.as_mut(), rules).run(&problem).unwrap();
 //! assert_eq!(run.record.count("group_steps"), Some(4));
 //! ```
 
@@ -103,7 +104,9 @@ pub use krylov::cg::{CgParams, ConjugateGradients};
 pub use krylov::gmres::{Gmres, GmresParams};
 pub use naming::{ParseSolverError, SolverParams};
 pub use registry::{SolverEntry, SolverRegistry};
-pub use run::executor::{DIVERGENCE_FACTOR, DIVERGENCE_FLOOR, Every, Executor, NoObserver, Observer, Run, Solver};
+pub use run::executor::{
+    DIVERGENCE_FACTOR, DIVERGENCE_FLOOR, ErrorMonitor, Executor, Observer, ObserverMode, Run, Solver, StepKind,
+};
 pub use run::problem::Problem;
 pub use run::record::{Entries, Record, Value};
 pub use run::residual_bound::{ResidualBound, area_norms};

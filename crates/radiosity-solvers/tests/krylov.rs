@@ -3,7 +3,9 @@
 
 use super::{non_physical, solve_capped, twelve};
 use radiosity_core::dense_lu::lu_solve;
-use radiosity_core::{Channels, ColumnSource, DenseColumns, LinearSystem, Real};
+use radiosity_core::{
+    Channels, ColumnSource, DenseColumns, LinearSystem, RadiosityOperator, Real, SymmetrizedOperator,
+};
 use radiosity_solvers::*;
 
 /// `B*` of every channel by dense LU.
@@ -32,7 +34,7 @@ fn run(name: &str, system: &LinearSystem, f: &DenseColumns, rules: &str) -> Resu
     let mut solver = solver_by_name(name)?;
     let problem = Problem::new(system, f)?;
     let rules = StopRules { step_cap: 2000.0, ..StopRules::parse(rules)? };
-    Executor::new(solver.as_mut(), rules).run(&problem, &mut NoObserver)
+    Executor::new(solver.as_mut(), rules).run(&problem)
 }
 
 #[test]
@@ -137,8 +139,14 @@ fn cg_stops_where_the_symmetrized_system_is_not_positive_definite() {
     // ρ F with rows of 4.05: reciprocal, but A = 1.81 I − 0.81 J has the eigenvalue −3.05.
     let (system, f) = non_physical();
     let f = f.with_measured_reciprocity(system.areas()).unwrap();
-    let text = run("cg", &system, &f, "residual=1e-10").unwrap_err().to_string();
-    assert!(text.contains("at step 2 the symmetrized system of channel 0 is not positive definite"), "{text}");
+    // The run ends with its state kept, as it stood after the first product, and says why.
+    let stopped = run("cg", &system, &f, "residual=1e-10").unwrap();
+    let TerminationReason::Breakdown { step, reason } = &stopped.termination else { panic!("{}", stopped.termination) };
+    assert_eq!(*step, 2);
+    assert!(reason.contains("the symmetrized system of channel 0 is not positive definite"), "{reason}");
+    assert!(stopped.termination.to_string().starts_with("broke down at step 2: "), "{}", stopped.termination);
+    assert_eq!(stopped.state.step, 1);
+    assert_eq!(stopped.state.radiosity, system.emissions(), "B = E until the breakdown");
     // GMRES needs no definiteness: it finds the non-physical system's solution (negative
     // radiosities), which no contraction-based method reaches.
     let star = exact(&system, &f);
@@ -192,6 +200,48 @@ fn krylov_names_parse_and_bad_ones_are_refused() {
     assert!(typo.contains("did you mean 'bicgstab'?"), "{typo}");
     for name in KRYLOV_SOLVERS {
         assert_eq!(solver_by_name(name).unwrap().name(), name);
-        assert!(solver_by_name(name).unwrap().step_is_sweep());
+        assert_eq!(solver_by_name(name).unwrap().step_kind(), StepKind::Product);
+    }
+}
+
+/// `x` with `A x = b` by faer's own matrix-free solver, `cg` or `bicgstab`, through the public
+/// operator ([`RadiosityOperator`] as faer's `LinOp`).
+fn faer_solve(op: impl faer::matrix_free::LinOp<Real> + Copy, b: &[Real], cg: bool) -> Vec<Real> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::matrix_free::{IdentityPrecond, bicgstab, conjugate_gradient};
+    let dim = b.len();
+    let rhs = faer::Mat::from_fn(dim, 1, |i, _| b[i]);
+    let mut out = faer::Mat::<Real>::zeros(dim, 1);
+    let precond = IdentityPrecond { dim };
+    let par = faer::Par::Seq;
+    if cg {
+        let params = conjugate_gradient::CgParams { max_iters: 500, ..Default::default() };
+        let mut buffer = MemBuffer::new(conjugate_gradient::conjugate_gradient_scratch(precond, op, 1, par));
+        let stack = MemStack::new(&mut buffer);
+        conjugate_gradient::conjugate_gradient(out.as_mut(), precond, op, rhs.as_ref(), params, |_| {}, par, stack)
+            .unwrap();
+    } else {
+        let params = bicgstab::BicgParams { max_iters: 500, ..Default::default() };
+        let mut buffer = MemBuffer::new(bicgstab::bicgstab_scratch(precond, precond, op, 1, par));
+        let stack = MemStack::new(&mut buffer);
+        bicgstab::bicgstab(out.as_mut(), precond, precond, op, rhs.as_ref(), params, |_| {}, par, stack).unwrap();
+    }
+    (0..dim).map(|i| out[(i, 0)]).collect()
+}
+
+#[test]
+fn faers_own_cg_and_bicgstab_agree_with_ours_on_a_stored_system() {
+    // Twelve patches, three channels, reciprocal form factors stored in memory.
+    let (system, f) = twelve();
+    let f = f.with_measured_reciprocity(system.areas()).unwrap();
+    let op = RadiosityOperator::new(&system, &f).unwrap();
+    let symmetric = SymmetrizedOperator::new(op).unwrap();
+    let theirs_cg = faer_solve(symmetric, &symmetric.rhs(), true);
+    let theirs_bicgstab = faer_solve(op, system.emissions(), false);
+    for (name, theirs) in [("cg", theirs_cg), ("bicgstab", theirs_bicgstab)] {
+        let ours = run(name, &system, &f, "residual=1e-14").unwrap().state.radiosity;
+        for (a, b) in ours.iter().zip(&theirs) {
+            assert!((a - b).abs() <= 1e-10 * b.abs().max(1.0), "{name}: ours {a}, faer's {b}");
+        }
     }
 }

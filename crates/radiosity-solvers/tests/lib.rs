@@ -61,7 +61,7 @@ fn solve_capped(name: &str, system: &LinearSystem, f: &DenseColumns, rules: &str
     let mut solver = solver_by_name(name).unwrap();
     let problem = Problem::new(system, f).unwrap();
     let rules = StopRules { step_cap: cap, ..StopRules::parse(rules).unwrap() };
-    Executor::new(solver.as_mut(), rules).run(&problem, &mut NoObserver).unwrap()
+    Executor::new(solver.as_mut(), rules).run(&problem).unwrap()
 }
 
 #[test]
@@ -173,9 +173,7 @@ fn column_time_is_form_factor_time() {
     for name in solvers().iter().map(String::as_str) {
         let mut solver = solver_by_name(name).unwrap();
         let problem = Problem::new(&system, &slow).unwrap();
-        let run = Executor::new(solver.as_mut(), StopRules::parse("steps=12").unwrap())
-            .run(&problem, &mut NoObserver)
-            .unwrap();
+        let run = Executor::new(solver.as_mut(), StopRules::parse("steps=12").unwrap()).run(&problem).unwrap();
         assert!(run.state.ff_seconds >= 0.012, "{name}: {}", run.state.ff_seconds);
         assert!(run.state.solve_seconds < run.state.ff_seconds, "{name}: {} s solving", run.state.solve_seconds);
     }
@@ -214,29 +212,26 @@ fn pr_shoots_by_area_and_southwell_by_value() {
     assert_eq!(first_shooter("southwell"), 0, "|ΔB|: 5 > 1");
 }
 
-struct Rms(Vec<Real>);
-
-impl Observer for Rms {
-    fn observe_step(&mut self, state: &State) -> Option<Real> {
-        let num: Real = state.radiosity.iter().zip(&self.0).map(|(b, x)| (b - x).powi(2)).sum();
-        let den: Real = self.0.iter().map(|x| x * x).sum();
+/// e_rms against `star`, as a monitor.
+fn rms(star: Vec<Real>) -> impl FnMut(&State) -> Option<Real> {
+    move |state: &State| {
+        let num: Real = state.radiosity.iter().zip(&star).map(|(b, x)| (b - x).powi(2)).sum();
+        let den: Real = star.iter().map(|x| x * x).sum();
         Some((num / den).sqrt())
-    }
-
-    fn measures_error(&self) -> bool {
-        true
     }
 }
 
 #[test]
-fn the_rms_rule_uses_the_observer() {
+fn the_rms_rule_uses_the_monitor() {
     let system = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![1.0; 6]).unwrap();
     let f = cube();
     let mut solver = solver_by_name("gauss-seidel").unwrap();
     let problem = Problem::new(&system, &f).unwrap();
-    let mut observer = Rms(vec![2.0; 6]);
-    let run =
-        Executor::new(solver.as_mut(), StopRules::parse("rms=1e-6").unwrap()).run(&problem, &mut observer).unwrap();
+    let mut monitor = rms(vec![2.0; 6]);
+    let run = Executor::new(solver.as_mut(), StopRules::parse("rms=1e-6").unwrap())
+        .monitor(&mut monitor)
+        .run(&problem)
+        .unwrap();
     let TerminationReason::Rms(e) = run.termination else { panic!("{}", run.termination) };
     assert!(e <= 1e-6);
 }
@@ -307,7 +302,7 @@ fn errors_are_reported_not_panicked() {
     for name in solvers().iter().map(String::as_str) {
         let mut solver = solver_by_name(name).unwrap();
         let problem = Problem::new(&system, &broken).unwrap();
-        let err = Executor::new(solver.as_mut(), StopRules::default()).run(&problem, &mut NoObserver).unwrap_err();
+        let err = Executor::new(solver.as_mut(), StopRules::default()).run(&problem).unwrap_err();
         if name == "cg" {
             assert!(matches!(err, SolverError::NotApplicable { .. }), "{err:?}");
             continue;
@@ -457,7 +452,7 @@ fn group_acceleration_stores_columns_and_reuses_them() {
 fn solve_problem(name: &str, problem: &Problem<'_>, rules: &str) -> Result<Run, SolverError> {
     let mut solver = solver_by_name(name)?;
     let rules = StopRules { step_cap: 2000.0, ..StopRules::parse(rules).unwrap() };
-    Executor::new(solver.as_mut(), rules).run(problem, &mut NoObserver)
+    Executor::new(solver.as_mut(), rules).run(problem)
 }
 
 /// The largest relative difference between two radiosity vectors.
@@ -888,7 +883,7 @@ impl Solver for Rogue {
         "rogue".into()
     }
 
-    fn next_step(&mut self, _problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
+    fn next_step(&mut self, _problem: &Problem<'_>, state: &mut State) -> Result<Record, SolverError> {
         if state.step == self.at {
             match self.target {
                 "both" => (state.radiosity[4], state.unshot[4]) = (self.value, self.value),
@@ -896,7 +891,7 @@ impl Solver for Rogue {
                 _ => state.unshot.fill(self.value),
             }
         }
-        Ok(())
+        Ok(Record::new())
     }
 
     fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real> {
@@ -908,7 +903,7 @@ fn run_rogue(rogue: &mut Rogue, rules: &str) -> Result<Run, SolverError> {
     let system = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![1.0; 6]).unwrap();
     let f = cube();
     let problem = Problem::new(&system, &f).unwrap();
-    Executor::new(rogue, StopRules::parse(rules).unwrap()).run(&problem, &mut NoObserver)
+    Executor::new(rogue, StopRules::parse(rules).unwrap()).run(&problem)
 }
 
 #[test]
@@ -1030,8 +1025,8 @@ impl Solver for Lazy {
         format!("lazy-{}", self.0)
     }
 
-    fn next_step(&mut self, _problem: &Problem<'_>, _state: &mut State) -> Result<(), SolverError> {
-        Ok(())
+    fn next_step(&mut self, _problem: &Problem<'_>, _state: &mut State) -> Result<Record, SolverError> {
+        Ok(Record::new())
     }
 
     fn residual_power(&self, _problem: &Problem<'_>, _state: &State) -> Option<Real> {
@@ -1082,8 +1077,7 @@ fn a_users_solver_builds_through_the_registry() {
     let system = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![1.0; 6]).unwrap();
     let f = cube();
     let problem = Problem::new(&system, &f).unwrap();
-    let run =
-        Executor::new(lazy.as_mut(), StopRules::parse("steps=3").unwrap()).run(&problem, &mut NoObserver).unwrap();
+    let run = Executor::new(lazy.as_mut(), StopRules::parse("steps=3").unwrap()).run(&problem).unwrap();
     assert_eq!((run.termination, run.state.columns), (TerminationReason::Steps(3), 0));
     assert_eq!(run.record.count("laziness"), Some(3));
     // Its refusals name it; the built-in names keep their meaning; the lists show it.
@@ -1157,90 +1151,125 @@ fn the_help_has_one_line_per_family() {
     }
 }
 
-// Observers: when they are called, every N steps, and rules they cannot feed.
+// Observers: when they are called, in which mode, what steps hand them, and rules no
+// monitor feeds.
 
-/// Counts its calls and the steps it saw.
+/// Counts its calls, the steps it saw and the figures they handed back.
 #[derive(Default)]
 struct Calls {
     init: Vec<String>,
     steps: Vec<u64>,
+    figures: Vec<Record>,
     last: Option<(u64, TerminationReason)>,
-    measures: bool,
 }
 
 impl Observer for Calls {
-    fn observe_init(&mut self, solver: &str, state: &State) -> Option<Real> {
+    fn observe_init(&mut self, solver: &str, state: &State) {
         assert_eq!(state.step, 0);
         self.init.push(solver.to_string());
-        None
     }
 
-    fn observe_step(&mut self, state: &State) -> Option<Real> {
+    fn observe_step(&mut self, state: &State, figures: &Record) {
         self.steps.push(state.step);
-        self.measures.then_some(1.0 / state.step as Real)
+        self.figures.push(figures.clone());
     }
 
     fn observe_final(&mut self, run: &Run) {
-        self.last = Some((run.state.step, run.termination));
-    }
-
-    fn measures_error(&self) -> bool {
-        self.measures
+        self.last = Some((run.state.step, run.termination.clone()));
     }
 }
 
 #[test]
-fn observers_see_the_start_every_step_and_the_end() {
+fn observers_see_the_start_the_steps_their_mode_takes_and_the_end() {
     let system = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![1.0; 6]).unwrap();
     let f = cube();
     let problem = Problem::new(&system, &f).unwrap();
-    let run = |observer: &mut dyn Observer, rules: &str| {
-        let mut solver = solver_by_name("pr").unwrap();
-        Executor::new(solver.as_mut(), StopRules::parse(rules).unwrap()).run(&problem, observer)
+    // Three observers on one run, each in its mode.
+    let (mut always, mut third, mut never) = (Calls::default(), Calls::default(), Calls::default());
+    let mut solver = solver_by_name("pr").unwrap();
+    Executor::new(solver.as_mut(), StopRules::parse("steps=7").unwrap())
+        .add_observer(&mut always, ObserverMode::Always)
+        .add_observer(&mut third, ObserverMode::Every(3))
+        .add_observer(&mut never, ObserverMode::Never)
+        .run(&problem)
+        .unwrap();
+    let end = Some((7, TerminationReason::Steps(7)));
+    assert_eq!((always.init, always.steps, always.last), (vec!["pr".to_string()], (1..=7).collect(), end.clone()));
+    assert_eq!((third.init.len(), third.steps, third.last), (1, vec![3, 6], end.clone()));
+    assert_eq!((never.init.len(), never.steps.len(), never.last), (1, 0, end));
+    // Every 0 steps is every step.
+    assert!((1..5).all(|k| ObserverMode::Every(0).observes(k)));
+    // The rms rule holds where the monitor says: e_rms = 1/step ≤ 0.2 from step 5.
+    let mut monitor = |state: &State| Some(1.0 / state.step as Real);
+    let mut solver = solver_by_name("pr").unwrap();
+    let done = Executor::new(solver.as_mut(), StopRules::parse("rms=0.2").unwrap())
+        .monitor(&mut monitor)
+        .run(&problem)
+        .unwrap();
+    assert_eq!((done.state.step, done.termination), (5, TerminationReason::Rms(0.2)));
+}
+
+#[test]
+fn a_step_hands_its_own_figures_to_the_observers() {
+    let system = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![1.0; 6]).unwrap();
+    let f = cube();
+    let problem = Problem::new(&system, &f).unwrap();
+    let run = |name: &str, steps: &str| {
+        let mut calls = Calls::default();
+        let mut solver = solver_by_name(name).unwrap();
+        let run = Executor::new(solver.as_mut(), StopRules::parse(steps).unwrap())
+            .add_observer(&mut calls, ObserverMode::Always)
+            .run(&problem)
+            .unwrap();
+        (calls.figures, run.record)
     };
+    // Group shooting: every step is a group of 3, whose size and condition come back.
+    for figures in run("group-pr-g3", "steps=4").0 {
+        assert_eq!((figures.count("group_size"), figures.count("group_fell_back")), (Some(3), Some(0)));
+        assert!(figures.real("group_condition").is_some_and(|k| (1.0..1e10).contains(&k)), "{figures:?}");
+    }
+    // A point solver hands back nothing.
+    assert!(run("pr", "steps=4").0.iter().all(Record::is_empty));
+    // Group-accelerated shooting on twelve patches: the steps that ran a group step hand back
+    // its figures, the others nothing.
+    let (twelve, f12) = twelve();
+    let problem = Problem::new(&twelve, &f12).unwrap();
     let mut calls = Calls::default();
-    run(&mut calls, "steps=7").unwrap();
-    assert_eq!(calls.init, ["pr"]);
-    assert_eq!(calls.steps, (1..=7).collect::<Vec<_>>());
-    assert_eq!(calls.last, Some((7, TerminationReason::Steps(7))));
-    // Every third step; the start and the end always.
-    let mut every = Calls::default().every(3);
-    run(&mut every, "steps=7").unwrap();
-    let inner = every.into_inner();
-    assert_eq!((inner.init.len(), inner.steps, inner.last), (1, vec![3, 6], Some((7, TerminationReason::Steps(7)))));
-    // The rms rule holds only where the observer measures: e_rms = 1/step ≤ 0.2 from step 5,
-    // seen at step 6.
-    let mut every = Every::new(3, Calls { measures: true, ..Calls::default() });
-    let done = run(&mut every, "rms=0.2").unwrap();
-    assert_eq!((done.state.step, done.termination), (6, TerminationReason::Rms(1.0 / 6.0)));
-    // Through a reference, and every 0 steps taken as every step.
-    let mut calls = Calls::default();
-    let mut by_ref = Every::new(0, &mut calls);
-    run(&mut by_ref, "steps=2").unwrap();
-    assert_eq!(calls.steps, [1, 2]);
+    let mut solver = solver_by_name("pr-g4-m12:f=3").unwrap();
+    let record = Executor::new(solver.as_mut(), StopRules::parse("steps=30").unwrap())
+        .add_observer(&mut calls, ObserverMode::Always)
+        .run(&problem)
+        .unwrap()
+        .record;
+    let figures = calls.figures;
+    let group_steps: Vec<&Record> = figures.iter().filter(|f| !f.is_empty()).collect();
+    assert_eq!(group_steps.len() as u64, record.count("group_steps").unwrap());
+    assert!(!group_steps.is_empty() && group_steps.len() < figures.len());
+    let sizes: Vec<u64> = group_steps.iter().map(|f| f.count("group_size").unwrap()).collect();
+    assert!(sizes.iter().all(|m| (1..=4).contains(m)), "{sizes:?}");
+    let mean = sizes.iter().sum::<u64>() as Real / sizes.len() as Real;
+    assert_eq!(Some(mean), record.real("group_size_mean"));
 }
 
 #[test]
-fn an_rms_rule_that_no_observer_feeds_is_refused_before_the_run() {
+fn an_rms_rule_without_a_monitor_is_refused_before_the_run() {
     let system = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![1.0; 6]).unwrap();
     let f = cube();
     let problem = Problem::new(&system, &f).unwrap();
-    for observer in [&mut NoObserver as &mut dyn Observer, &mut Calls::default(), &mut Calls::default().every(2)] {
-        let mut solver = solver_by_name("pr").unwrap();
-        let rules = StopRules::parse("steps=100,rms=0.1").unwrap();
-        let err = Executor::new(solver.as_mut(), rules).run(&problem, observer).unwrap_err();
-        assert_eq!(err, SolverError::ErrorNotMeasured { rule: "rms=0.1".into() });
-        assert_eq!(
-            err.to_string(),
-            "the stop rule rms=0.1 needs e_rms against a reference solution, which this run does not measure"
-        );
-    }
-    // Nothing ran: the observer was not even called on the initial state.
+    let mut solver = solver_by_name("pr").unwrap();
+    let rules = StopRules::parse("steps=100,rms=0.1").unwrap();
+    let err = Executor::new(solver.as_mut(), rules).run(&problem).unwrap_err();
+    assert_eq!(err, SolverError::ErrorNotMeasured { rule: "rms=0.1".into() });
+    assert_eq!(
+        err.to_string(),
+        "the stop rule rms=0.1 needs e_rms against a reference solution, which this run does not measure"
+    );
+    // Nothing ran: an observer was not even called on the initial state.
     let mut calls = Calls::default();
     let mut solver = solver_by_name("pr").unwrap();
     let rules = StopRules::parse("rms=1e-3").unwrap();
-    let err = Executor::new(solver.as_mut(), rules).run(&problem, &mut calls).unwrap_err();
-    assert!(err.to_string().starts_with("the stop rule rms=1e-3 needs"), "{err}");
+    let err = Executor::new(solver.as_mut(), rules).add_observer(&mut calls, ObserverMode::Always).run(&problem);
+    assert!(err.unwrap_err().to_string().starts_with("the stop rule rms=1e-3 needs"));
     assert!(calls.init.is_empty() && calls.steps.is_empty() && calls.last.is_none());
 }
 

@@ -143,9 +143,7 @@ impl<'a> Checker<'a> {
 }
 
 impl Observer for Checker<'_> {
-    fn observe_step(&mut self, _state: &State) -> Option<Real> {
-        None
-    }
+    fn observe_step(&mut self, _state: &State, _figures: &Record) {}
 
     fn wants_residual_bound(&self) -> bool {
         true
@@ -193,7 +191,10 @@ fn check<'a>(name: &str, system: &'a LinearSystem, f: &'a DenseColumns, steps: &
     let problem = Problem::new(system, f).unwrap().with_patch_order(&order).unwrap();
     let mut solver = solver_by_name(name).unwrap();
     let mut checker = Checker::new(name, system, f);
-    let run = Executor::new(solver.as_mut(), StopRules::parse(steps).unwrap()).run(&problem, &mut checker).unwrap();
+    let run = Executor::new(solver.as_mut(), StopRules::parse(steps).unwrap())
+        .add_observer(&mut checker, ObserverMode::Always)
+        .run(&problem)
+        .unwrap();
     assert_eq!(checker.checked, run.state.step + 1, "{name}: a bound at init and after every step");
     checker
 }
@@ -276,9 +277,7 @@ fn group_steps_that_fall_back_keep_the_bound() {
             assert_eq!(checker.missing, 0, "{name}");
             let mut solver = solver_by_name(name).unwrap();
             let problem = Problem::new(&system, &f).unwrap();
-            let run = Executor::new(solver.as_mut(), StopRules::parse("steps=8").unwrap())
-                .run(&problem, &mut NoObserver)
-                .unwrap();
+            let run = Executor::new(solver.as_mut(), StopRules::parse("steps=8").unwrap()).run(&problem).unwrap();
             assert!(run.record.count("group_fallbacks").unwrap() > 0, "{name}: {}", run.record);
         }
     }
@@ -308,9 +307,7 @@ fn shooting_keeps_the_unshot_radiosity_the_residual_when_patches_see_themselves(
     for name in ["pr", "southwell", "feda", "shao", "xu", "relax-1.5", "group-pr-g3", "pr-g3:f=1", "xu-g3-m6:f=2"] {
         let mut solver = solver_by_name(name).unwrap();
         let problem = Problem::new(&system, &f).unwrap();
-        let run = Executor::new(solver.as_mut(), StopRules::parse("steps=40").unwrap())
-            .run(&problem, &mut NoObserver)
-            .unwrap();
+        let run = Executor::new(solver.as_mut(), StopRules::parse("steps=40").unwrap()).run(&problem).unwrap();
         assert_unshot_is_the_residual(name, &system, &f, &run.state);
     }
 }
@@ -326,8 +323,8 @@ fn the_bound_follows_its_formula_and_reaches_observers_as_asked() {
         fn name(&self) -> String {
             "idle".into()
         }
-        fn next_step(&mut self, _: &Problem<'_>, _: &mut State) -> Result<(), SolverError> {
-            Ok(())
+        fn next_step(&mut self, _: &Problem<'_>, _: &mut State) -> Result<Record, SolverError> {
+            Ok(Record::new())
         }
         fn residual_power(&self, _: &Problem<'_>, _: &State) -> Option<Real> {
             None
@@ -336,16 +333,21 @@ fn the_bound_follows_its_formula_and_reaches_observers_as_asked() {
     let (system, f) = enclosure();
     let problem = Problem::new(&system, &f).unwrap();
     let mut checker = Checker::new("idle", &system, &f);
-    Executor::new(&mut Idle, StopRules::parse("steps=3").unwrap()).run(&problem, &mut checker).unwrap();
+    Executor::new(&mut Idle, StopRules::parse("steps=3").unwrap())
+        .add_observer(&mut checker, ObserverMode::Always)
+        .run(&problem)
+        .unwrap();
     assert_eq!((checker.checked, checker.missing), (4, 4));
     // Every n-th step only, and always at init; none at all to an observer that does not ask.
-    let mut every = Checker::new("pr", &system, &f).every(3);
+    let mut every = Checker::new("pr", &system, &f);
     let mut pr = solver_by_name("pr").unwrap();
-    Executor::new(pr.as_mut(), StopRules::parse("steps=7").unwrap()).run(&problem, &mut every).unwrap();
-    assert_eq!(every.inner().checked, 3);
+    Executor::new(pr.as_mut(), StopRules::parse("steps=7").unwrap())
+        .add_observer(&mut every, ObserverMode::Every(3))
+        .run(&problem)
+        .unwrap();
+    assert_eq!(every.checked, 3);
     let mut sor = solver_by_name("sor-1.2").unwrap();
-    assert!(!NoObserver.wants_residual_bound());
-    let run = Executor::new(sor.as_mut(), StopRules::parse("steps=4").unwrap()).run(&problem, &mut NoObserver).unwrap();
+    let run = Executor::new(sor.as_mut(), StopRules::parse("steps=4").unwrap()).run(&problem).unwrap();
     let direct = sor.residual_bound(&problem, &run.state).unwrap().direct;
     let unshot = area_norms(system.areas(), &run.state.unshot, 3);
     for (d, u) in direct.iter().zip(&unshot) {

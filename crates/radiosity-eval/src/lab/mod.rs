@@ -60,6 +60,7 @@
 //! [`FinalMetrics`]: crate::FinalMetrics
 
 pub(crate) mod backends;
+pub(crate) mod charged;
 pub(crate) mod compare;
 pub(crate) mod options;
 pub(crate) mod outcome;

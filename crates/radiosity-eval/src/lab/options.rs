@@ -1,7 +1,7 @@
 //! How a lab is set up ([`LabOptions`]) and how its solvers pay for the columns they fetch
 //! ([`ColumnCost`], [`ColumnCharge`]).
 
-use crate::lab::timing::{median, sample};
+use crate::lab::timing::sample;
 use crate::reference::cache::Cache;
 use crate::reference::kind::{MemoryBudget, ReferenceKind};
 use crate::reference::shooting::ShootingParams;
@@ -46,52 +46,82 @@ pub enum ColumnCost {
     Charged,
 }
 
-/// What each column a solver fetches is charged, when a lab serves columns from its stored
-/// matrix ([`ColumnCost::Charged`]): the median time of a fresh column of the backend, one
-/// column at a time (as solvers fetch them), over a seeded sample, measured with the
-/// backend's memory of earlier columns forgotten first.
+/// The prices a lab charges for the columns its solvers fetch from its stored matrix
+/// ([`ColumnCost::Charged`]), measured once on the backend. A fresh column costs the mean of
+/// the matrix's assembly when the lab assembled it (every pair once, the cost of all its
+/// columns with every pair traced once; or every column once), else the mean over a seeded
+/// sample of columns computed one at a time (as solvers fetch them) with the backend's memory
+/// of earlier columns forgotten. A recorded column costs the mean over the sample computed
+/// again, once the backend has recorded their pairs' visible fractions.
+///
+/// A run is charged as the backend would have cost it ([`ColumnCharge::column_seconds`]): a
+/// column fetched before is charged as recorded; a new one fetched after `known` other
+/// columns has `known` of its `n` pairs recorded already (the analytic backend traces each
+/// pair once, for the first of its two columns), so it is charged the fresh price less that
+/// share of the difference. Rows are charged as the columns of the same patch. A backend that
+/// records nothing costs the same either way, and is charged its fresh price.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct ColumnCharge {
-    /// Seconds charged for each column or row fetched.
-    pub seconds_per_column: Real,
-    /// Columns timed.
+    /// Mean seconds of a fresh column.
+    pub fresh: Real,
+    /// Mean seconds of a column whose pairs the backend has recorded (at most `fresh`).
+    pub recorded: Real,
+    /// Columns timed (twice).
     pub sampled: usize,
+    /// Whether `fresh` comes from the matrix's assembly rather than the sample.
+    pub from_assembly: bool,
 }
 
 impl ColumnCharge {
     /// Columns timed to measure the charge.
     pub const SAMPLE: usize = 8;
 
-    /// Times [`ColumnCharge::SAMPLE`] seeded fresh columns of `source` (fewer when it has
-    /// fewer patches), one at a time, and takes the median.
-    pub fn measure(source: &dyn ColumnSource) -> ColumnCharge {
+    /// Times [`ColumnCharge::SAMPLE`] seeded columns of `source` (fewer when it has fewer
+    /// patches), one at a time, fresh and then again; `assembled`, a fresh column's mean cost
+    /// from a matrix assembly, takes the place of the fresh sample's (type doc).
+    pub fn measure(source: &dyn ColumnSource, assembled: Option<Real>) -> ColumnCharge {
         let n = source.patch_count();
         let sample = sample(n, Self::SAMPLE.min(n), 0);
-        source.reset_memory();
         let mut column = vec![0.0; n];
-        let times: Vec<f64> = sample
-            .iter()
-            .map(|&j| {
-                let start = Instant::now();
-                source.fill_column(j, &mut column);
-                start.elapsed().as_secs_f64()
-            })
-            .collect();
+        let mut mean_time = || {
+            let total: f64 = sample
+                .iter()
+                .map(|&j| {
+                    let start = Instant::now();
+                    source.fill_column(j, &mut column);
+                    start.elapsed().as_secs_f64()
+                })
+                .sum();
+            total / sample.len().max(1) as f64
+        };
         source.reset_memory();
-        ColumnCharge { seconds_per_column: median(&times), sampled: sample.len() }
+        let sampled_fresh = mean_time();
+        let recorded = mean_time();
+        source.reset_memory();
+        let fresh = assembled.unwrap_or(sampled_fresh);
+        ColumnCharge { fresh, recorded: recorded.min(fresh), sampled: sample.len(), from_assembly: assembled.is_some() }
     }
 
-    /// The form-factor seconds of `columns` fetched.
-    pub fn seconds(&self, columns: u64) -> Real {
-        columns as Real * self.seconds_per_column
+    /// The seconds charged for a column of an `n`-patch scene fetched after `known` other
+    /// columns of the run, `repeated` if it was itself fetched before (type doc).
+    pub fn column_seconds(&self, n: usize, known: usize, repeated: bool) -> Real {
+        if repeated {
+            self.recorded
+        } else {
+            self.fresh - (self.fresh - self.recorded) * known.min(n) as Real / n.max(1) as Real
+        }
     }
 
     /// One sentence saying how a run's columns were paid for, for reports.
     pub fn describe(&self) -> String {
+        let fresh = if self.from_assembly { "the matrix's assembly" } else { "the sample" };
         format!(
-            "columns read from the stored matrix, each charged {:.3} ms (median of {} fresh columns of the backend, one at a time)",
-            self.seconds_per_column * 1e3,
+            "columns read from the stored matrix and charged as the backend computes them: {:.3} ms a fresh \
+             column (mean of {fresh}), {:.3} ms one whose pairs it has recorded (mean of {} columns computed \
+             twice)",
+            self.fresh * 1e3,
+            self.recorded * 1e3,
             self.sampled
         )
     }

@@ -2,12 +2,14 @@
 //! measures e_rms and the certified bound after every step and every metric at planned steps
 //! ([`RecordPlan`]), its own time kept apart.
 
-use crate::lab::options::ColumnCharge;
+use crate::lab::charged::ChargedColumns;
 use crate::progress::Progress;
 use crate::reference::certificate::{Contraction, SolverBound, relative_without_reference};
 use crate::reference::metrics::{Evaluator, Metrics, errors_against};
 use radiosity_core::{LinearSystem, Real};
-use radiosity_solvers::{Observer, ResidualBound, State};
+use radiosity_solvers::{ErrorMonitor, Observer, Record, ResidualBound, State};
+use std::cell::Cell;
+use std::rc::Rc;
 use std::time::Instant;
 
 /// How often a run's metrics are recorded.
@@ -107,8 +109,10 @@ pub struct Recorder<'a> {
     /// Where each step is reported, if anywhere (no message is formatted otherwise).
     pub(super) progress: Option<&'a dyn Progress>,
     pub(super) by_columns: bool,
-    /// The price of a column, when columns are charged rather than timed.
-    pub(super) charge: Option<ColumnCharge>,
+    /// The source that charges the columns, when they are charged rather than timed.
+    pub(super) charged: Option<&'a ChargedColumns>,
+    /// The e_rms of the last state observed, which [`Recorder::monitor`] hands the `rms=` rule.
+    pub(super) latest: Rc<Cell<Option<Real>>>,
 }
 
 impl<'a> Recorder<'a> {
@@ -131,7 +135,8 @@ impl<'a> Recorder<'a> {
             overhead: 0.0,
             progress: None,
             by_columns: true,
-            charge: None,
+            charged: None,
+            latest: Rc::default(),
         }
     }
 
@@ -153,11 +158,26 @@ impl<'a> Recorder<'a> {
     }
 }
 
+impl Recorder<'_> {
+    /// The monitor an `rms=` rule asks: the e_rms this recorder measured on the same state
+    /// (it observes every step), so nothing is measured twice. `None` without a reference.
+    pub fn monitor(&self) -> Option<impl ErrorMonitor + 'static> {
+        let latest = self.latest.clone();
+        self.reference.is_some().then_some(move |_: &State| latest.get())
+    }
+}
+
 impl Observer for Recorder<'_> {
-    fn observe_step(&mut self, state: &State) -> Option<Real> {
+    fn observe_step(&mut self, state: &State, _figures: &Record) {
         let start = Instant::now();
         let errors = match self.reference {
-            Some(reference) => Some(errors_against(self.system, reference, &state.radiosity).ok()?),
+            Some(reference) => match errors_against(self.system, reference, &state.radiosity) {
+                Ok(e) => Some(e),
+                Err(_) => {
+                    self.latest.set(None);
+                    return;
+                }
+            },
             None => None,
         };
         let e_rms = errors.map_or(Real::NAN, |e| e.e_rms);
@@ -165,7 +185,7 @@ impl Observer for Recorder<'_> {
             (Some(known), Some(c)) => SolverBound::new(self.system, c, &known, &state.radiosity).relative,
             _ => Real::NAN,
         };
-        let ff_seconds = self.charge.map_or(state.ff_seconds, |c| c.seconds(state.columns));
+        let ff_seconds = self.charged.map_or(state.ff_seconds, ChargedColumns::charged_seconds);
         let seconds = ff_seconds + state.solve_seconds;
         let new_mark =
             self.marks.contains(&state.columns) && self.points.last().is_none_or(|p| p.columns != state.columns);
@@ -205,11 +225,7 @@ impl Observer for Recorder<'_> {
             progress.advance(if self.by_columns { state.columns } else { state.step }, &message);
         }
         self.overhead += start.elapsed().as_secs_f64();
-        (!e_rms.is_nan()).then_some(e_rms)
-    }
-
-    fn measures_error(&self) -> bool {
-        self.reference.is_some()
+        self.latest.set((!e_rms.is_nan()).then_some(e_rms));
     }
 
     fn wants_residual_bound(&self) -> bool {

@@ -10,14 +10,15 @@ use crate::reference::certificate::SolverBound;
 use crate::reference::metrics::errors;
 use crate::reference::solution::Method;
 use radiosity_core::Real;
-use radiosity_solvers::{Executor, Problem, Solver, State, StopRule, StopRules};
+use radiosity_solvers::{Executor, ObserverMode, Problem, Solver, State, StepKind, StopRule, StopRules};
+use std::rc::Rc;
 use std::time::Instant;
 
 impl Lab<'_> {
     /// Why `solver` will not converge to the reference on this source, if it will not: it
     /// gathers along rows the source cannot give exactly.
     pub fn row_warning(&self, solver: &dyn Solver) -> Option<String> {
-        (solver.gathers_rows() && !self.serves_rows).then(|| {
+        (solver.step_kind() == StepKind::Gather && !self.serves_rows).then(|| {
             format!(
                 "{} gathers along rows of F, which {} cannot give exactly; they are taken from its columns by \
                  reciprocity, which these form factors do not satisfy, so the run converges to another system's \
@@ -53,14 +54,19 @@ impl Lab<'_> {
             solver: name.clone(),
             // A step that is a whole product by F is a sweep's worth of columns: every one is
             // recorded.
-            every: plan.every.unwrap_or(if solver.step_is_sweep() { 1 } else { (target / 100).max(1) }),
+            every: plan.every.unwrap_or(if solver.step_kind() == StepKind::Product {
+                1
+            } else {
+                (target / 100).max(1)
+            }),
             marks: if plan.marks { vec![n / 4, n / 2, n, 2 * n] } else { Vec::new() },
             points: Vec::new(),
             rows: Vec::new(),
             overhead: 0.0,
             progress: Some(progress),
             by_columns: unit == "columns",
-            charge: self.charge,
+            charged: self.charged.as_deref(),
+            latest: Rc::default(),
         };
         progress.begin(&name, target, unit);
         // Every run starts from columns as costly as the first ones: what an earlier run left
@@ -68,11 +74,16 @@ impl Lab<'_> {
         // solvers look faster.
         self.source.reset_memory();
         let problem = Problem::new(&self.system, &*self.source)?.with_patch_order(&self.order)?;
-        let run = Executor::new(solver, rules.clone()).run(&problem, &mut recorder);
+        let mut monitor = recorder.monitor();
+        let mut executor = Executor::new(solver, rules.clone());
+        if let Some(monitor) = monitor.as_mut() {
+            executor = executor.monitor(monitor);
+        }
+        let run = executor.add_observer(&mut recorder, ObserverMode::Always).run(&problem);
         progress.end();
         let mut run = run?;
-        if let Some(charge) = self.charge {
-            run.state.ff_seconds = charge.seconds(run.state.columns);
+        if let Some(charged) = &self.charged {
+            run.state.ff_seconds = charged.charged_seconds();
         }
         let solver_residual = solver.residual_power(&problem, &run.state);
         let known = solver.residual_bound(&problem, &run.state);

@@ -4,12 +4,13 @@
 
 use crate::error::LabError;
 use crate::lab::backends::{assemble_matrix, backend};
+use crate::lab::charged::ChargedColumns;
 use crate::lab::options::{ColumnCharge, ColumnCost, LabOptions};
 use crate::progress::Progress;
 use crate::reference::cache::{Lookup, checksum, scene_key};
 use crate::reference::certificate::Contraction;
 use crate::reference::kind::{MEMORY_VARIABLE, MemoryBudget, ReferenceKind, gib, matrix_bytes};
-use crate::reference::matrix::{F32Columns, FormFactors, StoredColumns};
+use crate::reference::matrix::{F32Columns, FormFactors};
 use crate::reference::metrics::Evaluator;
 use crate::reference::shooting::solve_by_shooting;
 use crate::reference::solution::ReferenceSolution;
@@ -65,6 +66,8 @@ pub struct Lab<'p> {
     pub(super) contraction: Contraction,
     pub(super) order: Vec<usize>,
     pub(super) charge: Option<ColumnCharge>,
+    /// The source charging them, when columns are charged.
+    pub(super) charged: Option<Arc<ChargedColumns>>,
 }
 
 /// How the matrix of a lab's source is obtained, when a `matrix` reference needs it.
@@ -85,6 +88,9 @@ struct Setup {
     origin: ReferenceOrigin,
     chosen: ChosenReference,
     contraction: Contraction,
+    /// A fresh column's mean cost, from the matrix assembled here: its seconds over `n / 2`
+    /// columns when each pair was computed once, over `n` when column by column.
+    assembled_column: Option<Real>,
 }
 
 impl<'p> Lab<'p> {
@@ -167,18 +173,16 @@ impl<'p> Lab<'p> {
         let scene = prepared.scene();
         // Charged columns: the stored matrix serves them (exact rows too), at the backend's
         // measured price.
-        let (source, charge) = match (&setup.matrix, columns) {
+        let (source, charged) = match (&setup.matrix, columns) {
             (Some(matrix), ColumnCost::Charged) => {
-                let charge = ColumnCharge::measure(&*source);
-                let stored = StoredColumns {
-                    matrix: matrix.clone(),
-                    rows: serves_rows,
-                    reciprocity: source.reciprocity_bound(),
-                };
-                (Box::new(stored) as Box<dyn ColumnSource + 'p>, Some(charge))
+                let charge = ColumnCharge::measure(&*source, setup.assembled_column);
+                let charged =
+                    Arc::new(ChargedColumns::new(matrix.clone(), serves_rows, source.reciprocity_bound(), charge));
+                (Box::new(charged.clone()) as Box<dyn ColumnSource + 'p>, Some((charged, charge)))
             }
             _ => (source, None),
         };
+        let (charged, charge) = charged.unzip();
         Lab {
             prepared,
             report: prepared.report(),
@@ -193,6 +197,7 @@ impl<'p> Lab<'p> {
             contraction: setup.contraction,
             order: radiosity_geom::spatial_order(scene),
             charge,
+            charged,
         }
     }
 
@@ -225,6 +230,7 @@ impl<'p> Lab<'p> {
                 origin: ReferenceOrigin::NotComputed,
                 chosen,
                 contraction,
+                assembled_column: None,
             })
         };
         if chosen.kind == ReferenceKind::None {
@@ -262,18 +268,21 @@ impl<'p> Lab<'p> {
             progress.end();
         }
         let keep_matrix = kind == ReferenceKind::Matrix && (options.residuals || cached.is_none());
-        let (matrix, assembly_seconds) = match (keep_matrix, assembly) {
-            (false, _) => (stored, 0.0),
-            (true, Assembly::Stored(m)) => (Some(m), 0.0),
+        let n = system.len() as Real;
+        let (matrix, assembly_seconds, assembled_column) = match (keep_matrix, assembly) {
+            (false, _) => (stored, 0.0, None),
+            (true, Assembly::Stored(m)) => (Some(m), 0.0, None),
             (true, Assembly::Reciprocal(pair)) => {
                 let start = Instant::now();
                 let m = assemble(&system, source, Some(pair), progress)?;
-                (Some(Arc::new(m)), start.elapsed().as_secs_f64())
+                let seconds = start.elapsed().as_secs_f64();
+                (Some(Arc::new(m)), seconds, Some(2.0 * seconds / n))
             }
             (true, Assembly::Columns) => {
                 let start = Instant::now();
                 let m = assemble(&system, source, None, progress)?;
-                (Some(Arc::new(m)), start.elapsed().as_secs_f64())
+                let seconds = start.elapsed().as_secs_f64();
+                (Some(Arc::new(m)), seconds, Some(seconds / n))
             }
         };
         let (reference, origin) = match cached {
@@ -305,7 +314,7 @@ impl<'p> Lab<'p> {
             }
         };
         let contraction = reference.certificate().contraction.clone();
-        Ok(Setup { system, matrix, reference: Some(reference), origin, chosen, contraction })
+        Ok(Setup { system, matrix, reference: Some(reference), origin, chosen, contraction, assembled_column })
     }
 
     /// The prepared scene.

@@ -194,34 +194,6 @@ impl ColumnSource for FormFactors {
     }
 }
 
-/// The columns of a lab's stored matrix served in place of the backend's own, when columns
-/// are charged rather than computed ([`crate::ColumnCost::Charged`]): the same `f32` entries,
-/// exact rows only where the backend served them, and the backend's stated reciprocity, so
-/// that every solver takes the same path and gets the same numbers as over the backend.
-pub(crate) struct StoredColumns {
-    pub(crate) matrix: std::sync::Arc<FormFactors>,
-    pub(crate) rows: bool,
-    pub(crate) reciprocity: Option<Real>,
-}
-
-impl ColumnSource for StoredColumns {
-    fn patch_count(&self) -> usize {
-        self.matrix.patch_count()
-    }
-
-    fn fill_column(&self, j: usize, column: &mut [Real]) {
-        self.matrix.fill_column(j, column)
-    }
-
-    fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
-        self.rows && self.matrix.fill_row(i, row)
-    }
-
-    fn reciprocity_bound(&self) -> Option<Real> {
-        self.reciprocity
-    }
-}
-
 /// A column source whose entries are rounded to `f32`, as a stored matrix holds them: a lab's
 /// solvers read these, so that they solve exactly the system its stored reference solves.
 /// Rounding costs `n` conversions a column, nothing beside computing one.

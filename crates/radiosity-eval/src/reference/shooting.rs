@@ -26,7 +26,9 @@ use crate::progress::Progress;
 use crate::reference::certificate::{Contraction, SolverBound};
 use crate::reference::solution::{Certificate, Method, ReferenceSolution};
 use radiosity_core::{ColumnSource, LinearSystem, Real};
-use radiosity_solvers::{Executor, Observer, Problem, ResidualBound, SolverRegistry, State, StopRules};
+use radiosity_solvers::{
+    Executor, Observer, ObserverMode, Problem, Record, ResidualBound, SolverRegistry, State, StopRules,
+};
 
 /// How a shooting reference is computed.
 #[derive(Clone, Debug, PartialEq)]
@@ -89,7 +91,7 @@ pub fn solve_by_shooting(
     let problem = Problem::new(system, source).map_err(|e| invalid_solver(&params.solver, &e.to_string()))?;
     let mut watch = BoundWatch { system, contraction: &contraction, progress, last: None };
     progress.begin("reference (shooting)", 0, "columns");
-    let run = Executor::new(solver.as_mut(), rules).run(&problem, &mut watch);
+    let run = Executor::new(solver.as_mut(), rules).add_observer(&mut watch, ObserverMode::Always).run(&problem);
     progress.end();
     let run = run.map_err(|e| invalid_solver(&params.solver, &e.to_string()))?;
     let known = solver
@@ -134,12 +136,11 @@ struct BoundWatch<'a> {
 const REPORT_EVERY: u64 = 32;
 
 impl Observer for BoundWatch<'_> {
-    fn observe_step(&mut self, state: &State) -> Option<Real> {
+    fn observe_step(&mut self, state: &State, _figures: &Record) {
         if let Some(known) = self.last.take() {
             let bound = SolverBound::new(self.system, self.contraction, &known, &state.radiosity);
             self.progress.advance(state.columns, &format!("bound {:.2e}", bound.relative));
         }
-        None
     }
 
     fn wants_residual_bound(&self) -> bool {

@@ -14,8 +14,9 @@
 use crate::error::SolverError;
 use crate::gathering::rule::{SweepResidual, gather, relax};
 use crate::naming::{ParseSolverError, SolverParams, no_params, split_params, validated};
-use crate::run::executor::Solver;
+use crate::run::executor::{Solver, StepKind};
 use crate::run::problem::Problem;
+use crate::run::record::Record;
 use crate::run::residual_bound::{ResidualBound, SweepChanges};
 use crate::run::state::State;
 use radiosity_core::Real;
@@ -97,7 +98,7 @@ impl Solver for GaussSeidel {
         Ok(())
     }
 
-    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
+    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<Record, SolverError> {
         let i = self.sweep.next;
         self.residual.resize(state.channels, 0.0);
         gather(problem, &state.radiosity, i, &mut self.row, &mut self.residual);
@@ -107,7 +108,7 @@ impl Solver for GaussSeidel {
         if self.sweep.next == 0 {
             self.changes.end_sweep();
         }
-        Ok(())
+        Ok(Record::new())
     }
 
     fn residual_power(&self, _problem: &Problem<'_>, _state: &State) -> Option<Real> {
@@ -118,7 +119,7 @@ impl Solver for GaussSeidel {
         Some(self.changes.bound(problem, state, false, self.omega))
     }
 
-    fn gathers_rows(&self) -> bool {
-        true
+    fn step_kind(&self) -> StepKind {
+        StepKind::Gather
     }
 }

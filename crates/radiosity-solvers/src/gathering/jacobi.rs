@@ -13,8 +13,9 @@
 use crate::error::SolverError;
 use crate::gathering::rule::{SweepResidual, gather, relax};
 use crate::naming::{ParseSolverError, SolverParams, plain_name};
-use crate::run::executor::Solver;
+use crate::run::executor::{Solver, StepKind};
 use crate::run::problem::Problem;
+use crate::run::record::Record;
 use crate::run::residual_bound::{ResidualBound, SweepChanges};
 use crate::run::state::State;
 use radiosity_core::Real;
@@ -64,7 +65,7 @@ impl Solver for Jacobi {
         Ok(())
     }
 
-    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
+    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<Record, SolverError> {
         let i = self.sweep.next;
         if i == 0 {
             self.sweep_start.clone_from(&state.radiosity);
@@ -80,7 +81,7 @@ impl Solver for Jacobi {
         if self.sweep.next == 0 {
             self.changes.end_sweep();
         }
-        Ok(())
+        Ok(Record::new())
     }
 
     fn residual_power(&self, _problem: &Problem<'_>, _state: &State) -> Option<Real> {
@@ -91,7 +92,7 @@ impl Solver for Jacobi {
         Some(self.changes.bound(problem, state, true, 1.0))
     }
 
-    fn gathers_rows(&self) -> bool {
-        true
+    fn step_kind(&self) -> StepKind {
+        StepKind::Gather
     }
 }

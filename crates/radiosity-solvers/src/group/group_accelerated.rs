@@ -50,23 +50,20 @@
 //! - shooting `y` to every patch: `n m k`.
 //!
 //! Work linear in `n k` (the ambient sums, the selection values) is left out. An operation is
-//! about one floating-point operation of these loops; a counted operation of a group step
-//! took 0.75–1.25 ns with groups of 30 on a 480-patch RGB system (`pr-g30`, `xu-g30`,
-//! `pr-g30-m480`, `xu-g30-m480`; release build, 2 cores), and 0.45–0.5 ns at m = 120, where
-//! the LU's dense loops dominate.
+//! about one floating-point operation of these loops.
 //!
-//! A column's modelled cost, [`column_operations`]`(n) =` [`COLUMN_OPERATIONS_PER_ROOT_PATCH`]
-//! `· √n`, is fitted to analytic columns at their defaults on the paper's three scenes (2
-//! threads, release build): 0.44 ms on `multi-cubes` (n = 480), 1.2 ms on `labyrinth`
-//! (3364) and 2.2 ms on `office` (10 990). A column does not cost `n` times a pair: most
-//! pairs of a large scene face away or are far enough for the centroid rule, so the time per
-//! pair falls from 0.92 µs to 0.2 µs over these scenes, about as `1/√n`. At 1 ns an
-//! operation, `20 000 √n` operations is within 10% of all three. It is charged for every
-//! point step, whether or not the step computed a column (as in the timed rule, which also
-//! takes the mean column time). Other backends cost otherwise (a stored matrix serves a
-//! column for `n` reads, a hemicube traces 49 152 rays whatever `n`): with them the share of
-//! the time spent in group steps drifts from `target`, and `:f=timed` or a fixed `:f=N` fits
-//! better.
+//! A column's modelled cost is [`column_operations`]`(n) =`
+//! [`COLUMN_OPERATIONS_PER_ROOT_PATCH`]` · √n` operations: a column does not cost `n` times a
+//! pair, since most pairs of a large scene face away or are far enough for the cheapest
+//! quadrature, so a pair's cost falls about as `1/√n`. The constant is a model, fixed so that
+//! `:f=auto` is reproducible; it was fitted to the analytic backend's columns of an earlier
+//! visibility estimator, and today's analytic columns cost several times more, so the group
+//! steps' share of the time stays below `target` (the fit and today's column times are in
+//! `docs/solvers.md`). It is charged for every point step, whether or not the step computed a
+//! column (as in the timed rule, which also takes the mean column time). Other backends cost
+//! otherwise (a stored matrix serves a column for `n` reads, a hemicube traces its rays
+//! whatever `n`): with them, as with today's analytic columns, `:f=timed` (the paper's rule)
+//! or a fixed `:f=N` follows the time better.
 //!
 //! ## Beyond the paper
 //!
@@ -94,7 +91,7 @@
 
 use crate::error::SolverError;
 use crate::group::group_shooting::shoot_group;
-use crate::group::group_step::{GroupStats, InnerSolve};
+use crate::group::group_step::{GroupShot, GroupStats, InnerSolve};
 use crate::group::memory::ColumnMemory;
 use crate::naming::{ParseSolverError, SolverParams, named, split_params, split_size, validated};
 use crate::run::executor::Solver;
@@ -410,7 +407,8 @@ impl GroupAccelerated {
         }
     }
 
-    fn group_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
+    /// A group step over the stored patches; the group's shot, unless there was no group.
+    fn group_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<Option<GroupShot>, SolverError> {
         // Everything here is the group step's cost, in seconds and in counted operations (the
         // cost model of the module doc): choosing the group (exact overshoots of every stored
         // patch, `O(n K)`) as well as solving it.
@@ -424,10 +422,12 @@ impl GroupAccelerated {
         if self.params.building == GroupBuilding::Interaction {
             operations += (group.len() * stored) as u64;
         }
+        let mut done = None;
         if !group.is_empty() {
             let (shot, _) = shoot_group(problem, state, &mut self.tracker, &self.memory, &group, self.params.inner)?;
             operations += shot.operations;
             self.stats.add(&shot);
+            done = Some(shot);
         }
         let seconds = start.elapsed().as_secs_f64();
         state.group_seconds += seconds;
@@ -445,7 +445,7 @@ impl GroupAccelerated {
                 if column_seconds > 0.0 { period(seconds / (target * column_seconds)) } else { u64::MAX }
             }
         };
-        Ok(())
+        Ok(done)
     }
 
     /// The group among the stored patches, given every stored patch's selection value.
@@ -551,12 +551,13 @@ impl Solver for GroupAccelerated {
         Ok(())
     }
 
-    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
+    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<Record, SolverError> {
         self.point_step(problem, state)?;
-        if self.group_due() {
-            self.group_step(problem, state)?;
+        if !self.group_due() {
+            return Ok(Record::new());
         }
-        Ok(())
+        let shot = self.group_step(problem, state)?;
+        Ok(shot.map_or_else(Record::new, |shot| shot.figures()))
     }
 
     fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real> {

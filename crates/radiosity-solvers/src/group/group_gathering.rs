@@ -55,7 +55,7 @@ use crate::error::SolverError;
 use crate::gathering::rule::{SweepResidual, gather, relax};
 use crate::group::group_step::{GroupShot, GroupStats};
 use crate::naming::{ParseSolverError, SolverParams, split_params, split_size, validated};
-use crate::run::executor::Solver;
+use crate::run::executor::{Solver, StepKind};
 use crate::run::problem::Problem;
 use crate::run::record::Record;
 use crate::run::residual_bound::{ResidualBound, SweepChanges};
@@ -227,7 +227,7 @@ impl Solver for GroupGathering {
         Ok(())
     }
 
-    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
+    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<Record, SolverError> {
         let (n, k) = (problem.n(), state.channels);
         if self.sweep == Sweep::Jacobi && self.next == 0 {
             self.sweep_start.clone_from(&state.radiosity);
@@ -269,7 +269,8 @@ impl Solver for GroupGathering {
             }
         }
         state.group_seconds += timer.elapsed().as_secs_f64();
-        self.stats.add(&GroupShot { size, condition, fell_back: false, operations: 0 });
+        let shot = GroupShot { size, condition, fell_back: false, operations: 0 };
+        self.stats.add(&shot);
         // For group Jacobi the group's B is still its value at the start of the sweep: no
         // other group of the sweep changes it.
         for (a, &i) in group.iter().enumerate() {
@@ -281,7 +282,7 @@ impl Solver for GroupGathering {
         if self.next == 0 {
             self.changes.end_sweep();
         }
-        Ok(())
+        Ok(shot.figures())
     }
 
     fn residual_power(&self, _problem: &Problem<'_>, _state: &State) -> Option<Real> {
@@ -292,8 +293,8 @@ impl Solver for GroupGathering {
         Some(self.changes.bound(problem, state, self.sweep == Sweep::Jacobi, 1.0))
     }
 
-    fn gathers_rows(&self) -> bool {
-        true
+    fn step_kind(&self) -> StepKind {
+        StepKind::Gather
     }
 
     fn record(&self) -> Record {

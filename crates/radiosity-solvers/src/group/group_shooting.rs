@@ -158,12 +158,12 @@ impl Solver for GroupShooting {
         Ok(())
     }
 
-    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
+    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<Record, SolverError> {
         let ambient = Ambient::measure(problem, state);
         let values = self.tracker.values(problem, state, &ambient);
         let group = top(&values, 0..problem.n(), self.m);
         if group.is_empty() {
-            return Ok(());
+            return Ok(Record::new());
         }
         let mut scratch = Vec::new();
         for &g in &group {
@@ -172,7 +172,7 @@ impl Solver for GroupShooting {
         let (shot, seconds) = shoot_group(problem, state, &mut self.tracker, &self.memory, &group, InnerSolve::Lu)?;
         state.group_seconds += seconds;
         self.stats.add(&shot);
-        Ok(())
+        Ok(shot.figures())
     }
 
     fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real> {

@@ -89,13 +89,10 @@
 //! step needed 1297 sweeps at `ρ = 0.99` and would need about 11 900 at `ρ = 0.999`, beyond
 //! [`MAX_INNER_SWEEPS`], so that group falls back.
 //!
-//! Measured (`cargo bench -p radiosity-solvers --bench group_solve`, criterion medians, one
-//! group step on a 3400-patch RGB system, 2 cores, before the condition estimate): LU against
-//! Gauss–Seidel took 0.37 / 0.37 ms at m = 25, 0.72 / 0.79 at 50, 2.1 / 1.7 at 100, 3.7 / 5.4
-//! at 200 and 12.6 / 12.8 at 400. There is no crossover up to m = 400: the `O(n m)` shot to
-//! every patch costs as much as either solve, and faer's LU stays as fast as the ~45 sweeps
-//! Gauss–Seidel needs at `ρ F` norm 0.54. LU remains the default. The second right-hand side
-//! adds `O(m²)` to the LU's `O(m³)`.
+//! LU is the default: the `group_solve` bench (`cargo bench -p radiosity-solvers --bench
+//! group_solve`, figures in `docs/solvers.md`) found no size up to m = 400 where the inner
+//! Gauss–Seidel is faster, since the `O(n m)` shot to every patch costs as much as either
+//! solve. The second right-hand side adds `O(m²)` to the LU's `O(m³)`.
 //!
 //! ## References
 //!
@@ -154,6 +151,19 @@ pub struct GroupShot {
     pub fell_back: bool,
     /// The operations the step counted: building, solving and shooting (module doc).
     pub operations: u64,
+}
+
+impl GroupShot {
+    /// What the step hands back to observers ([`crate::Solver::next_step`]): `group_size`,
+    /// `group_condition` and `group_fell_back` (0 or 1).
+    pub fn figures(&self) -> Record {
+        let mut record = Record::new();
+        record
+            .set("group_size", self.size)
+            .set("group_condition", self.condition)
+            .set("group_fell_back", u64::from(self.fell_back));
+        record
+    }
 }
 
 /// What a solver's group steps did so far, recorded as `group_steps` (count),

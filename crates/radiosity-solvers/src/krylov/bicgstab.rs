@@ -25,7 +25,7 @@
 use crate::error::SolverError;
 use crate::krylov::operator::{self, Operator, area_weights, axpy, dots};
 use crate::naming::{ParseSolverError, SolverParams, plain_name};
-use crate::run::executor::Solver;
+use crate::run::executor::{Solver, StepKind};
 use crate::run::problem::Problem;
 use crate::run::record::Record;
 use crate::run::residual_bound::ResidualBound;
@@ -113,7 +113,7 @@ impl Solver for Bicgstab {
         Ok(())
     }
 
-    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
+    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<Record, SolverError> {
         let (k, len) = (state.channels, state.radiosity.len());
         match self.phase {
             Phase::Start => {
@@ -173,7 +173,8 @@ impl Solver for Bicgstab {
             }
         }
         state.unshot.clone_from(&self.residual);
-        operator::check_finite(state)
+        operator::check_finite(state)?;
+        Ok(Record::new())
     }
 
     fn residual_power(&self, problem: &Problem<'_>, _state: &State) -> Option<Real> {
@@ -184,8 +185,8 @@ impl Solver for Bicgstab {
         Some(operator::bound_once_known(problem, &self.residual, self.phase != Phase::Start))
     }
 
-    fn step_is_sweep(&self) -> bool {
-        true
+    fn step_kind(&self) -> StepKind {
+        StepKind::Product
     }
 
     fn record(&self) -> Record {

@@ -54,7 +54,7 @@
 use crate::error::SolverError;
 use crate::krylov::operator::{self, Operator, axpy, dots};
 use crate::naming::{ParseSolverError, SolverParams, plain_name};
-use crate::run::executor::Solver;
+use crate::run::executor::{Solver, StepKind};
 use crate::run::problem::Problem;
 use crate::run::record::Record;
 use crate::run::residual_bound::ResidualBound;
@@ -140,7 +140,7 @@ impl Solver for ConjugateGradients {
         Ok(())
     }
 
-    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
+    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<Record, SolverError> {
         let k = state.channels;
         let len = state.radiosity.len();
         if !self.started {
@@ -150,7 +150,7 @@ impl Solver for ConjugateGradients {
             self.rr = dots(&self.weights, &self.residual, &self.residual, k);
             self.started = true;
             state.unshot.clone_from(&self.residual);
-            return Ok(());
+            return Ok(Record::new());
         }
         self.product.resize(len, 0.0);
         self.operator.apply(problem, &self.direction, &mut self.product, state.step + 1)?;
@@ -162,7 +162,8 @@ impl Solver for ConjugateGradients {
                 continue;
             }
             if pq[c].is_nan() || pq[c] <= 0.0 {
-                return Err(SolverError::NotApplicable {
+                // Nothing of the state has moved yet: the run ends with it kept.
+                return Err(SolverError::Breakdown {
                     solver: "cg".into(),
                     reason: format!(
                         "at step {} the symmetrized system of channel {c} is not positive definite (⟨p, A p⟩ = {:.3e}): \
@@ -187,7 +188,8 @@ impl Solver for ConjugateGradients {
         }
         self.rr = rr;
         state.unshot.clone_from(&self.residual);
-        operator::check_finite(state)
+        operator::check_finite(state)?;
+        Ok(Record::new())
     }
 
     fn residual_power(&self, problem: &Problem<'_>, _state: &State) -> Option<Real> {
@@ -198,8 +200,8 @@ impl Solver for ConjugateGradients {
         Some(operator::bound_once_known(problem, &self.residual, self.started))
     }
 
-    fn step_is_sweep(&self) -> bool {
-        true
+    fn step_kind(&self) -> StepKind {
+        StepKind::Product
     }
 
     fn record(&self) -> Record {

@@ -33,7 +33,7 @@
 use crate::error::SolverError;
 use crate::krylov::operator::{self, Operator, area_weights, axpy, dots};
 use crate::naming::{ParseSolverError, SolverParams, no_params, split_params, validated};
-use crate::run::executor::Solver;
+use crate::run::executor::{Solver, StepKind};
 use crate::run::problem::Problem;
 use crate::run::record::Record;
 use crate::run::residual_bound::ResidualBound;
@@ -279,11 +279,13 @@ impl Solver for Gmres {
         Ok(())
     }
 
-    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
+    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<Record, SolverError> {
         if self.restart_next {
-            return self.begin_cycle(problem, state);
+            self.begin_cycle(problem, state)?;
+        } else {
+            self.arnoldi_step(problem, state)?;
         }
-        self.arnoldi_step(problem, state)
+        Ok(Record::new())
     }
 
     fn residual_power(&self, problem: &Problem<'_>, _state: &State) -> Option<Real> {
@@ -294,8 +296,8 @@ impl Solver for Gmres {
         Some(operator::bound_once_known(problem, &self.residual, self.started))
     }
 
-    fn step_is_sweep(&self) -> bool {
-        true
+    fn step_kind(&self) -> StepKind {
+        StepKind::Product
     }
 
     fn record(&self) -> Record {

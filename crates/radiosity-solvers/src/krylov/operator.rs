@@ -1,5 +1,6 @@
 //! What the Krylov solvers (`cg`, `gmres-K`, `bicgstab`) share: the operator
-//! `A = I − diag(ρ) F` applied through columns, inner products per channel, and what their
+//! `A = I − diag(ρ) F` applied through columns (the public operator's product,
+//! [`radiosity_core::RadiosityOperator`], with every column counted by the [`Problem`]), inner products per channel, and what their
 //! residual tells the executor.
 //!
 //! ## The operator
@@ -47,9 +48,11 @@ use crate::run::problem::Problem;
 use crate::run::record::Record;
 use crate::run::residual_bound::{ResidualBound, area_norms};
 use crate::run::state::State;
-use radiosity_core::Real;
+use radiosity_core::{Real, apply_from_product, multiply_by_columns, residual_from_product};
 
-/// Applies `F` and `A = I − diag(ρ) F` through a problem's columns, counting what it did.
+/// Applies `F` and `A = I − diag(ρ) F` through a problem's columns, counting what it did: the
+/// public operator's product by columns ([`radiosity_core::multiply_by_columns`]) and its
+/// `A x` and residual, with every column fetched through the [`Problem`] that counts it.
 #[derive(Debug, Default)]
 pub(crate) struct Operator {
     column: Vec<Real>,
@@ -69,24 +72,10 @@ impl Operator {
         out: &mut [Real],
         step: u64,
     ) -> Result<(), SolverError> {
-        let (n, k) = (problem.n(), problem.channels());
-        self.column.resize(n, 0.0);
-        out.fill(0.0);
-        for j in 0..n {
-            let xj = &x[j * k..(j + 1) * k];
-            if xj.iter().all(|v| *v == 0.0) {
-                self.skipped += 1;
-                continue;
-            }
-            problem.column(j, &mut self.column);
-            for (i, &f) in self.column.iter().enumerate() {
-                if f != 0.0 {
-                    for (o, v) in out[i * k..(i + 1) * k].iter_mut().zip(xj) {
-                        *o += f * v;
-                    }
-                }
-            }
-        }
+        let k = problem.channels();
+        self.column.resize(problem.n(), 0.0);
+        let product = multiply_by_columns(x, k, out, &mut self.column, |j, column| problem.column(j, column));
+        self.skipped += product.skipped;
         self.products += 1;
         match out.iter().position(|v| !v.is_finite()) {
             Some(idx) => Err(SolverError::NonFinite { step, patch: idx / k, value: out[idx] }),
@@ -103,10 +92,7 @@ impl Operator {
         step: u64,
     ) -> Result<(), SolverError> {
         self.f_times(problem, x, out, step)?;
-        let rho = problem.system().reflectivities();
-        for ((o, &xv), &r) in out.iter_mut().zip(x).zip(rho) {
-            *o = xv - r * *o;
-        }
+        apply_from_product(problem.system(), x, out);
         Ok(())
     }
 
@@ -118,10 +104,8 @@ impl Operator {
         out: &mut [Real],
         step: u64,
     ) -> Result<(), SolverError> {
-        self.apply(problem, x, out, step)?;
-        for (o, &e) in out.iter_mut().zip(problem.system().emissions()) {
-            *o = e - *o;
-        }
+        self.f_times(problem, x, out, step)?;
+        residual_from_product(problem.system(), x, out);
         Ok(())
     }
 }

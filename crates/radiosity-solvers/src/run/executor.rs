@@ -5,21 +5,26 @@
 //! every column) and solve seconds (the rest of each step). Observers run between steps,
 //! outside both, so computing metrics against a reference never counts as solver time.
 //!
-//! ## Observers
+//! ## Observers, the error monitor and breakdowns
 //!
-//! As in argmin, an [`Observer`] is called once on the initial state
-//! ([`Observer::observe_init`], after [`Solver::init`]), after every step
-//! ([`Observer::observe_step`]) and once with the finished [`Run`]
-//! ([`Observer::observe_final`]). An observer that asks for it
-//! ([`Observer::wants_residual_bound`]) also gets, just before each of the first two, the
+//! As in argmin, observers only watch, and a run has any number of them, each with an
+//! [`ObserverMode`] ([`Executor::add_observer`]): an [`Observer`] is called once on the initial
+//! state ([`Observer::observe_init`], after [`Solver::init`]), after every step its mode takes
+//! ([`Observer::observe_step`], with the figures the step handed back) and once with the
+//! finished [`Run`] ([`Observer::observe_final`]). Observers that ask for it
+//! ([`Observer::wants_residual_bound`]) also get, just before each of the first two, the
 //! solver's bound on the residual of the displayed radiosity
 //! ([`Observer::observe_residual_bound`], [`Solver::residual_bound`],
-//! [`crate::run::residual_bound`]). [`Every`] (or [`Observer::every`]) passes on only the steps
-//! that are multiples of `n`. The `rms=` rule stops on the e_rms an observer returns; a run
-//! with such a rule and an observer that does not measure it ([`Observer::measures_error`]
-//! false) is refused before its first step ([`SolverError::ErrorNotMeasured`]), since the
-//! rule could never hold and the run would go on to the step cap. At the end the executor
-//! stores the solver's own figures ([`Solver::record`]) in [`Run::record`].
+//! [`crate::run::residual_bound`]), computed once for all of them. The `rms=` rule stops on
+//! the e_rms an [`ErrorMonitor`] measures ([`Executor::monitor`]), a separate part; a run with
+//! such a rule and no monitor is refused before its first step
+//! ([`SolverError::ErrorNotMeasured`]), since the rule could never hold and the run would go
+//! on to the step cap. At the end the executor stores the solver's own figures
+//! ([`Solver::record`]) in [`Run::record`].
+//!
+//! A method that cannot go on (conjugate gradients on a system seen not to be positive
+//! definite) reports [`SolverError::Breakdown`] from its step, leaving the state as it was;
+//! the run then ends with [`TerminationReason::Breakdown`] and its state, which says why.
 //!
 //! ## Divergence and values that are not finite
 //!
@@ -104,6 +109,23 @@ fn not_finite(state: &State, r: Real, watch: &Watch) -> Result<TerminationReason
     }
 }
 
+/// What one step of a solver is, which decides how the executor counts it and how a lab
+/// records it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum StepKind {
+    /// One shot: a column, or a group of columns, shot to every patch (the default).
+    #[default]
+    Shot,
+    /// One patch, or one group, gathered along rows of F ([`Problem::row`]): the solver's
+    /// system is then the column system only if the source serves exact rows.
+    Gather,
+    /// One whole matrix–vector product, up to `n` columns (the Krylov solvers, such as
+    /// [`crate::Gmres`]). The step cap counts it as `n` steps, so that it allows as many
+    /// columns as it allows a gathering solver, and a lab records every such step.
+    Product,
+}
+
 /// One solver: how to start and how to take one step.
 pub trait Solver {
     /// The solver's name, as on the command line (`pr`, `sor-1.2`).
@@ -122,8 +144,15 @@ pub trait Solver {
         Ok(())
     }
 
-    /// Takes one step: one shot, or one patch gathered.
-    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError>;
+    /// Takes one step ([`Solver::step_kind`]) and hands back what only this step knows (a
+    /// group step's size and condition number; empty for most), which every observer sees
+    /// ([`Observer::observe_step`]).
+    ///
+    /// A solver whose method cannot go on (a recurrence that breaks down, a system seen not to
+    /// be positive definite) returns [`SolverError::Breakdown`] with `state` as it was before
+    /// the step: the executor ends the run with [`TerminationReason::Breakdown`] and the state
+    /// kept. Any other error ends the run without a state.
+    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<Record, SolverError>;
 
     /// The residual power the solver knows without extra columns, relative to the emitted
     /// power (for shooting methods that of the shot radiosity, `Σ A |ΔB| / Σ A E`), or `None`
@@ -137,18 +166,9 @@ pub trait Solver {
         None
     }
 
-    /// Whether the solver gathers along rows of F ([`Problem::row`]) rather than shooting
-    /// columns: its system is then the column system only if the source serves exact rows.
-    fn gathers_rows(&self) -> bool {
-        false
-    }
-
-    /// Whether one step is a whole matrix–vector product, up to `n` columns (the Krylov
-    /// solvers, such as [`crate::Gmres`]), rather than one shot or one gathered patch. The step cap
-    /// then counts each step as `n` steps, so that it allows as many columns as it allows
-    /// a gathering solver, and a lab records every step.
-    fn step_is_sweep(&self) -> bool {
-        false
+    /// What one step is ([`StepKind::Shot`] by default).
+    fn step_kind(&self) -> StepKind {
+        StepKind::Shot
     }
 
     /// The solver's own figures so far (group steps, condition numbers, fallbacks; see
@@ -159,28 +179,22 @@ pub trait Solver {
     }
 }
 
-/// Watches a run: called between steps, outside the timed region (module doc).
+/// Watches a run: called between steps, outside the timed region (module doc). An observer
+/// only watches; what a stop rule needs to measure comes from an [`ErrorMonitor`].
 pub trait Observer {
     /// Called once on the initial state (`B = ΔB = E`) after [`Solver::init`], with the
-    /// solver's name; returns the e_rms when it measures one.
-    fn observe_init(&mut self, solver: &str, state: &State) -> Option<Real> {
-        let _ = solver;
-        self.observe_step(state)
+    /// solver's name.
+    fn observe_init(&mut self, solver: &str, state: &State) {
+        let _ = (solver, state);
     }
 
-    /// Called after every step; returns the e_rms when it measures one (needed by `rms=`
-    /// rules).
-    fn observe_step(&mut self, state: &State) -> Option<Real>;
+    /// Called after a step (every step, or as its [`ObserverMode`] says), with what the step
+    /// handed back ([`Solver::next_step`]).
+    fn observe_step(&mut self, state: &State, figures: &Record);
 
     /// Called once with the finished run, before the executor returns it.
     fn observe_final(&mut self, run: &Run) {
         let _ = run;
-    }
-
-    /// Whether `observe_*` return the e_rms; an `rms=` rule with an observer that does not
-    /// measure it is an error ([`SolverError::ErrorNotMeasured`]).
-    fn measures_error(&self) -> bool {
-        false
     }
 
     /// Whether the executor passes the solver's residual bound to
@@ -196,103 +210,44 @@ pub trait Observer {
     fn observe_residual_bound(&mut self, state: &State, bound: Option<&ResidualBound>) {
         let _ = (state, bound);
     }
-
-    /// This observer, called after every `n`-th step only ([`Every`]).
-    fn every(self, n: u64) -> Every<Self>
-    where
-        Self: Sized,
-    {
-        Every::new(n, self)
-    }
 }
 
-impl<O: Observer + ?Sized> Observer for &mut O {
-    fn observe_init(&mut self, solver: &str, state: &State) -> Option<Real> {
-        (**self).observe_init(solver, state)
-    }
-
-    fn observe_step(&mut self, state: &State) -> Option<Real> {
-        (**self).observe_step(state)
-    }
-
-    fn observe_final(&mut self, run: &Run) {
-        (**self).observe_final(run)
-    }
-
-    fn wants_residual_bound(&self) -> bool {
-        (**self).wants_residual_bound()
-    }
-
-    fn observe_residual_bound(&mut self, state: &State, bound: Option<&ResidualBound>) {
-        (**self).observe_residual_bound(state, bound)
-    }
-
-    fn measures_error(&self) -> bool {
-        (**self).measures_error()
-    }
+/// When an observer is called (argmin's modes).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum ObserverMode {
+    /// After every step (the default).
+    #[default]
+    Always,
+    /// After the steps that are multiples of `n` (`0` is taken as 1).
+    Every(u64),
+    /// Never after a step.
+    Never,
 }
 
-/// An observer that watches nothing.
-#[derive(Debug, Default)]
-pub struct NoObserver;
-
-impl Observer for NoObserver {
-    fn observe_step(&mut self, _state: &State) -> Option<Real> {
-        None
-    }
-}
-
-/// An observer called only after the steps that are multiples of `n` (and always on the
-/// initial state and the finished run). Between them it returns no e_rms, so an `rms=` rule
-/// is checked at those steps only.
-#[derive(Clone, Debug)]
-pub struct Every<O> {
-    n: u64,
-    inner: O,
-}
-
-impl<O> Every<O> {
-    /// `inner`, called after every `n`-th step (`n = 0` is taken as 1).
-    pub fn new(n: u64, inner: O) -> Every<O> {
-        Every { n: n.max(1), inner }
-    }
-
-    /// The observer inside.
-    pub fn into_inner(self) -> O {
-        self.inner
-    }
-
-    /// The observer inside.
-    pub fn inner(&self) -> &O {
-        &self.inner
-    }
-}
-
-impl<O: Observer> Observer for Every<O> {
-    fn observe_init(&mut self, solver: &str, state: &State) -> Option<Real> {
-        self.inner.observe_init(solver, state)
-    }
-
-    fn observe_step(&mut self, state: &State) -> Option<Real> {
-        if state.step % self.n == 0 { self.inner.observe_step(state) } else { None }
-    }
-
-    fn observe_final(&mut self, run: &Run) {
-        self.inner.observe_final(run)
-    }
-
-    fn wants_residual_bound(&self) -> bool {
-        self.inner.wants_residual_bound()
-    }
-
-    fn observe_residual_bound(&mut self, state: &State, bound: Option<&ResidualBound>) {
-        if state.step % self.n == 0 {
-            self.inner.observe_residual_bound(state, bound)
+impl ObserverMode {
+    /// Whether an observer in this mode is called after step `step`. The initial state and
+    /// the finished run are observed in every mode.
+    pub fn observes(self, step: u64) -> bool {
+        match self {
+            ObserverMode::Always => true,
+            ObserverMode::Every(n) => step % n.max(1) == 0,
+            ObserverMode::Never => false,
         }
     }
+}
 
-    fn measures_error(&self) -> bool {
-        self.inner.measures_error()
+/// Measures, between steps and outside the timed region, the error an `rms=` rule stops on:
+/// e_rms against a reference. A run with such a rule and no monitor is refused before its
+/// first step ([`SolverError::ErrorNotMeasured`]), since the rule could never hold.
+pub trait ErrorMonitor {
+    /// The e_rms of `state`'s displayed radiosity, or `None` when it cannot be measured.
+    fn e_rms(&mut self, state: &State) -> Option<Real>;
+}
+
+impl<F: FnMut(&State) -> Option<Real>> ErrorMonitor for F {
+    fn e_rms(&mut self, state: &State) -> Option<Real> {
+        self(state)
     }
 }
 
@@ -310,23 +265,38 @@ pub struct Run {
     pub record: Record,
 }
 
-/// Runs a solver under stop rules.
-pub struct Executor<'s> {
-    solver: &'s mut dyn Solver,
+/// Runs a solver under stop rules, with any number of observers and at most one error
+/// monitor (argmin's `Executor::new(problem, solver).add_observer(..).run()`).
+pub struct Executor<'a> {
+    solver: &'a mut dyn Solver,
     rules: StopRules,
+    observers: Vec<(&'a mut dyn Observer, ObserverMode)>,
+    monitor: Option<&'a mut dyn ErrorMonitor>,
 }
 
-impl<'s> Executor<'s> {
-    /// An executor for `solver` with `rules`.
-    pub fn new(solver: &'s mut dyn Solver, rules: StopRules) -> Executor<'s> {
-        Executor { solver, rules }
+impl<'a> Executor<'a> {
+    /// An executor for `solver` with `rules`, no observer and no monitor.
+    pub fn new(solver: &'a mut dyn Solver, rules: StopRules) -> Executor<'a> {
+        Executor { solver, rules, observers: Vec::new(), monitor: None }
     }
 
-    /// Runs from `B = ΔB = E` until a rule holds, round-off, the step cap, or a divergence
-    /// (module doc). Refuses, before anything runs, an `rms=` rule with an `observer` that does
-    /// not measure the error.
-    pub fn run(&mut self, problem: &Problem<'_>, observer: &mut dyn Observer) -> Result<Run, SolverError> {
-        if self.rules.needs_error() && !observer.measures_error() {
+    /// Adds an observer, called as `mode` says.
+    pub fn add_observer(mut self, observer: &'a mut dyn Observer, mode: ObserverMode) -> Executor<'a> {
+        self.observers.push((observer, mode));
+        self
+    }
+
+    /// Sets the monitor whose e_rms the `rms=` rule stops on.
+    pub fn monitor(mut self, monitor: &'a mut dyn ErrorMonitor) -> Executor<'a> {
+        self.monitor = Some(monitor);
+        self
+    }
+
+    /// Runs from `B = ΔB = E` until a rule holds, round-off, the step cap, a divergence or a
+    /// breakdown (module doc). Refuses, before anything runs, an `rms=` rule without a
+    /// monitor.
+    pub fn run(mut self, problem: &Problem<'_>) -> Result<Run, SolverError> {
+        if self.rules.needs_error() && self.monitor.is_none() {
             let rule = self.rules.rules.iter().find(|r| matches!(r, StopRule::Rms(_)));
             return Err(SolverError::ErrorNotMeasured { rule: rule.map(ToString::to_string).unwrap_or_default() });
         }
@@ -337,8 +307,9 @@ impl<'s> Executor<'s> {
         let start = Instant::now();
         self.solver.init(problem, &mut state)?;
         self.account(problem, &mut state, start.elapsed().as_secs_f64(), start_ff);
-        self.pass_bound(problem, &state, observer);
-        let mut error = observer.observe_init(&self.solver.name(), &state);
+        let name = self.solver.name();
+        self.observe(problem, &state, |o| o.observe_init(&name, &state), StepOrInit::Init);
+        let mut error = self.measure(&state);
         let mut watch = Watch::new();
         // The cap guards runs whose rules cannot be met; an explicit `steps=` or `columns=`
         // beyond it raises it (one step costs at least one column or none). A step that is a
@@ -347,7 +318,7 @@ impl<'s> Executor<'s> {
             StopRule::Steps(c) | StopRule::Columns(c) => Some(c.resolve(n)),
             _ => None,
         });
-        let per_step = if self.solver.step_is_sweep() { n.max(1) as f64 } else { 1.0 };
+        let per_step = if self.solver.step_kind() == StepKind::Product { n.max(1) as f64 } else { 1.0 };
         let cap = explicit.fold((self.rules.step_cap * n as f64 / per_step).ceil() as u64, u64::max);
         let termination = loop {
             if let Some(reason) = self.check(problem, &state, error, n, &mut watch)? {
@@ -358,21 +329,61 @@ impl<'s> Executor<'s> {
             }
             let ff_before = problem.ff_seconds();
             let step_start = Instant::now();
-            self.solver.next_step(problem, &mut state)?;
+            let step = self.solver.next_step(problem, &mut state);
+            let wall = step_start.elapsed().as_secs_f64();
+            let figures = match step {
+                Ok(figures) => figures,
+                Err(SolverError::Breakdown { reason, .. }) => {
+                    // The state is as it was before the step; its columns were spent.
+                    self.account(problem, &mut state, wall, ff_before);
+                    break TerminationReason::Breakdown { step: state.step + 1, reason };
+                }
+                Err(e) => return Err(e),
+            };
             state.step += 1;
-            self.account(problem, &mut state, step_start.elapsed().as_secs_f64(), ff_before);
-            self.pass_bound(problem, &state, observer);
-            error = observer.observe_step(&state);
+            self.account(problem, &mut state, wall, ff_before);
+            self.observe(problem, &state, |o| o.observe_step(&state, &figures), StepOrInit::Step(state.step));
+            error = self.measure(&state);
         };
-        let run = Run { state, termination, solver: self.solver.name(), record: self.solver.record() };
-        observer.observe_final(&run);
+        let run = Run { state, termination, solver: name, record: self.solver.record() };
+        for (observer, _) in &mut self.observers {
+            observer.observe_final(&run);
+        }
         Ok(run)
     }
 
-    /// Gives `observer` the solver's residual bound on `state`, if it wants it.
-    fn pass_bound(&self, problem: &Problem<'_>, state: &State, observer: &mut dyn Observer) {
-        if observer.wants_residual_bound() {
-            observer.observe_residual_bound(state, self.solver.residual_bound(problem, state).as_ref());
+    /// Calls `call` on every observer whose mode takes `step` (`true`: the initial state,
+    /// which every observer sees), after giving those that want it the solver's residual
+    /// bound; the bound is computed once, and only if some observer wants it.
+    fn observe(
+        &mut self,
+        problem: &Problem<'_>,
+        state: &State,
+        mut call: impl FnMut(&mut dyn Observer),
+        step: StepOrInit,
+    ) {
+        let takes = |mode: ObserverMode| match step {
+            StepOrInit::Init => true,
+            StepOrInit::Step(k) => mode.observes(k),
+        };
+        let wanted = self.observers.iter().any(|(o, mode)| takes(*mode) && o.wants_residual_bound());
+        let bound = wanted.then(|| self.solver.residual_bound(problem, state)).flatten();
+        for (observer, mode) in &mut self.observers {
+            if !takes(*mode) {
+                continue;
+            }
+            if observer.wants_residual_bound() {
+                observer.observe_residual_bound(state, bound.as_ref());
+            }
+            call(&mut **observer);
+        }
+    }
+
+    /// The monitor's e_rms of `state`, when there is a monitor and a rule that needs it.
+    fn measure(&mut self, state: &State) -> Option<Real> {
+        match &mut self.monitor {
+            Some(monitor) if self.rules.needs_error() => monitor.e_rms(state),
+            _ => None,
         }
     }
 
@@ -421,4 +432,11 @@ impl<'s> Executor<'s> {
         }
         Ok(residual.is_some_and(|r| r <= ROUND_OFF).then_some(TerminationReason::RoundOff))
     }
+}
+
+/// Which call an observer is about to get: the initial state's, or step `k`'s.
+#[derive(Clone, Copy)]
+enum StepOrInit {
+    Init,
+    Step(u64),
 }

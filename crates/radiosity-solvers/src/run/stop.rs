@@ -157,7 +157,7 @@ impl StopRules {
 }
 
 /// Why a run ended.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum TerminationReason {
     /// `columns=` reached.
     Columns(u64),
@@ -184,6 +184,14 @@ pub enum TerminationReason {
         /// The smallest residual power before it.
         minimum: Real,
     },
+    /// The method could not go on ([`crate::SolverError::Breakdown`]): the state is the one
+    /// before the step that broke down.
+    Breakdown {
+        /// The step that broke down.
+        step: u64,
+        /// Why, in one sentence.
+        reason: String,
+    },
 }
 
 impl std::fmt::Display for TerminationReason {
@@ -199,6 +207,7 @@ impl std::fmt::Display for TerminationReason {
             TerminationReason::Diverged { step, residual, minimum } => {
                 write!(f, "diverged: the residual power rose from {minimum:.1e} to {residual:.1e} by step {step}")
             }
+            TerminationReason::Breakdown { step, reason } => write!(f, "broke down at step {step}: {reason}"),
         }
     }
 }

@@ -14,6 +14,7 @@
 use crate::error::SolverError;
 use crate::run::executor::Solver;
 use crate::run::problem::Problem;
+use crate::run::record::Record;
 use crate::run::residual_bound::{self, ResidualBound};
 use crate::run::state::State;
 use crate::shooting::rule::{own_share, set_unshot, shoot, unshot_power};
@@ -64,10 +65,11 @@ impl Solver for ProgressiveRefinement {
         "pr".into()
     }
 
-    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
+    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<Record, SolverError> {
         let area = problem.system().areas();
         let j = select(state, |i| area[i]);
-        shoot_all(problem, state, j, &mut self.amount, &mut self.column)
+        shoot_all(problem, state, j, &mut self.amount, &mut self.column)?;
+        Ok(Record::new())
     }
 
     fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real> {

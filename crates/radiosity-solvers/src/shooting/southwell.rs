@@ -13,6 +13,7 @@
 use crate::error::SolverError;
 use crate::run::executor::Solver;
 use crate::run::problem::Problem;
+use crate::run::record::Record;
 use crate::run::residual_bound::{self, ResidualBound};
 use crate::run::state::State;
 use crate::shooting::progressive::{select, shoot_all};
@@ -31,9 +32,10 @@ impl Solver for Southwell {
         "southwell".into()
     }
 
-    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
+    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<Record, SolverError> {
         let j = select(state, |_| 1.0);
-        shoot_all(problem, state, j, &mut self.amount, &mut self.column)
+        shoot_all(problem, state, j, &mut self.amount, &mut self.column)?;
+        Ok(Record::new())
     }
 
     fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real> {

@@ -23,7 +23,7 @@ use crate::suites::bench::report_text::{duration, human_bytes, sig};
 use radiosity_core::{ColumnSource, LinearSystem, Real};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
-use radiosity_solvers::{Executor, Problem, Solver, StopRules};
+use radiosity_solvers::{Executor, ObserverMode, Problem, Solver, StopRules};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -113,7 +113,11 @@ pub fn time_to_accuracy_over(
     let backend_seconds = start.elapsed().as_secs_f64() - scene_seconds;
     let problem = Problem::new(&system, source)?.with_patch_order(&order)?;
     let mut recorder = Recorder::errors(&system, star, start);
-    let run = Executor::new(solver, rules).run(&problem, &mut recorder)?;
+    let mut monitor = recorder.monitor().expect("a recorder of errors has a reference");
+    let run = Executor::new(solver, rules)
+        .monitor(&mut monitor)
+        .add_observer(&mut recorder, ObserverMode::Always)
+        .run(&problem)?;
     let measurement = recorder.overhead();
     let seconds = start.elapsed().as_secs_f64() - measurement;
     let mut reached = Vec::new();

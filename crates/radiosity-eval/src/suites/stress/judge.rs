@@ -16,7 +16,7 @@ use radiosity_core::{LinearSystem, Real};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
 use radiosity_solvers::{
-    Executor, NoObserver, Observer, Problem, Record, SolverRegistry, State, StopRule, StopRules, TerminationReason,
+    Executor, ObserverMode, Problem, Record, SolverRegistry, State, StopRule, StopRules, TerminationReason,
 };
 use rayon::prelude::*;
 use std::time::Instant;
@@ -204,12 +204,11 @@ fn run_solver(
     let rules = StopRules { rules: vec![StopRule::Residual(RESIDUAL_TARGET)], step_cap: STEP_CAP };
     // e_rms after every step against the reference, when there is one.
     let mut recorder = reference.map(|r| Recorder::errors(system, r, Instant::now()));
-    let mut none = NoObserver;
-    let observer: &mut dyn Observer = match &mut recorder {
-        Some(r) => r,
-        None => &mut none,
-    };
-    let run = match Executor::new(solver.as_mut(), rules).run(&problem, observer) {
+    let mut executor = Executor::new(solver.as_mut(), rules);
+    if let Some(recorder) = &mut recorder {
+        executor = executor.add_observer(recorder, ObserverMode::Always);
+    }
+    let run = match executor.run(&problem) {
         Ok(run) => run,
         Err(e) => return Ok(Outcome::Failed(e.to_string())),
     };

@@ -53,6 +53,7 @@ use crate::error::SolverError;
 use crate::naming::{ParseSolverError, SolverParams, named, no_params, split_params, validated};
 use crate::run::executor::Solver;
 use crate::run::problem::Problem;
+use crate::run::record::Record;
 use crate::run::residual_bound::{self, ResidualBound};
 use crate::run::state::State;
 use crate::shooting::overshooting::overshoot::{AmbientTerm, Overshoot, RowTerm};
@@ -450,11 +451,12 @@ impl Solver for Overshooting {
         Ok(())
     }
 
-    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
+    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<Record, SolverError> {
         let ambient = Ambient::measure(problem, state);
         let j = argmax(&self.tracker.values(problem, state, &ambient));
         problem.column(j, &mut self.column);
-        shoot_with_overshoot(problem, state, &mut self.tracker, &ambient, j, &self.column)
+        shoot_with_overshoot(problem, state, &mut self.tracker, &ambient, j, &self.column)?;
+        Ok(Record::new())
     }
 
     fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real> {

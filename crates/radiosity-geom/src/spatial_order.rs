@@ -1,7 +1,7 @@
 //! A spatially coherent order of the patches: their centroids along a Morton (Z-order) curve,
 //! so that patches consecutive in the order lie near each other.
 //!
-//! Group gathering (`radiosity_solvers::group_gathering`, `:groups=spatial`) cuts this order
+//! Group gathering (`radiosity_solvers::GroupGathering`, `:groups=spatial`) cuts this order
 //! into consecutive groups of `m` patches. A group's solve resolves exactly the exchanges
 //! inside the group, and near patches exchange more energy than far ones (the form factor
 //! falls with the square of the distance), so groups of near patches take more of the

@@ -9,7 +9,7 @@ use radiosity_eval::{
     Cache, ColumnCharge, ColumnCost, Lab, LabOptions, Method, NoProgress, RecordPlan, ReferenceOrigin, ReferenceParams,
 };
 use radiosity_eval::{MemoryBudget, ReferenceKind, parse_bytes};
-use radiosity_eval::{SolverBound, errors};
+use radiosity_eval::{SolverBound, errors, errors_against};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
 use radiosity_solvers::{
@@ -101,6 +101,9 @@ fn a_run_records_the_bound_beside_e_rms_and_ends_on_it() {
     let o = lab.run(solver.as_mut(), &rules, &RecordPlan::default(), &NoProgress).unwrap();
     assert!(o.points.iter().all(|p| p.bound.is_finite() && p.e_rms.is_finite()));
     let (first, last) = (o.points.first().unwrap(), o.points.last().unwrap());
+    // The first point is the initial state, B = E, with its error against the reference.
+    let at_start = errors_against(lab.system(), lab.reference().unwrap().values(), lab.system().emissions()).unwrap();
+    assert_eq!((first.step, first.columns, first.e_rms), (0, 0, at_start.e_rms));
     assert!(last.bound < 1e-2 * first.bound, "{first:?} {last:?}");
     assert_eq!(o.last.bound, Some(last.bound));
     // The rows of the table carry the same bound as the point of their step.

@@ -22,19 +22,11 @@
 //!
 //! # Why faer
 //!
-//! Dense LU with partial pivoting and one right-hand side, on `I − 0.7 F` with a random
-//! non-negative `F` (rows summing to 0.99), medians of criterion's samples on this project's
-//! 2-core machine (`cargo bench -p radiosity-eval --bench lu`):
-//!
-//! | n | nalgebra 0.33 | faer 0.24, sequential | faer 0.24, rayon (2 threads) |
-//! |---|---|---|---|
-//! | 480 | 8.57 ms | 2.02 ms | 2.39 ms |
-//! | 3400 | 11.43 s | 0.649 s | 0.401 s |
-//!
-//! faer is 4× faster at 480 and 18× at 3400, so it is kept. Each factorisation runs
-//! sequentially and the channels run in parallel instead: results then cannot depend on the
-//! thread count, and an RGB system keeps both cores busy (a grey one loses at most the
-//! 1.6× that faer's own threads give at n = 3400).
+//! Dense LU with partial pivoting (faer) rather than nalgebra: faer is several times faster at
+//! n = 480 and over ten times at n = 3400 (`cargo bench -p radiosity-eval --bench lu`, figures
+//! in `docs/references.md`). Each factorisation runs sequentially and the channels run in
+//! parallel instead: results then cannot depend on the thread count, and an RGB system keeps
+//! both cores busy.
 //!
 //! [`ColumnSource`]: radiosity_core::ColumnSource
 

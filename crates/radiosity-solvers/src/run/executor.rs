@@ -183,9 +183,10 @@ pub trait Solver {
 /// only watches; what a stop rule needs to measure comes from an [`ErrorMonitor`].
 pub trait Observer {
     /// Called once on the initial state (`B = ΔB = E`) after [`Solver::init`], with the
-    /// solver's name.
+    /// solver's name; by default observed as a step that handed back nothing.
     fn observe_init(&mut self, solver: &str, state: &State) {
-        let _ = (solver, state);
+        let _ = solver;
+        self.observe_step(state, &Record::new());
     }
 
     /// Called after a step (every step, or as its [`ObserverMode`] says), with what the step

@@ -47,28 +47,33 @@ impl LinOp<Real> for RadiosityOperator<'_> {
 /// `diag(A/ρ) (I − diag(ρ) F)`, symmetric where the form factors are exactly reciprocal and
 /// positive definite where moreover rows sum to at most 1 and `ρ > 0`: the system faer's
 /// conjugate gradients can take, with right-hand side `diag(A/ρ) E`.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct SymmetrizedOperator<'a> {
     operator: RadiosityOperator<'a>,
+    weights: Vec<Real>,
 }
 
 impl<'a> SymmetrizedOperator<'a> {
     /// The symmetrized `operator`; `None` when a reflectivity is not positive (the weight
     /// `A/ρ` would be infinite).
     pub fn new(operator: RadiosityOperator<'a>) -> Option<SymmetrizedOperator<'a>> {
-        operator.system().reflectivities().iter().all(|r| *r > 0.0).then_some(SymmetrizedOperator { operator })
+        let system = operator.system();
+        let k = operator.channels();
+        let rho = system.reflectivities();
+        rho.iter().all(|r| *r > 0.0).then(|| {
+            let weights = rho.iter().enumerate().map(|(idx, r)| system.areas()[idx / k] / r).collect();
+            SymmetrizedOperator { operator, weights }
+        })
     }
 
     /// The weights `A_i / ρ_ic`, patch-major.
-    pub fn weights(&self) -> Vec<Real> {
-        let system = self.operator.system();
-        let k = self.operator.channels();
-        system.reflectivities().iter().enumerate().map(|(idx, r)| system.areas()[idx / k] / r).collect()
+    pub fn weights(&self) -> &[Real] {
+        &self.weights
     }
 
     /// The right-hand side `diag(A/ρ) E` whose solution is the radiosity.
     pub fn rhs(&self) -> Vec<Real> {
-        self.weights().iter().zip(self.operator.system().emissions()).map(|(w, e)| w * e).collect()
+        self.weights.iter().zip(self.operator.system().emissions()).map(|(w, e)| w * e).collect()
     }
 }
 
@@ -86,10 +91,9 @@ impl LinOp<Real> for SymmetrizedOperator<'_> {
     }
 
     fn apply(&self, out: MatMut<'_, Real>, rhs: MatRef<'_, Real>, _par: Par, _stack: &mut MemStack) {
-        let weights = self.weights();
         apply_by_columns(out, rhs, self.operator.dim(), |x, y| {
             self.operator.apply(x, y);
-            y.iter_mut().zip(&weights).for_each(|(v, w)| *v *= w);
+            y.iter_mut().zip(&self.weights).for_each(|(v, w)| *v *= w);
         });
     }
 

@@ -157,8 +157,8 @@ fn faer_conjugate_gradients_on_the_symmetrized_operator_find_the_lu_radiosity() 
     let mut out = Mat::<Real>::zeros(dim, 1);
     let precond = IdentityPrecond { dim };
     let params = CgParams { max_iters: 200, ..CgParams::default() };
-    let mut buffer = MemBuffer::new(conjugate_gradient_scratch(precond, op, 1, Par::Seq));
-    conjugate_gradient(out.as_mut(), precond, op, rhs.as_ref(), params, |_| {}, Par::Seq, MemStack::new(&mut buffer))
+    let mut buffer = MemBuffer::new(conjugate_gradient_scratch(precond, &op, 1, Par::Seq));
+    conjugate_gradient(out.as_mut(), precond, &op, rhs.as_ref(), params, |_| {}, Par::Seq, MemStack::new(&mut buffer))
         .unwrap();
     for (idx, want) in lu_radiosity(&system, &f).iter().enumerate() {
         assert_relative_eq!(out[(idx, 0)], *want, max_relative = 1e-10);

@@ -236,7 +236,7 @@ fn faers_own_cg_and_bicgstab_agree_with_ours_on_a_stored_system() {
     let f = f.with_measured_reciprocity(system.areas()).unwrap();
     let op = RadiosityOperator::new(&system, &f).unwrap();
     let symmetric = SymmetrizedOperator::new(op).unwrap();
-    let theirs_cg = faer_solve(symmetric, &symmetric.rhs(), true);
+    let theirs_cg = faer_solve(&symmetric, &symmetric.rhs(), true);
     let theirs_bicgstab = faer_solve(op, system.emissions(), false);
     for (name, theirs) in [("cg", theirs_cg), ("bicgstab", theirs_bicgstab)] {
         let ours = run(name, &system, &f, "residual=1e-14").unwrap().state.radiosity;

@@ -77,7 +77,7 @@ fn bad_gltf_files_are_refused_by_every_command() {
 fn bad_mgf_files_are_refused() {
     // (fixture, words the sentence must contain besides the file's name and line)
     let cases: [(&str, &[&str]); 6] = [
-        ("mgf/not_a_name.mgf", &["'3' is not an MGF entity"]),
+        ("mgf/not_a_name.mgf", &["it has no faces", "a line was skipped whose first word is not an entity name"]),
         ("mgf/undefined_vertex.mgf", &["undefined vertex 'v12'"]),
         ("mgf/undefined_material.mgf", &["undefined material 'nowhere'"]),
         ("mgf/cycle_a.mgf", &["cycle_a.mgf", "include cycle"]),
@@ -90,7 +90,7 @@ fn bad_mgf_files_are_refused() {
     }
     refused(
         &["compare", "--scene", &fixture("mgf/not_a_name.mgf"), "--solvers", "pr"],
-        &["not_a_name.mgf:3", "'3' is not an MGF entity"],
+        &["not_a_name.mgf:3", "no usable triangles"],
     );
 }
 

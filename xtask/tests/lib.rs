@@ -198,7 +198,7 @@ fn mgf_scenes_load_and_bad_mgf_fails_cleanly() {
         assert_eq!(r["emitters"], emitters, "{file}");
     }
     for (name, words) in [
-        ("mgf/not_a_name.mgf", "'3' is not an MGF entity"),
+        ("mgf/not_a_name.mgf", "whose first word is not an entity name"),
         ("mgf/undefined_vertex.mgf", "undefined vertex 'v12'"),
         ("mgf/undefined_material.mgf", "undefined material 'nowhere'"),
         ("mgf/cycle_a.mgf", "include cycle"),

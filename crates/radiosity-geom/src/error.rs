@@ -81,17 +81,6 @@ pub enum GeomError {
         /// Why nothing was usable, starting with "; " or empty.
         detail: String,
     },
-    /// A line of an MGF file whose first word is not an entity name (names begin with a
-    /// letter; entities with names this loader does not know are ignored with a warning).
-    #[error("{path}:{line}: '{entity}' is not an MGF entity (entity names begin with a letter)")]
-    MgfUnknownEntity {
-        /// The file.
-        path: PathBuf,
-        /// The line (1-based) where the entity starts.
-        line: usize,
-        /// The entity's name as written.
-        entity: String,
-    },
     /// An MGF entity with wrong or missing arguments.
     #[error("{path}:{line}: {message}")]
     MgfBadEntity {

@@ -156,9 +156,11 @@ fn zero_area_faces_are_dropped_with_one_warning() {
 
 #[test]
 fn bad_inputs_name_file_and_line() {
+    // A line that is not an entity is skipped; with nothing else, the file has no faces.
     let (e, m) = load_err(&mgf("not_a_name.mgf"));
-    assert!(matches!(e, GeomError::MgfUnknownEntity { line: 3, .. }), "{e:?}");
-    assert!(m.ends_with("not_a_name.mgf:3: '3' is not an MGF entity (entity names begin with a letter)"), "{m}");
+    assert!(matches!(e, GeomError::EmptyFile { .. }), "{e:?}");
+    assert!(m.contains("contains no usable triangles; it has no faces (a line was skipped"), "{m}");
+    assert!(m.contains("not_a_name.mgf:3)"), "{m}");
 
     let (e, m) = load_err(&mgf("undefined_vertex.mgf"));
     assert!(matches!(e, GeomError::MgfUndefined { line: 5, kind: "vertex", .. }), "{e:?}");
@@ -256,4 +258,36 @@ fn unknown_entities_are_ignored_with_one_warning_and_vertices_default_to_the_ori
     let w = &loaded.warnings[0];
     assert!(w.contains("ignored 3 unknown entities ('bogus' ×2, 'glow' ×1; the first at "), "{w}");
     assert!(w.ends_with("unknown.mgf:5), as MGF's reference parser does"), "{w}");
+}
+
+#[test]
+fn lines_the_reference_parser_passes_over_are_skipped_with_one_warning_each() {
+    // Two lines that are not entities (a vertex line without its `p`, a stray path) and a
+    // colour with y = 0: the scene is the one without them, its black material reflecting
+    // nothing.
+    let lenient = load(&mgf("lenient.mgf"));
+    let clean = load(&mgf("lenient_clean.mgf"));
+    assert!(clean.warnings.is_empty(), "{:?}", clean.warnings);
+    assert_eq!(lenient.scene.len(), clean.scene.len());
+    assert_eq!(lenient.scene.len(), 2);
+    assert!(close(lenient.scene.total_area(), clean.scene.total_area(), 1e-12));
+    for (a, b) in lenient.scene.patches().iter().zip(clean.scene.patches()) {
+        let (ma, mb) =
+            (&lenient.scene.materials()[a.material.0 as usize], &clean.scene.materials()[b.material.0 as usize]);
+        assert_eq!(ma.reflectivity, mb.reflectivity);
+    }
+    let w = &lenient.warnings;
+    assert_eq!(w.len(), 2, "{w:?}");
+    assert!(w[0].contains("skipped 2 lines whose first word is not an entity name (the first at "), "{w:?}");
+    assert!(w[0].ends_with("lenient.mgf:12), as MGF's reference parser does"), "{w:?}");
+    assert!(w[1].contains("took 1 chromaticity with y ≤ 0 as black (the first at "), "{w:?}");
+    assert!(w[1].ends_with("lenient.mgf:6), as RenderPark does"), "{w:?}");
+    // A negative x is still no chromaticity: an error of one sentence naming the line.
+    let dir = std::env::temp_dir().join(format!("radiosity-mgf-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("bad_colour.mgf");
+    std::fs::write(&bad, "c red =\n\tcxy -0.2 0.3\n").unwrap();
+    let (_, m) = load_err(bad.to_str().unwrap());
+    assert!(m.ends_with("bad_colour.mgf:2: 'cxy -0.2 0.3' is not a chromaticity"), "{m}");
+    std::fs::remove_dir_all(&dir).unwrap();
 }

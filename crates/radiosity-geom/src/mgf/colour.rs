@@ -21,19 +21,22 @@
 
 use radiosity_core::{Real, Spectrum};
 
-/// A chromaticity as CIE XYZ with `Y = 1`.
+/// A chromaticity as CIE XYZ with `Y = 1`, or black.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Colour {
     /// X / Y.
     pub x: Real,
     /// Z / Y.
     pub z: Real,
+    /// 1, or 0 for black: what RenderPark makes of a chromaticity with `y ≤ 0` ("invalid
+    /// color specification (Y<=0) … setting to black"), which scales every use to nothing.
+    pub luminance: Real,
 }
 
 impl Default for Colour {
     /// MGF's default colour: the equal-energy white, `x = y = 1/3`.
     fn default() -> Self {
-        Colour { x: 1.0, z: 1.0 }
+        Colour { x: 1.0, z: 1.0, luminance: 1.0 }
     }
 }
 
@@ -50,13 +53,16 @@ impl Colour {
         if !(x.is_finite() && y.is_finite() && x >= 0.0 && y > 0.0 && x + y <= 1.0 + 1e-9) {
             return None;
         }
-        Some(Colour { x: x / y, z: (1.0 - x - y).max(0.0) / y })
+        Some(Colour { x: x / y, z: (1.0 - x - y).max(0.0) / y, luminance: 1.0 })
     }
 
     /// The colour of XYZ tristimulus values, or `None` where `Y` is not positive.
     pub fn from_xyz([x, y, z]: [Real; 3]) -> Option<Colour> {
-        (y > 0.0 && y.is_finite()).then(|| Colour { x: x.max(0.0) / y, z: z.max(0.0) / y })
+        (y > 0.0 && y.is_finite()).then(|| Colour { x: x.max(0.0) / y, z: z.max(0.0) / y, luminance: 1.0 })
     }
+
+    /// Black: every `rd` or `ed` value of this colour gives nothing.
+    pub const BLACK: Colour = Colour { x: 1.0, z: 1.0, luminance: 0.0 };
 
     /// The chromaticity `(x, y)`.
     pub fn xy(self) -> (Real, Real) {
@@ -95,6 +101,7 @@ impl Colour {
     pub fn mix(parts: &[(Real, Colour)]) -> Option<Colour> {
         let mut xyz = [0.0; 3];
         for &(w, c) in parts {
+            let w = w * c.luminance;
             xyz[0] += w * c.x;
             xyz[1] += w;
             xyz[2] += w * c.z;
@@ -111,7 +118,7 @@ impl Colour {
         let mut rgb = [0.0; 3];
         for (c, row) in XYZ_TO_RGB.iter().enumerate() {
             let dot = |v: [Real; 3]| row[0] * v[0] + row[1] * v[1] + row[2] * v[2];
-            rgb[c] = (value * dot(xyz) / dot(white)).max(0.0);
+            rgb[c] = (self.luminance * value * dot(xyz) / dot(white)).max(0.0);
         }
         Spectrum(rgb)
     }

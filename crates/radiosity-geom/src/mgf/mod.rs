@@ -47,11 +47,18 @@
 //!   MGF parser encounters new entities it does not recognize, the default action is to ignore
 //!   them, printing a warning message", MGF 2.0, Notes): one warning counts them per name and
 //!   names the file and line of the first.
+//! - **Lines whose first word is not a name** (MGF names begin with a letter: a vertex line
+//!   that lost its `p`, a file path a converter left in the file) are skipped, as the
+//!   reference parser hands them to its handler of unknown entities and RenderPark's warns
+//!   and goes on: one warning counts them and names the file and line of the first.
+//! - **Chromaticities with `y ≤ 0`** (`cxy 0.4 0`) are taken as black, as RenderPark does
+//!   ("invalid color specification (Y<=0) … setting to black"): one warning counts them and
+//!   names the first.
 //! - **Vertices** without `p` are at the origin, the default vertex (`v id =`, MGF 2.0).
 //!
-//! Everything else is an error of one sentence naming the file and line: a line whose first
-//! word is not a name (MGF names begin with a letter), wrong arguments, an undefined vertex,
-//! material or colour, a face with fewer than three vertices, a bare `xf` with nothing to end.
+//! Everything else is an error of one sentence naming the file and line: wrong arguments, an
+//! undefined vertex, material or colour, a face with fewer than three vertices, a bare `xf`
+//! with nothing to end, an include that cannot be read; and a file with no usable face.
 //!
 //! ## References
 //!
@@ -364,6 +371,10 @@ struct Loader {
     unknown: BTreeMap<String, usize>,
     /// Where the first unknown entity was met, as `file:line`.
     first_unknown: Option<String>,
+    /// Lines skipped because their first word is not an entity name.
+    not_names: Skipped,
+    /// Chromaticities with `y ≤ 0`, taken as black.
+    black: Skipped,
     clamped: BTreeSet<String>,
     degenerate: usize,
     read: usize,
@@ -388,6 +399,8 @@ impl Loader {
             ignored: BTreeMap::new(),
             unknown: BTreeMap::new(),
             first_unknown: None,
+            not_names: Skipped::default(),
+            black: Skipped::default(),
             clamped: BTreeSet::new(),
             degenerate: 0,
             read: 0,
@@ -438,7 +451,13 @@ impl Loader {
             "c" => self.colours.select(words, at)?,
             "cxy" => {
                 let [x, y] = at.reals::<2>(words)?;
-                let c = Colour::from_xy(x, y).ok_or_else(|| at.bad(format!("'cxy {x} {y}' is not a chromaticity")))?;
+                let c = if y <= 0.0 && x.is_finite() {
+                    // RenderPark: "invalid color specification (Y<=0) … setting to black".
+                    self.black.note(at);
+                    Colour::BLACK
+                } else {
+                    Colour::from_xy(x, y).ok_or_else(|| at.bad(format!("'cxy {x} {y}' is not a chromaticity")))?
+                };
                 self.colours.modify(|v| *v = c);
             }
             "cspec" => {
@@ -512,13 +531,10 @@ impl Loader {
                 self.emit(faces, at)?;
             }
             // MGF names begin with a letter; anything else is not an entity at all.
-            _ if !name.starts_with(|c: char| c.is_ascii_alphabetic()) => {
-                return Err(GeomError::MgfUnknownEntity {
-                    path: at.path.to_path_buf(),
-                    line: at.line,
-                    entity: name.to_string(),
-                });
-            }
+            // A line whose first word is not a name (a vertex that lost its `p`, a file path a
+            // converter left behind): MGF's reference parser hands it to its handler of unknown
+            // entities, which RenderPark's warns about and skips.
+            _ if !name.starts_with(|c: char| c.is_ascii_alphabetic()) => self.not_names.note(at),
             // The reference parser ignores entities it does not know, with a warning, so that
             // files written for later versions of the format still load (MGF 2.0, "Ignoring
             // new entities").
@@ -724,11 +740,16 @@ impl Loader {
             }
         }
         if pieces.is_empty() {
-            let detail = if self.degenerate > 0 {
+            let mut detail = if self.degenerate > 0 {
                 format!("; all {} of its faces are degenerate", self.degenerate)
             } else {
                 "; it has no faces".to_string()
             };
+            if let Some(first) = &self.not_names.first {
+                let n = self.not_names.count;
+                let lines = if n == 1 { "line was".to_string() } else { format!("{n} lines were") };
+                detail += &format!(" (a {lines} skipped whose first word is not an entity name, the first at {first})");
+            }
             return Err(GeomError::EmptyFile { path, detail });
         }
         let target = size * bounding_diagonal(pieces.iter().flat_map(|(p, _, _)| p.iter().copied()));
@@ -765,6 +786,20 @@ impl Loader {
                 "{file}: ignored {total} unknown entit{s} ({list}; the first at {first}), as MGF's reference parser does"
             ));
         }
+        if let Some(first) = &self.not_names.first {
+            let (n, s) = (self.not_names.count, if self.not_names.count == 1 { "" } else { "s" });
+            warnings.push(format!(
+                "{file}: skipped {n} line{s} whose first word is not an entity name (the first at {first}), as MGF's \
+                 reference parser does"
+            ));
+        }
+        if let Some(first) = &self.black.first {
+            let (n, s) = (self.black.count, if self.black.count == 1 { "" } else { "s" });
+            warnings.push(format!(
+                "{file}: took {n} chromaticit{} with y ≤ 0 as black (the first at {first}), as RenderPark does",
+                if s.is_empty() { "y" } else { "ies" }
+            ));
+        }
         if !self.clamped.is_empty() {
             let list = self.clamped.iter().map(|n| format!("'{n}'")).collect::<Vec<_>>().join(", ");
             warnings.push(format!(
@@ -773,6 +808,20 @@ impl Loader {
         }
         let scene = self.builder.build().map_err(with_file)?;
         Ok(LoadedScene { scene, warnings })
+    }
+}
+
+/// Lines of one kind passed over with a warning: how many, and where the first was.
+#[derive(Default)]
+struct Skipped {
+    count: usize,
+    first: Option<String>,
+}
+
+impl Skipped {
+    fn note(&mut self, at: &At<'_>) {
+        self.count += 1;
+        self.first.get_or_insert_with(|| format!("{}:{}", at.path.display(), at.line));
     }
 }
 

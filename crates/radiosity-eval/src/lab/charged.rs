@@ -36,13 +36,18 @@ impl ChargedColumns {
         ChargedColumns { matrix, rows, reciprocity, charge, ledger }
     }
 
+    /// The prices it charges.
+    pub(crate) fn charge(&self) -> &ColumnCharge {
+        &self.charge
+    }
+
     /// The seconds charged since the last [`ColumnSource::reset_memory`].
     pub(crate) fn charged_seconds(&self) -> Real {
         self.ledger.lock().unwrap_or_else(PoisonError::into_inner).seconds
     }
 
     /// Charges the column (or row) of patch `j`.
-    fn charge(&self, j: usize) {
+    fn bill(&self, j: usize) {
         let mut ledger = self.ledger.lock().unwrap_or_else(PoisonError::into_inner);
         let n = ledger.seen.len();
         let repeated = ledger.seen[j];
@@ -61,14 +66,14 @@ impl ColumnSource for ChargedColumns {
 
     fn fill_column(&self, j: usize, column: &mut [Real]) {
         self.matrix.fill_column(j, column);
-        self.charge(j);
+        self.bill(j);
     }
 
     fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
         if !(self.rows && self.matrix.fill_row(i, row)) {
             return false;
         }
-        self.charge(i);
+        self.bill(i);
         true
     }
 

@@ -65,8 +65,8 @@ pub struct Lab<'p> {
     pub(super) chosen: ChosenReference,
     pub(super) contraction: Contraction,
     pub(super) order: Vec<usize>,
-    pub(super) charge: Option<ColumnCharge>,
-    /// The source charging them, when columns are charged.
+    /// The source that serves and charges the columns, when columns are charged
+    /// ([`ColumnCost::Charged`]).
     pub(super) charged: Option<Arc<ChargedColumns>>,
 }
 
@@ -178,11 +178,10 @@ impl<'p> Lab<'p> {
                 let charge = ColumnCharge::measure(&*source, setup.assembled_column);
                 let charged =
                     Arc::new(ChargedColumns::new(matrix.clone(), serves_rows, source.reciprocity_bound(), charge));
-                (Box::new(charged.clone()) as Box<dyn ColumnSource + 'p>, Some((charged, charge)))
+                (Box::new(charged.clone()) as Box<dyn ColumnSource + 'p>, Some(charged))
             }
             _ => (source, None),
         };
-        let (charged, charge) = charged.unzip();
         Lab {
             prepared,
             report: prepared.report(),
@@ -196,7 +195,6 @@ impl<'p> Lab<'p> {
             chosen: setup.chosen,
             contraction: setup.contraction,
             order: radiosity_geom::spatial_order(scene),
-            charge,
             charged,
         }
     }
@@ -345,7 +343,7 @@ impl<'p> Lab<'p> {
     /// What each column a solver fetches is charged, when the lab serves them from its stored
     /// matrix ([`ColumnCost::Charged`]); `None` when solvers compute their columns.
     pub fn charge(&self) -> Option<&ColumnCharge> {
-        self.charge.as_ref()
+        self.charged.as_deref().map(ChargedColumns::charge)
     }
 
     /// The stored matrix, when it is kept ([`LabOptions::residuals`], assembled for the

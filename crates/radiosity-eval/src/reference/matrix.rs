@@ -189,7 +189,7 @@ impl ColumnSource for FormFactors {
     /// One pass over the entries (`multiply_matrix`), deterministic whatever the thread
     /// count.
     fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
-        out.copy_from_slice(&multiply_matrix(self, x, channels));
+        multiply_matrix(self, x, channels, out);
         true
     }
 }
@@ -388,13 +388,13 @@ pub(crate) fn kappa_matrix(system: &LinearSystem, m: &FormFactors) -> Vec<Real> 
     partial.into_iter().fold(vec![0.0; k], |a, p| a.iter().zip(&p).map(|(x, y)| x.max(*y)).collect())
 }
 
-/// `F b` from the matrix in memory, patch-major with `k` channels. Dense: rows in parallel,
+/// `fb = F b` from the matrix in memory, patch-major with `k` channels. Dense: rows in parallel,
 /// each row summed in column order. Stored: columns in fixed chunks (as many whatever the
 /// thread count), each chunk's partial product accumulated in column order and the partials
 /// added in chunk order, so the sums do not depend on the thread count either.
-pub(crate) fn multiply_matrix(m: &FormFactors, b: &[Real], k: usize) -> Vec<Real> {
+fn multiply_matrix(m: &FormFactors, b: &[Real], k: usize, fb: &mut [Real]) {
     let n = m.n;
-    let mut fb = vec![0.0; n * k];
+    fb.fill(0.0);
     match &m.entries {
         Entries::Dense(rows) => fb.par_chunks_mut(k).enumerate().for_each(|(i, out)| {
             let row = &rows[i * n..(i + 1) * n];
@@ -428,7 +428,6 @@ pub(crate) fn multiply_matrix(m: &FormFactors, b: &[Real], k: usize) -> Vec<Real
             }
         }
     }
-    fb
 }
 
 /// At most this many partial products in a product with a stored matrix ...

@@ -218,10 +218,11 @@ fn summary(
     );
     out += &format!("reciprocity  max relative error {:.3e}\n", figures.max_reciprocity_error);
     let g = &prepared.report().geometry;
-    if g.hidden + g.touching + g.overlapping > 0 {
+    if g.hidden + g.touching + g.overlapping + g.covered + g.cut > 0 {
         out += &format!(
-            "geometry     {} hidden patches left out, {} touching, {} overlapping (`scenes --explain` lists them)\n",
-            g.hidden, g.touching, g.overlapping
+            "geometry     {} hidden patches left out, {} touching, {} overlapping coplanar patches left out and {} cut \
+             (`scenes --explain` lists them)\n",
+            g.hidden, g.touching, g.covered, g.cut
         );
     }
     match (worst.is_empty(), prepared.analysis.closure.value.is_closed()) {

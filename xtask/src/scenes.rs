@@ -91,8 +91,16 @@ fn explain_text(r: &SceneReport, arg: &str) -> String {
     }
     let g = &r.geometry;
     out += &format!(
-        "\ngeometry    {} hidden ({} pressed, {} enclosed, area {:.4e}), {} touching, {} overlapping\n",
-        g.hidden, g.pressed, g.enclosed, g.hidden_area, g.touching, g.overlapping
+        "\ngeometry    {} hidden ({} pressed, {} enclosed, area {:.4e}), {} touching, {} overlapping ({} covered, {} \
+         cut)\n",
+        g.hidden,
+        g.pressed,
+        g.enclosed,
+        g.hidden_area,
+        g.touching,
+        g.overlapping + g.covered + g.cut,
+        g.covered,
+        g.cut
     );
     out += &format!("  {:<10} because {}\n", "", g.reason);
     for e in &g.examples {

@@ -77,12 +77,12 @@ fn bad_gltf_files_are_refused_by_every_command() {
 fn bad_mgf_files_are_refused() {
     // (fixture, words the sentence must contain besides the file's name and line)
     let cases: [(&str, &[&str]); 6] = [
-        ("mgf/not_a_name.mgf", &["it has no faces", "a line was skipped whose first word is not an entity name"]),
+        ("mgf/not_a_name.mgf", &["it has no faces", "skipped 1 line whose first word is not an entity name"]),
         ("mgf/undefined_vertex.mgf", &["undefined vertex 'v12'"]),
         ("mgf/undefined_material.mgf", &["undefined material 'nowhere'"]),
         ("mgf/cycle_a.mgf", &["cycle_a.mgf", "include cycle"]),
         ("mgf/missing_include.mgf", &["cannot read included file", "no_such_file.mgf"]),
-        ("mgf/two_vertices.mgf", &["at least 3 vertices", "found 2"]),
+        ("mgf/two_vertices.mgf", &["it has no faces", "skipped 1 face or hole with fewer than 3 vertices"]),
     ];
     for (file, words) in cases {
         let e = refused(&["solve", "--scene", &fixture(file), "--solver", "pr"], words);

@@ -130,6 +130,14 @@ impl SceneAnalysis {
                 hidden.len()
             ));
         }
+        let resolved = &self.hidden.value.resolved;
+        if !resolved.is_empty() {
+            out.push(format!(
+                "the second copy of overlapping coplanar area (patches: {} covered, {} cut to what none covers)",
+                resolved.covered.len(),
+                resolved.cut.len()
+            ));
+        }
         if !self.occlusion.value {
             out.push("shadow rays (nothing can occlude)".to_string());
         }
@@ -166,6 +174,16 @@ fn hidden_decision(scene: &Scene, found: HiddenGeometry) -> Decision<HiddenGeome
     }
     if !found.overlapping.is_empty() {
         reason += &format!("; {} patches overlap a coplanar patch", found.overlapping.len());
+    }
+    let r = &found.resolved;
+    if !r.is_empty() {
+        reason += &format!(
+            "; overlapping coplanar patches facing the same way: {} left out as covered by others, {} cut to the part \
+             none covers, so the {:.4e} of area they counted twice is counted once",
+            r.covered.len(),
+            r.cut.len(),
+            r.area_removed
+        );
     }
     Decision { value: found, reason }
 }

@@ -81,6 +81,14 @@ pub enum GeomError {
         /// Why nothing was usable, starting with "; " or empty.
         detail: String,
     },
+    /// A file read as text that holds binary data.
+    #[error("{path} is not a text file: byte {offset} is binary data")]
+    NotText {
+        /// The file.
+        path: PathBuf,
+        /// The offset of the first byte that is not text (a NUL, or not UTF-8).
+        offset: usize,
+    },
     /// An MGF entity with wrong or missing arguments.
     #[error("{path}:{line}: {message}")]
     MgfBadEntity {

@@ -33,16 +33,18 @@
 //! - *enclosed*: every view ray meets the back of a patch: the patch faces the inside of a
 //!   closed solid.
 //!
-//! Patches in contact at some probe points but not all are **touching**, and patches with some
-//! points overlapped are **overlapping**; both stay in the system and are reported, since they
-//! explain rows of `F` that miss 1 (a patch seeing two coplanar copies of a face counts its
-//! form factor twice).
+//! Patches in contact at some probe points but not all are **touching**: they stay in the
+//! system and are reported, since they explain rows of `F` that miss 1. Patches with some
+//! points overlapped are **overlapping**: a patch seeing two coplanar copies of a face counts
+//! its form factor twice, so [`coplanar`](crate::coplanar) resolves them, leaving out what
+//! others cover and cutting what they partly cover.
 //!
 //! The test samples: a hidden patch with a gap narrower than one probe grid cell, or a solid
 //! with a leak, may be missed (it then stays in the system, which is what happened before). It
 //! never removes a patch some view ray saw the front of another patch from, other than through a
 //! contact.
 
+use crate::coplanar::ResolvedOverlaps;
 use crate::visibility::Visibility;
 use radiosity_core::math::cosine_direction;
 use radiosity_core::{Real, Scene};
@@ -128,6 +130,9 @@ pub struct HiddenGeometry {
     /// True once the hidden patches were left out of the scene the other fields number
     /// ([`HiddenGeometry::renumbered`]).
     pub left_out: bool,
+    /// How the overlapping patches were resolved, numbered as in the scene probed; empty until
+    /// they are ([`HiddenGeometry::renumbered`]).
+    pub resolved: ResolvedOverlaps,
 }
 
 /// What the probes of one patch found.
@@ -176,7 +181,7 @@ impl HiddenGeometry {
 
     /// True when nothing was found.
     pub fn is_empty(&self) -> bool {
-        self.hidden.is_empty() && self.touching.is_empty() && self.overlapping.is_empty()
+        self.hidden.is_empty() && self.touching.is_empty() && self.overlapping.is_empty() && self.resolved.is_empty()
     }
 
     /// How many hidden patches are pressed against another surface (the others are enclosed).
@@ -189,10 +194,11 @@ impl HiddenGeometry {
         self.hidden.iter().fold(0.0, |a, h| a + h.area)
     }
 
-    /// The same findings in the indices of the scene with the hidden patches left out: `kept[i]`
-    /// is the new index of old patch `i` (`None` for a hidden one). Hidden patches keep their old
-    /// indices, which name patches of the scene as loaded.
-    pub fn renumbered(&self, kept: &[Option<usize>]) -> HiddenGeometry {
+    /// The same findings in the indices of the scene with the hidden patches left out and the
+    /// overlaps `resolved`: `kept[i]` is the new index of old patch `i` (`None` for one left out;
+    /// the first of its pieces for one cut). Hidden and resolved patches keep their old indices,
+    /// which name patches of the scene as loaded.
+    pub fn renumbered(&self, kept: &[Option<usize>], resolved: ResolvedOverlaps) -> HiddenGeometry {
         let map = |list: &[PartialContact]| {
             list.iter()
                 .filter_map(|c| {
@@ -206,6 +212,7 @@ impl HiddenGeometry {
             overlapping: map(&self.overlapping),
             rays: self.rays,
             left_out: true,
+            resolved,
         }
     }
 }

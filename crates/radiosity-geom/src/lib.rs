@@ -19,6 +19,7 @@
 //! ```
 
 pub mod analysis;
+pub mod coplanar;
 pub mod error;
 pub mod gltf_input;
 pub mod hidden;
@@ -31,6 +32,7 @@ pub mod spec;
 pub mod visibility;
 
 pub use analysis::{Closure, Decision, SceneAnalysis};
+pub use coplanar::{CoveredPatch, CutPatch, ResolvedOverlaps};
 pub use error::GeomError;
 pub use hidden::{HiddenGeometry, HiddenParams, HiddenPatch, HiddenReason, PartialContact};
 pub use mesh::SceneBuilder;

@@ -2,6 +2,7 @@
 //! time each took, and the report of it that `scenes` prints and every experiment quotes.
 
 use crate::analysis::{Closure, SceneAnalysis};
+use crate::coplanar::{self, Replacements};
 use crate::error::GeomError;
 use crate::hidden::{HiddenGeometry, HiddenParams, HiddenReason};
 use crate::visibility::Visibility;
@@ -65,12 +66,19 @@ impl PreparedScene {
         let start = Instant::now();
         stage("probing for hidden geometry");
         let mut hidden = HiddenGeometry::find(&loaded.scene, &visibility, HiddenParams::default());
+        let mut is_hidden = vec![false; loaded.scene.len()];
+        for h in &hidden.hidden {
+            is_hidden[h.patch] = true;
+        }
+        let (resolved, replacements) = coplanar::resolve(&loaded.scene, &hidden.overlapping, &is_hidden);
+        // Every overlap the probes flagged is now resolved, or was found to have no area.
+        hidden.overlapping.clear();
         let mut analysis_seconds = start.elapsed().as_secs_f64();
-        if !hidden.hidden.is_empty() {
-            match without_hidden(&loaded.scene, &hidden) {
+        if !hidden.hidden.is_empty() || !replacements.is_empty() {
+            match rebuilt(&loaded.scene, &is_hidden, &replacements) {
                 Some((scene, kept)) => {
                     loaded.scene = scene;
-                    hidden = hidden.renumbered(&kept);
+                    hidden = hidden.renumbered(&kept, resolved);
                     let start = Instant::now();
                     visibility = Visibility::new(&loaded.scene);
                     bvh += start.elapsed().as_secs_f64();
@@ -145,18 +153,26 @@ impl PreparedScene {
     }
 }
 
-/// `scene` without the hidden patches, and the new index of every old patch (`None` for a
-/// hidden one); `None` when every patch is hidden.
-fn without_hidden(scene: &Scene, hidden: &HiddenGeometry) -> Option<(Scene, Vec<Option<usize>>)> {
-    let mut kept = vec![Some(0); scene.len()];
-    for h in &hidden.hidden {
-        kept[h.patch] = None;
-    }
-    let mut patches = Vec::with_capacity(scene.len() - hidden.hidden.len());
+/// `scene` without the hidden patches and with the `replacements` of overlapping ones, and the
+/// new index of every old patch (`None` for one left out, the first piece of one cut); `None`
+/// when nothing is left.
+fn rebuilt(scene: &Scene, hidden: &[bool], replacements: &Replacements) -> Option<(Scene, Vec<Option<usize>>)> {
+    let mut kept = vec![None; scene.len()];
+    let mut patches = Vec::with_capacity(scene.len());
     for (i, k) in kept.iter_mut().enumerate() {
-        if k.is_some() {
-            *k = Some(patches.len());
-            patches.push(scene.patches()[i].clone());
+        if hidden[i] {
+            continue;
+        }
+        match replacements.get(&i) {
+            None => {
+                *k = Some(patches.len());
+                patches.push(scene.patches()[i].clone());
+            }
+            Some(Some(pieces)) => {
+                *k = Some(patches.len());
+                patches.extend(pieces.iter().cloned());
+            }
+            Some(None) => {}
         }
     }
     let reduced = Scene::new(scene.name(), patches, scene.materials().to_vec(), scene.objects().to_vec()).ok()?;
@@ -227,8 +243,15 @@ pub struct GeometryReport {
     pub hidden_area: f64,
     /// Patches touching another surface over part of their area (kept).
     pub touching: usize,
-    /// Patches overlapped by a coplanar patch facing the same way (kept).
+    /// Patches overlapped by a coplanar patch facing the same way and not resolved (none once
+    /// the scene is prepared).
     pub overlapping: usize,
+    /// Patches left out because coplanar patches facing the same way cover them.
+    pub covered: usize,
+    /// Patches cut to the part no coplanar patch facing the same way covers.
+    pub cut: usize,
+    /// The area those overlaps counted twice, now counted once.
+    pub area_removed: f64,
     /// Up to three examples of each kind, one sentence each.
     pub examples: Vec<String>,
     /// The decision in one sentence.
@@ -267,7 +290,27 @@ impl GeometryReport {
                 100.0 * c.fraction
             ));
         }
+        for c in found.resolved.covered.iter().take(EXAMPLES) {
+            examples.push(format!(
+                "covered: patch {} of '{}' lies under a coplanar patch of '{}' and is left out",
+                c.patch, c.object, c.by
+            ));
+        }
+        for c in found.resolved.cut.iter().take(EXAMPLES) {
+            examples.push(format!(
+                "cut: patch {} of '{}' keeps the {:.0}% of its area no patch of '{}' covers, in {} piece{}",
+                c.patch,
+                c.object,
+                100.0 * c.kept,
+                c.by,
+                c.pieces,
+                if c.pieces == 1 { "" } else { "s" }
+            ));
+        }
         GeometryReport {
+            covered: found.resolved.covered.len(),
+            cut: found.resolved.cut.len(),
+            area_removed: found.resolved.area_removed,
             hidden: found.hidden.len(),
             pressed,
             enclosed: found.hidden.len() - pressed,

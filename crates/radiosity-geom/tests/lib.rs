@@ -3,6 +3,7 @@
 
 mod analysis;
 mod builtin_large;
+mod coplanar;
 mod gltf_input;
 mod hidden;
 mod mesh;

@@ -159,8 +159,8 @@ fn bad_inputs_name_file_and_line() {
     // A line that is not an entity is skipped; with nothing else, the file has no faces.
     let (e, m) = load_err(&mgf("not_a_name.mgf"));
     assert!(matches!(e, GeomError::EmptyFile { .. }), "{e:?}");
-    assert!(m.contains("contains no usable triangles; it has no faces (a line was skipped"), "{m}");
-    assert!(m.contains("not_a_name.mgf:3)"), "{m}");
+    assert!(m.contains("contains no usable triangles; it has no faces; skipped 1 line whose first"), "{m}");
+    assert!(m.ends_with("not_a_name.mgf:3)"), "{m}");
 
     let (e, m) = load_err(&mgf("undefined_vertex.mgf"));
     assert!(matches!(e, GeomError::MgfUndefined { line: 5, kind: "vertex", .. }), "{e:?}");
@@ -178,9 +178,28 @@ fn bad_inputs_name_file_and_line() {
     assert!(matches!(e, GeomError::MgfMissingInclude { line: 3, .. }), "{e:?}");
     assert!(m.contains("missing_include.mgf:3: cannot read included file") && m.contains("no_such_file.mgf"), "{m}");
 
+    // A face of two vertices is skipped; with nothing else, the file has no faces.
     let (e, m) = load_err(&mgf("two_vertices.mgf"));
-    assert!(matches!(e, GeomError::MgfBadEntity { line: 5, .. }), "{e:?}");
-    assert!(m.ends_with("two_vertices.mgf:5: a face needs at least 3 vertices, found 2"), "{m}");
+    assert!(matches!(e, GeomError::EmptyFile { .. }), "{e:?}");
+    assert!(m.contains("it has no faces; skipped 1 face or hole with fewer than 3 vertices"), "{m}");
+    assert!(m.ends_with("two_vertices.mgf:5)"), "{m}");
+
+    // Binary data is no MGF: one sentence naming the first binary byte.
+    let dir = std::env::temp_dir().join(format!("radiosity-mgf-binary-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, bytes, offset) in [("nul.mgf", &b"v a =\n\0\x01\x02"[..], 6), ("latin1.mgf", &b"# caf\xe9\n"[..], 5)] {
+        let file = dir.join(name);
+        std::fs::write(&file, bytes).unwrap();
+        let (e, m) = load_err(file.to_str().unwrap());
+        assert!(matches!(e, GeomError::NotText { .. }), "{e:?}");
+        assert!(m.ends_with(&format!("{name} is not a text file: byte {offset} is binary data")), "{m}");
+    }
+    // An included file that is binary is refused the same way.
+    std::fs::write(dir.join("includes_binary.mgf"), "i nul.mgf\n").unwrap();
+    let (e, m) = load_err(dir.join("includes_binary.mgf").to_str().unwrap());
+    assert!(matches!(e, GeomError::NotText { offset: 6, .. }), "{e:?}");
+    assert!(m.contains("nul.mgf is not a text file"), "{m}");
+    std::fs::remove_dir_all(&dir).unwrap();
 
     let (e, _) = load_err(&mgf("no_such_scene.mgf"));
     assert!(matches!(e, GeomError::Io { .. }), "{e:?}");
@@ -262,9 +281,9 @@ fn unknown_entities_are_ignored_with_one_warning_and_vertices_default_to_the_ori
 
 #[test]
 fn lines_the_reference_parser_passes_over_are_skipped_with_one_warning_each() {
-    // Two lines that are not entities (a vertex line without its `p`, a stray path) and a
-    // colour with y = 0: the scene is the one without them, its black material reflecting
-    // nothing.
+    // Two lines that are not entities (a vertex line without its `p`, a stray path), a
+    // colour with y = 0, faces and a hole of two vertices or none, and an `o` closing nothing:
+    // the scene is the one without them, its black material reflecting nothing.
     let lenient = load(&mgf("lenient.mgf"));
     let clean = load(&mgf("lenient_clean.mgf"));
     assert!(clean.warnings.is_empty(), "{:?}", clean.warnings);
@@ -277,11 +296,15 @@ fn lines_the_reference_parser_passes_over_are_skipped_with_one_warning_each() {
         assert_eq!(ma.reflectivity, mb.reflectivity);
     }
     let w = &lenient.warnings;
-    assert_eq!(w.len(), 2, "{w:?}");
+    assert_eq!(w.len(), 4, "{w:?}");
     assert!(w[0].contains("skipped 2 lines whose first word is not an entity name (the first at "), "{w:?}");
-    assert!(w[0].ends_with("lenient.mgf:12), as MGF's reference parser does"), "{w:?}");
+    assert!(w[0].ends_with("lenient.mgf:13), as MGF's reference parser does"), "{w:?}");
     assert!(w[1].contains("took 1 chromaticity with y ≤ 0 as black (the first at "), "{w:?}");
-    assert!(w[1].ends_with("lenient.mgf:6), as RenderPark does"), "{w:?}");
+    assert!(w[1].ends_with("lenient.mgf:7), as RenderPark does"), "{w:?}");
+    assert!(w[2].contains("skipped 4 faces or holes with fewer than 3 vertices (the first at "), "{w:?}");
+    assert!(w[2].ends_with("lenient.mgf:27), as RenderPark does"), "{w:?}");
+    assert!(w[3].contains("ignored 1 'o' line closing an object when none is open (the first at "), "{w:?}");
+    assert!(w[3].ends_with("lenient.mgf:28), since it changes no geometry"), "{w:?}");
     // A negative x is still no chromaticity: an error of one sentence naming the line.
     let dir = std::env::temp_dir().join(format!("radiosity-mgf-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

@@ -54,16 +54,28 @@
 //! - **Chromaticities with `y ≤ 0`** (`cxy 0.4 0`) are taken as black, as RenderPark does
 //!   ("invalid color specification (Y<=0) … setting to black"): one warning counts them and
 //!   names the first.
+//! - **Faces and holes with fewer than three vertices** enclose nothing and are skipped, as
+//!   RenderPark's reader does ("too few vertices in face", and it goes on): one warning counts
+//!   them and names the first. Their vertices must still be defined.
+//! - **An `o` closing no object** changes no geometry and is ignored with one warning (both
+//!   readers stop there).
 //! - **Vertices** without `p` are at the origin, the default vertex (`v id =`, MGF 2.0).
 //!
-//! Everything else is an error of one sentence naming the file and line: wrong arguments, an
-//! undefined vertex, material or colour, a face with fewer than three vertices, a bare `xf`
-//! with nothing to end, an include that cannot be read; and a file with no usable face.
+//! Everything else is an error of one sentence naming the file and line, as it is for the
+//! reference parser: wrong arguments or numbers out of range, an undefined vertex, material or
+//! colour, a bare `xf` with nothing to end, an include that cannot be read; and a file with no
+//! usable face, or one holding binary data (a NUL byte, or bytes that are not UTF-8).
 //!
 //! ## References
 //!
 //! - G. Ward, *The Materials and Geometry Format*, version 2.0, Lawrence Berkeley National
 //!   Laboratory (the entity pages `v.html`, `f.html` and `notes.html` of the specification).
+//! - The reference parser, `mgf_parser.c` and `mgf_context.c` in Radiance's `src/common/`
+//!   (NREL/Radiance): unknown entities go to `mg_uhand`, which warns once and goes on; bad
+//!   counts, numbers and undefined names stop the parse.
+//! - RenderPark's reader, `src/io/mgf/readmgf.cpp` in rpkCpp (OscarChavarro/rpkCpp): the
+//!   warnings it prints and goes on after (unknown entities, too few vertices in a face,
+//!   degenerate faces, chromaticities with `Y ≤ 0` set to black).
 
 pub mod colour;
 pub(crate) mod polygon;
@@ -106,13 +118,23 @@ pub fn load(path: &Path, params: &KeyValueParams) -> Result<LoadedScene, GeomErr
     let name = std::iter::once(path.display().to_string())
         .chain(params.given().map(|(k, v)| format!(":{k}={v}")))
         .collect::<String>();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| GeomError::Io { path: path.to_path_buf(), message: e.to_string() })?;
+    let bytes = std::fs::read(path).map_err(|e| GeomError::Io { path: path.to_path_buf(), message: e.to_string() })?;
+    let text = text_of(path, bytes)?;
     let root = Rc::new(parse(path, &text));
     let mut loader = Loader::new(path, div, name);
     loader.include_stack.push(std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf()));
     loader.run(&root, 0..root.entities.len(), 1)?;
     loader.finish(size)
+}
+
+/// The text of an MGF file; a file holding NUL bytes or bytes that are not UTF-8 is binary, not
+/// MGF, and an error naming the first such byte.
+fn text_of(path: &Path, bytes: Vec<u8>) -> Result<String, GeomError> {
+    let binary = |offset: usize| GeomError::NotText { path: path.to_path_buf(), offset };
+    if let Some(offset) = bytes.iter().position(|&b| b == 0) {
+        return Err(binary(offset));
+    }
+    String::from_utf8(bytes).map_err(|e| binary(e.utf8_error().valid_up_to()))
 }
 
 /// One entity: its first line and its words.
@@ -375,6 +397,10 @@ struct Loader {
     not_names: Skipped,
     /// Chromaticities with `y ≤ 0`, taken as black.
     black: Skipped,
+    /// Faces and holes with fewer than three vertices, which enclose no area.
+    short: Skipped,
+    /// `o` lines closing an object when none is open.
+    unmatched: Skipped,
     clamped: BTreeSet<String>,
     degenerate: usize,
     read: usize,
@@ -401,6 +427,8 @@ impl Loader {
             first_unknown: None,
             not_names: Skipped::default(),
             black: Skipped::default(),
+            short: Skipped::default(),
+            unmatched: Skipped::default(),
             clamped: BTreeSet::new(),
             degenerate: 0,
             read: 0,
@@ -509,22 +537,29 @@ impl Loader {
             }
             "o" => {
                 if words.len() == 1 {
-                    self.objects.pop();
+                    // The reference parser stops at a close with nothing open; it changes no
+                    // geometry, so it is passed over with a warning.
+                    if self.objects.pop().is_none() {
+                        self.unmatched.note(at);
+                    }
                 } else {
                     self.objects.push(words[1..].join(" "));
                 }
             }
             "i" => self.include(words, at)?,
+            // A face with fewer than three vertices encloses nothing: RenderPark's reader says
+            // "too few vertices in face" and goes on. Its vertices must still be defined.
             "f" => {
-                if words.len() < 4 {
-                    return Err(at.bad(format!("a face needs at least 3 vertices, found {}", words.len() - 1)));
-                }
                 let points = self.points(&words[1..], at)?;
-                self.emit(vec![points], at)?;
+                match points.len() {
+                    0..3 => self.short.note(at),
+                    _ => self.emit(vec![points], at)?,
+                }
             }
             "fh" => {
-                let points = self.face_with_holes(&words[1..], at)?;
-                self.emit(vec![points], at)?;
+                if let Some(points) = self.face_with_holes(&words[1..], at)? {
+                    self.emit(vec![points], at)?;
+                }
             }
             "sph" | "cyl" | "cone" | "ring" | "torus" | "prism" => {
                 let faces = self.shape(words, at)?;
@@ -555,17 +590,20 @@ impl Loader {
     }
 
     /// `fh v… - h… - h…`: the outline with each hole joined to it by a seam between their
-    /// closest vertices.
-    fn face_with_holes(&self, words: &[String], at: &At<'_>) -> Result<Vec<Vec3>, GeomError> {
-        let mut loops = words.split(|w| w == "-");
-        let mut outline = self.points(loops.next().unwrap_or_default(), at)?;
+    /// closest vertices; `None` when the outline has fewer than three vertices. A hole with
+    /// fewer than three vertices cuts nothing and is left out. Both are counted in `short`.
+    fn face_with_holes(&mut self, words: &[String], at: &At<'_>) -> Result<Option<Vec<Vec3>>, GeomError> {
+        let loops: Vec<&[String]> = words.split(|w| w == "-").collect();
+        let mut outline = self.points(loops[0], at)?;
+        let holes = loops[1..].iter().map(|h| self.points(h, at)).collect::<Result<Vec<_>, _>>()?;
         if outline.len() < 3 {
-            return Err(at.bad(format!("a face needs at least 3 vertices, found {}", outline.len())));
+            self.short.note(at);
+            return Ok(None);
         }
-        for hole in loops {
-            let hole = self.points(hole, at)?;
+        for hole in holes {
             if hole.len() < 3 {
-                return Err(at.bad(format!("a hole needs at least 3 vertices, found {}", hole.len())));
+                self.short.note(at);
+                continue;
             }
             let (mut best, mut oi, mut hi) = (Real::INFINITY, 0, 0);
             for (i, o) in outline.iter().enumerate() {
@@ -581,7 +619,7 @@ impl Loader {
             joined.extend_from_slice(&outline[oi..]);
             outline = joined;
         }
-        Ok(outline)
+        Ok(Some(outline))
     }
 
     fn shape(&self, words: &[String], at: &At<'_>) -> Result<Vec<Vec<Vec3>>, GeomError> {
@@ -706,7 +744,8 @@ impl Loader {
         let source = match self.sources.get(&canonical) {
             Some(s) => Rc::clone(s),
             None => {
-                let text = std::fs::read_to_string(&include).map_err(|e| missing(e.to_string()))?;
+                let bytes = std::fs::read(&include).map_err(|e| missing(e.to_string()))?;
+                let text = text_of(&include, bytes)?;
                 let s = Rc::new(parse(&include, &text));
                 self.sources.insert(canonical.clone(), Rc::clone(&s));
                 s
@@ -745,10 +784,8 @@ impl Loader {
             } else {
                 "; it has no faces".to_string()
             };
-            if let Some(first) = &self.not_names.first {
-                let n = self.not_names.count;
-                let lines = if n == 1 { "line was".to_string() } else { format!("{n} lines were") };
-                detail += &format!(" (a {lines} skipped whose first word is not an entity name, the first at {first})");
+            for (skipped, kind) in self.skipped_kinds() {
+                detail += &format!("; {}", skipped.phrase(&kind));
             }
             return Err(GeomError::EmptyFile { path, detail });
         }
@@ -786,19 +823,8 @@ impl Loader {
                 "{file}: ignored {total} unknown entit{s} ({list}; the first at {first}), as MGF's reference parser does"
             ));
         }
-        if let Some(first) = &self.not_names.first {
-            let (n, s) = (self.not_names.count, if self.not_names.count == 1 { "" } else { "s" });
-            warnings.push(format!(
-                "{file}: skipped {n} line{s} whose first word is not an entity name (the first at {first}), as MGF's \
-                 reference parser does"
-            ));
-        }
-        if let Some(first) = &self.black.first {
-            let (n, s) = (self.black.count, if self.black.count == 1 { "" } else { "s" });
-            warnings.push(format!(
-                "{file}: took {n} chromaticit{} with y ≤ 0 as black (the first at {first}), as RenderPark does",
-                if s.is_empty() { "y" } else { "ies" }
-            ));
+        for (skipped, kind) in self.skipped_kinds() {
+            warnings.push(format!("{file}: {}, {}", skipped.phrase(&kind), kind.why));
         }
         if !self.clamped.is_empty() {
             let list = self.clamped.iter().map(|n| format!("'{n}'")).collect::<Vec<_>>().join(", ");
@@ -818,10 +844,74 @@ struct Skipped {
     first: Option<String>,
 }
 
+/// How the warning of one kind of skipped line reads.
+struct SkippedKind {
+    /// What was done, with `{n}` for the count: "skipped {n} line".
+    verb: &'static str,
+    /// The plural ending of the noun before `what`, and its singular one.
+    endings: (&'static str, &'static str),
+    /// What the lines were.
+    what: &'static str,
+    /// Why: the reader that does the same.
+    why: &'static str,
+}
+
 impl Skipped {
     fn note(&mut self, at: &At<'_>) {
         self.count += 1;
         self.first.get_or_insert_with(|| format!("{}:{}", at.path.display(), at.line));
+    }
+
+    /// "skipped 2 lines whose first word is not an entity name (the first at f.mgf:12)".
+    fn phrase(&self, kind: &SkippedKind) -> String {
+        let ending = if self.count == 1 { kind.endings.1 } else { kind.endings.0 };
+        let first = self.first.as_deref().unwrap_or_default();
+        format!("{}{ending} {} (the first at {first})", kind.verb.replace("{n}", &self.count.to_string()), kind.what)
+    }
+}
+
+impl Loader {
+    /// The kinds of line passed over that were met, each with how its warning reads.
+    fn skipped_kinds(&self) -> Vec<(&Skipped, SkippedKind)> {
+        let kinds = [
+            (
+                &self.not_names,
+                SkippedKind {
+                    verb: "skipped {n} line",
+                    endings: ("s", ""),
+                    what: "whose first word is not an entity name",
+                    why: "as MGF's reference parser does",
+                },
+            ),
+            (
+                &self.black,
+                SkippedKind {
+                    verb: "took {n} chromaticit",
+                    endings: ("ies", "y"),
+                    what: "with y ≤ 0 as black",
+                    why: "as RenderPark does",
+                },
+            ),
+            (
+                &self.short,
+                SkippedKind {
+                    verb: "skipped {n} face",
+                    endings: ("s or holes", " or hole"),
+                    what: "with fewer than 3 vertices",
+                    why: "as RenderPark does",
+                },
+            ),
+            (
+                &self.unmatched,
+                SkippedKind {
+                    verb: "ignored {n} 'o' line",
+                    endings: ("s", ""),
+                    what: "closing an object when none is open",
+                    why: "since it changes no geometry",
+                },
+            ),
+        ];
+        kinds.into_iter().filter(|(s, _)| s.count > 0).collect()
     }
 }
 

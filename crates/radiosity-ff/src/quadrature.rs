@@ -137,8 +137,14 @@ pub fn patch_rule(patch: &Patch, order: usize) -> Vec<(Vec3, Real)> {
 
 /// The smallest order up to `max_order` whose predicted relative error for a receiver of
 /// size `h` at distance `d` from the shooter is at most `tolerance` (see the module
-/// documentation), or `None` when even `max_order` is not predicted to reach it.
+/// documentation), or `None` when even `max_order` is not predicted to reach it, or when `d`
+/// is not positive.
 pub fn order_for(d: Real, h: Real, tolerance: Real, max_order: usize) -> Option<usize> {
+    // A bound at or below zero says nothing about the distance (a receiver within the reach of
+    // a long shooter); squared, it would pass for a large one.
+    if d <= 0.0 {
+        return None;
+    }
     let r = d / h;
     let mut predicted = 0.33 / (r * r);
     for q in 1..=max_order {

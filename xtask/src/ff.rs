@@ -5,6 +5,10 @@
 //! Assembling costs `n` column computations and `n²` entries of memory, so scenes of more than
 //! [`MAX_PATCHES`] patches are refused unless `--force` is given.
 //!
+//! With `--against BACKEND` nothing is assembled: the backend is built, one product `F·x`
+//! timed, and `--rows` sampled rows compared with the other backend's
+//! ([`radiosity_ff::row_comparison`]), at any scene size.
+//!
 //! With `--ff matrix…` the assembled (and, with `rebalance=true`, rebalanced) matrix is kept in
 //! the cache ([`radiosity_eval::Cache`], `target/ff-cache/` or `$RADIOSITY_CACHE_DIR`) and
 //! loaded from it next time; a file that is unreadable or has another key is reported as a
@@ -15,12 +19,14 @@ use crate::experiment::{cache, prepare};
 use anyhow::{Result, bail};
 use radiosity_eval::{ObtainedMatrix, obtain_matrix};
 use radiosity_ff::guard::MatrixFigures;
+use radiosity_ff::row_comparison::{compare_rows, sampled_rows};
 use radiosity_ff::row_diagnosis::{RowDiagnosis, worst_rows};
-use radiosity_ff::{BackendSpec, StoredMatrix};
+use radiosity_ff::{Backend, BackendSpec, StoredMatrix};
 use radiosity_geom::{Closure, PreparedScene};
 use serde::Serialize;
 use serde::ser::{SerializeSeq, Serializer};
 use std::io::Write;
+use std::time::Instant;
 
 /// Scenes with more patches are assembled only with `--force`.
 pub const MAX_PATCHES: usize = 2000;
@@ -33,7 +39,7 @@ pub struct Args {
     /// The scene: a built-in name with `:key=value` parameters, or a .gltf, .glb or .mgf path.
     #[arg(long, value_name = "SCENE")]
     scene: String,
-    /// The backend: analytic, hemicube, montecarlo or matrix, with `:key=value` parameters
+    /// The backend: analytic, hemicube, montecarlo, hierarchical or matrix, with `:key=value` parameters
     /// (for example `matrix:of=hemicube:res=64:rebalance=true`).
     #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic")]
     ff: String,
@@ -43,12 +49,23 @@ pub struct Args {
     /// Assemble the matrix even when the scene has more than 2000 patches.
     #[arg(long)]
     force: bool,
+    /// Compare the backend's rows with this backend's instead of assembling the matrix (any
+    /// scene size): row sums and relative L1 distances on `--rows` sampled rows.
+    #[arg(long, value_name = "BACKEND")]
+    against: Option<String>,
+    /// Rows sampled for `--against`.
+    #[arg(long, value_name = "N", default_value_t = 20)]
+    rows: usize,
 }
 
 /// Runs `ff`.
 pub fn run(args: &Args) -> Result<()> {
     let spec = BackendSpec::parse(&args.ff)?;
+    let against = args.against.as_deref().map(BackendSpec::parse).transpose()?;
     let prepared = prepare(&args.scene)?;
+    if let Some(reference) = against {
+        return compare(args, &prepared, &spec, &reference);
+    }
     let n = prepared.loaded.scene.len();
     if n > MAX_PATCHES && !args.force {
         bail!(
@@ -68,6 +85,57 @@ pub fn run(args: &Args) -> Result<()> {
         print!("{}", summary(&args.scene, &prepared, &spec, &obtained, &figures, &worst));
         Ok(())
     }
+}
+
+/// `ff --against`: the backend built, one product timed, and sampled rows compared.
+fn compare(args: &Args, prepared: &PreparedScene, spec: &BackendSpec, reference: &BackendSpec) -> Result<()> {
+    if args.rows == 0 {
+        bail!("--rows must be at least 1");
+    }
+    let n = prepared.scene().len();
+    let start = Instant::now();
+    let backend = Backend::columns(spec, prepared.into());
+    let built = start.elapsed().as_secs_f64();
+    let truth = Backend::columns(reference, prepared.into());
+    let mut out =
+        format!("scene        {}: {n} patches\nbackend      {} built in {built:.3} s\n", args.scene, spec.canonical());
+    if let Backend::Hierarchical(h) = &backend {
+        let f = h.figures();
+        out += &format!(
+            "hierarchy    {} nodes, {} far links, {} near links, {} shadow rays ({} links occluded), {}\n",
+            f.nodes,
+            f.far_links,
+            f.near_links,
+            f.rays,
+            f.occluded,
+            human_bytes(f.bytes)
+        );
+    }
+    let x = vec![1.0; n];
+    let mut y = vec![0.0; n];
+    let start = Instant::now();
+    let product = radiosity_core::operator::multiply(&backend, &x, 1, &mut y);
+    let how = if product.native { "natively" } else { "column by column" };
+    out += &format!("product      F·x in {:.3} s ({how})\n", start.elapsed().as_secs_f64());
+    let rows = sampled_rows(n, args.rows, 0);
+    let c = compare_rows(&backend, &truth, &rows);
+    out += &format!(
+        "against      {}: {} sampled rows (seed 0), relative L1 distance max {:.3e} mean {:.3e}, row sums differ by \
+         at most {:.3e} (a sampled estimate, not a bound)\n",
+        reference.canonical(),
+        rows.len(),
+        c.max_relative_l1,
+        c.mean_relative_l1,
+        c.max_sum_difference
+    );
+    for r in &c.rows {
+        out += &format!(
+            "   row {:>7}  sum {:.6}  reference {:.6}  relative L1 {:.3e}\n",
+            r.row, r.sum, r.reference_sum, r.relative_l1
+        );
+    }
+    print!("{out}");
+    Ok(())
 }
 
 fn areas(prepared: &PreparedScene) -> Vec<f64> {

@@ -328,9 +328,26 @@ fn ff_text_summarises_the_matrix() {
 }
 
 #[test]
+fn ff_against_compares_sampled_rows_without_assembling() {
+    // The office is refused for assembly, but any scene can be compared row by row.
+    let args =
+        ["ff", "--scene", "furnace:res=6", "--ff", "hierarchical:eps=0.05", "--against", "analytic", "--rows", "3"];
+    let out = xtask(&args).success().get_output().stdout.clone();
+    let text = String::from_utf8(out).unwrap();
+    for words in
+        ["216 patches", "hierarchical:eps=5e-2:rays=16:seed=0 built in", "far links", "natively", "3 sampled rows"]
+    {
+        assert!(text.contains(words), "missing '{words}' in\n{text}");
+    }
+    assert_eq!(text.matches("   row ").count(), 3, "{text}");
+    let e = failure(&["ff", "--scene", "furnace:res=2", "--against", "analytic", "--rows", "0"]);
+    assert!(e.contains("--rows"), "{e}");
+}
+
+#[test]
 fn ff_refuses_bad_backends_and_large_scenes() {
     let e = failure(&["ff", "--scene", "furnace:res=2", "--ff", "nonsense"]);
-    assert!(e.contains("'nonsense'") && e.contains("analytic, hemicube, montecarlo, matrix"), "{e}");
+    assert!(e.contains("'nonsense'") && e.contains("analytic, hemicube, montecarlo, hierarchical, matrix"), "{e}");
     let e = failure(&["ff", "--scene", "furnace:res=2", "--ff", "analytic:order=0"]);
     assert!(e.contains("order=0"), "{e}");
     let e = failure(&["ff", "--scene", "office"]);

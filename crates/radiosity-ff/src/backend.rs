@@ -8,6 +8,7 @@
 
 use crate::analytic::AnalyticColumns;
 use crate::hemicube::HemicubeColumns;
+use crate::hierarchical::HierarchicalColumns;
 use crate::matrix::StoredMatrix;
 use crate::montecarlo::MonteCarloColumns;
 use crate::spec::BackendSpec;
@@ -44,6 +45,8 @@ pub enum Backend<'a> {
     Hemicube(HemicubeColumns<'a>),
     /// See [`MonteCarloColumns`].
     MonteCarlo(MonteCarloColumns<'a>),
+    /// See [`HierarchicalColumns`].
+    Hierarchical(HierarchicalColumns),
     /// See [`StoredMatrix`].
     Matrix(StoredMatrix),
 }
@@ -60,6 +63,9 @@ impl<'a> Backend<'a> {
             BackendSpec::MonteCarlo(p) => {
                 Backend::MonteCarlo(MonteCarloColumns::new(input.scene, input.visibility, *p))
             }
+            BackendSpec::Hierarchical(p) => {
+                Backend::Hierarchical(HierarchicalColumns::new(input.scene, input.visibility, input.analysis, *p))
+            }
             BackendSpec::Matrix { of, .. } => Backend::columns(of, input),
         }
     }
@@ -71,15 +77,15 @@ impl<'a> Backend<'a> {
             Backend::Analytic(b) => b.clamped(),
             Backend::Hemicube(b) => b.clamped(),
             Backend::MonteCarlo(b) => b.clamped(),
-            Backend::Matrix(_) => 0,
+            Backend::Hierarchical(_) | Backend::Matrix(_) => 0,
         }
     }
 
-    /// Whether [`ColumnSource::fill_row`] gives exact rows: for the analytic backend and a
-    /// stored matrix. Hemicube and Monte Carlo columns are not reciprocal, and a row of the
-    /// matrix they assemble would need every column.
+    /// Whether [`ColumnSource::fill_row`] gives exact rows: for the analytic and hierarchical
+    /// backends and a stored matrix. Hemicube and Monte Carlo columns are not reciprocal, and
+    /// a row of the matrix they assemble would need every column.
     pub fn serves_rows(&self) -> bool {
-        matches!(self, Backend::Analytic(_) | Backend::Matrix(_))
+        matches!(self, Backend::Analytic(_) | Backend::Hierarchical(_) | Backend::Matrix(_))
     }
 
     fn source(&self) -> &dyn ColumnSource {
@@ -87,6 +93,7 @@ impl<'a> Backend<'a> {
             Backend::Analytic(b) => b,
             Backend::Hemicube(b) => b,
             Backend::MonteCarlo(b) => b,
+            Backend::Hierarchical(b) => b,
             Backend::Matrix(b) => b,
         }
     }
@@ -111,5 +118,9 @@ impl ColumnSource for Backend<'_> {
 
     fn reset_memory(&self) {
         self.source().reset_memory()
+    }
+
+    fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
+        self.source().multiply(x, channels, out)
     }
 }

@@ -1,4 +1,4 @@
-//! Backend arguments: `analytic`, `hemicube`, `montecarlo` or `matrix`, each with its own
+//! Backend arguments: `analytic`, `hemicube`, `montecarlo`, `hierarchical` or `matrix`, each with its own
 //! `:key=value` parameters, parsed into typed, validated parameter sets.
 //!
 //! `matrix` stores the full matrix of another backend, named by `of` (default `analytic`);
@@ -8,6 +8,7 @@
 pub use crate::analytic::{ANALYTIC_PARAMS, AnalyticParams};
 use crate::error::FfError;
 pub use crate::hemicube::{HEMICUBE_PARAMS, HemicubeParams};
+pub use crate::hierarchical::{HIERARCHICAL_PARAMS, HierarchicalParams};
 pub use crate::montecarlo::{MONTECARLO_PARAMS, MonteCarloParams};
 use radiosity_geom::{KeyValueParams, ParamDoc};
 
@@ -20,6 +21,8 @@ pub enum BackendSpec {
     Hemicube(HemicubeParams),
     /// Cosine-weighted rays from the shooter.
     MonteCarlo(MonteCarloParams),
+    /// Links between clusters of a tree over the patches, refined to an error threshold.
+    Hierarchical(HierarchicalParams),
     /// The full matrix of another backend, assembled once.
     Matrix {
         /// The backend whose matrix is stored.
@@ -40,7 +43,7 @@ pub const MATRIX_PARAMS: &[ParamDoc] = &[
 ];
 
 /// The backend names, in the order listed to users.
-pub const BACKENDS: &[&str] = &["analytic", "hemicube", "montecarlo", "matrix"];
+pub const BACKENDS: &[&str] = &["analytic", "hemicube", "montecarlo", "hierarchical", "matrix"];
 
 impl BackendSpec {
     /// Parses `NAME[:key=value…]`.
@@ -82,6 +85,15 @@ impl BackendSpec {
                     seed: p.seed("seed", 0)?,
                 })
             }
+            "hierarchical" => {
+                let p = KeyValueParams::parse(&owner, items.iter().copied(), HIERARCHICAL_PARAMS)?;
+                let defaults = HierarchicalParams::default();
+                BackendSpec::Hierarchical(HierarchicalParams {
+                    eps: p.real("eps", defaults.eps, |e| e > 0.0 && e <= 1.0, "a threshold in (0, 1]")?,
+                    rays: p.count("rays", defaults.rays, 1, 4096)?,
+                    seed: p.seed("seed", 0)?,
+                })
+            }
             "matrix" => {
                 let (own, inner): (Vec<&str>, Vec<&str>) =
                     items.iter().partition(|item| MATRIX_PARAMS.iter().any(|d| item.split('=').next() == Some(d.key)));
@@ -114,6 +126,7 @@ impl BackendSpec {
             }
             BackendSpec::Hemicube(p) => format!("hemicube:res={}:seed={}", p.resolution, p.seed),
             BackendSpec::MonteCarlo(p) => format!("montecarlo:rays={}:seed={}", p.rays, p.seed),
+            BackendSpec::Hierarchical(p) => format!("hierarchical:eps={:e}:rays={}:seed={}", p.eps, p.rays, p.seed),
             BackendSpec::Matrix { of, rebalance } => {
                 let inner = of.canonical();
                 let (name, rest) = inner.split_once(':').unwrap_or((&inner, ""));

@@ -35,7 +35,7 @@ enum Kind<'a> {
 
 impl<'a> ColumnRays<'a> {
     /// The rays of the backend `spec` names, on `input`; `None` for `matrix`, which traces
-    /// nothing once stored.
+    /// nothing once stored, and for `hierarchical`, whose rays are traced once, when it is built.
     pub fn new(spec: &BackendSpec, input: FormFactorInput<'a>) -> Option<ColumnRays<'a>> {
         let kind = match spec {
             BackendSpec::Analytic(p) => {
@@ -43,7 +43,7 @@ impl<'a> ColumnRays<'a> {
             }
             BackendSpec::Hemicube(p) => Kind::Hemicube(HemicubeColumns::new(input.scene, input.visibility, *p)),
             BackendSpec::MonteCarlo(p) => Kind::MonteCarlo { scene: input.scene, params: *p },
-            BackendSpec::Matrix { .. } => return None,
+            BackendSpec::Matrix { .. } | BackendSpec::Hierarchical(_) => return None,
         };
         Some(ColumnRays { kind })
     }

@@ -5,6 +5,7 @@ mod allocation;
 mod analytic;
 mod closed_forms;
 mod hemicube;
+mod hierarchical;
 mod matrix;
 mod montecarlo;
 mod pair_visibility;

@@ -1,0 +1,204 @@
+//! The cluster tree of the hierarchical operator: a binary tree over the scene's patches, each
+//! node with a bounding sphere, a cone bounding its patches' normals and its area.
+//!
+//! Nodes holding patches of more than one orientation class (the normal's largest component
+//! and its sign) are first split between classes, at the class boundary nearest the middle;
+//! below, nodes are split at the median centroid along the longest side of their centroids'
+//! box, so the tree is balanced and the same whatever the thread count: ties are broken by
+//! patch index. Nodes are stored in pre-order, so a parent comes before its children
+//! (a pass forward pushes down, a pass backward gathers up), and the patches of a node are a
+//! contiguous range of [`ClusterTree::order`].
+
+use radiosity_core::{Real, Scene, Vec3};
+use std::f64::consts::PI;
+
+/// A node: the patches `order[first .. first + count]`.
+#[derive(Clone, Debug)]
+pub(crate) struct Node {
+    /// The centre of the bounding sphere of the patches' vertices.
+    pub centre: Vec3,
+    /// Its radius.
+    pub radius: Real,
+    /// The axis of the cone of the patches' normals (unit).
+    pub axis: Vec3,
+    /// The cone's half-angle in radians (π when the normals point every way).
+    pub spread: Real,
+    /// The patches' total area.
+    pub area: Real,
+    /// The lower corner of the box of the patches' vertices.
+    pub lo: Vec3,
+    /// Its upper corner.
+    pub hi: Vec3,
+    /// The smallest and largest `axis · v` over the vertices: the planes of the patches lie
+    /// between them when they all face along `axis` (`spread` 0).
+    pub offsets: (Real, Real),
+    /// The first patch, in tree order.
+    pub first: u32,
+    /// How many patches.
+    pub count: u32,
+    /// The two children, or none for a leaf (one patch).
+    pub children: Option<[u32; 2]>,
+}
+
+impl Node {
+    /// True for a leaf: one patch.
+    pub fn is_leaf(&self) -> bool {
+        self.children.is_none()
+    }
+
+    /// The smallest `n · d` over the normals of the node's patches, bounded through the cone:
+    /// `cos(min(π, ∠(axis, d) + spread))`.
+    pub fn min_cos(&self, d: Vec3) -> Real {
+        let angle = self.axis.dot(d).clamp(-1.0, 1.0).acos();
+        (angle + self.spread).min(PI).cos()
+    }
+}
+
+/// The tree over a scene's patches.
+#[derive(Clone, Debug)]
+pub(crate) struct ClusterTree {
+    /// The nodes, in pre-order; the root is node 0.
+    pub nodes: Vec<Node>,
+    /// The patches in tree order: the leaves of each node are a contiguous range.
+    pub order: Vec<u32>,
+    /// The leaf node of every patch.
+    pub leaf: Vec<u32>,
+}
+
+impl ClusterTree {
+    /// Builds the tree over every patch of `scene` (at least one).
+    pub fn new(scene: &Scene) -> ClusterTree {
+        let n = scene.len();
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        let mut tree = ClusterTree { nodes: Vec::with_capacity(2 * n), order: Vec::new(), leaf: vec![0; n] };
+        let centroids: Vec<Vec3> = scene.patches().iter().map(|p| p.centroid()).collect();
+        tree.split(scene, &centroids, &mut order, 0);
+        tree.order = order;
+        for (k, node) in tree.nodes.iter().enumerate() {
+            if node.is_leaf() {
+                tree.leaf[tree.order[node.first as usize] as usize] = k as u32;
+            }
+        }
+        tree
+    }
+
+    /// Adds the node over `patches` (which start at `first` in tree order) and its subtree;
+    /// returns its index.
+    fn split(&mut self, scene: &Scene, centroids: &[Vec3], patches: &mut [u32], first: usize) -> u32 {
+        let index = self.nodes.len() as u32;
+        self.nodes.push(bounds(scene, patches, first));
+        if patches.len() > 1 && !one_class(scene, patches) {
+            // Patches facing different ways first: clusters that face one way can link far
+            // more often (every cosine of a far link must be non-negative).
+            patches.sort_unstable_by_key(|&i| (class(scene, i), i));
+            let boundaries = (1..patches.len()).filter(|&k| class(scene, patches[k - 1]) != class(scene, patches[k]));
+            let mid = boundaries.min_by_key(|&k| k.abs_diff(patches.len() / 2)).unwrap();
+            let (left, right) = patches.split_at_mut(mid);
+            let a = self.split(scene, centroids, left, first);
+            let b = self.split(scene, centroids, right, first + mid);
+            self.nodes[index as usize].children = Some([a, b]);
+        } else if patches.len() > 1 {
+            let (lo, hi) = patches.iter().fold((Vec3::splat(Real::INFINITY), Vec3::splat(-Real::INFINITY)), |b, &i| {
+                (b.0.min(centroids[i as usize]), b.1.max(centroids[i as usize]))
+            });
+            let side = hi - lo;
+            let axis = if side.x >= side.y && side.x >= side.z {
+                0
+            } else if side.y >= side.z {
+                1
+            } else {
+                2
+            };
+            let mid = patches.len() / 2;
+            patches.select_nth_unstable_by(mid, |&a, &b| {
+                centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis]).then(a.cmp(&b))
+            });
+            let (left, right) = patches.split_at_mut(mid);
+            let a = self.split(scene, centroids, left, first);
+            let b = self.split(scene, centroids, right, first + mid);
+            self.nodes[index as usize].children = Some([a, b]);
+        }
+        index
+    }
+
+    /// The patches of node `k`, in tree order.
+    pub fn patches_of(&self, k: u32) -> &[u32] {
+        let node = &self.nodes[k as usize];
+        &self.order[node.first as usize..(node.first + node.count) as usize]
+    }
+}
+
+/// The class of a patch's orientation: its normal's largest component, and that component's
+/// sign (six classes).
+fn class(scene: &Scene, i: u32) -> u8 {
+    let n = scene.patches()[i as usize].normal();
+    let a = n.abs();
+    let axis = if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    };
+    2 * axis + u8::from(n[axis as usize] < 0.0)
+}
+
+/// True when every patch of `patches` has the class of the first.
+fn one_class(scene: &Scene, patches: &[u32]) -> bool {
+    let first = class(scene, patches[0]);
+    patches.iter().all(|&i| class(scene, i) == first)
+}
+
+/// A node over `patches` without children yet.
+fn bounds(scene: &Scene, patches: &[u32], first: usize) -> Node {
+    let all = scene.patches();
+    let (mut lo, mut hi) = (Vec3::splat(Real::INFINITY), Vec3::splat(-Real::INFINITY));
+    let (mut area, mut normal) = (0.0, Vec3::ZERO);
+    for &i in patches {
+        let p = &all[i as usize];
+        for v in p.vertices() {
+            lo = lo.min(*v);
+            hi = hi.max(*v);
+        }
+        area += p.area();
+        normal += p.area() * p.normal();
+    }
+    let centre = 0.5 * (lo + hi);
+    let radius = patches
+        .iter()
+        .flat_map(|&i| all[i as usize].vertices().iter())
+        .map(|v| (*v - centre).length())
+        .fold(0.0, Real::max);
+    let length = normal.length();
+    let (axis, spread) = if length > 1e-9 * area {
+        let axis = normal / length;
+        // The angle as atan2(|a × b|, a · b): exact near 0, where acos is not.
+        let spread = patches
+            .iter()
+            .map(|&i| {
+                let n = all[i as usize].normal();
+                n.cross(axis).length().atan2(n.dot(axis))
+            })
+            .fold(0.0, Real::max);
+        (axis, spread)
+    } else {
+        (Vec3::Z, PI)
+    };
+    let offsets = patches
+        .iter()
+        .flat_map(|&i| all[i as usize].vertices().iter())
+        .fold((Real::INFINITY, -Real::INFINITY), |(a, b), v| (a.min(axis.dot(*v)), b.max(axis.dot(*v))));
+    Node {
+        centre,
+        radius,
+        axis,
+        spread,
+        area,
+        lo,
+        hi,
+        offsets,
+        first: first as u32,
+        count: patches.len() as u32,
+        children: None,
+    }
+}

@@ -32,7 +32,6 @@
 //! Like the probes, this samples where overlaps are looked for: two patches overlapping only
 //! between probe points of both are not found.
 
-use crate::hidden::PartialContact;
 use glam::DVec2;
 use radiosity_core::{Patch, Real, Scene, Vec3};
 use serde::Serialize;
@@ -96,20 +95,20 @@ impl ResolvedOverlaps {
 /// What becomes of the patches involved: `None` to leave one out, or the pieces replacing it.
 pub type Replacements = BTreeMap<usize, Option<Vec<Patch>>>;
 
-/// Resolves the overlaps among the patches of `scene` that `overlapping` names (found by the
-/// probes), ignoring patches marked in `hidden`: what was done, and the replacements.
-pub fn resolve(scene: &Scene, overlapping: &[PartialContact], hidden: &[bool]) -> (ResolvedOverlaps, Replacements) {
+/// Resolves the overlaps among the patches of `scene` reachable from the `flagged` ones (those
+/// the probes found overlapping, and what they overlap), ignoring patches marked in `hidden`:
+/// what was done, and the replacements.
+pub fn resolve(scene: &Scene, flagged: &[usize], hidden: &[bool]) -> (ResolvedOverlaps, Replacements) {
     let mut resolved = ResolvedOverlaps::default();
     let mut replacements = Replacements::new();
-    if overlapping.is_empty() {
+    if flagged.is_empty() {
         return (resolved, replacements);
     }
     let gap = PLANE_GAP * scene.diagonal();
     let planes = PlaneIndex::new(scene, hidden, gap);
     // The overlap graph reachable from the flagged patches.
     let mut partners: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
-    let mut queue: Vec<usize> = overlapping.iter().flat_map(|c| [Some(c.patch), c.other]).flatten().collect();
-    queue.retain(|&i| !hidden[i]);
+    let mut queue: Vec<usize> = flagged.iter().copied().filter(|&i| !hidden[i]).collect();
     queue.sort_unstable();
     queue.dedup();
     let mut seen: BTreeSet<usize> = queue.iter().copied().collect();

@@ -70,7 +70,8 @@ impl PreparedScene {
         for h in &hidden.hidden {
             is_hidden[h.patch] = true;
         }
-        let (resolved, replacements) = coplanar::resolve(&loaded.scene, &hidden.overlapping, &is_hidden);
+        let flagged: Vec<usize> = hidden.overlapping.iter().flat_map(|c| [Some(c.patch), c.other]).flatten().collect();
+        let (resolved, replacements) = coplanar::resolve(&loaded.scene, &flagged, &is_hidden);
         // Every overlap the probes flagged is now resolved, or was found to have no area.
         hidden.overlapping.clear();
         let mut analysis_seconds = start.elapsed().as_secs_f64();

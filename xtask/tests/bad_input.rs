@@ -215,8 +215,11 @@ fn bad_stop_rules_are_refused() {
 #[test]
 fn bad_backends_are_refused() {
     // (backend, words of the sentence)
-    let cases: [(&str, &[&str]); 10] = [
-        ("radiance", &["unknown form-factor backend 'radiance'", "analytic, hemicube, montecarlo, matrix"]),
+    let cases: [(&str, &[&str]); 12] = [
+        (
+            "radiance",
+            &["unknown form-factor backend 'radiance'", "analytic, hemicube, montecarlo, hierarchical, matrix"],
+        ),
         ("analytic:rays=0", &["backend 'analytic'", "rays=0", "from 1 to"]),
         ("analytic:order=0", &["backend 'analytic'", "order=0", "from 1 to 32"]),
         ("analytic:tol=2", &["backend 'analytic'", "tol=2", "(0, 1]"]),
@@ -224,6 +227,8 @@ fn bad_backends_are_refused() {
         ("hemicube:res=3", &["backend 'hemicube'", "res=3", "even"]),
         ("hemicube:res=0", &["backend 'hemicube'", "res=0", "from 2 to 4096"]),
         ("montecarlo:rays=0", &["backend 'montecarlo'", "rays=0", "from 1 to"]),
+        ("hierarchical:eps=0", &["backend 'hierarchical'", "eps=0", "(0, 1]"]),
+        ("hierarchical:rays=0", &["backend 'hierarchical'", "rays=0", "from 1 to 4096"]),
         ("analytic:bogus=1", &["backend 'analytic'", "no parameter 'bogus'", "order, tol, rays, budget, seed"]),
         ("matrix:rebalance=maybe", &["backend 'matrix'", "rebalance=maybe", "true or false"]),
     ];

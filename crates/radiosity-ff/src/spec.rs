@@ -100,8 +100,7 @@ impl BackendSpec {
                 let p = KeyValueParams::parse(&owner, own.iter().copied(), MATRIX_PARAMS)?;
                 let of = own.iter().find_map(|i| i.strip_prefix("of=")).unwrap_or("analytic");
                 if of == "matrix" {
-                    let expected =
-                        "analytic, hemicube or montecarlo: a stored matrix is assembled from a column backend";
+                    let expected = "analytic, hemicube, montecarlo or hierarchical: a stored matrix is assembled from a column backend";
                     return Err(p.reject("of", expected).into());
                 }
                 BackendSpec::Matrix {

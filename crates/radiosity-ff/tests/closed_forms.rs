@@ -144,7 +144,8 @@ fn bad_backend_arguments_are_clear_errors() {
     let err = |arg: &str| BackendSpec::parse(arg).unwrap_err().to_string();
     let e = err("radiance");
     assert!(
-        e.contains("unknown form-factor backend 'radiance'") && e.contains("analytic, hemicube, montecarlo, matrix"),
+        e.contains("unknown form-factor backend 'radiance'")
+            && e.contains("analytic, hemicube, montecarlo, hierarchical, matrix"),
         "{e}"
     );
     let e = err("analytic:order=0");
@@ -159,6 +160,7 @@ fn bad_backend_arguments_are_clear_errors() {
     assert!(e.contains("matrix"), "{e}");
     let e = err("matrix:of=hemicube:order=3");
     assert!(e.contains("form-factor backend 'hemicube'") && e.contains("no parameter 'order'"), "{e}");
+    assert_eq!(BackendSpec::parse("hierarchical").unwrap().canonical(), "hierarchical:eps=1e-3:rays=16:seed=0");
     assert_eq!(
         BackendSpec::parse("matrix:of=hemicube:res=64").unwrap().canonical(),
         "matrix:of=hemicube:rebalance=false:res=64:seed=0"

@@ -6,12 +6,15 @@
 //!   (bounded through the normal cones and the spheres), or when its shadow rays all meet
 //!   something: no light passes, exactly or as far as the rays tell;
 //! - **far**: the spheres are apart, every patch of `A` faces the centre-to-centre direction `d`
-//!   and every patch of `B` faces `−d`, and the error estimate is within `eps`. Then
-//!   `F_ij = g · A_j · (n_j · (−d)) · (n_i · d)` for `i ∈ A`, `j ∈ B` (and the same with the
-//!   roles swapped), with `g = V / (π r²)`, `r` the distance between the centres and `V` the
-//!   fraction of `rays` segments between area-sampled points of both that are clear. The
-//!   cosines are both non-negative, so every entry is, and `A_i F_ij = A_j F_ji` holds by
-//!   construction (one `g`, one `d`);
+//!   and every patch of `B` faces `−d` (cosines bounded below by `α`, `β` through the cones),
+//!   `αβ (1 − 2ρ) ≥ ρ (α + β)` with `ρ = (R_A + R_B) / r`, and the error estimate is within
+//!   `eps`. Then `F_ij = A_j · g · κ_ij` for `i`, `j` on either side, with `g = V / (π r²)`, `r`
+//!   the distance between the centres, `V` the fraction of `rays` segments between
+//!   area-sampled points of both that are clear, and `κ` the kernel's cosines and `r²/|y − x|²`
+//!   to first order about the centres (the module root's `kernel_factor`). `κ` is symmetric
+//!   in the two ends, so `A_i F_ij = A_j F_ji` holds by construction, and its first-order
+//!   terms are at most `ρ (2αβ + α + β)` against `αβ`, so the condition above keeps every
+//!   entry non-negative;
 //! - **near**: both are single patches and the link is not far: the analytic backend's entry
 //!   ([`AnalyticColumns::pair`]), stored as `A_i F_ij`;
 //! - otherwise **split**: the larger node (by radius) that can be split is replaced by its
@@ -19,12 +22,13 @@
 //!   `eps`: it is subdivided rather than trusted.
 //!
 //! The error estimate of a far link bounds what it adds to one row of `F`,
-//! `max(A_A, A_B) / (π r²)`, times the relative variation of the kernel over the link:
-//! `2 (R_A + R_B) / r` for the distance and `2 asin((R_A + R_B) / r)` for the directions
-//! (Hanrahan, Salzman & Aupperle 1991, "A rapid hierarchical radiosity algorithm", SIGGRAPH;
-//! Sillion 1995, "A unified hierarchical algorithm for global illumination with scattering
-//! volumes and object clusters", IEEE TVCG 1(3)). This is a geometric oracle; one weighted by
-//! the radiosity `B` (Hanrahan's BF refinement) is the next step.
+//! `max(A_A, A_B) / (π r²)`, times the second-order variation of the kernel over the link,
+//! `(2 (ρ + asin ρ))²`: the first-order terms are in `κ` (Hanrahan, Salzman & Aupperle 1991,
+//! "A rapid hierarchical radiosity algorithm", SIGGRAPH; Sillion 1995, "A unified hierarchical
+//! algorithm for global illumination with scattering volumes and object clusters", IEEE TVCG
+//! 1(3)). This is a geometric oracle; one weighted by the radiosity `B` (Hanrahan's BF
+//! refinement) is the next step. The visible fraction of a far link comes from `rays`
+//! segments, which limits the operator's accuracy where links are partly occluded.
 
 use super::tree::ClusterTree;
 use crate::analytic::AnalyticColumns;
@@ -43,6 +47,8 @@ pub(crate) struct FarLink {
     pub b: u32,
     /// The unit direction from `a`'s centre to `b`'s.
     pub d: Vec3,
+    /// The distance between the centres.
+    pub r: Real,
     /// `V / (π r²)`.
     pub g: Real,
 }
@@ -82,7 +88,6 @@ impl Links {
 struct Sampled {
     count: usize,
     clear: usize,
-    g: Real,
 }
 
 /// What refinement reads.
@@ -175,18 +180,22 @@ impl Refiner<'_> {
             return;
         }
         let (leaf_a, leaf_b) = (na.is_leaf(), nb.is_leaf());
-        if r > reach && na.min_cos(d) >= 0.0 && nb.min_cos(-d) >= 0.0 {
+        let (alpha, beta, rho) = (na.min_cos(d), nb.min_cos(-d), reach / r);
+        // The kernel to first order stays non-negative for every pair of the link: its
+        // first-order terms are at most ρ (2αβ + α + β) against αβ.
+        if r > reach && alpha > 0.0 && beta > 0.0 && alpha * beta * (1.0 - 2.0 * rho) >= rho * (alpha + beta) {
             let bound = na.area.max(nb.area) / (PI * r * r);
-            let error = bound * 2.0 * (reach / r + spread);
+            let error = bound * (2.0 * (rho + spread)).powi(2);
             if error <= self.eps {
-                let sampled = self.sample(a, b, d, out);
+                let sampled = self.sample(a, b, out);
                 if sampled.clear == 0 {
                     out.occluded += 1;
                     return;
                 }
                 // Partly visible links are split while their transfer could exceed eps.
                 if sampled.clear == sampled.count || bound <= self.eps || (leaf_a && leaf_b) {
-                    out.far.push(FarLink { a, b, d, g: sampled.g });
+                    let visible = sampled.clear as Real / sampled.count as Real;
+                    out.far.push(FarLink { a, b, d, r, g: visible / (PI * r * r) });
                     return;
                 }
             }
@@ -246,40 +255,24 @@ impl Refiner<'_> {
     }
 
     /// `rays` segments between points of `a` and `b` drawn by area (stratified), each traced
-    /// when the scene can occlude; the stream is keyed by the pair. `g` is the ratio estimate
-    /// `Σ K(x, y) v(x, y) / Σ (n_x · d)(n_y · (−d))` over the segments, with `K` the kernel
-    /// `cos θ_x cos θ_y / (π r²)` and `v` the segment's visibility: the link then carries the
-    /// transfer of the sampled pairs in all, and only its split between the patches follows
-    /// the central direction `d`.
-    fn sample(&self, a: u32, b: u32, d: Vec3, out: &mut Links) -> Sampled {
+    /// when the scene can occlude (all clear otherwise); the stream is keyed by the pair.
+    fn sample(&self, a: u32, b: u32, out: &mut Links) -> Sampled {
+        let k = self.rays.max(1);
+        let Some(visibility) = self.visibility else { return Sampled { count: k, clear: k } };
         let key = ((a.min(b) as u64) << 32) | a.max(b) as u64;
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(key ^ self.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15));
-        let k = self.rays.max(1);
-        let (mut clear, mut kernel, mut central) = (0, 0.0, 0.0);
+        let mut clear = 0;
         for s in 0..k {
             let u = (s as Real + rng.random::<Real>()) / k as Real;
             let v = (((s * 7 + 3) % k) as Real + rng.random::<Real>()) / k as Real;
             let (x, i) = self.point_in(a, u, &mut rng);
             let (y, j) = self.point_in(b, v, &mut rng);
-            let (ni, nj) = (self.scene.patches()[i].normal(), self.scene.patches()[j].normal());
-            central += ni.dot(d).max(0.0) * nj.dot(-d).max(0.0);
-            let visible = match self.visibility {
-                Some(visibility) => {
-                    out.rays += 1;
-                    visibility.unoccluded_between(x, i, y, j)
-                }
-                None => true,
-            };
-            if visible {
+            if visibility.unoccluded_between(x, i, y, j) {
                 clear += 1;
-                let between = y - x;
-                let r2 = between.length_squared();
-                let w = between / r2.sqrt();
-                kernel += ni.dot(w).max(0.0) * nj.dot(-w).max(0.0) / (PI * r2);
             }
         }
-        let g = if central > 0.0 { kernel / central } else { 0.0 };
-        Sampled { count: k, clear, g }
+        out.rays += k as u64;
+        Sampled { count: k, clear }
     }
 
     /// The point of node `k` at the fraction `u` of its area, and its patch.

@@ -4,30 +4,33 @@
 //!
 //! ## What it stores
 //!
-//! A [cluster tree](tree) over the patches (leaves are patches: this is an operator on the
-//! scene's mesh, not a remeshing) and [links](links) refined from the root's link with itself,
+//! A cluster tree (`tree`) over the patches (leaves are patches: this is an operator on the
+//! scene's mesh, not a remeshing) and links (`links`) refined from the root's link with itself,
 //! every pair of patches covered by exactly one link or by none:
 //!
-//! - a **far** link between nodes `A` and `B` gives `F_ij = g · A_j · cos_j · cos_i` for every
-//!   `i` in one and `j` in the other, with one direction `d` between their centres for both
-//!   cosines (`cos_i = n_i · d`, `cos_j = n_j · (−d)` for `i ∈ A`) and `g = V / (π r²)`;
+//! - a **far** link between nodes `A` and `B` gives `F_ij = A_j · g · κ_ij` for every `i` in
+//!   one and `j` in the other, with `g = V / (π r²)` between the centres and `κ` the kernel
+//!   `cos θ_i cos θ_j r² / |y − x|²` to first order in the patches' offsets from the centres
+//!   (`kernel_factor`);
 //! - a **near** link between two patches stores the analytic backend's `A_i F_ij`.
 //!
-//! So `A_i F_ij = A_j F_ji` holds by construction (up to rounding), and every entry is
-//! non-negative: far links are made only where every cosine is. A row sums to 1 only
-//! approximately: the far links' kernel is the one between the centres, and `eps` bounds its
-//! error per link.
+//! So `A_i F_ij = A_j F_ji` holds by construction (up to rounding: `κ` is symmetric in the two
+//! ends), and every entry is non-negative: far links are made only where the first-order terms
+//! cannot outweigh the product of the cosines. A row sums to 1 only approximately: `eps`
+//! bounds the second-order error of each far link, and `V` is sampled.
 //!
 //! ## Products and columns
 //!
-//! With the clamp of the cosines inactive on every far link, a far link's transfer is bilinear
-//! in the normals: `Σ_{j∈B} A_j x_j cos_j = −d · M_B` with the moment `M_B = Σ_{j∈B} A_j x_j n_j`.
-//! A product gathers the moments up the tree, adds `d g (−d · M_B)` to a vector `R_A` per link
-//! end, pushes the `R` down and ends with `y_i = n_i · R_leaf(i)`, plus the near links:
-//! `O(links + n)`. A column `j` pushes the links of `j`'s ancestors into the patches of their
-//! other ends; each entry comes from exactly one link, so a row (`F_ij` for every `j`, through
-//! `i`'s ancestors) holds bit for bit the entries the columns hold.
-//!
+//! `κ` is bilinear in a sender's normal `m` and offset `b`, so a far link's transfer needs only
+//! the sender's moments `M0 = Σ A_j x_j m_j` and `M1 = Σ A_j x_j m_j b_jᵀ`, and gives the
+//! receiver a linear form `n · V + nᵀ W a` of a patch's normal and offset. A product gathers
+//! the moments up the tree (shifting `M1` by `M0 δᵀ` to a parent's centre), adds each link's
+//! form at both ends, pushes the forms down (shifting `V` by `W δ`) and evaluates them at the
+//! leaves, plus the near links: `O(links + n)`. A column `j` evaluates the links of `j`'s
+//! ancestors at the patches of their other ends; each entry comes from exactly one link, so a
+//! row (`F_ij` for every `j`, through `i`'s ancestors) holds bit for bit the entries the
+//! columns hold.
+
 //! ## References
 //!
 //! - P. Hanrahan, D. Salzman, L. Aupperle, "A rapid hierarchical radiosity algorithm",
@@ -105,6 +108,7 @@ pub struct HierarchicalColumns {
     near_at: Vec<u32>,
     areas: Vec<Real>,
     normals: Vec<Vec3>,
+    centroids: Vec<Vec3>,
     figures: HierarchyFigures,
 }
 
@@ -171,6 +175,7 @@ impl HierarchicalColumns {
             near_at,
             areas: scene.patches().iter().map(|p| p.area()).collect(),
             normals: scene.patches().iter().map(|p| p.normal()).collect(),
+            centroids: scene.patches().iter().map(|p| p.centroid()).collect(),
             tree,
             figures,
         }
@@ -190,36 +195,52 @@ impl HierarchicalColumns {
         }
     }
 
-    /// `F_ij` for every `i` (`towards_i = false`: a column) or every `j` (`true`: a row), for
-    /// the patch `p` that is `j` or `i` respectively. Each entry is
-    /// `(g · (A_j · cos_j)) · cos_i`, computed the same way either way.
+    /// `F_ij` for every `i` (`row = false`: a column) or every `j` (`row = true`: a row), for
+    /// the patch `p` that is `j` or `i` respectively. A far entry is `A_j · g · κ` with `κ` the
+    /// link's kernel factor evaluated with the link's own orientation ([`kernel_factor`]), so a
+    /// row and a column compute each entry the same way.
     fn fill_line(&self, p: usize, line: &mut [Real], row: bool) {
         line.fill(0.0);
-        let (np, ap) = (self.normals[p], self.areas[p]);
         self.ancestors(p, |k| {
             for &l in &self.far_at[self.far_start[k as usize] as usize..self.far_start[k as usize + 1] as usize] {
                 let link = &self.far[l as usize];
-                // The direction from p's side to the other side.
-                let (other, d) = if link.a == k { (link.b, link.d) } else { (link.a, -link.d) };
-                let cos_p = np.dot(d);
+                let (ca, cb) = (self.tree.nodes[link.a as usize].centre, self.tree.nodes[link.b as usize].centre);
+                let other = if link.a == k { link.b } else { link.a };
                 for &q in self.tree.patches_of(other) {
                     let q = q as usize;
-                    let cos_q = self.normals[q].dot(-d);
-                    line[q] = match row {
-                        // F_pq: j = q.
-                        true => (link.g * (self.areas[q] * cos_q)) * cos_p,
-                        // F_qp: j = p.
-                        false => (link.g * (ap * cos_p)) * cos_q,
-                    };
+                    // The pair in the link's orientation: `x` on `a`'s side, `y` on `b`'s.
+                    let (x, y) = if link.a == k { (p, q) } else { (q, p) };
+                    let kappa = kernel_factor(
+                        link,
+                        (self.normals[x], self.centroids[x] - ca),
+                        (self.normals[y], self.centroids[y] - cb),
+                    );
+                    // F_iq or F_qi: the area is the sender's.
+                    let sender = if row { q } else { p };
+                    line[q] = self.areas[sender] * (link.g * kappa);
                 }
             }
         });
         for &l in &self.near_at[self.near_start[p] as usize..self.near_start[p + 1] as usize] {
             let link = &self.near[l as usize];
             let q = if link.i as usize == p { link.j } else { link.i } as usize;
-            line[q] = link.transfer / if row { ap } else { self.areas[q] };
+            line[q] = link.transfer / if row { self.areas[p] } else { self.areas[q] };
         }
     }
+}
+
+/// The kernel of a far link to first order about the centres, without its `1 / (π r²)`:
+/// for `x` on `a`'s side (normal `n`, offset `a` from `a`'s centre) and `y` on `b`'s (normal
+/// `m`, offset `b`), with `e` the link's direction, `P = I − e eᵀ`, `Δ = b − a`, `α = n · e`,
+/// `β = −m · e`:
+/// `κ = αβ (1 − 2 e · Δ / r) + (β n · PΔ − α m · PΔ) / r`. It is symmetric in the two ends (swap
+/// them and `e`), and non-negative wherever the link was made.
+fn kernel_factor(link: &FarLink, (n, a): (Vec3, Vec3), (m, b): (Vec3, Vec3)) -> Real {
+    let e = link.d;
+    let delta = b - a;
+    let p_delta = delta - e * e.dot(delta);
+    let (alpha, beta) = (n.dot(e), -m.dot(e));
+    alpha * beta * (1.0 - 2.0 * e.dot(delta) / link.r) + (beta * n.dot(p_delta) - alpha * m.dot(p_delta)) / link.r
 }
 
 /// Compressed lists: for each of `len` keys, the indices of the items naming it.
@@ -261,63 +282,130 @@ impl ColumnSource for HierarchicalColumns {
         Some(16.0 * Real::EPSILON)
     }
 
-    /// Moments up the tree, one multiply-add per far link end, the sums down the tree, and
-    /// the near links: `O(links + n)` per channel.
+    /// Moments up the tree, one update per far link end, the linear forms down the tree, and
+    /// the near links: `O(links + n)` per channel (module doc).
     fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
-        let nodes = self.tree.nodes.len();
-        let c = channels;
-        // Moments, gathered up: children come after their parent, so a backward pass sees
-        // them first.
-        let mut moment = vec![Vec3::ZERO; nodes * c];
-        for k in (0..nodes).rev() {
-            match self.tree.nodes[k].children {
-                None => {
-                    let p = self.tree.order[self.tree.nodes[k].first as usize] as usize;
-                    for ch in 0..c {
-                        moment[k * c + ch] = self.normals[p] * (self.areas[p] * x[p * c + ch]);
+        let nodes = &self.tree.nodes;
+        let mut moments = vec![Moments::default(); nodes.len()];
+        let mut forms = vec![Form::default(); nodes.len()];
+        for ch in 0..channels {
+            // Gathered up: children come after their parent, so a backward pass sees them first.
+            for k in (0..nodes.len()).rev() {
+                moments[k] = match nodes[k].children {
+                    None => {
+                        let p = self.tree.order[nodes[k].first as usize] as usize;
+                        let w = self.areas[p] * x[p * channels + ch];
+                        Moments::of(self.normals[p] * w, self.centroids[p] - nodes[k].centre)
                     }
-                }
-                Some([a, b]) => {
-                    for ch in 0..c {
-                        moment[k * c + ch] = moment[a as usize * c + ch] + moment[b as usize * c + ch];
+                    Some([a, b]) => {
+                        let shifted = |c: u32| moments[c as usize].shifted(nodes[c as usize].centre - nodes[k].centre);
+                        shifted(a).plus(&shifted(b))
                     }
-                }
+                };
+                forms[k] = Form::default();
             }
-        }
-        let mut pushed = vec![Vec3::ZERO; nodes * c];
-        for link in &self.far {
-            let (a, b, d) = (link.a as usize, link.b as usize, link.d);
-            for ch in 0..c {
-                let into_a = link.g * (-d).dot(moment[b * c + ch]);
-                let into_b = link.g * d.dot(moment[a * c + ch]);
-                pushed[a * c + ch] += d * into_a;
-                pushed[b * c + ch] -= d * into_b;
+            for link in &self.far {
+                let (a, b) = (link.a as usize, link.b as usize);
+                forms[a].receive(&moments[b], link.d, link.r, link.g);
+                forms[b].receive(&moments[a], -link.d, link.r, link.g);
             }
-        }
-        for k in 0..nodes {
-            match self.tree.nodes[k].children {
-                None => {
-                    let p = self.tree.order[self.tree.nodes[k].first as usize] as usize;
-                    for ch in 0..c {
-                        out[p * c + ch] = self.normals[p].dot(pushed[k * c + ch]);
+            for k in 0..nodes.len() {
+                match nodes[k].children {
+                    None => {
+                        let p = self.tree.order[nodes[k].first as usize] as usize;
+                        out[p * channels + ch] = forms[k].at(self.normals[p], self.centroids[p] - nodes[k].centre);
                     }
-                }
-                Some([a, b]) => {
-                    for ch in 0..c {
-                        let r = pushed[k * c + ch];
-                        pushed[a as usize * c + ch] += r;
-                        pushed[b as usize * c + ch] += r;
+                    Some(children) => {
+                        for c in children {
+                            let shifted = forms[k].shifted(nodes[c as usize].centre - nodes[k].centre);
+                            forms[c as usize].add(&shifted);
+                        }
                     }
                 }
             }
         }
         for link in &self.near {
             let (i, j) = (link.i as usize, link.j as usize);
-            for ch in 0..c {
-                out[i * c + ch] += link.transfer / self.areas[i] * x[j * c + ch];
-                out[j * c + ch] += link.transfer / self.areas[j] * x[i * c + ch];
+            for ch in 0..channels {
+                out[i * channels + ch] += link.transfer / self.areas[i] * x[j * channels + ch];
+                out[j * channels + ch] += link.transfer / self.areas[j] * x[i * channels + ch];
             }
         }
         true
+    }
+}
+
+/// What a node sends through its far links: `M0 = Σ w m` and `M1 = Σ w m bᵀ` (rows `k` of
+/// `M1` are `Σ w m_k b`) over its patches, `w = A x`, `m` the normal and `b` the offset of the
+/// centroid from the node's centre.
+#[derive(Clone, Copy, Debug, Default)]
+struct Moments {
+    m0: Vec3,
+    m1: [Vec3; 3],
+}
+
+impl Moments {
+    fn of(wm: Vec3, b: Vec3) -> Moments {
+        Moments { m0: wm, m1: [b * wm.x, b * wm.y, b * wm.z] }
+    }
+
+    /// About a centre `δ` away: `b` becomes `b + δ`.
+    fn shifted(&self, delta: Vec3) -> Moments {
+        let m = self.m0;
+        Moments { m0: m, m1: [self.m1[0] + delta * m.x, self.m1[1] + delta * m.y, self.m1[2] + delta * m.z] }
+    }
+
+    fn plus(&self, o: &Moments) -> Moments {
+        Moments { m0: self.m0 + o.m0, m1: [self.m1[0] + o.m1[0], self.m1[1] + o.m1[1], self.m1[2] + o.m1[2]] }
+    }
+}
+
+/// What a node receives through its far links, as a function of a patch's normal `n` and
+/// offset `a` from the node's centre: `n · V + Σ_k n_k (W_k · a)`.
+#[derive(Clone, Copy, Debug, Default)]
+struct Form {
+    v: Vec3,
+    w: [Vec3; 3],
+}
+
+impl Form {
+    /// Adds the transfer from a node with moments `from` along the direction `e` (from this
+    /// node to that one), at distance `r`, with `g = V / (π r²)`: the first-order kernel of
+    /// [`kernel_factor`] summed over the sender's patches. With `S = Σ w β = −e · M0`,
+    /// `Q = Σ w β (e · b) = −eᵀ M1 e`, `U = Σ w β b = −M1ᵀ e`, `T = Σ w m · P b = tr M1 − eᵀ M1 e`:
+    /// `V += g (S e − 2Q e / r + P U / r − T e / r)` and
+    /// `W += g (2S e eᵀ / r − S P / r + e (P M0)ᵀ / r)`.
+    fn receive(&mut self, from: &Moments, e: Vec3, r: Real, g: Real) {
+        let m1e = Vec3::new(from.m1[0].dot(e), from.m1[1].dot(e), from.m1[2].dot(e));
+        let e_m1_e = e.dot(m1e);
+        let m1t_e = from.m1[0] * e.x + from.m1[1] * e.y + from.m1[2] * e.z;
+        let s = -e.dot(from.m0);
+        let q = -e_m1_e;
+        let u = -m1t_e;
+        let t = from.m1[0].x + from.m1[1].y + from.m1[2].z - e_m1_e;
+        let pu = u - e * e.dot(u);
+        let pm0 = from.m0 - e * e.dot(from.m0);
+        self.v += g * (e * (s - (2.0 * q + t) / r) + pu / r);
+        let unit = [Vec3::X, Vec3::Y, Vec3::Z];
+        for k in 0..3 {
+            let row_p = unit[k] - e * e[k];
+            self.w[k] += g * ((2.0 * s / r) * e[k] * e - (s / r) * row_p + (e[k] / r) * pm0);
+        }
+    }
+
+    /// About a centre `δ` away (a child's): `a` becomes `a + δ`.
+    fn shifted(&self, delta: Vec3) -> Form {
+        Form { v: self.v + Vec3::new(self.w[0].dot(delta), self.w[1].dot(delta), self.w[2].dot(delta)), w: self.w }
+    }
+
+    fn add(&mut self, o: &Form) {
+        self.v += o.v;
+        for k in 0..3 {
+            self.w[k] += o.w[k];
+        }
+    }
+
+    fn at(&self, n: Vec3, a: Vec3) -> Real {
+        n.dot(self.v) + n.x * self.w[0].dot(a) + n.y * self.w[1].dot(a) + n.z * self.w[2].dot(a)
     }
 }

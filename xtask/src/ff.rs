@@ -5,9 +5,12 @@
 //! Assembling costs `n` column computations and `n²` entries of memory, so scenes of more than
 //! [`MAX_PATCHES`] patches are refused unless `--force` is given.
 //!
-//! With `--against BACKEND` nothing is assembled: the backend is built, one product `F·x`
-//! timed, and `--rows` sampled rows compared with the other backend's
-//! ([`radiosity_ff::row_comparison`]), at any scene size.
+//! With `--against BACKEND` the backend is not assembled: it is built, one product `F·x`
+//! timed, and it is measured against the other backend ([`radiosity_eval::operator_distance`]):
+//! `--rows` sampled rows, the transfer error `‖ρ (F − F̃) B̃‖ / ‖B̃‖` on them with `B̃` its own
+//! exact solution (by GMRES over its product), and, up to [`SOLUTION_PATCHES`] patches,
+//! `e_rms` between `B̃` and the other backend's exact solution (its stored matrix, cached like
+//! a reference).
 //!
 //! With `--ff matrix…` the assembled (and, with `rebalance=true`, rebalanced) matrix is kept in
 //! the cache ([`radiosity_eval::Cache`], `target/ff-cache/` or `$RADIOSITY_CACHE_DIR`) and
@@ -17,7 +20,10 @@
 use crate::bars::Bars;
 use crate::experiment::{cache, prepare};
 use anyhow::{Result, bail};
-use radiosity_eval::{ObtainedMatrix, obtain_matrix};
+use radiosity_core::LinearSystem;
+use radiosity_eval::{
+    Lab, LabError, LabOptions, ObtainedMatrix, OperatorDistanceParams, ReferenceKind, obtain_matrix, operator_distance,
+};
 use radiosity_ff::guard::MatrixFigures;
 use radiosity_ff::row_comparison::{compare_rows, sampled_rows};
 use radiosity_ff::row_diagnosis::{RowDiagnosis, worst_rows};
@@ -118,7 +124,22 @@ fn compare(args: &Args, prepared: &PreparedScene, spec: &BackendSpec, reference:
     let how = if product.native { "natively" } else { "column by column" };
     out += &format!("product      F·x in {:.3} s ({how})\n", start.elapsed().as_secs_f64());
     let rows = sampled_rows(n, args.rows, 0);
-    let c = compare_rows(&backend, &truth, &rows);
+    print!("{out}");
+    out = String::new();
+    let distance = if prepared.analysis.emitters.value.is_empty() {
+        out += "solutions    none: nothing emits, so there is no solution to compare\n";
+        None
+    } else {
+        let star = truth_solution(prepared, reference, n)?;
+        let system = LinearSystem::from_scene(prepared.scene());
+        let params = OperatorDistanceParams { rows: args.rows, ..OperatorDistanceParams::default() };
+        Some(operator_distance(&system, &backend, &truth, star.as_ref().ok().map(Vec::as_slice), params)?)
+            .map(|d| (d, star))
+    };
+    let c = match &distance {
+        Some((d, _)) => d.rows.clone(),
+        None => compare_rows(&backend, &truth, &rows),
+    };
     out += &format!(
         "against      {}: {} sampled rows (seed 0), relative L1 distance max {:.3e} mean {:.3e}, row sums differ by \
          at most {:.3e} (a sampled estimate, not a bound)\n",
@@ -134,8 +155,57 @@ fn compare(args: &Args, prepared: &PreparedScene, spec: &BackendSpec, reference:
             r.row, r.sum, r.reference_sum, r.relative_l1
         );
     }
+    if let Some((d, star)) = &distance {
+        let s = &d.solve;
+        out += &format!(
+            "transfer     ‖ρ (F − F̃) B̃‖ / ‖B̃‖ = {:.3e} on the sampled rows, B̃ the backend's exact solution (a sampled \
+             estimate, not a bound)\n",
+            d.transfer
+        );
+        out += &format!(
+            "solve        B̃ by gmres-30 over the product: {} steps, residual {:.1e}{}, {:.3} s\n",
+            s.steps,
+            s.residual,
+            if s.converged { "" } else { " (not converged)" },
+            s.seconds
+        );
+        match (d.solution_e_rms, star) {
+            (Some(e), _) => {
+                out += &format!(
+                    "solutions    e_rms {e:.3e} between B̃ and the exact solution of {}'s system (exact to the solves' \
+                 tolerances)\n",
+                    reference.canonical()
+                )
+            }
+            (None, Err(why)) => out += &format!("solutions    not compared: {why}\n"),
+            (None, Ok(_)) => {}
+        }
+    }
     print!("{out}");
     Ok(())
+}
+
+/// Patches up to which `ff --against` solves the truth's system exactly, by its stored matrix.
+pub const SOLUTION_PATCHES: usize = 15_000;
+
+/// The exact solution of `reference`'s system (its stored matrix, cached), or why not.
+fn truth_solution(
+    prepared: &PreparedScene,
+    reference: &BackendSpec,
+    n: usize,
+) -> Result<std::result::Result<Vec<f64>, String>> {
+    if n > SOLUTION_PATCHES {
+        return Ok(Err(format!(
+            "the scene has {n} patches, more than the {SOLUTION_PATCHES} whose matrix is assembled"
+        )));
+    }
+    let options =
+        LabOptions::default().with_cache(Some(cache())).with_reference(ReferenceKind::Matrix).with_residuals(false);
+    match Lab::new(prepared, reference, options, &Bars::new()) {
+        Ok(lab) => Ok(Ok(lab.reference().expect("a matrix reference was asked for").values().to_vec())),
+        Err(LabError::Invalid(why)) => Ok(Err(why)),
+        Err(e) => Err(e.into()),
+    }
 }
 
 fn areas(prepared: &PreparedScene) -> Vec<f64> {

@@ -58,6 +58,9 @@ struct PatchJson {
 struct StatsJson {
     columns: u64,
     columns_reused: u64,
+    /// Products `F x` the backend computed itself (a stored matrix's, the hierarchical
+    /// operator's), beside the columns.
+    products: u64,
     steps: u64,
     seconds: Real,
     ff_seconds: Real,
@@ -190,6 +193,7 @@ pub fn run(args: &Args) -> Result<()> {
     let stats = StatsJson {
         columns: s.columns,
         columns_reused: s.columns_reused,
+        products: s.products,
         steps: s.step,
         seconds: s.ff_seconds + s.solve_seconds,
         ff_seconds: s.ff_seconds,
@@ -213,8 +217,12 @@ pub fn run(args: &Args) -> Result<()> {
             0 => String::new(),
             k => format!(" (and {k} served again from memory)"),
         };
+        let products = match stats.products {
+            0 => String::new(),
+            k => format!(", {k} products"),
+        };
         println!(
-            "work         {} steps, {} columns{reused}, {:.3} s ({:.3} s in form factors)",
+            "work         {} steps, {} columns{reused}{products}, {:.3} s ({:.3} s in form factors)",
             stats.steps, stats.columns, stats.seconds, stats.ff_seconds
         );
         if stats.group_seconds > 0.0 {

@@ -334,12 +334,23 @@ fn ff_against_compares_sampled_rows_without_assembling() {
         ["ff", "--scene", "furnace:res=6", "--ff", "hierarchical:eps=0.05", "--against", "analytic", "--rows", "3"];
     let out = xtask(&args).success().get_output().stdout.clone();
     let text = String::from_utf8(out).unwrap();
-    for words in
-        ["216 patches", "hierarchical:eps=5e-2:rays=16:seed=0 built in", "far links", "natively", "3 sampled rows"]
-    {
+    for words in [
+        "216 patches",
+        "hierarchical:eps=5e-2:shadows=0.05:rays=16:seed=0 built in",
+        "far links",
+        "natively",
+        "3 sampled rows",
+    ] {
         assert!(text.contains(words), "missing '{words}' in\n{text}");
     }
     assert_eq!(text.matches("   row ").count(), 3, "{text}");
+    // The operator's own exact solution, its transfer error and its distance to the
+    // analytic backend's exact solution (the furnace emits, and is small enough to solve).
+    for words in ["transfer     ", "B̃ by gmres-30 over the product", "solutions    e_rms "] {
+        assert!(text.contains(words), "missing '{words}' in\n{text}");
+    }
+    let e_rms: f64 = text.split("solutions    e_rms ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+    assert!(e_rms > 0.0 && e_rms < 2e-2, "{text}");
     let e = failure(&["ff", "--scene", "furnace:res=2", "--against", "analytic", "--rows", "0"]);
     assert!(e.contains("--rows"), "{e}");
 }

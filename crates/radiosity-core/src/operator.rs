@@ -43,6 +43,13 @@ pub struct Product {
     pub native: bool,
 }
 
+impl Product {
+    /// A product the source computed itself: no column fetched.
+    pub fn native() -> Product {
+        Product { native: true, ..Product::default() }
+    }
+}
+
 /// `A = I − diag(ρ) F` of a [`LinearSystem`] over a [`ColumnSource`], applied through
 /// products by `F` (module doc).
 #[derive(Clone, Copy)]
@@ -167,7 +174,7 @@ fn multiply_dyn(f: &dyn ColumnSource, x: &[Real], k: usize, out: &mut [Real]) ->
     let n = f.patch_count();
     assert!(x.len() == n * k && out.len() == n * k, "vectors of length n·k");
     if f.multiply(x, k, out) {
-        return Product { native: true, ..Product::default() };
+        return Product::native();
     }
     let mut column = vec![0.0; n];
     multiply_by_columns(x, k, out, &mut column, |j, column| f.fill_column(j, column))

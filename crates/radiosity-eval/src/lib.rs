@@ -92,6 +92,7 @@ pub use reports::plot::{
 };
 pub use reports::table::{ConvergenceTable, HEADER, round_significant};
 pub use suites::{bench, stress};
+pub use truth::operator_distance::{OperatorDistance, OperatorDistanceParams, OperatorSolve, operator_distance};
 pub use truth::path_trace::{
     DEFAULT_SAMPLES_PER_OBJECT, ObjectEstimate, PathTraceError, PathTraceParams, PathTraced, path_trace,
 };

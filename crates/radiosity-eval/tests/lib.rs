@@ -8,6 +8,7 @@ mod examples;
 mod gltf_export;
 mod lab;
 mod metrics;
+mod operator_distance;
 mod path_trace;
 mod plot;
 mod reference;

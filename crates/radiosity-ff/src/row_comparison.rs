@@ -52,11 +52,16 @@ pub fn sampled_rows(n: usize, count: usize, seed: u64) -> Vec<usize> {
 /// [`ColumnSource::fill_row`] where the source serves rows, or else assembled from all its
 /// columns (costly: use sources that serve rows).
 pub fn compare_rows(f: &dyn ColumnSource, reference: &dyn ColumnSource, rows: &[usize]) -> RowComparison {
-    let n = f.patch_count();
-    let (a, b) = (row_reader(f, rows), row_reader(reference, rows));
+    compare_read_rows(rows, &read_rows(f, rows), &read_rows(reference, rows))
+}
+
+/// Compares rows already read: `a[k]` and `b[k]` are row `rows[k]` of the source compared and
+/// of the reference.
+pub fn compare_read_rows(rows: &[usize], a: &[Vec<Real>], b: &[Vec<Real>]) -> RowComparison {
+    let n = a.first().map_or(0, Vec::len);
     let distances: Vec<RowDistance> = rows
         .iter()
-        .zip(a.iter().zip(&b))
+        .zip(a.iter().zip(b))
         .map(|(&row, (x, y))| {
             debug_assert!(x.len() == n && y.len() == n);
             let l1: Real = x.iter().zip(y).map(|(p, q)| (p - q).abs()).sum();
@@ -82,7 +87,7 @@ pub fn compare_rows(f: &dyn ColumnSource, reference: &dyn ColumnSource, rows: &[
 }
 
 /// The `rows` of `f`: by rows where it serves them, else from every column.
-fn row_reader(f: &dyn ColumnSource, rows: &[usize]) -> Vec<Vec<Real>> {
+pub fn read_rows(f: &dyn ColumnSource, rows: &[usize]) -> Vec<Vec<Real>> {
     let n = f.patch_count();
     let mut out = vec![vec![0.0; n]; rows.len()];
     let served = rows.iter().zip(out.iter_mut()).all(|(&i, row)| f.fill_row(i, row));

@@ -160,7 +160,10 @@ fn bad_backend_arguments_are_clear_errors() {
     assert!(e.contains("matrix"), "{e}");
     let e = err("matrix:of=hemicube:order=3");
     assert!(e.contains("form-factor backend 'hemicube'") && e.contains("no parameter 'order'"), "{e}");
-    assert_eq!(BackendSpec::parse("hierarchical").unwrap().canonical(), "hierarchical:eps=1e-3:rays=16:seed=0");
+    assert_eq!(
+        BackendSpec::parse("hierarchical").unwrap().canonical(),
+        "hierarchical:eps=1e-2:shadows=0.05:rays=16:seed=0"
+    );
     assert_eq!(
         BackendSpec::parse("matrix:of=hemicube:res=64").unwrap().canonical(),
         "matrix:of=hemicube:rebalance=false:res=64:seed=0"

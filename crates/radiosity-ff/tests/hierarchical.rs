@@ -128,11 +128,19 @@ fn closed_scenes_close_at_the_default_threshold() {
 }
 
 #[test]
-fn columns_are_the_same_on_one_and_two_threads() {
+fn columns_and_products_are_the_same_on_one_and_two_threads() {
     let p = prepared("multi-cubes");
     let build = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| columns(&hierarchical(&p, 0.05)))
+        pool.install(|| {
+            let f = hierarchical(&p, 0.05);
+            // The product too: each node sums its own links in a fixed order.
+            let n = f.patch_count();
+            let x: Vec<Real> = (0..3 * n).map(|k| 0.1 + ((k * 7919) % 101) as Real / 101.0).collect();
+            let mut product = vec![0.0; 3 * n];
+            assert!(f.multiply(&x, 3, &mut product));
+            (columns(&f), product)
+        })
     };
     assert_eq!(build(1), build(2));
 }

@@ -143,18 +143,19 @@ impl Comparison {
         );
         let _ = writeln!(
             md,
-            "| solver | steps | columns (reused) | form factors | solving | of which groups | measurement | stopped |\n\
-             |---|--:|--:|--:|--:|--:|--:|---|"
+            "| solver | steps | columns (reused) | products | form factors | solving | of which groups | measurement | stopped \
+             |\n|---|--:|--:|--:|--:|--:|--:|--:|---|"
         );
         for o in &self.outcomes {
             let s = &o.state;
             let _ = writeln!(
                 md,
-                "| `{}` | {} | {} ({}) | {:.3} s | {:.3} s | {:.3} s | {:.3} s | {} |",
+                "| `{}` | {} | {} ({}) | {} | {:.3} s | {:.3} s | {:.3} s | {:.3} s | {} |",
                 o.solver,
                 s.step,
                 s.columns,
                 s.columns_reused,
+                s.products,
                 s.ff_seconds,
                 s.solve_seconds,
                 s.group_seconds,

@@ -2,5 +2,6 @@
 //! tracing ([`path_trace`]), and those means beside the discrete reference at increasing mesh
 //! resolution ([`validate`]), which tells discretization error from solver error.
 
+pub(crate) mod operator_distance;
 pub(crate) mod path_trace;
 pub(crate) mod validate;

@@ -18,8 +18,20 @@
 //! - **near**: both are single patches and the link is not far: the analytic backend's entry
 //!   ([`AnalyticColumns::pair`]), stored as `A_i F_ij`;
 //! - otherwise **split**: the larger node (by radius) that can be split is replaced by its
-//!   children. A link with partly visible rays is split too, while its transfer could exceed
-//!   `eps`: it is subdivided rather than trusted.
+//!   children.
+//!
+//! **Visibility.** A link that passes the geometric test first traces a quarter of its `rays`
+//! (a probe), in an order whose every prefix is spread over both areas ([`strata_order`]). A
+//! link is *small* when its transfer bound `max(A_A, A_B) / (π r²)` is at most `shadows` (the
+//! parameter times `eps`) or both ends are patches. A small link whose probe agrees is taken as
+//! it is (clear, or dropped as occluded); a small link whose probe disagrees traces the rest and
+//! keeps its visible fraction. A larger link is only trusted on every ray: it traces the rest
+//! when its probe agrees and is kept or dropped when all still agree; any disagreement splits
+//! it. The visible fraction is one number for every pair of the link, so a partly visible link
+//! misplaces light between its lit and shadowed pairs (a light leak): `shadows` bounds how
+//! much of a row one link may misplace that way. (Fewer rays for larger links, in proportion to
+//! their transfer, measured worse: a leak through a link taken as clear by mistake is
+//! systematic, and a row sums hundreds of them.)
 //!
 //! The error estimate of a far link bounds what it adds to one row of `F`,
 //! `max(A_A, A_B) / (π r²)`, times the second-order variation of the kernel over the link,
@@ -27,8 +39,7 @@
 //! "A rapid hierarchical radiosity algorithm", SIGGRAPH; Sillion 1995, "A unified hierarchical
 //! algorithm for global illumination with scattering volumes and object clusters", IEEE TVCG
 //! 1(3)). This is a geometric oracle; one weighted by the radiosity `B` (Hanrahan's BF
-//! refinement) is the next step. The visible fraction of a far link comes from `rays`
-//! segments, which limits the operator's accuracy where links are partly occluded.
+//! refinement) is the next step.
 
 use super::tree::ClusterTree;
 use crate::analytic::AnalyticColumns;
@@ -100,6 +111,8 @@ pub(crate) struct Refiner<'a> {
     pub analytic: &'a AnalyticColumns<'a>,
     /// The error threshold.
     pub eps: Real,
+    /// The largest transfer bound of a partly visible far link.
+    pub shadows: Real,
     /// Shadow rays per far link.
     pub rays: usize,
     /// The seed of the rays.
@@ -187,14 +200,25 @@ impl Refiner<'_> {
             let bound = na.area.max(nb.area) / (PI * r * r);
             let error = bound * (2.0 * (rho + spread)).powi(2);
             if error <= self.eps {
-                let sampled = self.sample(a, b, out);
-                if sampled.clear == 0 {
+                let small = bound <= self.shadows || (leaf_a && leaf_b);
+                let order = strata_order(self.rays.max(1));
+                let total = order.len();
+                let probe = (total / 4).max(1);
+                let mut rng = self.rays_of(a, b);
+                let mut seen = self.sample(a, b, order[..probe].iter().copied(), total, &mut rng, out);
+                let unanimous = |s: &Sampled| s.clear == 0 || s.clear == s.count;
+                // A small link whose probe agrees is taken as it is; any other link that is not
+                // split at once traces every ray.
+                if (small && !unanimous(&seen)) || (!small && unanimous(&seen)) {
+                    let rest = self.sample(a, b, order[probe..].iter().copied(), total, &mut rng, out);
+                    seen = Sampled { count: seen.count + rest.count, clear: seen.clear + rest.clear };
+                }
+                if seen.clear == 0 {
                     out.occluded += 1;
                     return;
                 }
-                // Partly visible links are split while their transfer could exceed eps.
-                if sampled.clear == sampled.count || bound <= self.eps || (leaf_a && leaf_b) {
-                    let visible = sampled.clear as Real / sampled.count as Real;
+                let visible = (small || unanimous(&seen)).then(|| seen.clear as Real / seen.count as Real);
+                if let Some(visible) = visible {
                     out.far.push(FarLink { a, b, d, r, g: visible / (PI * r * r) });
                     return;
                 }
@@ -254,25 +278,41 @@ impl Refiner<'_> {
         far <= na.offsets.0 + self.tolerance
     }
 
-    /// `rays` segments between points of `a` and `b` drawn by area (stratified), each traced
-    /// when the scene can occlude (all clear otherwise); the stream is keyed by the pair.
-    fn sample(&self, a: u32, b: u32, out: &mut Links) -> Sampled {
-        let k = self.rays.max(1);
-        let Some(visibility) = self.visibility else { return Sampled { count: k, clear: k } };
+    /// The random stream of the link between `a` and `b`, keyed by the pair and the seed.
+    fn rays_of(&self, a: u32, b: u32) -> Xoshiro256PlusPlus {
         let key = ((a.min(b) as u64) << 32) | a.max(b) as u64;
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(key ^ self.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15));
-        let mut clear = 0;
-        for s in 0..k {
-            let u = (s as Real + rng.random::<Real>()) / k as Real;
-            let v = (((s * 7 + 3) % k) as Real + rng.random::<Real>()) / k as Real;
-            let (x, i) = self.point_in(a, u, &mut rng);
-            let (y, j) = self.point_in(b, v, &mut rng);
+        Xoshiro256PlusPlus::seed_from_u64(key ^ self.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15))
+    }
+
+    /// The segments `strata` of `total` between points of `a` and `b` drawn by area
+    /// (stratified: stratum `s` of `a`'s area and a permuted stratum of `b`'s), each traced
+    /// when the scene can occlude (all clear otherwise).
+    fn sample(
+        &self,
+        a: u32,
+        b: u32,
+        strata: impl Iterator<Item = usize>,
+        total: usize,
+        rng: &mut Xoshiro256PlusPlus,
+        out: &mut Links,
+    ) -> Sampled {
+        let (mut count, mut clear) = (0, 0);
+        for s in strata {
+            count += 1;
+            let Some(visibility) = self.visibility else {
+                clear += 1;
+                continue;
+            };
+            let u = (s as Real + rng.random::<Real>()) / total as Real;
+            let v = (((s * stride_of(total) + 3) % total) as Real + rng.random::<Real>()) / total as Real;
+            let (x, i) = self.point_in(a, u, rng);
+            let (y, j) = self.point_in(b, v, rng);
             if visibility.unoccluded_between(x, i, y, j) {
                 clear += 1;
             }
+            out.rays += 1;
         }
-        out.rays += k as u64;
-        Sampled { count: k, clear }
+        Sampled { count, clear }
     }
 
     /// The point of node `k` at the fraction `u` of its area, and its patch.
@@ -285,4 +325,27 @@ impl Refiner<'_> {
         let point = self.scene.patches()[patch].point_at(rng.random(), rng.random());
         (point, patch)
     }
+}
+
+/// The strata of `total` rays in the order they are traced, so that every prefix is spread
+/// over both nodes' areas: bit-reversed for a power of two (0, 8, 4, 12, 2, … of 16),
+/// otherwise by a step coprime with `total`.
+fn strata_order(total: usize) -> Vec<usize> {
+    if total.is_power_of_two() {
+        let bits = total.trailing_zeros();
+        (0..total).map(|k| if bits == 0 { 0 } else { k.reverse_bits() >> (usize::BITS - bits) }).collect()
+    } else {
+        (0..total).map(|k| (k * stride_of(total)) % total).collect()
+    }
+}
+
+/// A step coprime with `total`, so that `s ↦ (s · step + 3) mod total` permutes the strata.
+fn stride_of(total: usize) -> usize {
+    let gcd = |mut a: usize, mut b: usize| {
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a
+    };
+    [7, 5, 3, 11, 13].into_iter().find(|&m| gcd(m, total) == 1).unwrap_or(1)
 }

@@ -47,6 +47,7 @@ use crate::analytic::{AnalyticColumns, AnalyticParams};
 use links::{FarLink, Links, NearLink, Refiner};
 use radiosity_core::{ColumnSource, Real, Scene, Vec3};
 use radiosity_geom::{ParamDoc, SceneAnalysis, Visibility};
+use rayon::prelude::*;
 use std::time::Instant;
 use tree::ClusterTree;
 
@@ -55,6 +56,9 @@ use tree::ClusterTree;
 pub struct HierarchicalParams {
     /// The largest error estimate a far link may have, in units of a row of `F`.
     pub eps: Real,
+    /// A far link that is partly visible may carry at most `shadows · eps` of a row: its
+    /// visible fraction is one number for all its pairs, so it is subdivided further.
+    pub shadows: Real,
     /// Shadow rays per far link.
     pub rays: usize,
     /// The seed of the rays (and of the near links' analytic entries).
@@ -63,13 +67,18 @@ pub struct HierarchicalParams {
 
 impl Default for HierarchicalParams {
     fn default() -> Self {
-        HierarchicalParams { eps: 1e-3, rays: 16, seed: 0 }
+        HierarchicalParams { eps: 1e-2, shadows: 0.05, rays: 16, seed: 0 }
     }
 }
 
 /// Parameters of `hierarchical`.
 pub const HIERARCHICAL_PARAMS: &[ParamDoc] = &[
-    ParamDoc { key: "eps", default: "1e-3", doc: "largest error estimate of a far link, in units of a row of F" },
+    ParamDoc { key: "eps", default: "1e-2", doc: "largest error estimate of a far link, in units of a row of F" },
+    ParamDoc {
+        key: "shadows",
+        default: "0.05",
+        doc: "a partly visible far link carries at most shadows·eps of a row, in (0, 1]",
+    },
     ParamDoc { key: "rays", default: "16", doc: "shadow rays per far link, 1 to 4096" },
     ParamDoc { key: "seed", default: "0", doc: "seed of the rays" },
 ];
@@ -136,6 +145,7 @@ impl HierarchicalColumns {
             visibility: analysis.occlusion.value.then_some(visibility),
             analytic: &analytic,
             eps: params.eps,
+            shadows: params.shadows * params.eps,
             rays: params.rays,
             seed: params.seed,
             tolerance: 1e-9 * scene.diagonal(),
@@ -282,55 +292,76 @@ impl ColumnSource for HierarchicalColumns {
         Some(16.0 * Real::EPSILON)
     }
 
-    /// Moments up the tree, one update per far link end, the linear forms down the tree, and
-    /// the near links: `O(links + n)` per channel (module doc).
+    /// Moments up the tree, the far links' transfers gathered at each node (in parallel over
+    /// the nodes, each summing its own links in a fixed order, so the result is the same
+    /// whatever the thread count), the linear forms down the tree, and the near links:
+    /// `O(links + n)` for all channels in one pass over the links (module doc).
     fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
         let nodes = &self.tree.nodes;
-        let mut moments = vec![Moments::default(); nodes.len()];
-        let mut forms = vec![Form::default(); nodes.len()];
-        for ch in 0..channels {
-            // Gathered up: children come after their parent, so a backward pass sees them first.
-            for k in (0..nodes.len()).rev() {
-                moments[k] = match nodes[k].children {
-                    None => {
-                        let p = self.tree.order[nodes[k].first as usize] as usize;
-                        let w = self.areas[p] * x[p * channels + ch];
-                        Moments::of(self.normals[p] * w, self.centroids[p] - nodes[k].centre)
+        let k = channels;
+        let mut moments = vec![Moments::default(); nodes.len() * k];
+        // Gathered up: children come after their parent, so a backward pass sees them first.
+        for node in (0..nodes.len()).rev() {
+            match nodes[node].children {
+                None => {
+                    let p = self.tree.order[nodes[node].first as usize] as usize;
+                    let offset = self.centroids[p] - nodes[node].centre;
+                    for ch in 0..k {
+                        let w = self.areas[p] * x[p * k + ch];
+                        moments[node * k + ch] = Moments::of(self.normals[p] * w, offset);
                     }
-                    Some([a, b]) => {
-                        let shifted = |c: u32| moments[c as usize].shifted(nodes[c as usize].centre - nodes[k].centre);
-                        shifted(a).plus(&shifted(b))
+                }
+                Some([a, b]) => {
+                    let (da, db) =
+                        (nodes[a as usize].centre - nodes[node].centre, nodes[b as usize].centre - nodes[node].centre);
+                    for ch in 0..k {
+                        moments[node * k + ch] =
+                            moments[a as usize * k + ch].shifted(da).plus(&moments[b as usize * k + ch].shifted(db));
                     }
-                };
-                forms[k] = Form::default();
+                }
             }
-            for link in &self.far {
-                let (a, b) = (link.a as usize, link.b as usize);
-                forms[a].receive(&moments[b], link.d, link.r, link.g);
-                forms[b].receive(&moments[a], -link.d, link.r, link.g);
+        }
+        let mut forms = vec![Form::default(); nodes.len() * k];
+        forms.par_chunks_mut(k).enumerate().for_each(|(node, forms)| {
+            let links = &self.far_at[self.far_start[node] as usize..self.far_start[node + 1] as usize];
+            for &l in links {
+                let link = &self.far[l as usize];
+                // The direction from this node to the other end.
+                let (other, e) = if link.a as usize == node { (link.b, link.d) } else { (link.a, -link.d) };
+                let from = &moments[other as usize * k..(other as usize + 1) * k];
+                Form::receive(forms, from, e, link.r, link.g);
             }
-            for k in 0..nodes.len() {
-                match nodes[k].children {
-                    None => {
-                        let p = self.tree.order[nodes[k].first as usize] as usize;
-                        out[p * channels + ch] = forms[k].at(self.normals[p], self.centroids[p] - nodes[k].centre);
+        });
+        for node in 0..nodes.len() {
+            match nodes[node].children {
+                None => {
+                    let p = self.tree.order[nodes[node].first as usize] as usize;
+                    let offset = self.centroids[p] - nodes[node].centre;
+                    for ch in 0..k {
+                        out[p * k + ch] = forms[node * k + ch].at(self.normals[p], offset);
                     }
-                    Some(children) => {
-                        for c in children {
-                            let shifted = forms[k].shifted(nodes[c as usize].centre - nodes[k].centre);
-                            forms[c as usize].add(&shifted);
+                }
+                Some(children) => {
+                    for c in children {
+                        let delta = nodes[c as usize].centre - nodes[node].centre;
+                        for ch in 0..k {
+                            let shifted = forms[node * k + ch].shifted(delta);
+                            forms[c as usize * k + ch].add(&shifted);
                         }
                     }
                 }
             }
         }
-        for link in &self.near {
-            let (i, j) = (link.i as usize, link.j as usize);
-            for ch in 0..channels {
-                out[i * channels + ch] += link.transfer / self.areas[i] * x[j * channels + ch];
-                out[j * channels + ch] += link.transfer / self.areas[j] * x[i * channels + ch];
+        out.par_chunks_mut(k).enumerate().for_each(|(i, out)| {
+            for &l in &self.near_at[self.near_start[i] as usize..self.near_start[i + 1] as usize] {
+                let link = &self.near[l as usize];
+                let j = if link.i as usize == i { link.j } else { link.i } as usize;
+                let f = link.transfer / self.areas[i];
+                for ch in 0..k {
+                    out[ch] += f * x[j * k + ch];
+                }
             }
-        }
+        });
         true
     }
 }
@@ -369,27 +400,32 @@ struct Form {
 }
 
 impl Form {
-    /// Adds the transfer from a node with moments `from` along the direction `e` (from this
+    /// Adds to `forms` (one per channel) the transfer from a node with moments `from` (one per
+    /// channel) along the direction `e` (from this
     /// node to that one), at distance `r`, with `g = V / (π r²)`: the first-order kernel of
     /// [`kernel_factor`] summed over the sender's patches. With `S = Σ w β = −e · M0`,
     /// `Q = Σ w β (e · b) = −eᵀ M1 e`, `U = Σ w β b = −M1ᵀ e`, `T = Σ w m · P b = tr M1 − eᵀ M1 e`:
     /// `V += g (S e − 2Q e / r + P U / r − T e / r)` and
     /// `W += g (2S e eᵀ / r − S P / r + e (P M0)ᵀ / r)`.
-    fn receive(&mut self, from: &Moments, e: Vec3, r: Real, g: Real) {
-        let m1e = Vec3::new(from.m1[0].dot(e), from.m1[1].dot(e), from.m1[2].dot(e));
-        let e_m1_e = e.dot(m1e);
-        let m1t_e = from.m1[0] * e.x + from.m1[1] * e.y + from.m1[2] * e.z;
-        let s = -e.dot(from.m0);
-        let q = -e_m1_e;
-        let u = -m1t_e;
-        let t = from.m1[0].x + from.m1[1].y + from.m1[2].z - e_m1_e;
-        let pu = u - e * e.dot(u);
-        let pm0 = from.m0 - e * e.dot(from.m0);
-        self.v += g * (e * (s - (2.0 * q + t) / r) + pu / r);
+    fn receive(forms: &mut [Form], from: &[Moments], e: Vec3, r: Real, g: Real) {
+        // The parts that depend on the direction only, shared by every channel.
         let unit = [Vec3::X, Vec3::Y, Vec3::Z];
-        for k in 0..3 {
-            let row_p = unit[k] - e * e[k];
-            self.w[k] += g * ((2.0 * s / r) * e[k] * e - (s / r) * row_p + (e[k] / r) * pm0);
+        let rows_p = unit.map(|u| u - e * e.dot(u));
+        let ee = [e * e.x, e * e.y, e * e.z];
+        for (form, from) in forms.iter_mut().zip(from) {
+            let m1e = Vec3::new(from.m1[0].dot(e), from.m1[1].dot(e), from.m1[2].dot(e));
+            let e_m1_e = e.dot(m1e);
+            let m1t_e = from.m1[0] * e.x + from.m1[1] * e.y + from.m1[2] * e.z;
+            let s = -e.dot(from.m0);
+            let q = -e_m1_e;
+            let u = -m1t_e;
+            let t = from.m1[0].x + from.m1[1].y + from.m1[2].z - e_m1_e;
+            let pu = u - e * e.dot(u);
+            let pm0 = from.m0 - e * e.dot(from.m0);
+            form.v += g * (e * (s - (2.0 * q + t) / r) + pu / r);
+            for k in 0..3 {
+                form.w[k] += g * ((2.0 * s / r) * ee[k] - (s / r) * rows_p[k] + (e[k] / r) * pm0);
+            }
         }
     }
 

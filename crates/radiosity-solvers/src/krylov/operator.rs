@@ -1,12 +1,14 @@
 //! What the Krylov solvers (`cg`, `gmres-K`, `bicgstab`) share: the operator
-//! `A = I − diag(ρ) F` applied through columns (the public operator's product,
-//! [`radiosity_core::RadiosityOperator`], with every column counted by the [`Problem`]), inner products per channel, and what their
-//! residual tells the executor.
+//! `A = I − diag(ρ) F` applied through the [`Problem`]'s product (the source's own where it
+//! has one, counted as a product, else its columns, each counted), inner products per
+//! channel, and what their residual tells the executor.
 //!
 //! ## The operator
 //!
 //! Per channel the system is `A B = E` with `A = I − diag(ρ) F` (DESIGN §3). A Krylov solver
-//! applies `A` to a vector `x` once a step: `F x = Σ_j F_{·j} x_j` is a sum of columns, and a
+//! applies `A` to a vector `x` once a step. A source that multiplies a vector itself (a
+//! stored matrix, the hierarchical operator) does so in one product. Otherwise
+//! `F x = Σ_j F_{·j} x_j` is a sum of columns, and a
 //! column serves every channel at once, so a step costs one column for each patch `j` where
 //! some channel of `x` is non-zero: `n` columns for a dense vector, counted by the
 //! [`Problem`] like a gathering sweep. Columns of patches where `x` is zero in every channel
@@ -48,7 +50,7 @@ use crate::run::problem::Problem;
 use crate::run::record::Record;
 use crate::run::residual_bound::{ResidualBound, area_norms};
 use crate::run::state::State;
-use radiosity_core::{Real, apply_from_product, multiply_by_columns, residual_from_product};
+use radiosity_core::{Real, apply_from_product, residual_from_product};
 
 /// Applies `F` and `A = I − diag(ρ) F` through a problem's columns, counting what it did: the
 /// public operator's product by columns ([`radiosity_core::multiply_by_columns`]) and its
@@ -73,8 +75,7 @@ impl Operator {
         step: u64,
     ) -> Result<(), SolverError> {
         let k = problem.channels();
-        self.column.resize(problem.n(), 0.0);
-        let product = multiply_by_columns(x, k, out, &mut self.column, |j, column| problem.column(j, column));
+        let product = problem.multiply(x, out, &mut self.column);
         self.skipped += product.skipped;
         self.products += 1;
         match out.iter().position(|v| !v.is_finite()) {

@@ -393,6 +393,7 @@ impl<'a> Executor<'a> {
         let ff = problem.ff_seconds() - ff_before;
         state.columns = problem.columns_fetched();
         state.columns_reused = problem.columns_reused();
+        state.products = problem.products();
         state.ff_seconds += ff;
         state.solve_seconds += (wall - ff).max(0.0);
     }

@@ -7,11 +7,17 @@
 //! when it can ([`radiosity_core::ColumnSource::fill_row`]), and otherwise it follows from the
 //! same column by reciprocity, `F_ji = F_ij A_i / A_j`.
 //!
+//! A product `F x` of a whole vector ([`Problem::multiply`]) is the source's own when it has
+//! one ([`radiosity_core::ColumnSource::multiply`]: a stored matrix's pass over its entries, a
+//! hierarchical operator's `O(links + n)`), counted as one product beside the columns;
+//! otherwise it is the columns of the patches where the vector is not zero, each counted.
+//!
 //! A problem may also carry a spatially coherent order of the patches
 //! ([`Problem::with_patch_order`]), for solvers that group patches by proximity
 //! (`group-gs-gM:groups=spatial`); the others ignore it.
 
 use crate::error::SolverError;
+use radiosity_core::operator::{Product, multiply_by_columns};
 use radiosity_core::{ColumnSource, LinearSystem, Real};
 use std::cell::Cell;
 use std::time::Instant;
@@ -21,6 +27,7 @@ pub struct Problem<'a> {
     system: &'a LinearSystem,
     columns: &'a dyn ColumnSource,
     fetched: Cell<u64>,
+    products: Cell<u64>,
     reused: Cell<u64>,
     ff_seconds: Cell<f64>,
     order: Option<&'a [usize]>,
@@ -36,6 +43,7 @@ impl<'a> Problem<'a> {
             system,
             columns,
             fetched: Cell::new(0),
+            products: Cell::new(0),
             reused: Cell::new(0),
             ff_seconds: Cell::new(0.0),
             order: None,
@@ -112,6 +120,20 @@ impl<'a> Problem<'a> {
         Self::reciprocal_row(self.system.areas(), i, out);
     }
 
+    /// `out = F x`, both patch-major with the problem's channels: one product when the source
+    /// multiplies itself, else a column for each patch where `x` is not zero (module doc).
+    /// `column` is scratch space of `n` values for the second case.
+    pub fn multiply(&self, x: &[Real], out: &mut [Real], column: &mut Vec<Real>) -> Product {
+        let start = Instant::now();
+        if self.columns.multiply(x, self.channels(), out) {
+            self.ff_seconds.set(self.ff_seconds.get() + start.elapsed().as_secs_f64());
+            self.products.set(self.products.get() + 1);
+            return Product::native();
+        }
+        column.resize(self.n(), 0.0);
+        multiply_by_columns(x, self.channels(), out, column, |j, column| self.column(j, column))
+    }
+
     /// Turns column `i`, in place, into row `i` by reciprocity: `F_ij = F_ji A_j / A_i`.
     fn reciprocal_row(area: &[Real], i: usize, column: &mut [Real]) {
         for (j, f) in column.iter_mut().enumerate() {
@@ -129,6 +151,11 @@ impl<'a> Problem<'a> {
     /// Columns computed so far.
     pub fn columns_fetched(&self) -> u64 {
         self.fetched.get()
+    }
+
+    /// Products the source computed itself so far ([`Problem::multiply`]).
+    pub fn products(&self) -> u64 {
+        self.products.get()
     }
 
     /// Records that a solver served a column from its own memory instead of computing it

@@ -26,7 +26,10 @@ pub struct State {
     pub columns: u64,
     /// Columns served again from a solver's memory, at no cost: not counted in `columns`.
     pub columns_reused: u64,
-    /// Seconds spent computing columns.
+    /// Products `F x` the source computed itself ([`crate::Problem::multiply`]), each in
+    /// `O(links + n)` or a pass over a stored matrix: counted beside `columns`, not in them.
+    pub products: u64,
+    /// Seconds spent computing columns and products.
     pub ff_seconds: f64,
     /// Seconds spent in the solver outside column computations.
     pub solve_seconds: f64,
@@ -47,6 +50,7 @@ impl State {
             step: 0,
             columns: 0,
             columns_reused: 0,
+            products: 0,
             ff_seconds: 0.0,
             solve_seconds: 0.0,
             group_seconds: 0.0,

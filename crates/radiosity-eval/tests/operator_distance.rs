@@ -66,7 +66,7 @@ fn the_hierarchical_operator_keeps_the_furnace_identity_with_an_occluder() {
     let p = PreparedScene::load("furnace:res=6:block=true").unwrap();
     let system = LinearSystem::from_scene(p.scene());
     let f = HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, HierarchicalParams::default());
-    assert!(f.figures().rays > 0 && f.figures().far_links > 0, "{:?}", f.figures());
+    assert!(f.figures().rays > 0 && f.figures().far_pairs > 0, "{:?}", f.figures());
     let truth = AnalyticColumns::new(p.scene(), &p.visibility, &p.analysis, AnalyticParams::default());
     let star: Vec<Real> = (0..system.len()).map(|i| system.e(i, 0) / (1.0 - system.rho(i, 0))).collect();
     let params = OperatorDistanceParams { rows: 10, ..OperatorDistanceParams::default() };

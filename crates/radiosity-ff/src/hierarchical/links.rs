@@ -16,7 +16,9 @@
 //!   terms are at most `ρ (2αβ + α + β)` against `αβ`, so the condition above keeps every
 //!   entry non-negative;
 //! - **near**: both are single patches and the link is not far: the analytic backend's entry
-//!   ([`AnalyticColumns::pair`]), stored as `A_i F_ij`;
+//!   ([`AnalyticColumns::pair`]), stored as `A_i F_ij`. A far link between two single patches
+//!   is stored the same way, as the entry it gives (`A_i A_j g κ_ij`), so products and
+//!   columns read one number for it instead of its kernel's expansion;
 //! - otherwise **split**: the larger node (by radius) that can be split is replaced by its
 //!   children.
 //!
@@ -41,6 +43,7 @@
 //! 1(3)). This is a geometric oracle; one weighted by the radiosity `B` (Hanrahan's BF
 //! refinement) is the next step.
 
+use super::kernel_factor;
 use super::tree::ClusterTree;
 use crate::analytic::AnalyticColumns;
 use radiosity_core::{Real, Scene, Vec3};
@@ -84,6 +87,8 @@ pub(crate) struct Links {
     pub rays: u64,
     /// Links dropped as fully occluded by their rays.
     pub occluded: u64,
+    /// Of the near links, those between patches far enough apart for a far link.
+    pub far_pairs: u64,
 }
 
 impl Links {
@@ -92,6 +97,7 @@ impl Links {
         self.near.append(&mut other.near);
         self.rays += other.rays;
         self.occluded += other.occluded;
+        self.far_pairs += other.far_pairs;
     }
 }
 
@@ -113,8 +119,9 @@ pub(crate) struct Refiner<'a> {
     pub eps: Real,
     /// The largest transfer bound of a partly visible far link.
     pub shadows: Real,
-    /// Shadow rays per far link.
-    pub rays: usize,
+    /// The strata of a far link's rays (as many as its rays) in the order they are traced
+    /// ([`strata_order`]).
+    pub strata: Vec<usize>,
     /// The seed of the rays.
     pub seed: u64,
     /// What counts as on a plane: a length relative to the scene diagonal.
@@ -201,7 +208,7 @@ impl Refiner<'_> {
             let error = bound * (2.0 * (rho + spread)).powi(2);
             if error <= self.eps {
                 let small = bound <= self.shadows || (leaf_a && leaf_b);
-                let order = strata_order(self.rays.max(1));
+                let order = &self.strata;
                 let total = order.len();
                 let probe = (total / 4).max(1);
                 let mut rng = self.rays_of(a, b);
@@ -219,7 +226,22 @@ impl Refiner<'_> {
                 }
                 let visible = (small || unanimous(&seen)).then(|| seen.clear as Real / seen.count as Real);
                 if let Some(visible) = visible {
-                    out.far.push(FarLink { a, b, d, r, g: visible / (PI * r * r) });
+                    let link = FarLink { a, b, d, r, g: visible / (PI * r * r) };
+                    if leaf_a && leaf_b {
+                        // Two patches: the entry the far link gives, stored as one number, so
+                        // that products and columns read it like a near link's.
+                        let (i, j) = (self.tree.order[na.first as usize], self.tree.order[nb.first as usize]);
+                        let (p, q) = (&self.scene.patches()[i as usize], &self.scene.patches()[j as usize]);
+                        let kappa = kernel_factor(
+                            &link,
+                            (p.normal(), p.centroid() - na.centre),
+                            (q.normal(), q.centroid() - nb.centre),
+                        );
+                        out.near.push(NearLink { i, j, transfer: p.area() * q.area() * link.g * kappa });
+                        out.far_pairs += 1;
+                    } else {
+                        out.far.push(link);
+                    }
                     return;
                 }
             }
@@ -330,7 +352,7 @@ impl Refiner<'_> {
 /// The strata of `total` rays in the order they are traced, so that every prefix is spread
 /// over both nodes' areas: bit-reversed for a power of two (0, 8, 4, 12, 2, … of 16),
 /// otherwise by a step coprime with `total`.
-fn strata_order(total: usize) -> Vec<usize> {
+pub(crate) fn strata_order(total: usize) -> Vec<usize> {
     if total.is_power_of_two() {
         let bits = total.trailing_zeros();
         (0..total).map(|k| if bits == 0 { 0 } else { k.reverse_bits() >> (usize::BITS - bits) }).collect()

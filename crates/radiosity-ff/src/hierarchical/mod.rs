@@ -12,7 +12,8 @@
 //!   one and `j` in the other, with `g = V / (π r²)` between the centres and `κ` the kernel
 //!   `cos θ_i cos θ_j r² / |y − x|²` to first order in the patches' offsets from the centres
 //!   (`kernel_factor`);
-//! - a **near** link between two patches stores the analytic backend's `A_i F_ij`.
+//! - a **near** link between two patches stores `A_i F_ij`: the analytic backend's, or, for
+//!   two patches far apart, the far kernel's.
 //!
 //! So `A_i F_ij = A_j F_ji` holds by construction (up to rounding: `κ` is symmetric in the two
 //! ends), and every entry is non-negative: far links are made only where the first-order terms
@@ -90,8 +91,11 @@ pub struct HierarchyFigures {
     pub nodes: usize,
     /// Far links, between clusters or patches.
     pub far_links: usize,
-    /// Near links, patch to patch with the analytic entry.
+    /// Near links, patch to patch, each one number: the analytic entry, or the far kernel's
+    /// for patches far apart (`far_pairs`).
     pub near_links: usize,
+    /// Of the near links, those between patches far apart.
+    pub far_pairs: u64,
     /// Shadow rays traced for far links.
     pub rays: u64,
     /// Links dropped because every ray was blocked.
@@ -146,12 +150,12 @@ impl HierarchicalColumns {
             analytic: &analytic,
             eps: params.eps,
             shadows: params.shadows * params.eps,
-            rays: params.rays,
+            strata: links::strata_order(params.rays.max(1)),
             seed: params.seed,
             tolerance: 1e-9 * scene.diagonal(),
             cumulative,
         };
-        let Links { far, near, rays, occluded } = refiner.refine_all();
+        let Links { far, near, rays, occluded, far_pairs } = refiner.refine_all();
         let mut parent = vec![u32::MAX; tree.nodes.len()];
         for (k, node) in tree.nodes.iter().enumerate() {
             if let Some(children) = node.children {
@@ -170,6 +174,7 @@ impl HierarchicalColumns {
             nodes: tree.nodes.len(),
             far_links: far.len(),
             near_links: near.len(),
+            far_pairs,
             rays,
             occluded,
             seconds: start.elapsed().as_secs_f64(),

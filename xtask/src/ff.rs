@@ -22,7 +22,8 @@ use crate::experiment::{cache, prepare};
 use anyhow::{Result, bail};
 use radiosity_core::LinearSystem;
 use radiosity_eval::{
-    Lab, LabError, LabOptions, ObtainedMatrix, OperatorDistanceParams, ReferenceKind, obtain_matrix, operator_distance,
+    Lab, LabError, LabOptions, ObtainedMatrix, OperatorDistanceParams, Progress, ReferenceKind, obtain_matrix,
+    operator_distance,
 };
 use radiosity_ff::guard::MatrixFigures;
 use radiosity_ff::row_comparison::{compare_rows, sampled_rows};
@@ -100,9 +101,9 @@ fn compare(args: &Args, prepared: &PreparedScene, spec: &BackendSpec, reference:
     }
     let n = prepared.scene().len();
     let start = Instant::now();
-    let backend = Backend::columns(spec, prepared.into());
+    let backend = radiosity_eval::backend(prepared, spec, Some(&cache()), &Bars::new())?;
     let built = start.elapsed().as_secs_f64();
-    let truth = Backend::columns(reference, prepared.into());
+    let truth = radiosity_eval::backend(prepared, reference, Some(&cache()), &Bars::new())?;
     let mut out =
         format!("scene        {}: {n} patches\nbackend      {} built in {built:.3} s\n", args.scene, spec.canonical());
     if let Backend::Hierarchical(h) = &backend {
@@ -135,8 +136,11 @@ fn compare(args: &Args, prepared: &PreparedScene, spec: &BackendSpec, reference:
         let star = truth_solution(prepared, reference, n)?;
         let system = LinearSystem::from_scene(prepared.scene());
         let params = OperatorDistanceParams { rows: args.rows, ..OperatorDistanceParams::default() };
-        Some(operator_distance(&system, &backend, &truth, star.as_ref().ok().map(Vec::as_slice), params)?)
-            .map(|d| (d, star))
+        let bars = Bars::new();
+        bars.begin("solving the backend's system and comparing rows", 0, "");
+        let distance = operator_distance(&system, &backend, &truth, star.as_ref().ok().map(Vec::as_slice), params);
+        bars.end();
+        Some((distance?, star))
     };
     let c = match &distance {
         Some((d, _)) => d.rows.clone(),

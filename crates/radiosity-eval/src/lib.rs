@@ -23,7 +23,9 @@
 //!   ([`paper`]);
 //! - **truth**: each object's area-mean radiosity by Monte Carlo path tracing
 //!   ([`path_trace()`]), and those means beside the discrete reference at increasing mesh
-//!   resolution ([`validate()`]), which separates discretization error from solver error;
+//!   resolution ([`validate()`]), which separates discretization error from solver error; a
+//!   fast operator against a trusted one by sampled rows and exact solutions
+//!   ([`operator_distance()`]);
 //! - **suites**: the stress suite ([`stress`]) and the performance measurements
 //!   ([`bench`](mod@bench)): columns per second against the ray-tracing limit, matrix
 //!   assembly, group solves, time and memory from scene load to accuracy, and the cost of a

@@ -52,7 +52,8 @@ pub struct CacheUse {
 }
 
 /// The backend `spec` names; a `matrix` comes from `cache` when it holds it (and is written
-/// to it otherwise), or is assembled fresh without a cache.
+/// to it otherwise), or is assembled fresh without a cache. Building the hierarchical
+/// operator, which takes a while on large scenes, is shown as a stage of `progress`.
 pub fn backend<'p>(
     prepared: &'p PreparedScene,
     spec: &BackendSpec,
@@ -61,6 +62,12 @@ pub fn backend<'p>(
 ) -> Result<Backend<'p>, LabError> {
     Ok(match spec {
         BackendSpec::Matrix { .. } => Backend::Matrix(obtain_matrix(prepared, spec, cache, progress)?.matrix),
+        BackendSpec::Hierarchical(_) => {
+            progress.begin("building the hierarchical operator", 0, "");
+            let built = Backend::columns(spec, prepared.into());
+            progress.end();
+            built
+        }
         _ => Backend::columns(spec, prepared.into()),
     })
 }

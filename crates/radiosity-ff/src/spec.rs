@@ -92,6 +92,7 @@ impl BackendSpec {
                     eps: p.real("eps", defaults.eps, |e| e > 0.0 && e <= 1.0, "a threshold in (0, 1]")?,
                     shadows: p.real("shadows", defaults.shadows, |s| s > 0.0 && s <= 1.0, "a fraction in (0, 1]")?,
                     rays: p.count("rays", defaults.rays, 1, 4096)?,
+                    budget: p.count("budget", defaults.budget, 0, 1 << 24)?,
                     seed: p.seed("seed", 0)?,
                 })
             }
@@ -127,7 +128,10 @@ impl BackendSpec {
             BackendSpec::Hemicube(p) => format!("hemicube:res={}:seed={}", p.resolution, p.seed),
             BackendSpec::MonteCarlo(p) => format!("montecarlo:rays={}:seed={}", p.rays, p.seed),
             BackendSpec::Hierarchical(p) => {
-                format!("hierarchical:eps={:e}:shadows={}:rays={}:seed={}", p.eps, p.shadows, p.rays, p.seed)
+                format!(
+                    "hierarchical:eps={:e}:shadows={}:rays={}:budget={}:seed={}",
+                    p.eps, p.shadows, p.rays, p.budget, p.seed
+                )
             }
             BackendSpec::Matrix { of, rebalance } => {
                 let inner = of.canonical();

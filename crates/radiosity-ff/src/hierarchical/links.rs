@@ -16,7 +16,8 @@
 //!   terms are at most `ρ (2αβ + α + β)` against `αβ`, so the condition above keeps every
 //!   entry non-negative;
 //! - **near**: both are single patches and the link is not far: the analytic backend's entry
-//!   ([`AnalyticColumns::pair`]), stored as `A_i F_ij`. A far link between two single patches
+//!   ([`AnalyticColumns::pair`], with the operator's `budget` of shadow rays), stored as
+//!   `A_i F_ij`. A far link between two single patches
 //!   is stored the same way, as the entry it gives (`A_i A_j g κ_ij`), so products and
 //!   columns read one number for it instead of its kernel's expansion;
 //! - otherwise **split**: the larger node (by radius) that can be split is replaced by its
@@ -105,6 +106,16 @@ impl Links {
 struct Sampled {
     count: usize,
     clear: usize,
+}
+
+/// What a link's rays tell.
+enum Seen {
+    /// Every ray is blocked: the link is dropped.
+    Occluded,
+    /// The rays disagree on a link too large to trust its visible fraction.
+    Split,
+    /// The visible fraction.
+    Visible(Real),
 }
 
 /// What refinement reads.
@@ -208,23 +219,11 @@ impl Refiner<'_> {
             let error = bound * (2.0 * (rho + spread)).powi(2);
             if error <= self.eps {
                 let small = bound <= self.shadows || (leaf_a && leaf_b);
-                let order = &self.strata;
-                let total = order.len();
-                let probe = (total / 4).max(1);
-                let mut rng = self.rays_of(a, b);
-                let mut seen = self.sample(a, b, order[..probe].iter().copied(), total, &mut rng, out);
-                let unanimous = |s: &Sampled| s.clear == 0 || s.clear == s.count;
-                // A small link whose probe agrees is taken as it is; any other link that is not
-                // split at once traces every ray.
-                if (small && !unanimous(&seen)) || (!small && unanimous(&seen)) {
-                    let rest = self.sample(a, b, order[probe..].iter().copied(), total, &mut rng, out);
-                    seen = Sampled { count: seen.count + rest.count, clear: seen.clear + rest.clear };
-                }
-                if seen.clear == 0 {
-                    out.occluded += 1;
-                    return;
-                }
-                let visible = (small || unanimous(&seen)).then(|| seen.clear as Real / seen.count as Real);
+                let visible = match self.visible_fraction(a, b, small, out) {
+                    Seen::Occluded => return,
+                    Seen::Split => None,
+                    Seen::Visible(v) => Some(v),
+                };
                 if let Some(visible) = visible {
                     let link = FarLink { a, b, d, r, g: visible / (PI * r * r) };
                     if leaf_a && leaf_b {
@@ -282,6 +281,29 @@ impl Refiner<'_> {
         } else {
             self.refine_pair(p0.0, p0.1, out);
             self.refine_pair(p1.0, p1.1, out);
+        }
+    }
+
+    /// What the rays of the link between `a` and `b` tell (module doc): a small link whose probe
+    /// agrees is taken as it is, any other link that is not split at once traces every ray.
+    fn visible_fraction(&self, a: u32, b: u32, small: bool, out: &mut Links) -> Seen {
+        let order = &self.strata;
+        let total = order.len();
+        let probe = (total / 4).max(1);
+        let mut rng = self.rays_of(a, b);
+        let mut seen = self.sample(a, b, order[..probe].iter().copied(), total, &mut rng, out);
+        let unanimous = |s: &Sampled| s.clear == 0 || s.clear == s.count;
+        if (small && !unanimous(&seen)) || (!small && unanimous(&seen)) {
+            let rest = self.sample(a, b, order[probe..].iter().copied(), total, &mut rng, out);
+            seen = Sampled { count: seen.count + rest.count, clear: seen.clear + rest.clear };
+        }
+        if seen.clear == 0 {
+            out.occluded += 1;
+            Seen::Occluded
+        } else if small || unanimous(&seen) {
+            Seen::Visible(seen.clear as Real / seen.count as Real)
+        } else {
+            Seen::Split
         }
     }
 

@@ -62,13 +62,17 @@ pub struct HierarchicalParams {
     pub shadows: Real,
     /// Shadow rays per far link.
     pub rays: usize,
+    /// The near pairs' shadow-ray budget: the analytic backend's `budget` (rays per unit of a
+    /// pair's unoccluded form factor), lower than its own default because a near pair's
+    /// visibility noise averages out over the many pairs of a row.
+    pub budget: usize,
     /// The seed of the rays (and of the near links' analytic entries).
     pub seed: u64,
 }
 
 impl Default for HierarchicalParams {
     fn default() -> Self {
-        HierarchicalParams { eps: 1e-2, shadows: 0.05, rays: 16, seed: 0 }
+        HierarchicalParams { eps: 1e-2, shadows: 0.05, rays: 16, budget: 2048, seed: 0 }
     }
 }
 
@@ -81,6 +85,11 @@ pub const HIERARCHICAL_PARAMS: &[ParamDoc] = &[
         doc: "a partly visible far link carries at most shadows·eps of a row, in (0, 1]",
     },
     ParamDoc { key: "rays", default: "16", doc: "shadow rays per far link, 1 to 4096" },
+    ParamDoc {
+        key: "budget",
+        default: "2048",
+        doc: "the near pairs' shadow rays per unit of unoccluded form factor (the analytic backend's budget)",
+    },
     ParamDoc { key: "seed", default: "0", doc: "seed of the rays" },
 ];
 
@@ -136,7 +145,7 @@ impl HierarchicalColumns {
     ) -> HierarchicalColumns {
         let start = Instant::now();
         let tree = ClusterTree::new(scene);
-        let near_params = AnalyticParams { seed: params.seed, ..AnalyticParams::default() };
+        let near_params = AnalyticParams { seed: params.seed, budget: params.budget, ..AnalyticParams::default() };
         let analytic = AnalyticColumns::new(scene, visibility, analysis, near_params);
         let mut cumulative = Vec::with_capacity(scene.len() + 1);
         cumulative.push(0.0);

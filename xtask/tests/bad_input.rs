@@ -215,7 +215,7 @@ fn bad_stop_rules_are_refused() {
 #[test]
 fn bad_backends_are_refused() {
     // (backend, words of the sentence)
-    let cases: [(&str, &[&str]); 12] = [
+    let cases: [(&str, &[&str]); 14] = [
         (
             "radiance",
             &["unknown form-factor backend 'radiance'", "analytic, hemicube, montecarlo, hierarchical, matrix"],
@@ -229,6 +229,8 @@ fn bad_backends_are_refused() {
         ("montecarlo:rays=0", &["backend 'montecarlo'", "rays=0", "from 1 to"]),
         ("hierarchical:eps=0", &["backend 'hierarchical'", "eps=0", "(0, 1]"]),
         ("hierarchical:rays=0", &["backend 'hierarchical'", "rays=0", "from 1 to 4096"]),
+        ("hierarchical:shadows=2", &["backend 'hierarchical'", "shadows=2", "(0, 1]"]),
+        ("hierarchical:budget=-1", &["backend 'hierarchical'", "budget=-1"]),
         ("analytic:bogus=1", &["backend 'analytic'", "no parameter 'bogus'", "order, tol, rays, budget, seed"]),
         ("matrix:rebalance=maybe", &["backend 'matrix'", "rebalance=maybe", "true or false"]),
     ];

@@ -41,9 +41,12 @@ fn about(scene: &str) -> ExportInfo {
     ExportInfo { scene: scene.into(), solver: "reference".into(), ff: "analytic".into() }
 }
 
-/// Writes `glb` to a scratch file and loads it back as a scene argument.
+/// Writes `glb` to a scratch file and loads it back as a scene argument. Each call has a
+/// folder of its own: tests run in parallel, and two of them may load back the same scene.
 fn load_back(glb: &Glb, name: &str) -> radiosity_geom::LoadedScene {
-    let dir = std::env::temp_dir().join(format!("radiosity-eval-export-{}-{name}", std::process::id()));
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("radiosity-eval-export-{}-{call}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join(format!("{name}.glb"));
     glb.save(&path).unwrap();

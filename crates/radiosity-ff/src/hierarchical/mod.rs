@@ -63,8 +63,8 @@ pub struct HierarchicalParams {
     /// Shadow rays per far link.
     pub rays: usize,
     /// The near pairs' shadow-ray budget: the analytic backend's `budget` (rays per unit of a
-    /// pair's unoccluded form factor), lower than its own default because a near pair's
-    /// visibility noise averages out over the many pairs of a row.
+    /// pair's unoccluded form factor), lower than that backend's own default: it trades the
+    /// near pairs' visibility noise for build time (measured in `docs/hierarchical.md`).
     pub budget: usize,
     /// The seed of the rays (and of the near links' analytic entries).
     pub seed: u64,
@@ -98,7 +98,8 @@ pub const HIERARCHICAL_PARAMS: &[ParamDoc] = &[
 pub struct HierarchyFigures {
     /// Nodes of the cluster tree.
     pub nodes: usize,
-    /// Far links, between clusters or patches.
+    /// Far links with a cluster at one end at least (a far link between two patches is
+    /// stored as a near link, counted in `far_pairs`).
     pub far_links: usize,
     /// Near links, patch to patch, each one number: the analytic entry, or the far kernel's
     /// for patches far apart (`far_pairs`).

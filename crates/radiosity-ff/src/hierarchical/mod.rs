@@ -72,7 +72,7 @@ pub struct HierarchicalParams {
 
 impl Default for HierarchicalParams {
     fn default() -> Self {
-        HierarchicalParams { eps: 1e-2, shadows: 0.05, rays: 16, budget: 2048, seed: 0 }
+        HierarchicalParams { eps: 1e-2, shadows: 0.05, rays: 16, budget: 512, seed: 0 }
     }
 }
 
@@ -87,7 +87,7 @@ pub const HIERARCHICAL_PARAMS: &[ParamDoc] = &[
     ParamDoc { key: "rays", default: "16", doc: "shadow rays per far link, 1 to 4096" },
     ParamDoc {
         key: "budget",
-        default: "2048",
+        default: "512",
         doc: "the near pairs' shadow rays per unit of unoccluded form factor (the analytic backend's budget)",
     },
     ParamDoc { key: "seed", default: "0", doc: "seed of the rays" },

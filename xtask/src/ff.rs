@@ -131,7 +131,6 @@ fn compare(args: &Args, prepared: &PreparedScene, spec: &BackendSpec, reference:
     print!("{out}");
     out = String::new();
     let distance = if prepared.analysis.emitters.value.is_empty() {
-        out += "solutions    none: nothing emits, so there is no solution to compare\n";
         None
     } else {
         let star = truth_solution(prepared, reference, n)?;
@@ -161,6 +160,9 @@ fn compare(args: &Args, prepared: &PreparedScene, spec: &BackendSpec, reference:
             "   row {:>7}  sum {:.6}  reference {:.6}  relative L1 {:.3e}\n",
             r.row, r.sum, r.reference_sum, r.relative_l1
         );
+    }
+    if distance.is_none() {
+        out += "solutions    none: nothing emits, so there is no solution to compare\n";
     }
     if let Some((d, star)) = &distance {
         let s = &d.solve;

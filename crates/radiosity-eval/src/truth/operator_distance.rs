@@ -93,8 +93,7 @@ pub fn operator_distance(
     if params.rows == 0 {
         return Err(LabError::Invalid("at least one row must be sampled".into()));
     }
-    let solve = solve_operator(system, operator, params)?;
-    let b = solve.1;
+    let (solve, b) = solve_operator(system, operator, params)?;
     let rows = sampled_rows(n, params.rows, params.seed);
     let (ours, theirs) = (read_rows(operator, &rows), read_rows(truth, &rows));
     let comparison = compare_read_rows(&rows, &ours, &theirs);
@@ -111,7 +110,7 @@ pub fn operator_distance(
     }
     let transfer = if den > 0.0 { (num / den).sqrt() } else { 0.0 };
     let solution_e_rms = truth_solution.map(|star| errors_against(system, star, &b).map(|e| e.e_rms)).transpose()?;
-    Ok(OperatorDistance { rows: comparison, transfer, solve: solve.0, solution_e_rms, operator_solution: b })
+    Ok(OperatorDistance { rows: comparison, transfer, solve, solution_e_rms, operator_solution: b })
 }
 
 /// `B̃` by GMRES(30) over the operator's product.

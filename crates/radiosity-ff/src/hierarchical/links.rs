@@ -17,9 +17,9 @@
 //!   entry non-negative;
 //! - **near**: both are single patches and the link is not far: the analytic backend's entry
 //!   ([`AnalyticColumns::pair`], with the operator's `budget` of shadow rays), stored as
-//!   `A_i F_ij`. A far link between two single patches
-//!   is stored the same way, as the entry it gives (`A_i A_j g κ_ij`), so products and
-//!   columns read one number for it instead of its kernel's expansion;
+//!   `A_i F_ij`. A far link between two single patches is stored the same way, as the entry
+//!   it gives (`A_i A_j g κ_ij`), so products and columns read one number for it instead of
+//!   its kernel's expansion;
 //! - otherwise **split**: the larger node (by radius) that can be split is replaced by its
 //!   children.
 //!
@@ -130,9 +130,10 @@ pub(crate) struct Refiner<'a> {
     pub eps: Real,
     /// The largest transfer bound of a partly visible far link.
     pub shadows: Real,
-    /// The strata of a far link's rays (as many as its rays) in the order they are traced
+    /// The strata of a far link's rays (as many as its rays) in the order they are traced:
+    /// for each ray, its stratum of one end's area and its stratum of the other's
     /// ([`strata_order`]).
-    pub strata: Vec<usize>,
+    pub strata: Vec<[usize; 2]>,
     /// The seed of the rays.
     pub seed: u64,
     /// What counts as on a plane: a length relative to the scene diagonal.
@@ -291,10 +292,10 @@ impl Refiner<'_> {
         let total = order.len();
         let probe = (total / 4).max(1);
         let mut rng = self.rays_of(a, b);
-        let mut seen = self.sample(a, b, order[..probe].iter().copied(), total, &mut rng, out);
+        let mut seen = self.sample(a, b, &order[..probe], total, &mut rng, out);
         let unanimous = |s: &Sampled| s.clear == 0 || s.clear == s.count;
         if (small && !unanimous(&seen)) || (!small && unanimous(&seen)) {
-            let rest = self.sample(a, b, order[probe..].iter().copied(), total, &mut rng, out);
+            let rest = self.sample(a, b, &order[probe..], total, &mut rng, out);
             seen = Sampled { count: seen.count + rest.count, clear: seen.clear + rest.clear };
         }
         if seen.clear == 0 {
@@ -329,26 +330,26 @@ impl Refiner<'_> {
     }
 
     /// The segments `strata` of `total` between points of `a` and `b` drawn by area
-    /// (stratified: stratum `s` of `a`'s area and a permuted stratum of `b`'s), each traced
-    /// when the scene can occlude (all clear otherwise).
+    /// (stratified: each with its stratum of `a`'s area and of `b`'s), each traced when the
+    /// scene can occlude (all clear otherwise).
     fn sample(
         &self,
         a: u32,
         b: u32,
-        strata: impl Iterator<Item = usize>,
+        strata: &[[usize; 2]],
         total: usize,
         rng: &mut Xoshiro256PlusPlus,
         out: &mut Links,
     ) -> Sampled {
         let (mut count, mut clear) = (0, 0);
-        for s in strata {
+        for &[s, t] in strata {
             count += 1;
             let Some(visibility) = self.visibility else {
                 clear += 1;
                 continue;
             };
             let u = (s as Real + rng.random::<Real>()) / total as Real;
-            let v = (((s * stride_of(total) + 3) % total) as Real + rng.random::<Real>()) / total as Real;
+            let v = (t as Real + rng.random::<Real>()) / total as Real;
             let (x, i) = self.point_in(a, u, rng);
             let (y, j) = self.point_in(b, v, rng);
             if visibility.unoccluded_between(x, i, y, j) {
@@ -372,14 +373,17 @@ impl Refiner<'_> {
 }
 
 /// The strata of `total` rays in the order they are traced, so that every prefix is spread
-/// over both nodes' areas: bit-reversed for a power of two (0, 8, 4, 12, 2, … of 16),
-/// otherwise by a step coprime with `total`.
-pub(crate) fn strata_order(total: usize) -> Vec<usize> {
+/// over both nodes' areas: one end's stratum `s` bit-reversed for a power of two (0, 8, 4, 12,
+/// 2, … of 16), otherwise by a step coprime with `total`; the other end's `(s · step + 3) mod
+/// total`, a permutation, so that the two ends' strata are not paired in order.
+pub(crate) fn strata_order(total: usize) -> Vec<[usize; 2]> {
+    let step = stride_of(total);
+    let permuted = |s: usize| [s, (s * step + 3) % total];
     if total.is_power_of_two() {
         let bits = total.trailing_zeros();
-        (0..total).map(|k| if bits == 0 { 0 } else { k.reverse_bits() >> (usize::BITS - bits) }).collect()
+        (0..total).map(|k| permuted(if bits == 0 { 0 } else { k.reverse_bits() >> (usize::BITS - bits) })).collect()
     } else {
-        (0..total).map(|k| (k * stride_of(total)) % total).collect()
+        (0..total).map(|k| permuted((k * step) % total)).collect()
     }
 }
 

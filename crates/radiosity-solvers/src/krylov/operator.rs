@@ -52,9 +52,9 @@ use crate::run::residual_bound::{ResidualBound, area_norms};
 use crate::run::state::State;
 use radiosity_core::{Real, apply_from_product, residual_from_product};
 
-/// Applies `F` and `A = I − diag(ρ) F` through a problem's columns, counting what it did: the
-/// public operator's product by columns ([`radiosity_core::multiply_by_columns`]) and its
-/// `A x` and residual, with every column fetched through the [`Problem`] that counts it.
+/// Applies `F` and `A = I − diag(ρ) F` through a problem's product ([`Problem::multiply`]: the
+/// source's own, or its columns), counting what it did, and the public operator's `A x` and
+/// residual from that product.
 #[derive(Debug, Default)]
 pub(crate) struct Operator {
     column: Vec<Real>,

@@ -215,7 +215,7 @@ fn bad_stop_rules_are_refused() {
 #[test]
 fn bad_backends_are_refused() {
     // (backend, words of the sentence)
-    let cases: [(&str, &[&str]); 14] = [
+    let cases: [(&str, &[&str]); 16] = [
         (
             "radiance",
             &["unknown form-factor backend 'radiance'", "analytic, hemicube, montecarlo, hierarchical, matrix"],
@@ -231,6 +231,8 @@ fn bad_backends_are_refused() {
         ("hierarchical:rays=0", &["backend 'hierarchical'", "rays=0", "from 1 to 4096"]),
         ("hierarchical:shadows=2", &["backend 'hierarchical'", "shadows=2", "(0, 1]"]),
         ("hierarchical:budget=-1", &["backend 'hierarchical'", "budget=-1"]),
+        ("hierarchical:oracle=light", &["backend 'hierarchical'", "oracle=light", "flux or area"]),
+        ("hierarchical:floor=0", &["backend 'hierarchical'", "floor=0", "(0, 1]"]),
         ("analytic:bogus=1", &["backend 'analytic'", "no parameter 'bogus'", "order, tol, rays, budget, seed"]),
         ("matrix:rebalance=maybe", &["backend 'matrix'", "rebalance=maybe", "true or false"]),
     ];

@@ -8,7 +8,7 @@
 pub use crate::analytic::{ANALYTIC_PARAMS, AnalyticParams};
 use crate::error::FfError;
 pub use crate::hemicube::{HEMICUBE_PARAMS, HemicubeParams};
-pub use crate::hierarchical::{HIERARCHICAL_PARAMS, HierarchicalParams};
+pub use crate::hierarchical::{HIERARCHICAL_PARAMS, HierarchicalParams, Oracle};
 pub use crate::montecarlo::{MONTECARLO_PARAMS, MonteCarloParams};
 use radiosity_geom::{KeyValueParams, ParamDoc};
 
@@ -94,6 +94,12 @@ impl BackendSpec {
                     rays: p.count("rays", defaults.rays, 1, 4096)?,
                     budget: p.count("budget", defaults.budget, 0, 1 << 24)?,
                     seed: p.seed("seed", 0)?,
+                    oracle: match p.given().find(|(k, _)| *k == "oracle").map(|(_, v)| v) {
+                        None | Some("flux") => Oracle::Flux,
+                        Some("area") => Oracle::Area,
+                        Some(_) => return Err(p.reject("oracle", "flux or area").into()),
+                    },
+                    floor: p.real("floor", defaults.floor, |f| f > 0.0 && f <= 1.0, "a weight in (0, 1]")?,
                 })
             }
             "matrix" => {
@@ -129,8 +135,17 @@ impl BackendSpec {
             BackendSpec::MonteCarlo(p) => format!("montecarlo:rays={}:seed={}", p.rays, p.seed),
             BackendSpec::Hierarchical(p) => {
                 format!(
-                    "hierarchical:eps={:e}:shadows={}:rays={}:budget={}:seed={}",
-                    p.eps, p.shadows, p.rays, p.budget, p.seed
+                    "hierarchical:eps={:e}:shadows={}:rays={}:budget={}:seed={}:oracle={}:floor={}",
+                    p.eps,
+                    p.shadows,
+                    p.rays,
+                    p.budget,
+                    p.seed,
+                    match p.oracle {
+                        Oracle::Flux => "flux",
+                        Oracle::Area => "area",
+                    },
+                    p.floor
                 )
             }
             BackendSpec::Matrix { of, rebalance } => {

@@ -7,14 +7,15 @@
 //!   something: no light passes, exactly or as far as the rays tell;
 //! - **far**: the spheres are apart, every patch of `A` faces the centre-to-centre direction `d`
 //!   and every patch of `B` faces `−d` (cosines bounded below by `α`, `β` through the cones),
-//!   `αβ (1 − 2ρ) ≥ ρ (α + β)` with `ρ = (R_A + R_B) / r`, and the error estimate is within
-//!   `eps`. Then `F_ij = A_j · g · κ_ij` for `i`, `j` on either side, with `g = V / (π r²)`, `r`
-//!   the distance between the centres, `V` the fraction of `rays` segments between
+//!   `αβ (1 − 2ρ_c) ≥ ρ_c (α + β)` with `ρ_c = (C_A + C_B) / r` and `C` a node's largest
+//!   distance from its centre to a patch's centroid, and the error estimate is within `eps`.
+//!   Then `F_ij = A_j · g · κ_ij` for `i`, `j` on either side, with `g = V / (π r²)`, `r`
+//!   the distance between the centres, `V` the fraction of the link's segments between
 //!   area-sampled points of both that are clear, and `κ` the kernel's cosines and `r²/|y − x|²`
-//!   to first order about the centres (the module root's `kernel_factor`). `κ` is symmetric
-//!   in the two ends, so `A_i F_ij = A_j F_ji` holds by construction, and its first-order
-//!   terms are at most `ρ (2αβ + α + β)` against `αβ`, so the condition above keeps every
-//!   entry non-negative;
+//!   to first order about the centres, evaluated at the patches' centroids (the module root's
+//!   `kernel_factor`). `κ` is symmetric in the two ends, so `A_i F_ij = A_j F_ji` holds by
+//!   construction, and its first-order terms are at most `ρ_c (2αβ + α + β)` against `αβ`, so
+//!   the condition above keeps every entry non-negative;
 //! - **near**: both are single patches and the link is not far: the analytic backend's entry
 //!   ([`AnalyticColumns::pair`], with the operator's `budget` of shadow rays), stored as
 //!   `A_i F_ij`. A far link between two single patches is stored the same way, as the entry
@@ -25,25 +26,29 @@
 //!
 //! **Visibility.** A link that passes the geometric test first traces a quarter of its `rays`
 //! (a probe), in an order whose every prefix is spread over both areas ([`strata_order`]). A
-//! link is *small* when its transfer bound `max(A_A, A_B) / (π r²)` is at most `shadows` (the
-//! parameter times `eps`) or both ends are patches. A small link whose probe agrees is taken as
-//! it is (clear, or dropped as occluded); a small link whose probe disagrees traces the rest and
-//! keeps its visible fraction. A larger link is only trusted on every ray: it traces the rest
-//! when its probe agrees and is kept or dropped when all still agree; any disagreement splits
-//! it. The visible fraction is one number for every pair of the link, so a partly visible link
-//! misplaces light between its lit and shadowed pairs (a light leak): `shadows` bounds how
-//! much of a row one link may misplace that way. (Fewer rays for larger links, in proportion to
-//! their transfer, measured worse: a leak through a link taken as clear by mistake is
-//! systematic, and a row sums hundreds of them.)
+//! link is *small* when its weighted transfer bound (below) is at most `shadows` (the parameter
+//! times `eps`) or both ends are patches. A small link keeps what its probe saw: dropped when
+//! every ray is blocked, otherwise the probe's visible fraction. A larger link is only trusted
+//! on every ray: any disagreement splits it, and one whose probe agrees traces the rest and is
+//! kept or dropped when all still agree. The visible fraction is one number for every pair of
+//! the link, so a partly visible link misplaces light between its lit and shadowed pairs (a
+//! light leak): `shadows` bounds how much of a row one link may misplace that way. A small
+//! link's fraction is noisy, but the noise is unbiased and averages over the hundreds of links
+//! of a row: tracing all `rays` for small partly visible links (half the rays on `office`)
+//! left its exact solution where it was (measured in `docs/hierarchical.md`). Fewer rays for
+//! larger links, in proportion to their transfer, measured worse: a leak through a link taken as
+//! clear by mistake is systematic.
 //!
-//! The error estimate of a far link bounds what it adds to one row of `F`,
-//! `max(A_A, A_B) / (π r²)`, times the second-order variation of the kernel over the link,
-//! `(2 (ρ + asin ρ))²`: the first-order terms are in `κ` (Hanrahan, Salzman & Aupperle 1991,
-//! "A rapid hierarchical radiosity algorithm", SIGGRAPH; Sillion 1995, "A unified hierarchical
-//! algorithm for global illumination with scattering volumes and object clusters", IEEE TVCG
-//! 1(3)). This is a geometric oracle; one weighted by the radiosity `B` (Hanrahan's BF
-//! refinement) is the next step.
+//! The error estimate of a far link bounds what it adds to the radiosity of one receiver,
+//! relative to the RMS radiosity: the [brightness](super::brightness) bound
+//! `max(ρ_A Φ_B, ρ_B Φ_A) / (π r²)` (with `oracle=area`, `max(A_A, A_B) / (π r²)`, a row of `F`),
+//! times the second-order variation of the kernel over the link, `(2 (ρ + asin ρ))²` with
+//! `ρ = (R_A + R_B) / r` over the bounding spheres: the first-order terms are in `κ` (Hanrahan,
+//! Salzman & Aupperle 1991, "A rapid hierarchical radiosity algorithm", SIGGRAPH; Sillion 1995,
+//! "A unified hierarchical algorithm for global illumination with scattering volumes and object
+//! clusters", IEEE TVCG 1(3)).
 
+use super::brightness::Brightness;
 use super::kernel_factor;
 use super::tree::ClusterTree;
 use crate::analytic::AnalyticColumns;
@@ -53,19 +58,39 @@ use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use std::f64::consts::PI;
 
-/// A far link between nodes `a` and `b`.
+/// A far link between nodes `a` and `b`: 12 bytes, its geometry worked out again from the
+/// nodes' centres when it is used ([`Span::new`]).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct FarLink {
     /// The first node.
     pub a: u32,
     /// The second node.
     pub b: u32,
+    /// Of the link's shadow rays, those found clear.
+    pub clear: u16,
+    /// The link's shadow rays (1 when the scene cannot occlude).
+    pub count: u16,
+}
+
+/// What a far link's kernel needs: its direction, length and `g = V / (π r²)`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Span {
     /// The unit direction from `a`'s centre to `b`'s.
     pub d: Vec3,
     /// The distance between the centres.
     pub r: Real,
     /// `V / (π r²)`.
     pub g: Real,
+}
+
+impl Span {
+    /// The geometry of a far link from node `a` to node `b`, `clear` of its `count` rays clear.
+    /// Seen from `b`, `d` is exactly `−d` and the rest the same.
+    pub fn new(tree: &ClusterTree, a: u32, b: u32, clear: u16, count: u16) -> Span {
+        let between = tree.nodes[b as usize].centre - tree.nodes[a as usize].centre;
+        let r = between.length();
+        Span { d: between / r, r, g: (clear as Real / count as Real) / (PI * r * r) }
+    }
 }
 
 /// A near link: two patches and `A_i F_ij`.
@@ -114,8 +139,8 @@ enum Seen {
     Occluded,
     /// The rays disagree on a link too large to trust its visible fraction.
     Split,
-    /// The visible fraction.
-    Visible(Real),
+    /// Some rays are clear: how many, of how many.
+    Visible { clear: u16, count: u16 },
 }
 
 /// What refinement reads.
@@ -126,6 +151,8 @@ pub(crate) struct Refiner<'a> {
     pub visibility: Option<&'a Visibility>,
     /// The near field.
     pub analytic: &'a AnalyticColumns<'a>,
+    /// What the oracle weighs links by.
+    pub brightness: Brightness,
     /// The error threshold.
     pub eps: Real,
     /// The largest transfer bound of a partly visible far link.
@@ -213,31 +240,34 @@ impl Refiner<'_> {
         }
         let (leaf_a, leaf_b) = (na.is_leaf(), nb.is_leaf());
         let (alpha, beta, rho) = (na.min_cos(d), nb.min_cos(-d), reach / r);
-        // The kernel to first order stays non-negative for every pair of the link: its
-        // first-order terms are at most ρ (2αβ + α + β) against αβ.
-        if r > reach && alpha > 0.0 && beta > 0.0 && alpha * beta * (1.0 - 2.0 * rho) >= rho * (alpha + beta) {
-            let bound = na.area.max(nb.area) / (PI * r * r);
+        // The kernel to first order, evaluated at the patches' centroids, stays non-negative for
+        // every pair of the link: its first-order terms are at most ρ_c (2αβ + α + β) against
+        // αβ, with ρ_c the centroids' largest offsets from the centres over r.
+        let rho_c = (na.centroid_radius + nb.centroid_radius) / r;
+        if r > reach && alpha > 0.0 && beta > 0.0 && alpha * beta * (1.0 - 2.0 * rho_c) >= rho_c * (alpha + beta) {
+            let bound = self.brightness.bound(a, b, r);
             let error = bound * (2.0 * (rho + spread)).powi(2);
             if error <= self.eps {
                 let small = bound <= self.shadows || (leaf_a && leaf_b);
                 let visible = match self.visible_fraction(a, b, small, out) {
                     Seen::Occluded => return,
                     Seen::Split => None,
-                    Seen::Visible(v) => Some(v),
+                    Seen::Visible { clear, count } => Some((clear, count)),
                 };
-                if let Some(visible) = visible {
-                    let link = FarLink { a, b, d, r, g: visible / (PI * r * r) };
+                if let Some((clear, count)) = visible {
+                    let link = FarLink { a, b, clear, count };
                     if leaf_a && leaf_b {
+                        let span = Span::new(self.tree, a, b, clear, count);
                         // Two patches: the entry the far link gives, stored as one number, so
                         // that products and columns read it like a near link's.
                         let (i, j) = (self.tree.order[na.first as usize], self.tree.order[nb.first as usize]);
                         let (p, q) = (&self.scene.patches()[i as usize], &self.scene.patches()[j as usize]);
                         let kappa = kernel_factor(
-                            &link,
+                            &span,
                             (p.normal(), p.centroid() - na.centre),
                             (q.normal(), q.centroid() - nb.centre),
                         );
-                        out.near.push(NearLink { i, j, transfer: p.area() * q.area() * link.g * kappa });
+                        out.near.push(NearLink { i, j, transfer: p.area() * q.area() * span.g * kappa });
                         out.far_pairs += 1;
                     } else {
                         out.far.push(link);
@@ -285,8 +315,9 @@ impl Refiner<'_> {
         }
     }
 
-    /// What the rays of the link between `a` and `b` tell (module doc): a small link whose probe
-    /// agrees is taken as it is, any other link that is not split at once traces every ray.
+    /// What the rays of the link between `a` and `b` tell (module doc): a small link keeps what
+    /// its probe saw, a larger one is split as soon as its rays disagree and traces every ray
+    /// otherwise.
     fn visible_fraction(&self, a: u32, b: u32, small: bool, out: &mut Links) -> Seen {
         let order = &self.strata;
         let total = order.len();
@@ -294,7 +325,10 @@ impl Refiner<'_> {
         let mut rng = self.rays_of(a, b);
         let mut seen = self.sample(a, b, &order[..probe], total, &mut rng, out);
         let unanimous = |s: &Sampled| s.clear == 0 || s.clear == s.count;
-        if (small && !unanimous(&seen)) || (!small && unanimous(&seen)) {
+        if !small {
+            if !unanimous(&seen) {
+                return Seen::Split;
+            }
             let rest = self.sample(a, b, &order[probe..], total, &mut rng, out);
             seen = Sampled { count: seen.count + rest.count, clear: seen.clear + rest.clear };
         }
@@ -302,7 +336,7 @@ impl Refiner<'_> {
             out.occluded += 1;
             Seen::Occluded
         } else if small || unanimous(&seen) {
-            Seen::Visible(seen.clear as Real / seen.count as Real)
+            Seen::Visible { clear: seen.clear as u16, count: seen.count as u16 }
         } else {
             Seen::Split
         }

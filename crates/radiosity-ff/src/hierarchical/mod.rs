@@ -18,7 +18,12 @@
 //! So `A_i F_ij = A_j F_ji` holds by construction (up to rounding: `κ` is symmetric in the two
 //! ends), and every entry is non-negative: far links are made only where the first-order terms
 //! cannot outweigh the product of the cosines. A row sums to 1 only approximately: `eps`
-//! bounds the second-order error of each far link, and `V` is sampled.
+//! bounds the second-order error of each far link, weighed by how much light it carries
+//! (`brightness`: links from the lights are refined further, links between dim or dark
+//! patches less), and `V` is sampled.
+//!
+//! A far link is stored as its two nodes and its rays' tally, 12 bytes; its direction, length
+//! and `g` are worked out again from the nodes' centres wherever it is used, to the same bits.
 //!
 //! ## Products and columns
 //!
@@ -41,11 +46,14 @@
 //! - F. Sillion, "A unified hierarchical algorithm for global illumination with scattering
 //!   volumes and object clusters", IEEE TVCG 1(3), 1995.
 
+mod brightness;
 mod links;
 mod tree;
 
 use crate::analytic::{AnalyticColumns, AnalyticParams};
-use links::{FarLink, Links, NearLink, Refiner};
+use brightness::Brightness;
+pub use brightness::Oracle;
+use links::{Links, Refiner, Span};
 use radiosity_core::{ColumnSource, Real, Scene, Vec3};
 use radiosity_geom::{ParamDoc, SceneAnalysis, Visibility};
 use rayon::prelude::*;
@@ -55,12 +63,14 @@ use tree::ClusterTree;
 /// Parameters of the hierarchical operator.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HierarchicalParams {
-    /// The largest error estimate a far link may have, in units of a row of `F`.
+    /// The largest error estimate a far link may have: what it may change a receiver's
+    /// radiosity by, relative to the RMS radiosity (`oracle=flux`), or a row of `F`
+    /// (`oracle=area`).
     pub eps: Real,
-    /// A far link that is partly visible may carry at most `shadows · eps` of a row: its
-    /// visible fraction is one number for all its pairs, so it is subdivided further.
+    /// A far link larger than `shadows · eps` (in the same units) is split when its rays
+    /// disagree: its visible fraction would be one number for all its pairs.
     pub shadows: Real,
-    /// Shadow rays per far link.
+    /// Shadow rays per far link larger than `shadows · eps`; smaller ones trace a quarter.
     pub rays: usize,
     /// The near pairs' shadow-ray budget: the analytic backend's `budget` (rays per unit of a
     /// pair's unoccluded form factor), lower than that backend's own default: it trades the
@@ -68,29 +78,60 @@ pub struct HierarchicalParams {
     pub budget: usize,
     /// The seed of the rays (and of the near links' analytic entries).
     pub seed: u64,
+    /// What a link's error is weighed by: the flux it carries (the default) or its area.
+    pub oracle: Oracle,
+    /// The smallest weight of a patch's estimated brightness and reflectivity under the flux
+    /// oracle: every link stays within `eps / floor` of a row of `F`.
+    pub floor: Real,
 }
 
 impl Default for HierarchicalParams {
     fn default() -> Self {
-        HierarchicalParams { eps: 1e-2, shadows: 0.05, rays: 16, budget: 512, seed: 0 }
+        HierarchicalParams {
+            eps: 3e-3,
+            shadows: 0.05,
+            rays: 16,
+            budget: 512,
+            seed: 0,
+            oracle: Oracle::Flux,
+            floor: 0.1,
+        }
     }
 }
 
 /// Parameters of `hierarchical`.
 pub const HIERARCHICAL_PARAMS: &[ParamDoc] = &[
-    ParamDoc { key: "eps", default: "1e-2", doc: "largest error estimate of a far link, in units of a row of F" },
+    ParamDoc {
+        key: "eps",
+        default: "3e-3",
+        doc: "largest error estimate of a far link: a receiver's radiosity relative to the RMS radiosity (a row of F with oracle=area)",
+    },
     ParamDoc {
         key: "shadows",
         default: "0.05",
-        doc: "a partly visible far link carries at most shadows·eps of a row, in (0, 1]",
+        doc: "a far link larger than shadows·eps is split when its rays disagree, in (0, 1]",
     },
-    ParamDoc { key: "rays", default: "16", doc: "shadow rays per far link, 1 to 4096" },
+    ParamDoc {
+        key: "rays",
+        default: "16",
+        doc: "shadow rays per far link larger than shadows·eps (a quarter for smaller ones), 1 to 4096",
+    },
     ParamDoc {
         key: "budget",
         default: "512",
         doc: "the near pairs' shadow rays per unit of unoccluded form factor (the analytic backend's budget)",
     },
     ParamDoc { key: "seed", default: "0", doc: "seed of the rays" },
+    ParamDoc {
+        key: "oracle",
+        default: "flux",
+        doc: "what a link's error is weighed by: flux (estimated sender radiosity times receiver reflectivity) or area",
+    },
+    ParamDoc {
+        key: "floor",
+        default: "0.1",
+        doc: "the flux oracle's smallest weight, in (0, 1]: every link stays within eps/floor of a row of F",
+    },
 ];
 
 /// What building the operator found and cost.
@@ -121,14 +162,12 @@ pub struct HierarchyFigures {
 pub struct HierarchicalColumns {
     tree: ClusterTree,
     parent: Vec<u32>,
-    far: Vec<FarLink>,
-    near: Vec<NearLink>,
-    /// Far links by node (CSR): `far_at[far_start[k]..far_start[k + 1]]`.
-    far_start: Vec<u32>,
-    far_at: Vec<u32>,
-    /// Near links by patch (CSR).
-    near_start: Vec<u32>,
-    near_at: Vec<u32>,
+    /// Far links by node, each in the lists of both its nodes: the other nodes and the rays
+    /// found clear of the link's rays.
+    far: Adjacency<[u16; 2]>,
+    /// Near links by patch, each in the lists of both its patches: the other patches and the
+    /// links' `A_p F_pq`.
+    near: Adjacency<Real>,
     areas: Vec<Real>,
     normals: Vec<Vec3>,
     centroids: Vec<Vec3>,
@@ -158,6 +197,7 @@ impl HierarchicalColumns {
             tree: &tree,
             visibility: analysis.occlusion.value.then_some(visibility),
             analytic: &analytic,
+            brightness: Brightness::estimate(scene, &tree, params.oracle, params.floor),
             eps: params.eps,
             shadows: params.shadows * params.eps,
             strata: links::strata_order(params.rays.max(1)),
@@ -165,7 +205,7 @@ impl HierarchicalColumns {
             tolerance: 1e-9 * scene.diagonal(),
             cumulative,
         };
-        let Links { far, near, rays, occluded, far_pairs } = refiner.refine_all();
+        let Links { far: far_links, near: near_links, rays, occluded, far_pairs } = refiner.refine_all();
         let mut parent = vec![u32::MAX; tree.nodes.len()];
         for (k, node) in tree.nodes.iter().enumerate() {
             if let Some(children) = node.children {
@@ -174,16 +214,14 @@ impl HierarchicalColumns {
                 }
             }
         }
-        let (far_start, far_at) = csr(tree.nodes.len(), far.iter().flat_map(|l| [l.a, l.b]));
-        let (near_start, near_at) = csr(scene.len(), near.iter().flat_map(|l| [l.i, l.j]));
-        let bytes = tree.nodes.len() * (size_of::<tree::Node>() + 4)
-            + far.len() * (size_of::<FarLink>() + 8)
-            + near.len() * (size_of::<NearLink>() + 8)
-            + scene.len() * 40;
+        let far = Adjacency::new(tree.nodes.len(), &far_links, |l| (l.a, l.b, [l.clear, l.count]));
+        let near = Adjacency::new(scene.len(), &near_links, |l| (l.i, l.j, l.transfer));
+        let (far_links, near_links) = (far_links.len(), near_links.len());
+        let bytes = tree.nodes.len() * (size_of::<tree::Node>() + 4) + far.bytes() + near.bytes() + scene.len() * 40;
         let figures = HierarchyFigures {
             nodes: tree.nodes.len(),
-            far_links: far.len(),
-            near_links: near.len(),
+            far_links,
+            near_links,
             far_pairs,
             rays,
             occluded,
@@ -194,10 +232,6 @@ impl HierarchicalColumns {
             parent,
             far,
             near,
-            far_start,
-            far_at,
-            near_start,
-            near_at,
             areas: scene.patches().iter().map(|p| p.area()).collect(),
             normals: scene.patches().iter().map(|p| p.normal()).collect(),
             centroids: scene.patches().iter().map(|p| p.centroid()).collect(),
@@ -222,34 +256,29 @@ impl HierarchicalColumns {
 
     /// `F_ij` for every `i` (`row = false`: a column) or every `j` (`row = true`: a row), for
     /// the patch `p` that is `j` or `i` respectively. A far entry is `A_j · g · κ` with `κ` the
-    /// link's kernel factor evaluated with the link's own orientation ([`kernel_factor`]), so a
-    /// row and a column compute each entry the same way.
+    /// link's kernel factor ([`kernel_factor`]) seen from `p`'s end: swapping the ends negates
+    /// `e`, `Δ` and `PΔ` exactly and swaps `α` and `β`, so a row and a column compute each
+    /// entry to the same bits.
     fn fill_line(&self, p: usize, line: &mut [Real], row: bool) {
         line.fill(0.0);
         self.ancestors(p, |k| {
-            for &l in &self.far_at[self.far_start[k as usize] as usize..self.far_start[k as usize + 1] as usize] {
-                let link = &self.far[l as usize];
-                let (ca, cb) = (self.tree.nodes[link.a as usize].centre, self.tree.nodes[link.b as usize].centre);
-                let other = if link.a == k { link.b } else { link.a };
+            let ck = self.tree.nodes[k as usize].centre;
+            for (&other, &[clear, count]) in self.far.of(k as usize) {
+                let span = Span::new(&self.tree, k, other, clear, count);
+                let co = self.tree.nodes[other as usize].centre;
+                let at_p = (self.normals[p], self.centroids[p] - ck);
                 for &q in self.tree.patches_of(other) {
                     let q = q as usize;
-                    // The pair in the link's orientation: `x` on `a`'s side, `y` on `b`'s.
-                    let (x, y) = if link.a == k { (p, q) } else { (q, p) };
-                    let kappa = kernel_factor(
-                        link,
-                        (self.normals[x], self.centroids[x] - ca),
-                        (self.normals[y], self.centroids[y] - cb),
-                    );
-                    // F_iq or F_qi: the area is the sender's.
+                    let kappa = kernel_factor(&span, at_p, (self.normals[q], self.centroids[q] - co));
+                    // F_pq or F_qp: the area is the sender's.
                     let sender = if row { q } else { p };
-                    line[q] = self.areas[sender] * (link.g * kappa);
+                    line[q] = self.areas[sender] * (span.g * kappa);
                 }
             }
         });
-        for &l in &self.near_at[self.near_start[p] as usize..self.near_start[p + 1] as usize] {
-            let link = &self.near[l as usize];
-            let q = if link.i as usize == p { link.j } else { link.i } as usize;
-            line[q] = link.transfer / if row { self.areas[p] } else { self.areas[q] };
+        for (&q, &transfer) in self.near.of(p) {
+            let q = q as usize;
+            line[q] = transfer / if row { self.areas[p] } else { self.areas[q] };
         }
     }
 }
@@ -260,31 +289,73 @@ impl HierarchicalColumns {
 /// `β = −m · e`:
 /// `κ = αβ (1 − 2 e · Δ / r) + (β n · PΔ − α m · PΔ) / r`. It is symmetric in the two ends (swap
 /// them and `e`), and non-negative wherever the link was made.
-fn kernel_factor(link: &FarLink, (n, a): (Vec3, Vec3), (m, b): (Vec3, Vec3)) -> Real {
-    let e = link.d;
+fn kernel_factor(span: &Span, (n, a): (Vec3, Vec3), (m, b): (Vec3, Vec3)) -> Real {
+    let e = span.d;
     let delta = b - a;
     let p_delta = delta - e * e.dot(delta);
     let (alpha, beta) = (n.dot(e), -m.dot(e));
-    alpha * beta * (1.0 - 2.0 * e.dot(delta) / link.r) + (beta * n.dot(p_delta) - alpha * m.dot(p_delta)) / link.r
+    alpha * beta * (1.0 - 2.0 * e.dot(delta) / span.r) + (beta * n.dot(p_delta) - alpha * m.dot(p_delta)) / span.r
 }
 
-/// Compressed lists: for each of `len` keys, the indices of the items naming it.
-fn csr(len: usize, keys: impl Iterator<Item = u32> + Clone) -> (Vec<u32>, Vec<u32>) {
-    let mut start = vec![0u32; len + 1];
-    for k in keys.clone() {
-        start[k as usize + 1] += 1;
+/// Links by the node or patch at either end: for each of `len` keys, the other end and the
+/// link's value, ordered by the other end (so that a product reads its vector in order).
+#[derive(Debug)]
+struct Adjacency<T> {
+    start: Vec<usize>,
+    other: Vec<u32>,
+    value: Vec<T>,
+}
+
+impl<T: Copy + Default + Send> Adjacency<T> {
+    /// The lists of `links` `(a, b, value)`, each in `a`'s list and in `b`'s. A pair is linked
+    /// once, so the order within a list is total.
+    fn new<L>(len: usize, links: &[L], ends: impl Fn(&L) -> (u32, u32, T)) -> Adjacency<T> {
+        let mut start = vec![0usize; len + 1];
+        for (a, b, _) in links.iter().map(&ends) {
+            start[a as usize + 1] += 1;
+            start[b as usize + 1] += 1;
+        }
+        for k in 0..len {
+            start[k + 1] += start[k];
+        }
+        let mut next = start.clone();
+        let (mut other, mut value) = (vec![0u32; start[len]], vec![T::default(); start[len]]);
+        for (a, b, v) in links.iter().map(&ends) {
+            for (p, q) in [(a, b), (b, a)] {
+                (other[next[p as usize]], value[next[p as usize]]) = (q, v);
+                next[p as usize] += 1;
+            }
+        }
+        let (mut rest_other, mut rest_value) = (other.as_mut_slice(), value.as_mut_slice());
+        let mut lists = Vec::with_capacity(len);
+        for k in 0..len {
+            let count = start[k + 1] - start[k];
+            let (o, tail_o) = rest_other.split_at_mut(count);
+            let (v, tail_v) = rest_value.split_at_mut(count);
+            lists.push((o, v));
+            (rest_other, rest_value) = (tail_o, tail_v);
+        }
+        lists.into_par_iter().for_each_init(Vec::new, |entries, (o, v)| {
+            entries.clear();
+            entries.extend(o.iter().copied().zip(v.iter().copied()));
+            entries.sort_unstable_by_key(|e: &(u32, T)| e.0);
+            for (k, &(q, x)) in entries.iter().enumerate() {
+                (o[k], v[k]) = (q, x);
+            }
+        });
+        Adjacency { start, other, value }
     }
-    for k in 0..len {
-        start[k + 1] += start[k];
+
+    /// The list of `k`: the other ends and the values.
+    fn of(&self, k: usize) -> impl Iterator<Item = (&u32, &T)> {
+        let at = self.start[k]..self.start[k + 1];
+        self.other[at.clone()].iter().zip(&self.value[at])
     }
-    let mut next = start.clone();
-    let mut at = vec![0u32; start[len] as usize];
-    // Two keys per item: the item's index is its position halved.
-    for (n, k) in keys.enumerate() {
-        at[next[k as usize] as usize] = (n / 2) as u32;
-        next[k as usize] += 1;
+
+    /// The bytes the lists hold.
+    fn bytes(&self) -> usize {
+        self.start.len() * size_of::<usize>() + self.other.len() * (size_of::<u32>() + size_of::<T>())
     }
-    (start, at)
 }
 
 impl ColumnSource for HierarchicalColumns {
@@ -338,13 +409,11 @@ impl ColumnSource for HierarchicalColumns {
         }
         let mut forms = vec![Form::default(); nodes.len() * k];
         forms.par_chunks_mut(k).enumerate().for_each(|(node, forms)| {
-            let links = &self.far_at[self.far_start[node] as usize..self.far_start[node + 1] as usize];
-            for &l in links {
-                let link = &self.far[l as usize];
-                // The direction from this node to the other end.
-                let (other, e) = if link.a as usize == node { (link.b, link.d) } else { (link.a, -link.d) };
+            for (&other, &[clear, count]) in self.far.of(node) {
+                // From this node to the other end.
+                let span = Span::new(&self.tree, node as u32, other, clear, count);
                 let from = &moments[other as usize * k..(other as usize + 1) * k];
-                Form::receive(forms, from, e, link.r, link.g);
+                Form::receive(forms, from, span.d, span.r, span.g);
             }
         });
         for node in 0..nodes.len() {
@@ -368,12 +437,10 @@ impl ColumnSource for HierarchicalColumns {
             }
         }
         out.par_chunks_mut(k).enumerate().for_each(|(i, out)| {
-            for &l in &self.near_at[self.near_start[i] as usize..self.near_start[i + 1] as usize] {
-                let link = &self.near[l as usize];
-                let j = if link.i as usize == i { link.j } else { link.i } as usize;
-                let f = link.transfer / self.areas[i];
+            for (&j, &transfer) in self.near.of(i) {
+                let f = transfer / self.areas[i];
                 for ch in 0..k {
-                    out[ch] += f * x[j * k + ch];
+                    out[ch] += f * x[j as usize * k + ch];
                 }
             }
         });

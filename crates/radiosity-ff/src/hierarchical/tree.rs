@@ -19,12 +19,13 @@ pub(crate) struct Node {
     pub centre: Vec3,
     /// Its radius.
     pub radius: Real,
+    /// The largest distance from the centre to a patch's centroid: far links evaluate their
+    /// kernel at the centroids, so this bounds the offsets the kernel's first-order terms see.
+    pub centroid_radius: Real,
     /// The axis of the cone of the patches' normals (unit).
     pub axis: Vec3,
     /// The cone's half-angle in radians (π when the normals point every way).
     pub spread: Real,
-    /// The patches' total area.
-    pub area: Real,
     /// The lower corner of the box of the patches' vertices.
     pub lo: Vec3,
     /// Its upper corner.
@@ -153,14 +154,13 @@ fn one_class(scene: &Scene, patches: &[u32]) -> bool {
 fn bounds(scene: &Scene, patches: &[u32], first: usize) -> Node {
     let all = scene.patches();
     let (mut lo, mut hi) = (Vec3::splat(Real::INFINITY), Vec3::splat(-Real::INFINITY));
-    let (mut area, mut normal) = (0.0, Vec3::ZERO);
+    let mut normal = Vec3::ZERO;
     for &i in patches {
         let p = &all[i as usize];
         for v in p.vertices() {
             lo = lo.min(*v);
             hi = hi.max(*v);
         }
-        area += p.area();
         normal += p.area() * p.normal();
     }
     let centre = 0.5 * (lo + hi);
@@ -169,6 +169,8 @@ fn bounds(scene: &Scene, patches: &[u32], first: usize) -> Node {
         .flat_map(|&i| all[i as usize].vertices().iter())
         .map(|v| (*v - centre).length())
         .fold(0.0, Real::max);
+    let centroid_radius = patches.iter().map(|&i| (all[i as usize].centroid() - centre).length()).fold(0.0, Real::max);
+    let area: Real = patches.iter().map(|&i| all[i as usize].area()).sum();
     let length = normal.length();
     let (axis, spread) = if length > 1e-9 * area {
         let axis = normal / length;
@@ -191,9 +193,9 @@ fn bounds(scene: &Scene, patches: &[u32], first: usize) -> Node {
     Node {
         centre,
         radius,
+        centroid_radius,
         axis,
         spread,
-        area,
         lo,
         hi,
         offsets,

@@ -110,10 +110,11 @@ fn compare(args: &Args, prepared: &PreparedScene, spec: &BackendSpec, reference:
     if let Backend::Hierarchical(h) = &backend {
         let f = h.figures();
         out += &format!(
-            "hierarchy    {} nodes, {} far links, {} near links ({} of them far pairs of patches), {} shadow rays ({} \
-             links occluded), {}\n",
+            "hierarchy    {} nodes, {} far links ({} of them to zeroth order), {} near links ({} of them far pairs of \
+             patches), {} shadow rays ({} links occluded), {}\n",
             f.nodes,
             f.far_links,
+            f.zeroth_links,
             f.near_links,
             f.far_pairs,
             f.rays,

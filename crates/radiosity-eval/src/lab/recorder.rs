@@ -50,6 +50,8 @@ pub struct Point {
     pub step: u64,
     /// Columns computed.
     pub columns: u64,
+    /// Products `F·x` of the source's own ([`radiosity_core::ColumnSource::multiply`]).
+    pub products: u64,
     /// The run's seconds so far (form factors and solving; measurement excluded).
     pub seconds: Real,
     /// Wall seconds since the recorder's clock started (for a lab's runs, when the run was
@@ -215,7 +217,15 @@ impl Observer for Recorder<'_> {
             }
         }
         let wall = (start - self.clock).as_secs_f64() - self.overhead;
-        self.points.push(Point { step: state.step, columns: state.columns, seconds, wall, e_rms, bound });
+        self.points.push(Point {
+            step: state.step,
+            columns: state.columns,
+            products: state.products,
+            seconds,
+            wall,
+            e_rms,
+            bound,
+        });
         if let Some(progress) = self.progress {
             let message = match (e_rms.is_nan(), bound.is_nan()) {
                 (false, _) => format!("e_rms {e_rms:.2e}"),

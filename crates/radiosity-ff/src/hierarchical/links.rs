@@ -15,7 +15,11 @@
 //!   to first order about the centres, evaluated at the patches' centroids (the module root's
 //!   `kernel_factor`). `κ` is symmetric in the two ends, so `A_i F_ij = A_j F_ji` holds by
 //!   construction, and its first-order terms are at most `ρ_c (2αβ + α + β)` against `αβ`, so
-//!   the condition above keeps every entry non-negative;
+//!   the condition above keeps every entry non-negative. Where that condition fails (grazing
+//!   links, where one cosine is small), the link may still be far to **zeroth order**:
+//!   `κ = (n · d)(−m · d)`, the cosines with the link's direction alone, non-negative wherever
+//!   `α, β > 0`, its error estimate adding the first-order terms (at most `4ρ_c`) and held to a
+//!   quarter of `eps` (`ZEROTH_SHARE`);
 //! - **near**: both are single patches and the link is not far: the analytic backend's entry
 //!   ([`AnalyticColumns::pair`], with the operator's `budget` of shadow rays), stored as
 //!   `A_i F_ij`. A far link between two single patches is stored the same way, as the entry
@@ -39,8 +43,8 @@
 //! larger links, in proportion to their transfer, measured worse: a leak through a link taken as
 //! clear by mistake is systematic.
 //!
-//! The error estimate of a far link bounds what it adds to the radiosity of one receiver,
-//! relative to the RMS radiosity: the [brightness](super::brightness) bound
+//! The error estimate of a far link (to first order) bounds what it adds to the radiosity of
+//! one receiver, relative to the RMS radiosity: the [brightness](super::brightness) bound
 //! `max(ρ_A Φ_B, ρ_B Φ_A) / (π r²)` (with `oracle=area`, `max(A_A, A_B) / (π r²)`, a row of `F`),
 //! times the second-order variation of the kernel over the link, `(2 (ρ + asin ρ))²` with
 //! `ρ = (R_A + R_B) / r` over the bounding spheres: the first-order terms are in `κ` (Hanrahan,
@@ -68,9 +72,26 @@ pub(crate) struct FarLink {
     pub b: u32,
     /// Of the link's shadow rays, those found clear.
     pub clear: u16,
-    /// The link's shadow rays (1 when the scene cannot occlude).
+    /// The link's shadow rays (1 when the scene cannot occlude), with [`ZEROTH`] set when the
+    /// link's kernel is taken to zeroth order.
     pub count: u16,
 }
+
+/// The bit of [`FarLink::count`] that marks a link whose kernel is the product of the cosines
+/// with its direction alone, `κ = (n · e)(−m · e)` (rays are at most 4096, below this bit).
+pub(crate) const ZEROTH: u16 = 1 << 15;
+
+/// The share of `eps` a link to zeroth order may take. Its error is of first order, the same
+/// sign over every link a receiver sees on one side, so it does not average out over a row as
+/// the second-order error of a first-order link partly does: on `office` (eps 3e-3) the whole
+/// of `eps` gave an exact solution 2.4e-3 from the analytic one, a quarter 1.8e-3, a tenth
+/// 1.8e-3 (`docs/hierarchical.md`).
+const ZEROTH_SHARE: Real = 0.25;
+
+/// The smallest cosine bound a far link is made with: the bounds through the normal cones are
+/// a few roundings from the cosines they bound, and a zeroth-order link must not turn a cosine
+/// of `−1e-17` into a negative entry.
+const MIN_COSINE: Real = 1e-9;
 
 /// What a far link's kernel needs: its direction, length and `g = V / (π r²)`.
 #[derive(Clone, Copy, Debug)]
@@ -81,15 +102,20 @@ pub(crate) struct Span {
     pub r: Real,
     /// `V / (π r²)`.
     pub g: Real,
+    /// Whether the kernel is expanded to first order in the patches' offsets (otherwise the
+    /// product of the cosines with `d`).
+    pub first: bool,
 }
 
 impl Span {
-    /// The geometry of a far link from node `a` to node `b`, `clear` of its `count` rays clear.
-    /// Seen from `b`, `d` is exactly `−d` and the rest the same.
+    /// The geometry of a far link from node `a` to node `b`, `clear` of its `count` rays clear
+    /// (`count` with its [`ZEROTH`] bit). Seen from `b`, `d` is exactly `−d` and the rest the
+    /// same.
     pub fn new(tree: &ClusterTree, a: u32, b: u32, clear: u16, count: u16) -> Span {
         let between = tree.nodes[b as usize].centre - tree.nodes[a as usize].centre;
         let r = between.length();
-        Span { d: between / r, r, g: (clear as Real / count as Real) / (PI * r * r) }
+        let rays = (count & !ZEROTH) as Real;
+        Span { d: between / r, r, g: (clear as Real / rays) / (PI * r * r), first: count & ZEROTH == 0 }
     }
 }
 
@@ -115,6 +141,8 @@ pub(crate) struct Links {
     pub occluded: u64,
     /// Of the near links, those between patches far enough apart for a far link.
     pub far_pairs: u64,
+    /// Of the far links, those to zeroth order.
+    pub zeroth: u64,
 }
 
 impl Links {
@@ -124,6 +152,7 @@ impl Links {
         self.rays += other.rays;
         self.occluded += other.occluded;
         self.far_pairs += other.far_pairs;
+        self.zeroth += other.zeroth;
     }
 }
 
@@ -244,15 +273,26 @@ impl Refiner<'_> {
         // every pair of the link: its first-order terms are at most ρ_c (2αβ + α + β) against
         // αβ, with ρ_c the centroids' largest offsets from the centres over r.
         let rho_c = (na.centroid_radius + nb.centroid_radius) / r;
-        if r > reach && alpha > 0.0 && beta > 0.0 && alpha * beta * (1.0 - 2.0 * rho_c) >= rho_c * (alpha + beta) {
+        // Cosines below `MIN_COSINE` are taken as zero: the cones bound them to a few roundings.
+        if r > reach && alpha > MIN_COSINE && beta > MIN_COSINE {
             let bound = self.brightness.bound(a, b, r);
-            let error = bound * (2.0 * (rho + spread)).powi(2);
-            if error <= self.eps {
+            let second = (2.0 * (rho + spread)).powi(2);
+            // To first order where that stays non-negative, otherwise to zeroth order (the
+            // cosines with d alone, non-negative wherever every patch faces the other side),
+            // whose error adds the first-order terms, at most 4ρ_c, within a share of eps.
+            let order = if alpha * beta * (1.0 - 2.0 * rho_c) >= rho_c * (alpha + beta) && bound * second <= self.eps {
+                Some(0)
+            } else if bound * (4.0 * rho_c + second) <= ZEROTH_SHARE * self.eps {
+                Some(ZEROTH)
+            } else {
+                None
+            };
+            if let Some(order) = order {
                 let small = bound <= self.shadows || (leaf_a && leaf_b);
                 let visible = match self.visible_fraction(a, b, small, out) {
                     Seen::Occluded => return,
                     Seen::Split => None,
-                    Seen::Visible { clear, count } => Some((clear, count)),
+                    Seen::Visible { clear, count } => Some((clear, count | order)),
                 };
                 if let Some((clear, count)) = visible {
                     let link = FarLink { a, b, clear, count };
@@ -270,6 +310,7 @@ impl Refiner<'_> {
                         out.near.push(NearLink { i, j, transfer: p.area() * q.area() * span.g * kappa });
                         out.far_pairs += 1;
                     } else {
+                        out.zeroth += u64::from(order == ZEROTH);
                         out.far.push(link);
                     }
                     return;

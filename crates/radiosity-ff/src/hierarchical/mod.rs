@@ -11,13 +11,15 @@
 //! - a **far** link between nodes `A` and `B` gives `F_ij = A_j · g · κ_ij` for every `i` in
 //!   one and `j` in the other, with `g = V / (π r²)` between the centres and `κ` the kernel
 //!   `cos θ_i cos θ_j r² / |y − x|²` to first order in the patches' offsets from the centres
-//!   (`kernel_factor`);
+//!   (`kernel_factor`), or to zeroth order (the cosines with the link's direction) on grazing
+//!   links, where the first-order terms could turn it negative;
 //! - a **near** link between two patches stores `A_i F_ij`: the analytic backend's, or, for
 //!   two patches far apart, the far kernel's.
 //!
 //! So `A_i F_ij = A_j F_ji` holds by construction (up to rounding: `κ` is symmetric in the two
-//! ends), and every entry is non-negative: far links are made only where the first-order terms
-//! cannot outweigh the product of the cosines. A row sums to 1 only approximately: `eps`
+//! ends), and every entry is non-negative: far links are made to first order only where the
+//! first-order terms cannot outweigh the product of the cosines, and to zeroth order only
+//! where every patch faces the other side. A row sums to 1 only approximately: `eps`
 //! bounds the second-order error of each far link, weighed by how much light it carries
 //! (`brightness`: links from the lights are refined further, links between dim or dark
 //! patches less), and `V` is sampled.
@@ -142,6 +144,9 @@ pub struct HierarchyFigures {
     /// Far links with a cluster at one end at least (a far link between two patches is
     /// stored as a near link, counted in `far_pairs`).
     pub far_links: usize,
+    /// Of the far links, those whose kernel is taken to zeroth order (grazing links, where the
+    /// first-order kernel could turn negative).
+    pub zeroth_links: usize,
     /// Near links, patch to patch, each one number: the analytic entry, or the far kernel's
     /// for patches far apart (`far_pairs`).
     pub near_links: usize,
@@ -205,7 +210,7 @@ impl HierarchicalColumns {
             tolerance: 1e-9 * scene.diagonal(),
             cumulative,
         };
-        let Links { far: far_links, near: near_links, rays, occluded, far_pairs } = refiner.refine_all();
+        let Links { far: far_links, near: near_links, rays, occluded, far_pairs, zeroth } = refiner.refine_all();
         let mut parent = vec![u32::MAX; tree.nodes.len()];
         for (k, node) in tree.nodes.iter().enumerate() {
             if let Some(children) = node.children {
@@ -221,6 +226,7 @@ impl HierarchicalColumns {
         let figures = HierarchyFigures {
             nodes: tree.nodes.len(),
             far_links,
+            zeroth_links: zeroth as usize,
             near_links,
             far_pairs,
             rays,
@@ -291,6 +297,9 @@ impl HierarchicalColumns {
 /// them and `e`), and non-negative wherever the link was made.
 fn kernel_factor(span: &Span, (n, a): (Vec3, Vec3), (m, b): (Vec3, Vec3)) -> Real {
     let e = span.d;
+    if !span.first {
+        return n.dot(e) * -m.dot(e);
+    }
     let delta = b - a;
     let p_delta = delta - e * e.dot(delta);
     let (alpha, beta) = (n.dot(e), -m.dot(e));
@@ -413,7 +422,7 @@ impl ColumnSource for HierarchicalColumns {
                 // From this node to the other end.
                 let span = Span::new(&self.tree, node as u32, other, clear, count);
                 let from = &moments[other as usize * k..(other as usize + 1) * k];
-                Form::receive(forms, from, span.d, span.r, span.g);
+                Form::receive(forms, from, &span);
             }
         });
         for node in 0..nodes.len() {
@@ -489,24 +498,33 @@ impl Form {
     /// `Q = Σ w β (e · b) = −eᵀ M1 e`, `U = Σ w β b = −M1ᵀ e`, `T = Σ w m · P b = tr M1 − eᵀ M1 e`:
     /// `V += g (S e − 2Q e / r + P U / r − T e / r)` and
     /// `W += g (2S e eᵀ / r − S P / r + e (P M0)ᵀ / r)`.
-    fn receive(forms: &mut [Form], from: &[Moments], e: Vec3, r: Real, g: Real) {
-        // The parts that depend on the direction only, shared by every channel.
-        let unit = [Vec3::X, Vec3::Y, Vec3::Z];
-        let rows_p = unit.map(|u| u - e * e.dot(u));
-        let ee = [e * e.x, e * e.y, e * e.z];
+    /// To zeroth order (`span.first` false), `V += g S e` alone.
+    fn receive(forms: &mut [Form], from: &[Moments], span: &Span) {
+        let (e, r, g) = (span.d, span.r, span.g);
+        if !span.first {
+            for (form, from) in forms.iter_mut().zip(from) {
+                form.v += e * (g * -e.dot(from.m0));
+            }
+            return;
+        }
+        // `W`'s rows are `(g / r) (e_k (3S e + P M0) − S u_k)`, `u_k` the unit vectors.
+        let g_r = g / r;
         for (form, from) in forms.iter_mut().zip(from) {
             let m1e = Vec3::new(from.m1[0].dot(e), from.m1[1].dot(e), from.m1[2].dot(e));
             let e_m1_e = e.dot(m1e);
             let m1t_e = from.m1[0] * e.x + from.m1[1] * e.y + from.m1[2] * e.z;
-            let s = -e.dot(from.m0);
+            let e_m0 = e.dot(from.m0);
+            let s = -e_m0;
             let q = -e_m1_e;
             let u = -m1t_e;
             let t = from.m1[0].x + from.m1[1].y + from.m1[2].z - e_m1_e;
             let pu = u - e * e.dot(u);
-            let pm0 = from.m0 - e * e.dot(from.m0);
+            let pm0 = from.m0 - e * e_m0;
             form.v += g * (e * (s - (2.0 * q + t) / r) + pu / r);
+            let c = e * (3.0 * s) + pm0;
             for k in 0..3 {
-                form.w[k] += g * ((2.0 * s / r) * ee[k] - (s / r) * rows_p[k] + (e[k] / r) * pm0);
+                form.w[k] += (g_r * e[k]) * c;
+                form.w[k][k] -= g_r * s;
             }
         }
     }

@@ -5,7 +5,7 @@
 use radiosity_core::operator::multiply_by_columns;
 use radiosity_core::{ColumnSource, Real, measured_reciprocity};
 use radiosity_ff::row_comparison::{compare_rows, sampled_rows};
-use radiosity_ff::{AnalyticColumns, AnalyticParams, HierarchicalColumns, HierarchicalParams};
+use radiosity_ff::{AnalyticColumns, AnalyticParams, HierarchicalColumns, HierarchicalParams, Oracle};
 use radiosity_geom::PreparedScene;
 
 fn prepared(arg: &str) -> PreparedScene {
@@ -122,14 +122,18 @@ fn rows_compared_against_the_analytic_backend() {
 
 #[test]
 fn closed_scenes_close_at_the_default_threshold() {
-    // With and without an occluder; far links carry most of each row.
+    // With and without an occluder, links weighed by flux (the default) and by area; far links
+    // carry most of each row.
     for arg in ["furnace:res=12", "furnace:res=12:block=true"] {
         let p = prepared(arg);
-        let f = hierarchical(&p, HierarchicalParams::default().eps);
-        assert!(f.figures().far_links > 0, "{arg}: {:?}", f.figures());
-        let sums = row_sums(&columns(&f));
-        let worst = sums.iter().fold(0.0, |m: Real, s| m.max((s - 1.0).abs()));
-        assert!(worst < 2e-2, "{arg}: a row off 1 by {worst}");
+        for oracle in [Oracle::Flux, Oracle::Area] {
+            let params = HierarchicalParams { oracle, ..HierarchicalParams::default() };
+            let f = HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, params);
+            assert!(f.figures().far_links > 0, "{arg}, {oracle:?}: {:?}", f.figures());
+            let sums = row_sums(&columns(&f));
+            let worst = sums.iter().fold(0.0, |m: Real, s| m.max((s - 1.0).abs()));
+            assert!(worst < 2e-2, "{arg}, {oracle:?}: a row off 1 by {worst}");
+        }
     }
 }
 

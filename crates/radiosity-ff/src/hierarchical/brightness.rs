@@ -12,8 +12,9 @@
 //! bounce, `B_i ≈ E_i + ρ_i B_amb` with `B_amb = Σ A E / (Σ A (1 − ρ̄))` (the ambient term of
 //! Cohen, Chen, Wallace & Greenberg 1988, "A progressive refinement approach to fast radiosity
 //! image generation", SIGGRAPH), per channel, the largest channel taken. The estimate is wrong
-//! where a patch is lit or shadowed more than on average, so no weight falls below `floor`:
-//! every link is still within `eps / floor` of a row of `F`.
+//! where a patch is lit or shadowed more than on average, so neither weight falls below `floor`:
+//! every link is still within `eps / floor` of a row of `F` towards a receiver that reflects,
+//! and within `eps / floor²` between two patches that are both near black and dim.
 
 use super::tree::ClusterTree;
 use radiosity_core::{Real, Scene};

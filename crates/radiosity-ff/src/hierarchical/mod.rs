@@ -82,8 +82,9 @@ pub struct HierarchicalParams {
     pub seed: u64,
     /// What a link's error is weighed by: the flux it carries (the default) or its area.
     pub oracle: Oracle,
-    /// The smallest weight of a patch's estimated brightness and reflectivity under the flux
-    /// oracle: every link stays within `eps / floor` of a row of `F`.
+    /// The smallest weight of a patch's estimated brightness and of its reflectivity under the
+    /// flux oracle: every link stays within `eps / floor²` of a row of `F` (`eps / floor`
+    /// towards a receiver that reflects).
     pub floor: Real,
 }
 
@@ -132,7 +133,7 @@ pub const HIERARCHICAL_PARAMS: &[ParamDoc] = &[
     ParamDoc {
         key: "floor",
         default: "0.1",
-        doc: "the flux oracle's smallest weight, in (0, 1]: every link stays within eps/floor of a row of F",
+        doc: "the flux oracle's smallest weight of a brightness or a reflectivity, in (0, 1]: every link stays within eps/floor² of a row of F",
     },
 ];
 

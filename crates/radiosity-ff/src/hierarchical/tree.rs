@@ -154,13 +154,14 @@ fn one_class(scene: &Scene, patches: &[u32]) -> bool {
 fn bounds(scene: &Scene, patches: &[u32], first: usize) -> Node {
     let all = scene.patches();
     let (mut lo, mut hi) = (Vec3::splat(Real::INFINITY), Vec3::splat(-Real::INFINITY));
-    let mut normal = Vec3::ZERO;
+    let (mut area, mut normal) = (0.0, Vec3::ZERO);
     for &i in patches {
         let p = &all[i as usize];
         for v in p.vertices() {
             lo = lo.min(*v);
             hi = hi.max(*v);
         }
+        area += p.area();
         normal += p.area() * p.normal();
     }
     let centre = 0.5 * (lo + hi);
@@ -170,7 +171,6 @@ fn bounds(scene: &Scene, patches: &[u32], first: usize) -> Node {
         .map(|v| (*v - centre).length())
         .fold(0.0, Real::max);
     let centroid_radius = patches.iter().map(|&i| (all[i as usize].centroid() - centre).length()).fold(0.0, Real::max);
-    let area: Real = patches.iter().map(|&i| all[i as usize].area()).sum();
     let length = normal.length();
     let (axis, spread) = if length > 1e-9 * area {
         let axis = normal / length;

@@ -364,14 +364,16 @@ impl Refiner<'_> {
         let total = order.len();
         let probe = (total / 4).max(1);
         let mut rng = self.rays_of(a, b);
-        let mut seen = self.sample(a, b, &order[..probe], total, &mut rng, out);
+        // A larger link is split at its first ray that disagrees with the others: the rays
+        // after it could not change that.
+        let mut seen = Sampled { count: 0, clear: 0 };
+        self.sample(a, b, &order[..probe], total, &mut rng, &mut seen, !small, out);
         let unanimous = |s: &Sampled| s.clear == 0 || s.clear == s.count;
         if !small {
             if !unanimous(&seen) {
                 return Seen::Split;
             }
-            let rest = self.sample(a, b, &order[probe..], total, &mut rng, out);
-            seen = Sampled { count: seen.count + rest.count, clear: seen.clear + rest.clear };
+            self.sample(a, b, &order[probe..], total, &mut rng, &mut seen, true, out);
         }
         if seen.clear == 0 {
             out.occluded += 1;
@@ -404,9 +406,11 @@ impl Refiner<'_> {
         Xoshiro256PlusPlus::seed_from_u64(key ^ self.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15))
     }
 
-    /// The segments `strata` of `total` between points of `a` and `b` drawn by area
-    /// (stratified: each with its stratum of `a`'s area and of `b`'s), each traced when the
-    /// scene can occlude (all clear otherwise).
+    /// Adds to `seen` the segments `strata` of `total` between points of `a` and `b` drawn by
+    /// area (stratified: each with its stratum of `a`'s area and of `b`'s), each traced when the
+    /// scene can occlude (all clear otherwise); with `until_split`, stops at the first segment
+    /// that disagrees with those before it.
+    #[allow(clippy::too_many_arguments)]
     fn sample(
         &self,
         a: u32,
@@ -414,13 +418,14 @@ impl Refiner<'_> {
         strata: &[[usize; 2]],
         total: usize,
         rng: &mut Xoshiro256PlusPlus,
+        seen: &mut Sampled,
+        until_split: bool,
         out: &mut Links,
-    ) -> Sampled {
-        let (mut count, mut clear) = (0, 0);
+    ) {
         for &[s, t] in strata {
-            count += 1;
+            seen.count += 1;
             let Some(visibility) = self.visibility else {
-                clear += 1;
+                seen.clear += 1;
                 continue;
             };
             let u = (s as Real + rng.random::<Real>()) / total as Real;
@@ -428,11 +433,13 @@ impl Refiner<'_> {
             let (x, i) = self.point_in(a, u, rng);
             let (y, j) = self.point_in(b, v, rng);
             if visibility.unoccluded_between(x, i, y, j) {
-                clear += 1;
+                seen.clear += 1;
             }
             out.rays += 1;
+            if until_split && seen.clear != 0 && seen.clear != seen.count {
+                return;
+            }
         }
-        Sampled { count, clear }
     }
 
     /// The point of node `k` at the fraction `u` of its area, and its patch.

@@ -33,8 +33,14 @@
 //! link is *small* when its weighted transfer bound (below) is at most `shadows` (the parameter
 //! times `eps`) or both ends are patches. A small link keeps what its probe saw: dropped when
 //! every ray is blocked, otherwise the probe's visible fraction. A larger link is only trusted
-//! on every ray: any disagreement splits it, and one whose probe agrees traces the rest and is
-//! kept or dropped when all still agree. The visible fraction is one number for every pair of
+//! on every ray: any disagreement splits it (at the first ray that disagrees: the rest could
+//! not change that), and one whose probe agrees traces the rest and is kept or dropped when all
+//! still agree. A split link hands the segments it traced to its children, each to the child its
+//! end lies in: a larger child counts them among its rays (uniform over its areas, as its own
+//! are), so a child that inherits a disagreement is split without a ray, and one that inherits
+//! agreement traces only the rest. A small child traces its own probe: the segments that made
+//! its parent split were selected by their disagreement, and a kept fraction counted from them
+//! would lean towards the sibling's side. The visible fraction is one number for every pair of
 //! the link, so a partly visible link misplaces light between its lit and shadowed pairs (a
 //! light leak): `shadows` bounds how much of a row one link may misplace that way. A small
 //! link's fraction is noisy, but the noise is unbiased and averages over the hundreds of links
@@ -162,6 +168,16 @@ struct Sampled {
     clear: usize,
 }
 
+/// A shadow segment traced for a link: its ends' patches (by position in the tree's order, on
+/// the link's first node and on its second) and whether it was clear. A split link hands its
+/// segments to its children (module doc).
+#[derive(Clone, Copy, Debug)]
+struct Segment {
+    from: u32,
+    to: u32,
+    clear: bool,
+}
+
 /// What a link's rays tell.
 enum Seen {
     /// Every ray is blocked: the link is dropped.
@@ -232,7 +248,7 @@ impl Refiner<'_> {
                 },
                 || {
                     let mut l = Links::default();
-                    self.refine_pair(a, b, &mut l);
+                    self.refine_pair(a, b, Vec::new(), &mut l);
                     l
                 },
             );
@@ -242,12 +258,13 @@ impl Refiner<'_> {
         } else {
             self.refine_self(a, out);
             self.refine_self(b, out);
-            self.refine_pair(a, b, out);
+            self.refine_pair(a, b, Vec::new(), out);
         }
     }
 
-    /// The links between the disjoint nodes `a` and `b`.
-    fn refine_pair(&self, a: u32, b: u32, out: &mut Links) {
+    /// The links between the disjoint nodes `a` and `b`, given the segments traced between
+    /// them for links they were split from.
+    fn refine_pair(&self, a: u32, b: u32, mut traced: Vec<Segment>, out: &mut Links) {
         let (na, nb) = (&self.tree.nodes[a as usize], &self.tree.nodes[b as usize]);
         let between = nb.centre - na.centre;
         let r = between.length();
@@ -289,7 +306,7 @@ impl Refiner<'_> {
             };
             if let Some(order) = order {
                 let small = bound <= self.shadows || (leaf_a && leaf_b);
-                let visible = match self.visible_fraction(a, b, small, out) {
+                let visible = match self.visible_fraction(a, b, small, &mut traced, out) {
                     Seen::Occluded => return,
                     Seen::Split => None,
                     Seen::Visible { clear, count } => Some((clear, count | order)),
@@ -335,53 +352,74 @@ impl Refiner<'_> {
             true => ((c0, keep), (c1, keep)),
             false => ((keep, c0), (keep, c1)),
         };
+        // Each segment goes with the child its end on the split side lies in.
+        let (mut t0, mut t1) = (Vec::new(), Vec::new());
+        let split = &self.tree.nodes[c0 as usize];
+        for segment in traced {
+            let at = if split_a { segment.from } else { segment.to };
+            if at < split.first + split.count { t0.push(segment) } else { t1.push(segment) }
+        }
         if na.count + nb.count > PARALLEL_COUNT {
             let (mut x, y) = rayon::join(
                 || {
                     let mut l = Links::default();
-                    self.refine_pair(p0.0, p0.1, &mut l);
+                    self.refine_pair(p0.0, p0.1, t0, &mut l);
                     l
                 },
                 || {
                     let mut l = Links::default();
-                    self.refine_pair(p1.0, p1.1, &mut l);
+                    self.refine_pair(p1.0, p1.1, t1, &mut l);
                     l
                 },
             );
             x.append(y);
             out.append(x);
         } else {
-            self.refine_pair(p0.0, p0.1, out);
-            self.refine_pair(p1.0, p1.1, out);
+            self.refine_pair(p0.0, p0.1, t0, out);
+            self.refine_pair(p1.0, p1.1, t1, out);
         }
     }
 
     /// What the rays of the link between `a` and `b` tell (module doc): a small link keeps what
     /// its probe saw, a larger one is split as soon as its rays disagree and traces every ray
-    /// otherwise.
-    fn visible_fraction(&self, a: u32, b: u32, small: bool, out: &mut Links) -> Seen {
+    /// otherwise, counting the segments `traced` for the links it was split from. When it is
+    /// split, `traced` holds every segment traced between `a` and `b`.
+    fn visible_fraction(&self, a: u32, b: u32, small: bool, traced: &mut Vec<Segment>, out: &mut Links) -> Seen {
         let order = &self.strata;
         let total = order.len();
         let probe = (total / 4).max(1);
         let mut rng = self.rays_of(a, b);
-        // A larger link is split at its first ray that disagrees with the others: the rays
-        // after it could not change that.
-        let mut seen = Sampled { count: 0, clear: 0 };
-        self.sample(a, b, &order[..probe], total, &mut rng, &mut seen, !small, out);
         let unanimous = |s: &Sampled| s.clear == 0 || s.clear == s.count;
-        if !small {
-            if !unanimous(&seen) {
-                return Seen::Split;
-            }
-            self.sample(a, b, &order[probe..], total, &mut rng, &mut seen, true, out);
+        if small {
+            let mut seen = Sampled { count: 0, clear: 0 };
+            self.sample(a, b, &order[..probe], total, &mut rng, &mut seen, None, out);
+            return match seen.clear {
+                0 => {
+                    out.occluded += 1;
+                    Seen::Occluded
+                }
+                clear => Seen::Visible { clear: clear as u16, count: seen.count as u16 },
+            };
         }
-        if seen.clear == 0 {
+        // A larger link is split at its first ray that disagrees with the others, the segments
+        // traced for its ancestors included: the rays after it could not change that.
+        let clear = traced.iter().filter(|s| s.clear).count();
+        let mut seen = Sampled { count: traced.len(), clear };
+        if unanimous(&seen) {
+            let fresh = total.saturating_sub(traced.len());
+            let (first, rest) = order[..fresh].split_at(probe.min(fresh));
+            self.sample(a, b, first, total, &mut rng, &mut seen, Some(traced), out);
+            if unanimous(&seen) {
+                self.sample(a, b, rest, total, &mut rng, &mut seen, Some(traced), out);
+            }
+        }
+        if !unanimous(&seen) {
+            Seen::Split
+        } else if seen.clear == 0 {
             out.occluded += 1;
             Seen::Occluded
-        } else if small || unanimous(&seen) {
-            Seen::Visible { clear: seen.clear as u16, count: seen.count as u16 }
         } else {
-            Seen::Split
+            Seen::Visible { clear: seen.clear as u16, count: seen.count as u16 }
         }
     }
 
@@ -408,8 +446,8 @@ impl Refiner<'_> {
 
     /// Adds to `seen` the segments `strata` of `total` between points of `a` and `b` drawn by
     /// area (stratified: each with its stratum of `a`'s area and of `b`'s), each traced when the
-    /// scene can occlude (all clear otherwise); with `until_split`, stops at the first segment
-    /// that disagrees with those before it.
+    /// scene can occlude (all clear otherwise). With `traced`, records each segment there and
+    /// stops at the first that disagrees with those before it.
     #[allow(clippy::too_many_arguments)]
     fn sample(
         &self,
@@ -419,7 +457,7 @@ impl Refiner<'_> {
         total: usize,
         rng: &mut Xoshiro256PlusPlus,
         seen: &mut Sampled,
-        until_split: bool,
+        mut traced: Option<&mut Vec<Segment>>,
         out: &mut Links,
     ) {
         for &[s, t] in strata {
@@ -430,19 +468,23 @@ impl Refiner<'_> {
             };
             let u = (s as Real + rng.random::<Real>()) / total as Real;
             let v = (t as Real + rng.random::<Real>()) / total as Real;
-            let (x, i) = self.point_in(a, u, rng);
-            let (y, j) = self.point_in(b, v, rng);
-            if visibility.unoccluded_between(x, i, y, j) {
-                seen.clear += 1;
-            }
+            let (x, from) = self.point_in(a, u, rng);
+            let (y, to) = self.point_in(b, v, rng);
+            let (i, j) = (self.tree.order[from] as usize, self.tree.order[to] as usize);
+            let clear = visibility.unoccluded_between(x, i, y, j);
+            seen.clear += usize::from(clear);
             out.rays += 1;
-            if until_split && seen.clear != 0 && seen.clear != seen.count {
-                return;
+            if let Some(traced) = traced.as_deref_mut() {
+                traced.push(Segment { from: from as u32, to: to as u32, clear });
+                if seen.clear != 0 && seen.clear != seen.count {
+                    return;
+                }
             }
         }
     }
 
-    /// The point of node `k` at the fraction `u` of its area, and its patch.
+    /// The point of node `k` at the fraction `u` of its area, and its patch's position in the
+    /// tree's order.
     fn point_in(&self, k: u32, u: Real, rng: &mut impl Rng) -> (Vec3, usize) {
         let node = &self.tree.nodes[k as usize];
         let (first, last) = (node.first as usize, (node.first + node.count) as usize);
@@ -450,7 +492,7 @@ impl Refiner<'_> {
         let at = self.cumulative[first..=last].partition_point(|&c| c <= target).clamp(1, last - first) + first - 1;
         let patch = self.tree.order[at] as usize;
         let point = self.scene.patches()[patch].point_at(rng.random(), rng.random());
-        (point, patch)
+        (point, at)
     }
 }
 

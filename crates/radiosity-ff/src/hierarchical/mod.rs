@@ -93,7 +93,7 @@ impl Default for HierarchicalParams {
         HierarchicalParams {
             eps: 3e-3,
             shadows: 0.05,
-            rays: 16,
+            rays: 14,
             budget: 512,
             seed: 0,
             oracle: Oracle::Flux,
@@ -116,7 +116,7 @@ pub const HIERARCHICAL_PARAMS: &[ParamDoc] = &[
     },
     ParamDoc {
         key: "rays",
-        default: "16",
+        default: "14",
         doc: "shadow rays per far link larger than shadows·eps (a quarter for smaller ones), 1 to 4096",
     },
     ParamDoc {

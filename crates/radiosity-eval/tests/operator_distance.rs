@@ -1,10 +1,14 @@
 //! A fast operator measured against a trusted one: the figures of `operator_distance` against
 //! values worked out independently, and the hierarchical operator on the furnace with its
-//! occluder against the closed form `E / (1 − ρ)`.
+//! occluder against the closed form `E / (1 − ρ)`; its contraction bounded by two products
+//! against the one its assembled matrix gives, and a reference through its products.
 
 use radiosity_core::dense_lu::lu_solve;
 use radiosity_core::{ColumnSource, DenseColumns, LinearSystem, Real};
-use radiosity_eval::{OperatorDistanceParams, errors_against, operator_distance};
+use radiosity_eval::{
+    Contraction, FormFactors, Method, NoProgress, OperatorDistanceParams, ReferenceParams, ReferenceSolution,
+    ShootingParams, errors_against, operator_distance, solve_by_shooting,
+};
 use radiosity_ff::{AnalyticColumns, AnalyticParams, HierarchicalColumns, HierarchicalParams};
 use radiosity_geom::PreparedScene;
 
@@ -74,4 +78,45 @@ fn the_hierarchical_operator_keeps_the_furnace_identity_with_an_occluder() {
     assert!(d.solve.converged, "{:?}", d.solve);
     let e = d.solution_e_rms.unwrap();
     assert!(e < 1e-2, "e_rms {e} against E / (1 − ρ)");
+}
+
+#[test]
+fn the_contraction_from_products_bounds_the_one_of_the_assembled_matrix() {
+    // The hierarchical operator multiplies natively and is reciprocal to rounding: its two
+    // products bound the contraction its assembled matrix gives, from above and within 1e-8,
+    // and a `shooting` reference over it runs `gmres-30` through products, certified by that
+    // contraction, and lands within its certified bound of the dense solve of the same matrix.
+    let p = PreparedScene::load("cornell:res=6").unwrap();
+    let system = LinearSystem::from_scene(p.scene());
+    let params = HierarchicalParams { eps: 5e-2, ..HierarchicalParams::default() };
+    let f = HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, params);
+    let m = FormFactors::assemble(&f, 1 << 30).unwrap();
+    let measured = Contraction::from_matrix(&system, &m).unwrap();
+    let bounded = Contraction::from_products(&system, &f).unwrap().expect("the operator multiplies natively");
+    assert!(bounded.measured);
+    let close = |bound: Real, exact: Real| bound >= exact && bound <= exact * (1.0 + 1e-8);
+    assert!(close(bounded.max_row_sum, measured.max_row_sum), "{bounded:?} against {measured:?}");
+    for c in 0..measured.kappa.len() {
+        assert!(close(bounded.kappa[c], measured.kappa[c]), "channel {c}: {bounded:?} against {measured:?}");
+    }
+    // A source that multiplies column by column gives none: a product would cost n columns.
+    let dense = DenseColumns::from_fn(system.len(), |i, j| m.get(i, j));
+    assert_eq!(Contraction::from_products(&system, &dense).unwrap(), None);
+
+    let reference = solve_by_shooting(&system, &f, &ShootingParams::default(), &NoProgress).unwrap();
+    match reference.method() {
+        Method::Shooting { solver, columns, .. } => assert_eq!((solver.as_str(), *columns), ("gmres-30", 0)),
+        other => panic!("{other:?}"),
+    }
+    let certificate = reference.certificate();
+    assert!(certificate.certified && certificate.contraction.measured, "{certificate}");
+    let exact = ReferenceSolution::solve_matrix(&system, &m, ReferenceParams::default()).unwrap();
+    let k = system.channels().count();
+    let (mut error, mut total) = (0.0, 0.0);
+    for (idx, (&a, &b)) in reference.values().iter().zip(exact.values()).enumerate() {
+        error += system.areas()[idx / k] * (a - b).abs();
+        total += system.areas()[idx / k] * b.abs();
+    }
+    assert!(error / total <= certificate.relative_bound, "{} > {}", error / total, certificate.relative_bound);
+    assert!(certificate.relative_bound <= 1e-8, "{certificate}");
 }

@@ -32,9 +32,11 @@
 //! `O(nnz)`). Its own time is reported apart, as measurement.
 //!
 //! **The bound's hypothesis.** With a stored matrix the contraction `κ_c` is measured on it;
-//! without one it is DESIGN §5's hypothesis, rows of F summing to at most 1 and F reciprocal,
-//! so `κ_c ≤ ρ_max,c` ([`Contraction::assumed`]). The analytic backend is exactly reciprocal
-//! and its rows sum to 1 within its stated accuracy.
+//! over a source that multiplies natively and states its reciprocity (the hierarchical
+//! operator), it is bounded by two products ([`Contraction::from_products`]); otherwise it is
+//! DESIGN §5's hypothesis, rows of F summing to at most 1 and F reciprocal, so
+//! `κ_c ≤ ρ_max,c` ([`Contraction::assumed`]). The analytic backend is exactly reciprocal and
+//! its rows sum to 1 within its stated accuracy.
 //!
 //! ## The reference cache
 //!
@@ -55,6 +57,7 @@
 //! [`Recorder`]: crate::Recorder
 //! [`SolverBound`]: crate::SolverBound
 //! [`Contraction::assumed`]: crate::Contraction::assumed
+//! [`Contraction::from_products`]: crate::Contraction::from_products
 //! [`Cache`]: crate::Cache
 //! [`LabOptions::residuals`]: crate::LabOptions::residuals
 //! [`FinalMetrics`]: crate::FinalMetrics

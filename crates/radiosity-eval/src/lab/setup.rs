@@ -219,7 +219,7 @@ impl<'p> Lab<'p> {
         let none = |chosen| {
             let contraction = match &stored {
                 Some(m) => Contraction::from_matrix(&system, m)?,
-                None => Contraction::assumed(&system),
+                None => Contraction::from_products(&system, source)?.unwrap_or_else(|| Contraction::assumed(&system)),
             };
             Ok::<_, LabError>(Setup {
                 system: system.clone(),

@@ -74,6 +74,37 @@ impl Contraction {
         Ok(Contraction::new(system, m.max_row_sum(), kappa_matrix(system, m)))
     }
 
+    /// Measures the contraction of `system` from two products by a source that multiplies a
+    /// whole vector itself ([`ColumnSource::multiply`], the hierarchical operator's
+    /// `O(links + n)`) and states a reciprocity bound `δ`. Reciprocity within `δ` gives
+    /// `A_i F_ij ≤ A_j F_ji / (1 − δ)`, so `κ_c = max_j Σ_i A_i ρ_ic F_ij / A_j ≤
+    /// max_j (F ρ_c)_j / (1 − δ)`: one product by the reflectivities, and one by ones for
+    /// `max_row_sum`. Both are raised by a relative [`PRODUCT_SLACK`] for the rounding of the
+    /// products' sums, so the contraction is an upper bound and the certificate stays proven.
+    /// `None` when the source multiplies column by column (`n` columns a product: a stored
+    /// matrix is measured with [`Contraction::from_matrix`]) or states no reciprocity bound.
+    pub fn from_products(system: &LinearSystem, f: &dyn ColumnSource) -> Result<Option<Contraction>, EvalError> {
+        check_sizes(system, f.patch_count(), None)?;
+        let Some(delta) = f.reciprocity_bound().filter(|&d| d < 1.0) else { return Ok(None) };
+        let n = system.len();
+        let mut sums = vec![0.0; n];
+        if !f.multiply(&vec![1.0; n], 1, &mut sums) {
+            return Ok(None);
+        }
+        let k = system.channels().count();
+        let mut gathered = vec![0.0; n * k];
+        if !f.multiply(system.reflectivities(), k, &mut gathered) {
+            return Ok(None);
+        }
+        let up = 1.0 + PRODUCT_SLACK;
+        let max_row_sum = up * sums.iter().copied().fold(0.0, Real::max);
+        let mut kappa = vec![0.0_f64; k];
+        for (idx, &v) in gathered.iter().enumerate() {
+            kappa[idx % k] = kappa[idx % k].max(up * v / (1.0 - delta));
+        }
+        Ok(Some(Contraction::new(system, max_row_sum, kappa)))
+    }
+
     /// `q_c = max(ρ_max,c, κ_c)`, the factor of channel `c`: the bound is
     /// `‖r_c‖_A / (1 − q_c)`.
     pub fn factor(&self, c: usize) -> Real {
@@ -96,6 +127,11 @@ impl Contraction {
         self.max_row_sum <= 1.0
     }
 }
+
+/// The relative slack [`Contraction::from_products`] adds to what its products measured: a
+/// product's sums are rounded, and a native product (the hierarchical operator's moments)
+/// sums in another order than the entries, some `1e-13` of the value apart; `1e-9` is ample.
+pub const PRODUCT_SLACK: Real = 1e-9;
 
 /// Per channel, `max_i ρ_ic`.
 fn rho_max(system: &LinearSystem) -> Vec<Real> {

@@ -92,6 +92,10 @@ impl ColumnSource for Multiplying {
         }
         true
     }
+
+    fn multiplies(&self) -> bool {
+        true
+    }
 }
 
 #[test]

@@ -1386,3 +1386,73 @@ fn automatic_group_frequency_is_reproducible_and_follows_the_cost_model() {
     let sparse = solve("pr-g8-m16:target=0.002", &system, &f, "steps=60").record;
     assert!(sparse.count("group_steps").unwrap() < first.record.count("group_steps").unwrap());
 }
+
+/// Every state a run passes through after a step.
+struct States(Vec<State>);
+
+impl Observer for States {
+    fn observe_step(&mut self, state: &State, _figures: &Record) {
+        self.0.push(state.clone());
+    }
+}
+
+/// A dense matrix that multiplies a whole vector itself, as a stored matrix or the
+/// hierarchical operator does.
+struct Multiplying<'a>(&'a DenseColumns);
+
+impl radiosity_core::ColumnSource for Multiplying<'_> {
+    fn patch_count(&self) -> usize {
+        radiosity_core::ColumnSource::patch_count(self.0)
+    }
+
+    fn fill_column(&self, j: usize, column: &mut [Real]) {
+        self.0.fill_column(j, column)
+    }
+
+    fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
+        self.0.fill_row(i, row)
+    }
+
+    fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
+        for (idx, o) in out.iter_mut().enumerate() {
+            let (i, c) = (idx / channels, idx % channels);
+            *o = (0..radiosity_core::ColumnSource::patch_count(self.0))
+                .map(|j| self.0.get(i, j) * x[j * channels + c])
+                .sum();
+        }
+        true
+    }
+
+    fn multiplies(&self) -> bool {
+        true
+    }
+}
+
+#[test]
+fn jacobi_sweeps_by_products_over_a_source_that_multiplies() {
+    // Over a source that multiplies itself a Jacobi step is a whole sweep, one product: after
+    // k steps the radiosity is the per-patch Jacobi's after k sweeps (k n steps) to rounding,
+    // no column is fetched, the change kept is the residual of the radiosity before the step,
+    // and the residual bound holds against the exact residual after every step.
+    let system =
+        LinearSystem::new(Channels::Rgb, vec![1.0; 6], [0.9, 0.5, 0.2].repeat(6), [1.0, 2.0, 0.5].repeat(6)).unwrap();
+    let f = cube();
+    let by_rows = solve("jacobi", &system, &f, "steps=30");
+    let multiplying = Multiplying(&f);
+    let problem = Problem::new(&system, &multiplying).unwrap();
+    let mut solver = solver_by_name("jacobi").unwrap();
+    let mut states = States(Vec::new());
+    let by_products = Executor::new(solver.as_mut(), StopRules::parse("steps=5").unwrap())
+        .add_observer(&mut states, ObserverMode::Always)
+        .run(&problem)
+        .unwrap();
+    assert_eq!(solver.step_kind(), StepKind::Product);
+    assert_eq!((by_products.state.step, by_products.state.columns, by_products.state.products), (5, 0, 5));
+    for (a, b) in by_products.state.radiosity.iter().zip(&by_rows.state.radiosity) {
+        assert!((a - b).abs() <= 1e-13 * b.abs(), "{a} against {b}");
+    }
+    assert!(states.0.len() >= 5, "a state after every step");
+    for state in &states.0 {
+        assert_unshot_is_the_residual("jacobi by products", &system, &f, state);
+    }
+}

@@ -192,6 +192,10 @@ impl ColumnSource for FormFactors {
         multiply_matrix(self, x, channels, out);
         true
     }
+
+    fn multiplies(&self) -> bool {
+        true
+    }
 }
 
 /// A column source whose entries are rounded to `f32`, as a stored matrix holds them: a lab's
@@ -230,6 +234,10 @@ impl<S: ColumnSource> ColumnSource for F32Columns<S> {
 
     fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
         self.0.multiply(x, channels, out)
+    }
+
+    fn multiplies(&self) -> bool {
+        self.0.multiplies()
     }
 }
 

@@ -5,6 +5,13 @@
 //! reciprocity), so a sweep is `n` steps. The residual reported is that of `B^k`, exactly, at
 //! the end of each sweep.
 //!
+//! Over a source that multiplies a whole vector itself ([`Problem::multiplies`]: a stored
+//! matrix, the hierarchical operator), a step is a whole sweep, one product `F B^k`: the same
+//! iterates at the end of each sweep, up to the order of summation, for one product in place of
+//! `n` rows. The step's change is then the residual `r^k` of `B^k`, and the residual of
+//! `B^{k+1} = B^k + r^k` is exactly `ρ F r^k`: the bound of a shooting method with `ΔB = r^k`,
+//! non-negative when `r^k` is.
+//!
 //! ## References
 //!
 //! - Cohen & Greenberg 1985, "The hemi-cube", SIGGRAPH (radiosity by gathering iterations).
@@ -16,7 +23,7 @@ use crate::naming::{ParseSolverError, SolverParams, plain_name};
 use crate::run::executor::{Solver, StepKind};
 use crate::run::problem::Problem;
 use crate::run::record::Record;
-use crate::run::residual_bound::{ResidualBound, SweepChanges};
+use crate::run::residual_bound::{ResidualBound, SweepChanges, shooting};
 use crate::run::state::State;
 use radiosity_core::Real;
 use std::str::FromStr;
@@ -52,6 +59,12 @@ pub struct Jacobi {
     residual: Vec<Real>,
     sweep: SweepResidual,
     changes: SweepChanges,
+    /// Whether a step is a whole sweep by one product (module doc).
+    by_products: bool,
+    /// `F B^k`, when sweeping by products.
+    product: Vec<Real>,
+    /// The residual power of `B^k`, when sweeping by products.
+    product_residual: Option<Real>,
 }
 
 impl Solver for Jacobi {
@@ -59,13 +72,18 @@ impl Solver for Jacobi {
         "jacobi".into()
     }
 
-    fn init(&mut self, _problem: &Problem<'_>, _state: &mut State) -> Result<(), SolverError> {
+    fn init(&mut self, problem: &Problem<'_>, _state: &mut State) -> Result<(), SolverError> {
         self.sweep = SweepResidual::default();
         self.changes = SweepChanges::default();
+        self.by_products = problem.multiplies();
+        self.product_residual = None;
         Ok(())
     }
 
     fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<Record, SolverError> {
+        if self.by_products {
+            return self.sweep_by_product(problem, state);
+        }
         let i = self.sweep.next;
         if i == 0 {
             self.sweep_start.clone_from(&state.radiosity);
@@ -85,14 +103,43 @@ impl Solver for Jacobi {
     }
 
     fn residual_power(&self, _problem: &Problem<'_>, _state: &State) -> Option<Real> {
-        self.sweep.last()
+        if self.by_products { self.product_residual } else { self.sweep.last() }
     }
 
     fn residual_bound(&self, problem: &Problem<'_>, state: &State) -> Option<ResidualBound> {
+        if self.by_products {
+            return Some(shooting(problem, state));
+        }
         Some(self.changes.bound(problem, state, true, 1.0))
     }
 
+    /// A gather, or, once [`Solver::init`] found a source that multiplies, a product.
     fn step_kind(&self) -> StepKind {
-        StepKind::Gather
+        if self.by_products { StepKind::Product } else { StepKind::Gather }
+    }
+}
+
+impl Jacobi {
+    /// A whole sweep by one product (module doc): `B^{k+1} = B^k + r^k`, the change `r^k` kept
+    /// in `state.unshot`.
+    fn sweep_by_product(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<Record, SolverError> {
+        let (n, k) = (problem.n(), state.channels);
+        self.product.resize(n * k, 0.0);
+        problem.multiply(&state.radiosity, &mut self.product, &mut self.row);
+        let system = problem.system();
+        let (mut residual, mut emitted) = (0.0, 0.0);
+        for (idx, &fb) in self.product.iter().enumerate() {
+            let (i, c) = (idx / k, idx % k);
+            let r = system.e(i, c) + system.rho(i, c) * fb - state.radiosity[idx];
+            state.radiosity[idx] += r;
+            state.unshot[idx] = r;
+            if !state.radiosity[idx].is_finite() {
+                return Err(SolverError::NonFinite { step: state.step + 1, patch: i, value: state.radiosity[idx] });
+            }
+            residual += system.areas()[i] * r.abs();
+            emitted += system.areas()[i] * system.e(i, c).abs();
+        }
+        self.product_residual = Some(if emitted > 0.0 { residual / emitted } else { 0.0 });
+        Ok(Record::new())
     }
 }

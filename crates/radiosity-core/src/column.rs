@@ -71,13 +71,6 @@ pub trait ColumnSource: Sync {
     fn multiply(&self, _x: &[Real], _channels: usize, _out: &mut [Real]) -> bool {
         false
     }
-
-    /// Whether [`ColumnSource::multiply`] multiplies (returns `true`), known without
-    /// multiplying: a solver may then sweep by products (`jacobi`). The default is `false`; a
-    /// source that overrides `multiply` overrides this too.
-    fn multiplies(&self) -> bool {
-        false
-    }
 }
 
 /// The reciprocity bound of entries computed once per pair in `f64`, the other entry taken
@@ -150,10 +143,6 @@ impl<T: ColumnSource + ?Sized> ColumnSource for &T {
     fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
         (**self).multiply(x, channels, out)
     }
-
-    fn multiplies(&self) -> bool {
-        (**self).multiplies()
-    }
 }
 
 impl<T: ColumnSource + ?Sized> ColumnSource for Box<T> {
@@ -180,10 +169,6 @@ impl<T: ColumnSource + ?Sized> ColumnSource for Box<T> {
     fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
         (**self).multiply(x, channels, out)
     }
-
-    fn multiplies(&self) -> bool {
-        (**self).multiplies()
-    }
 }
 
 impl<T: ColumnSource + ?Sized + Send> ColumnSource for std::sync::Arc<T> {
@@ -209,10 +194,6 @@ impl<T: ColumnSource + ?Sized + Send> ColumnSource for std::sync::Arc<T> {
 
     fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
         (**self).multiply(x, channels, out)
-    }
-
-    fn multiplies(&self) -> bool {
-        (**self).multiplies()
     }
 }
 
@@ -379,9 +360,5 @@ impl<S: ColumnSource> ColumnSource for CountingColumns<S> {
         let nanos = start.elapsed().as_nanos().min(u64::MAX as u128) as u64;
         self.nanos.fetch_add(nanos, Ordering::Relaxed);
         done
-    }
-
-    fn multiplies(&self) -> bool {
-        self.inner.multiplies()
     }
 }

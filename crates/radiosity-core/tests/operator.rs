@@ -92,10 +92,6 @@ impl ColumnSource for Multiplying {
         }
         true
     }
-
-    fn multiplies(&self) -> bool {
-        true
-    }
 }
 
 #[test]

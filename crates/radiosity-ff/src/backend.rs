@@ -123,8 +123,4 @@ impl ColumnSource for Backend<'_> {
     fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
         self.source().multiply(x, channels, out)
     }
-
-    fn multiplies(&self) -> bool {
-        self.source().multiplies()
-    }
 }

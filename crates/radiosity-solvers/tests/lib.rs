@@ -966,7 +966,8 @@ fn typed_parameters_parse_their_family_and_no_other() {
     assert_eq!("sor-abc".parse::<GaussSeidelParams>(), Err(ParseSolverError::OtherFamily));
     let Err(ParseSolverError::Refused(e)) = "sor-2.5".parse::<GaussSeidelParams>() else { panic!("sor-2.5") };
     assert_eq!(e.to_string(), "solver 'sor-2.5': SOR needs 0 < ω < 2, not 2.5");
-    assert_eq!("jacobi".parse::<JacobiParams>(), Ok(JacobiParams));
+    assert_eq!("jacobi".parse::<JacobiParams>(), Ok(JacobiParams::default()));
+    assert_eq!("jacobi:sweep=product".parse::<JacobiParams>(), Ok(JacobiParams { by_products: true }));
     assert_eq!(
         "relax-1.5".parse::<PointShootingParams>(),
         Ok(PointShootingParams { method: ShootingMethod::Relax(1.5) })
@@ -1117,7 +1118,10 @@ fn unknown_names_get_the_nearest_name_and_the_wrapped_list() {
         assert_eq!(solver_by_name(typo).err().unwrap().to_string(), registry.build(typo).err().unwrap().to_string());
     }
     let message = solver_by_name("gaus-seidel").err().unwrap().to_string();
-    assert!(message.starts_with("unknown solver 'gaus-seidel' (did you mean 'gauss-seidel'?); solvers are jacobi; "));
+    let unwrapped = message.replace("\n  ", " ");
+    assert!(unwrapped.starts_with(
+        "unknown solver 'gaus-seidel' (did you mean 'gauss-seidel'?); solvers are jacobi[:sweep=rows|product] (e.g. jacobi:sweep=product); "
+    ));
     // One sentence over several lines of at most 100 characters, continuation lines indented by
     // two spaces; joined, it is the unwrapped sentence.
     let lines: Vec<&str> = message.lines().collect();
@@ -1131,7 +1135,13 @@ fn unknown_names_get_the_nearest_name_and_the_wrapped_list() {
         format!("unknown solver 'gaus-seidel' (did you mean 'gauss-seidel'?); solvers are {}", registry.names());
     assert_eq!(joined, sentence);
     let no_guess = solver_by_name("magic").err().unwrap().to_string();
-    assert!(no_guess.starts_with("unknown solver 'magic'; solvers are jacobi; ") && !no_guess.contains("did you mean"));
+    let no_guess = no_guess.replace("\n  ", " ");
+    assert!(
+        no_guess.starts_with(
+            "unknown solver 'magic'; solvers are jacobi[:sweep=rows|product] (e.g. jacobi:sweep=product); "
+        )
+    );
+    assert!(!no_guess.contains("did you mean"));
     // The list names every family, with placeholders and examples.
     for words in ["sor-ω (e.g. sor-1.2)", "relax-ω (e.g. relax-1.5)", "group-S-gM", "pr-g30", "xu-g30-m480:f=10"] {
         assert!(registry.names().contains(words), "{words}: {}", registry.names());
@@ -1409,50 +1419,46 @@ impl radiosity_core::ColumnSource for Multiplying<'_> {
         self.0.fill_column(j, column)
     }
 
-    fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
-        self.0.fill_row(i, row)
-    }
-
     fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
         for (idx, o) in out.iter_mut().enumerate() {
             let (i, c) = (idx / channels, idx % channels);
-            *o = (0..radiosity_core::ColumnSource::patch_count(self.0))
-                .map(|j| self.0.get(i, j) * x[j * channels + c])
-                .sum();
+            *o = (0..self.patch_count()).map(|j| self.0.get(i, j) * x[j * channels + c]).sum();
         }
-        true
-    }
-
-    fn multiplies(&self) -> bool {
         true
     }
 }
 
 #[test]
-fn jacobi_sweeps_by_products_over_a_source_that_multiplies() {
-    // Over a source that multiplies itself a Jacobi step is a whole sweep, one product: after
-    // k steps the radiosity is the per-patch Jacobi's after k sweeps (k n steps) to rounding,
-    // no column is fetched, the change kept is the residual of the radiosity before the step,
-    // and the residual bound holds against the exact residual after every step.
+fn jacobi_by_products_takes_the_sweeps_of_jacobi_by_rows() {
+    // `jacobi:sweep=product` takes a whole sweep a step: after k steps its radiosity is plain
+    // Jacobi's after k sweeps (k n steps) to rounding, over a source that multiplies itself (k
+    // products, no column) and over plain columns (n columns a product), and the change it
+    // keeps is the residual of the radiosity before the step.
     let system =
         LinearSystem::new(Channels::Rgb, vec![1.0; 6], [0.9, 0.5, 0.2].repeat(6), [1.0, 2.0, 0.5].repeat(6)).unwrap();
     let f = cube();
     let by_rows = solve("jacobi", &system, &f, "steps=30");
+    assert_eq!(by_rows.state.columns, 30);
     let multiplying = Multiplying(&f);
-    let problem = Problem::new(&system, &multiplying).unwrap();
-    let mut solver = solver_by_name("jacobi").unwrap();
-    let mut states = States(Vec::new());
-    let by_products = Executor::new(solver.as_mut(), StopRules::parse("steps=5").unwrap())
-        .add_observer(&mut states, ObserverMode::Always)
-        .run(&problem)
-        .unwrap();
-    assert_eq!(solver.step_kind(), StepKind::Product);
-    assert_eq!((by_products.state.step, by_products.state.columns, by_products.state.products), (5, 0, 5));
-    for (a, b) in by_products.state.radiosity.iter().zip(&by_rows.state.radiosity) {
-        assert!((a - b).abs() <= 1e-13 * b.abs(), "{a} against {b}");
+    let sources: [(&dyn radiosity_core::ColumnSource, (u64, u64)); 2] = [(&multiplying, (0, 5)), (&f, (30, 0))];
+    for (source, (columns, products)) in sources {
+        let problem = Problem::new(&system, source).unwrap();
+        let mut solver = solver_by_name("jacobi:sweep=product").unwrap();
+        let mut states = States(Vec::new());
+        let run = Executor::new(solver.as_mut(), StopRules::parse("steps=5").unwrap())
+            .add_observer(&mut states, ObserverMode::Always)
+            .run(&problem)
+            .unwrap();
+        assert_eq!(solver.step_kind(), StepKind::Product);
+        assert_eq!((run.state.step, run.state.columns, run.state.products), (5, columns, products));
+        for (a, b) in run.state.radiosity.iter().zip(&by_rows.state.radiosity) {
+            assert!((a - b).abs() <= 1e-13 * b.abs(), "{a} against {b}");
+        }
+        assert!(states.0.len() >= 5, "a state after every step");
+        for state in &states.0 {
+            assert_unshot_is_the_residual("jacobi:sweep=product", &system, &f, state);
+        }
     }
-    assert!(states.0.len() >= 5, "a state after every step");
-    for state in &states.0 {
-        assert_unshot_is_the_residual("jacobi by products", &system, &f, state);
-    }
+    let Err(ParseSolverError::Refused(e)) = "jacobi:sweep=sideways".parse::<JacobiParams>() else { panic!("sideways") };
+    assert_eq!(e.to_string(), "solver 'jacobi' takes sweep=rows or sweep=product, not 'sweep=sideways'");
 }

@@ -357,14 +357,14 @@ fn the_bound_follows_its_formula_and_reaches_observers_as_asked() {
 
 #[test]
 fn jacobi_by_products_bounds_its_residual() {
-    // Over a source that multiplies itself, Jacobi's step is a sweep by one product and its
-    // bound that of a shooting method over the sweep's change: checked against the exact
+    // `jacobi:sweep=product` over a source that multiplies itself: a step is a sweep by one
+    // product and its bound that of a shooting method over the sweep's change, checked against the exact
     // residual after every step, and stated non-negative from a non-negative start.
     let (system, f) = reciprocal(12, 7, 0.0, 0.98, |idx| 0.3 + 0.6 * unit(idx as u64));
     let multiplying = super::Multiplying(&f);
     let problem = Problem::new(&system, &multiplying).unwrap();
-    let mut solver = solver_by_name("jacobi").unwrap();
-    let mut checker = Checker::new("jacobi by products", &system, &f);
+    let mut solver = solver_by_name("jacobi:sweep=product").unwrap();
+    let mut checker = Checker::new("jacobi:sweep=product", &system, &f);
     let run = Executor::new(solver.as_mut(), StopRules::parse("steps=20").unwrap())
         .add_observer(&mut checker, ObserverMode::Always)
         .run(&problem)

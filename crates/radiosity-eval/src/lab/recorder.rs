@@ -17,9 +17,8 @@ use std::time::Instant;
 #[non_exhaustive]
 pub struct RecordPlan {
     /// Every metric every this many steps (`None`: about 100 points over the run's budget, and
-    /// every step of a solver whose step is a whole product by F, `StepKind::Product`). A step
-    /// that made a product is recorded in full whatever this says (`jacobi` sweeps by products
-    /// over a source that multiplies itself). e_rms is recorded after every step regardless.
+    /// every step of a solver whose step is a whole product by F, `StepKind::Product`).
+    /// e_rms is recorded after every step regardless.
     pub every: Option<u64>,
     /// Also record every metric at `n/4`, `n/2`, `n` and `2n` columns.
     pub marks: bool,
@@ -192,9 +191,7 @@ impl Observer for Recorder<'_> {
         let seconds = ff_seconds + state.solve_seconds;
         let new_mark =
             self.marks.contains(&state.columns) && self.points.last().is_none_or(|p| p.columns != state.columns);
-        // A step that made a product by F is a sweep's worth of columns: recorded in full.
-        let made_product = state.products > self.points.last().map_or(0, |p| p.products);
-        if state.step % self.every == 0 || new_mark || made_product {
+        if state.step % self.every == 0 || new_mark {
             let row = |e_max, residual, bound| TableRow {
                 solver: self.solver.clone(),
                 step: state.step,

@@ -192,10 +192,6 @@ impl ColumnSource for FormFactors {
         multiply_matrix(self, x, channels, out);
         true
     }
-
-    fn multiplies(&self) -> bool {
-        true
-    }
 }
 
 /// A column source whose entries are rounded to `f32`, as a stored matrix holds them: a lab's
@@ -234,10 +230,6 @@ impl<S: ColumnSource> ColumnSource for F32Columns<S> {
 
     fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
         self.0.multiply(x, channels, out)
-    }
-
-    fn multiplies(&self) -> bool {
-        self.0.multiplies()
     }
 }
 

@@ -388,10 +388,6 @@ impl ColumnSource for HierarchicalColumns {
         Some(16.0 * Real::EPSILON)
     }
 
-    fn multiplies(&self) -> bool {
-        true
-    }
-
     /// Moments up the tree, the far links' transfers gathered at each node (in parallel over
     /// the nodes, each summing its own links in a fixed order, so the result is the same
     /// whatever the thread count), the linear forms down the tree, and the near links:

@@ -5,12 +5,15 @@
 //! reciprocity), so a sweep is `n` steps. The residual reported is that of `B^k`, exactly, at
 //! the end of each sweep.
 //!
-//! Over a source that multiplies a whole vector itself ([`Problem::multiplies`]: a stored
-//! matrix, the hierarchical operator), a step is a whole sweep, one product `F B^k`: the same
-//! iterates at the end of each sweep, up to the order of summation, for one product in place of
-//! `n` rows. The step's change is then the residual `r^k` of `B^k`, and the residual of
+//! `jacobi:sweep=product` takes a whole sweep a step, one product `F B^k`
+//! ([`Problem::multiply`]): the same iterates at the end of each sweep, up to the order of
+//! summation. Over a source that multiplies a whole vector itself (a stored matrix, the
+//! hierarchical operator, where a product costs as much as a few hundred columns) that is one
+//! product in place of `n` rows; over any other, the columns of the patches where `B^k` is not
+//! zero. The step's change is the residual `r^k` of `B^k`, and the residual of
 //! `B^{k+1} = B^k + r^k` is exactly `ρ F r^k`: the bound of a shooting method with `ΔB = r^k`,
-//! non-negative when `r^k` is.
+//! non-negative when `r^k` is. The default, `sweep=rows`, is the paper's: a patch a step, its
+//! cost counted in columns like every method it is compared with.
 //!
 //! ## References
 //!
@@ -19,7 +22,7 @@
 
 use crate::error::SolverError;
 use crate::gathering::rule::{SweepResidual, gather, relax};
-use crate::naming::{ParseSolverError, SolverParams, plain_name};
+use crate::naming::{ParseSolverError, SolverParams, split_params};
 use crate::run::executor::{Solver, StepKind};
 use crate::run::problem::Problem;
 use crate::run::record::Record;
@@ -28,26 +31,39 @@ use crate::run::state::State;
 use radiosity_core::Real;
 use std::str::FromStr;
 
-/// The name `jacobi`: point Jacobi takes no parameters.
+/// The name `jacobi[:sweep=rows|product]`: a patch a step (the default) or a sweep a step.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct JacobiParams;
+pub struct JacobiParams {
+    /// Whether a step is a whole sweep by one product (`sweep=product`, module doc).
+    pub by_products: bool,
+}
 
 impl FromStr for JacobiParams {
     type Err = ParseSolverError;
 
     fn from_str(name: &str) -> Result<JacobiParams, ParseSolverError> {
-        plain_name(name, "jacobi")?;
-        Ok(JacobiParams)
+        let (head, params) = split_params(name);
+        if head != "jacobi" {
+            return Err(ParseSolverError::OtherFamily);
+        }
+        match params {
+            "" | "sweep=rows" => Ok(JacobiParams { by_products: false }),
+            "sweep=product" => Ok(JacobiParams { by_products: true }),
+            other => {
+                Err(SolverError::BadParams(format!("solver 'jacobi' takes sweep=rows or sweep=product, not '{other}'"))
+                    .into())
+            }
+        }
     }
 }
 
 impl SolverParams for JacobiParams {
-    const SYNTAX: &'static str = "jacobi";
-    const HELP: &'static str = "point Jacobi gathering: a sweep gathers every patch from the sweep before";
-    const EXAMPLES: &'static [&'static str] = &["jacobi"];
+    const SYNTAX: &'static str = "jacobi[:sweep=rows|product]";
+    const HELP: &'static str = "point Jacobi gathering: a sweep gathers every patch from the sweep before, a patch a step or (sweep=product) a sweep a step by one product";
+    const EXAMPLES: &'static [&'static str] = &["jacobi", "jacobi:sweep=product"];
 
     fn build(&self) -> Result<Box<dyn Solver>, SolverError> {
-        Ok(Box::new(Jacobi::default()))
+        Ok(Box::new(Jacobi { by_products: self.by_products, ..Jacobi::default() }))
     }
 }
 
@@ -59,7 +75,7 @@ pub struct Jacobi {
     residual: Vec<Real>,
     sweep: SweepResidual,
     changes: SweepChanges,
-    /// Whether a step is a whole sweep by one product (module doc).
+    /// Whether a step is a whole sweep by one product (`sweep=product`).
     by_products: bool,
     /// `F B^k`, when sweeping by products.
     product: Vec<Real>,
@@ -69,13 +85,12 @@ pub struct Jacobi {
 
 impl Solver for Jacobi {
     fn name(&self) -> String {
-        "jacobi".into()
+        if self.by_products { "jacobi:sweep=product".into() } else { "jacobi".into() }
     }
 
-    fn init(&mut self, problem: &Problem<'_>, _state: &mut State) -> Result<(), SolverError> {
+    fn init(&mut self, _problem: &Problem<'_>, _state: &mut State) -> Result<(), SolverError> {
         self.sweep = SweepResidual::default();
         self.changes = SweepChanges::default();
-        self.by_products = problem.multiplies();
         self.product_residual = None;
         Ok(())
     }
@@ -113,7 +128,7 @@ impl Solver for Jacobi {
         Some(self.changes.bound(problem, state, true, 1.0))
     }
 
-    /// A gather, or, once [`Solver::init`] found a source that multiplies, a product.
+    /// A gather, or a product with `sweep=product`.
     fn step_kind(&self) -> StepKind {
         if self.by_products { StepKind::Product } else { StepKind::Gather }
     }

@@ -134,12 +134,6 @@ impl<'a> Problem<'a> {
         multiply_by_columns(x, self.channels(), out, column, |j, column| self.column(j, column))
     }
 
-    /// Whether the source multiplies a whole vector itself, so that [`Problem::multiply`] is
-    /// one product and not a column for each patch ([`ColumnSource::multiplies`]).
-    pub fn multiplies(&self) -> bool {
-        self.columns.multiplies()
-    }
-
     /// Turns column `i`, in place, into row `i` by reciprocity: `F_ij = F_ji A_j / A_i`.
     fn reciprocal_row(area: &[Real], i: usize, column: &mut [Real]) {
         for (j, f) in column.iter_mut().enumerate() {

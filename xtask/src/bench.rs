@@ -35,10 +35,14 @@
 //! 5. **`scale`** ([`scale`](radiosity_eval::bench::scale)): `office` at 10 990, 33 179 and
 //!    95 832 patches and the largest real scene (`office.mgf` cut to 114 042 patches), each
 //!    method in a child process with no reference and no matrix: setup, seconds per column, columns per second, peak memory,
-//!    and wall time from scene load to a certified bound of 1e-1 and 1e-2, with the growth
-//!    exponent of the time per column in `n`. Not part of a plain `cargo xtask bench`: it
-//!    takes `--max-seconds` (default 120 s) per run and method and scene, about half an hour;
-//!    `--only scale` runs it.
+//!    and wall time from scene load to a certified bound of 1e-1, 1e-2 and 1e-3, with the
+//!    growth exponent of the time per column in `n`; then the same scenes over the
+//!    hierarchical operator with `cg`, `gauss-seidel`, `xu` and `xu-g50-m500`: its build
+//!    seconds, links and memory, the seconds of a product, and the wall times from scene load
+//!    to bounds 1e-2 and 1e-3, with the growth of the build in `n`. Not part of a plain
+//!    `cargo xtask bench`: it takes up to `--max-seconds` (default 120 s) per run and method
+//!    and scene, about two hours at three runs; `--only scale --runs 1 --max-seconds 60
+//!    --solvers cg` takes about half an hour.
 //!
 //! Each section's medians are over `--runs` runs (default 5 for `columns` and `lu`, 3 for
 //! `assembly` and `e2e`). The report states the machine's core count and ends with the
@@ -88,7 +92,7 @@ pub struct Args {
     #[arg(long)]
     quick: bool,
     /// Only these sections, comma-separated: columns, assembly, lu, e2e (e2e includes memory),
-    /// scale (not run by default: about half an hour).
+    /// scale (not run by default: about two hours).
     #[arg(long, value_name = "SECTIONS")]
     only: Option<String>,
     /// Runs per measurement (default 5 for columns and lu, 3 for assembly and e2e; with
@@ -111,7 +115,7 @@ pub struct Args {
     /// Internal: run one end-to-end case in this process and print its figures as JSON.
     #[arg(long, hide = true, value_name = "SOLVER")]
     child_solver: Option<String>,
-    /// Internal: the backend of the end-to-end case.
+    /// Internal: the backend of the end-to-end or scale case.
     #[arg(long, hide = true, value_name = "BACKEND")]
     child_ff: Option<String>,
     /// Internal: the reference solution, raw little-endian f64.
@@ -239,7 +243,8 @@ pub(crate) struct Findings {
 pub fn run(args: &Args) -> Result<()> {
     if let Some(solver) = &args.child_scale {
         let Some(scene) = &args.scene else { bail!("a scale child run needs --scene") };
-        return children::scale_child(scene, solver, args.max_seconds.unwrap_or(120.0));
+        let ff = args.child_ff.as_deref().unwrap_or("analytic");
+        return children::scale_child(scene, solver, ff, args.max_seconds.unwrap_or(120.0));
     }
     if let Some(solver) = &args.child_solver {
         let (Some(ff), Some(reference), Some(scene)) = (&args.child_ff, &args.child_reference, &args.scene) else {

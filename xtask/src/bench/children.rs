@@ -49,13 +49,14 @@ pub(crate) fn e2e_child(scene: &str, solver: &str, ff: &str, reference: &Path, m
     Ok(())
 }
 
-/// The child of a scale case.
-pub(crate) fn scale_child(scene: &str, solver: &str, max_seconds: Real) -> Result<()> {
+/// The child of a scale case: `solver` over the backend `ff`.
+pub(crate) fn scale_child(scene: &str, solver: &str, ff: &str, max_seconds: Real) -> Result<()> {
+    let spec = BackendSpec::parse(ff)?;
     let mut solver = SolverRegistry::builtin().build(solver)?;
     let start = Instant::now();
     let prepared = prepare(scene)?;
     let scene_seconds = start.elapsed().as_secs_f64();
-    let report = scale::scale_run(&prepared, start, scene_seconds, solver.as_mut(), max_seconds)?;
+    let report = scale::scale_run(&prepared, start, scene_seconds, solver.as_mut(), &spec, max_seconds)?;
     println!("{}", serde_json::to_string(&report)?);
     Ok(())
 }
@@ -120,22 +121,26 @@ pub(crate) fn e2e(config: &Config, prepared: &PreparedScene, findings: &mut Find
 /// Runs the scale section, every case `--runs` times in its own process.
 pub(crate) fn scale(config: &Config) -> Result<String> {
     let scenes: Vec<&str> = if config.quick { vec!["cornell:res=4", "cornell:res=8"] } else { scale::SCENES.to_vec() };
-    let solvers = &config.solvers;
-    let bar = progress((scenes.len() * solvers.len() * config.runs_heavy) as u64, "scale");
+    // The `--solvers` over the analytic backend, then the hierarchical operator's methods.
+    let mut cases: Vec<(&str, String)> = config.solvers.iter().map(|s| ("analytic", s.clone())).collect();
+    cases.extend(scale::HIERARCHICAL_SOLVERS.iter().map(|s| ("hierarchical", s.to_string())));
+    let bar = progress((scenes.len() * cases.len() * config.runs_heavy) as u64, "scale");
     let mut rows = Vec::new();
-    for scene in &scenes {
-        for solver in solvers {
+    for (ff, solver) in &cases {
+        for scene in &scenes {
             let mut runs: Vec<ScaleReport> = Vec::new();
             for r in 0..config.runs_heavy {
-                bar.set_message(format!("{solver} on {scene}, run {}/{}", r + 1, config.runs_heavy));
+                bar.set_message(format!("{solver} over {ff} on {scene}, run {}/{}", r + 1, config.runs_heavy));
                 let seconds = config.scale_seconds.to_string();
-                let args = ["bench", "--scene", scene, "--child-scale", solver, "--max-seconds", &seconds];
-                runs.push(run_child(&args.map(String::from), &format!("the scale run of {solver} on {scene}"))?);
+                let args =
+                    ["bench", "--scene", scene, "--child-scale", solver, "--child-ff", ff, "--max-seconds", &seconds];
+                let what = format!("the scale run of {solver} over {ff} on {scene}");
+                runs.push(run_child(&args.map(String::from), &what)?);
                 bar.inc(1);
             }
-            rows.push((scene.to_string(), solver.clone(), runs));
+            rows.push((scene.to_string(), ff.to_string(), solver.clone(), runs));
         }
     }
     bar.finish_and_clear();
-    Ok(scale::report(&rows, solvers, config.scale_seconds))
+    Ok(scale::report(&rows, config.scale_seconds))
 }

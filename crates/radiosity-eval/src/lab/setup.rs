@@ -15,7 +15,7 @@ use crate::reference::metrics::Evaluator;
 use crate::reference::shooting::solve_by_shooting;
 use crate::reference::solution::ReferenceSolution;
 use radiosity_core::{ColumnSource, LinearSystem, Real};
-use radiosity_ff::{Backend, BackendSpec};
+use radiosity_ff::{Backend, BackendSpec, HierarchyFigures};
 use radiosity_geom::{PreparedScene, SceneReport};
 use std::sync::Arc;
 use std::time::Instant;
@@ -68,6 +68,8 @@ pub struct Lab<'p> {
     /// The source that serves and charges the columns, when columns are charged
     /// ([`ColumnCost::Charged`]).
     pub(super) charged: Option<Arc<ChargedColumns>>,
+    /// What building the hierarchical operator found and cost, when it is the backend.
+    pub(super) hierarchy: Option<HierarchyFigures>,
 }
 
 /// How the matrix of a lab's source is obtained, when a `matrix` reference needs it.
@@ -127,9 +129,14 @@ impl<'p> Lab<'p> {
                 Ok(Lab::finish(prepared, &label, Box::new(source), serves_rows, setup, options.columns))
             }
             other => {
+                let hierarchy = match &other {
+                    Backend::Hierarchical(h) => Some(h.figures()),
+                    _ => None,
+                };
                 let source = F32Columns(other);
                 let setup = Lab::setup(prepared, &label, &source, Assembly::Columns, &options, progress)?;
-                Ok(Lab::finish(prepared, &label, Box::new(source), serves_rows, setup, options.columns))
+                let lab = Lab::finish(prepared, &label, Box::new(source), serves_rows, setup, options.columns);
+                Ok(Lab { hierarchy, ..lab })
             }
         }
     }
@@ -196,6 +203,7 @@ impl<'p> Lab<'p> {
             contraction: setup.contraction,
             order: radiosity_geom::spatial_order(scene),
             charged,
+            hierarchy: None,
         }
     }
 
@@ -383,6 +391,11 @@ impl<'p> Lab<'p> {
     /// The number of patches.
     pub fn n(&self) -> usize {
         self.system.len()
+    }
+
+    /// What building the hierarchical operator found and cost, when it is the lab's backend.
+    pub fn hierarchy(&self) -> Option<HierarchyFigures> {
+        self.hierarchy
     }
 }
 

@@ -114,10 +114,10 @@ fn bad_scene_parameters_are_refused() {
         }
     }
     // The scenes sized by a patch edge in metres.
-    for scene in ["office", "labyrinth"] {
+    for (scene, range) in [("office", "from 0.01 to 10"), ("labyrinth", "from 0.02 to 10")] {
         for value in ["-1", "0"] {
             let param = format!("size={value}");
-            solve_refuses(&format!("{scene}:{param}"), &[scene, &param, "from 0.02 to 10"]);
+            solve_refuses(&format!("{scene}:{param}"), &[scene, &param, range]);
         }
     }
     solve_refuses("labyrinth:cells=2:lights=5", &["lights=5", "from 1 to 4"]);

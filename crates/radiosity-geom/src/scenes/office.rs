@@ -46,7 +46,11 @@ pub const SUMMARY: &str = "the paper's office: furnished room, ceiling light pan
 
 /// Parameters.
 pub const PARAMS: &[ParamDoc] = &[
-    ParamDoc { key: "size", default: "0.186", doc: "largest patch edge in metres, from 0.02 to 10" },
+    ParamDoc {
+        key: "size",
+        default: "0.186",
+        doc: "largest patch edge in metres, from 0.01 to 10 (0.0158 gives about a million patches)",
+    },
     ParamDoc { key: "desks", default: "9", doc: "number of desks (each with monitor and chair), 0 to 9" },
     ParamDoc { key: "light", default: "1", doc: "emission of the ceiling panels, grey or r/g/b" },
 ];
@@ -337,7 +341,7 @@ impl Furniture<'_> {
 
 /// Builds the scene.
 pub fn build(name: &str, params: &KeyValueParams) -> Result<LoadedScene, GeomError> {
-    let size = params.real("size", 0.186, |v| (0.02..=10.0).contains(&v), "a patch size in metres from 0.02 to 10")?;
+    let size = params.real("size", 0.186, |v| (0.01..=10.0).contains(&v), "a patch size in metres from 0.01 to 10")?;
     let desks = params.count("desks", 9, 0, 9)?;
     let light = params.spectrum("light", Spectrum::grey(1.0), |v| v >= 0.0, "an emission >= 0")?;
 

@@ -68,6 +68,7 @@ pub const BACKENDS: &[SuiteBackend] = &[
     SuiteBackend { label: "hemicube", spec: "hemicube", close_rows: false },
     SuiteBackend { label: "montecarlo", spec: "montecarlo", close_rows: false },
     SuiteBackend { label: "matrix:rebalance=true", spec: "matrix:rebalance=true", close_rows: false },
+    SuiteBackend { label: "hierarchical", spec: "hierarchical", close_rows: false },
 ];
 
 /// Keeps the items of `all` named in the comma list `list` (all of them when `list` is

@@ -10,8 +10,9 @@
 //! and one 1e-6 above it, a thin slab, and one scene at coordinate scales 1e-4 and 1e4 (the
 //! scenes are `furnace` and `inner-box`, whose module docs describe them). Each runs on
 //! [`BACKENDS`]: `analytic`, the same with every row rescaled to sum to 1 in `f64` (closed
-//! scenes only, see [`FormFactors::close_rows`]), `hemicube`, `montecarlo` and
-//! `matrix:rebalance=true`. Every solver of `POINT_SOLVERS`, `GROUP_SOLVERS`,
+//! scenes only, see [`FormFactors::close_rows`]), `hemicube`, `montecarlo`,
+//! `matrix:rebalance=true` and `hierarchical` (its defaults; its rows sum to 1 only to its
+//! `eps`, so at `ρ = 0.999` it may amplify light, and then nothing is certified). Every solver of `POINT_SOLVERS`, `GROUP_SOLVERS`,
 //! `BEYOND_PAPER_SOLVERS` and `KRYLOV_SOLVERS` runs on each (`cg` refuses, in one sentence,
 //! the backends that state no reciprocity bound or one above its limit).
 //!

@@ -105,8 +105,13 @@ fn compare(args: &Args, prepared: &PreparedScene, spec: &BackendSpec, reference:
     let backend = radiosity_eval::backend(prepared, spec, Some(&cache()), &Bars::new())?;
     let built = start.elapsed().as_secs_f64();
     let truth = radiosity_eval::backend(prepared, reference, Some(&cache()), &Bars::new())?;
-    let mut out =
-        format!("scene        {}: {n} patches\nbackend      {} built in {built:.3} s\n", args.scene, spec.canonical());
+    let how = match &backend {
+        Backend::Hierarchical(h) if h.figures().loaded => {
+            format!("read from the cache in {built:.3} s (built in {:.3} s)", h.figures().seconds)
+        }
+        _ => format!("built in {built:.3} s"),
+    };
+    let mut out = format!("scene        {}: {n} patches\nbackend      {} {how}\n", args.scene, spec.canonical());
     if let Backend::Hierarchical(h) = &backend {
         let f = h.figures();
         out += &format!(

@@ -1,7 +1,8 @@
 //! The laboratory's references and bounds: the certified bound of every step holds against
 //! the reference, `--reference none` runs without matrix or reference, `auto` weighs the
 //! matrix against the memory budget, the shooting and stored-matrix references agree with
-//! dense LU within their certificates, and the cache tells reference kinds apart.
+//! dense LU within their certificates, the cache tells reference kinds apart and keeps the
+//! hierarchical operator.
 
 use radiosity_core::ColumnSource;
 use radiosity_eval::ShootingParams;
@@ -244,6 +245,31 @@ fn the_cache_tells_reference_kinds_apart() {
         .with_reference(ReferenceKind::Shooting)
         .with_shooting(ShootingParams::default().with_certified(1e-6));
     assert!(matches!(lab(&scene, options).origin(), ReferenceOrigin::Solved { .. }));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn the_cache_keeps_the_hierarchical_operator() {
+    // A second lab over the same scene and parameters reads the operator's links instead of
+    // building them, and a run over it gives the same radiosity to the bit; other parameters
+    // are another entry.
+    let dir = std::env::temp_dir().join(format!("radiosity-lab-hierarchy-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let scene = PreparedScene::load("cornell:res=4").unwrap();
+    let run = |spec: &str| {
+        let options = LabOptions::default().with_cache(Some(Cache::at(&dir))).with_reference(ReferenceKind::None);
+        let lab = Lab::new(&scene, &BackendSpec::parse(spec).unwrap(), options, &NoProgress).unwrap();
+        let mut solver = SolverRegistry::builtin().build("gmres-30").unwrap();
+        let rules = StopRules::parse("residual=1e-8").unwrap();
+        let outcome = lab.run(solver.as_mut(), &rules, &RecordPlan::errors_only(), &NoProgress).unwrap();
+        (lab.hierarchy().unwrap().loaded, outcome.state.radiosity.iter().map(|v| v.to_bits()).collect::<Vec<_>>())
+    };
+    let (loaded, first) = run("hierarchical:eps=5e-2");
+    assert!(!loaded, "built the first time");
+    let (loaded, again) = run("hierarchical:eps=5e-2");
+    assert!(loaded, "read the second time");
+    assert_eq!(first, again);
+    assert!(!run("hierarchical:eps=1e-2").0, "other parameters are another entry");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

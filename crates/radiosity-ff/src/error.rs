@@ -21,4 +21,7 @@ pub enum FfError {
     /// A stored matrix that cannot be decoded, or does not fit the scene.
     #[error("stored form-factor matrix is unusable: {0}")]
     StoredMatrix(String),
+    /// A stored hierarchical operator that cannot be decoded, or does not fit the scene.
+    #[error("stored hierarchical operator is unusable: {0}")]
+    StoredOperator(String),
 }

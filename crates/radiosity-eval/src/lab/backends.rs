@@ -10,7 +10,9 @@
 //!
 //! A stored matrix's cache key is [`scene_key`] with the canonical backend argument and the
 //! way it was assembled, so a matrix is reused exactly when the geometry, every backend
-//! parameter and the assembly agree.
+//! parameter and the assembly agree. The hierarchical operator's links are cached the same way
+//! (kind `hierarchical`, [`HierarchicalColumns::to_bytes`]), keyed by the scene and the
+//! canonical argument: a second run over the same scene reads them instead of building.
 
 use crate::error::LabError;
 use crate::progress::Progress;
@@ -18,7 +20,7 @@ use crate::reference::cache::{Cache, Lookup, scene_key};
 use radiosity_core::{ColumnSource, Real};
 use radiosity_ff::guard::MatrixFigures;
 use radiosity_ff::matrix::RebalanceReport;
-use radiosity_ff::{Backend, BackendSpec, StoredMatrix};
+use radiosity_ff::{Backend, BackendSpec, HierarchicalColumns, StoredMatrix};
 use radiosity_geom::PreparedScene;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -52,8 +54,8 @@ pub struct CacheUse {
 }
 
 /// The backend `spec` names; a `matrix` comes from `cache` when it holds it (and is written
-/// to it otherwise), or is assembled fresh without a cache. Building the hierarchical
-/// operator, which takes a while on large scenes, is shown as a stage of `progress`.
+/// to it otherwise), or is assembled fresh without a cache; so is the hierarchical operator's
+/// links, whose reading or building is shown as a stage of `progress`.
 pub fn backend<'p>(
     prepared: &'p PreparedScene,
     spec: &BackendSpec,
@@ -62,14 +64,52 @@ pub fn backend<'p>(
 ) -> Result<Backend<'p>, LabError> {
     Ok(match spec {
         BackendSpec::Matrix { .. } => Backend::Matrix(obtain_matrix(prepared, spec, cache, progress)?.matrix),
-        BackendSpec::Hierarchical(_) => {
-            progress.begin("building the hierarchical operator", 0, "");
-            let built = Backend::columns(spec, prepared.into());
-            progress.end();
-            built
-        }
+        BackendSpec::Hierarchical(_) => Backend::Hierarchical(obtain_hierarchical(prepared, spec, cache, progress)),
         _ => Backend::columns(spec, prepared.into()),
     })
+}
+
+/// The hierarchical operator `spec` names: read from `cache` when it holds it (a file that
+/// cannot be read is replaced, with a warning), built otherwise and written to it.
+fn obtain_hierarchical(
+    prepared: &PreparedScene,
+    spec: &BackendSpec,
+    cache: Option<&Cache>,
+    progress: &dyn Progress,
+) -> HierarchicalColumns {
+    let key = format!("{}; backend {}", scene_key(prepared.scene()), spec.canonical());
+    if let Some(cache) = cache {
+        progress.begin("reading the hierarchical operator", 0, "");
+        let read = match cache.read("hierarchical", &key) {
+            Lookup::Hit(bytes) => match HierarchicalColumns::from_bytes(&bytes, &key, prepared.scene()) {
+                Ok(h) => Some(h),
+                Err(e) => {
+                    progress.warn(&format!("replacing cache file {}: {e}", cache.path("hierarchical", &key).display()));
+                    None
+                }
+            },
+            Lookup::Miss => None,
+            Lookup::Unreadable(why) => {
+                progress.warn(&why);
+                None
+            }
+        };
+        progress.end();
+        if let Some(h) = read {
+            return h;
+        }
+    }
+    progress.begin("building the hierarchical operator", 0, "");
+    let Backend::Hierarchical(built) = Backend::columns(spec, prepared.into()) else {
+        unreachable!("a hierarchical spec builds the hierarchical operator")
+    };
+    progress.end();
+    if let Some(cache) = cache {
+        if let Err(e) = cache.write("hierarchical", &key, &built.to_bytes(&key)) {
+            progress.warn(&format!("the hierarchical operator was not cached: {e}"));
+        }
+    }
+    built
 }
 
 /// The full matrix of `spec` (for `matrix:of=…`, of the backend it stores, rebalanced when it

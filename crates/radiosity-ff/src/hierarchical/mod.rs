@@ -50,6 +50,7 @@
 
 mod brightness;
 mod links;
+mod stored;
 mod tree;
 
 use crate::analytic::{AnalyticColumns, AnalyticParams};
@@ -161,6 +162,9 @@ pub struct HierarchyFigures {
     pub seconds: f64,
     /// Bytes held by the tree and the links.
     pub bytes: usize,
+    /// Whether the links were read from disk ([`HierarchicalColumns::from_bytes`]) rather than
+    /// built: the figures above are then the build's.
+    pub loaded: bool,
 }
 
 /// The hierarchical operator over a scene.
@@ -212,18 +216,10 @@ impl HierarchicalColumns {
             cumulative,
         };
         let Links { far: far_links, near: near_links, rays, occluded, far_pairs, zeroth } = refiner.refine_all();
-        let mut parent = vec![u32::MAX; tree.nodes.len()];
-        for (k, node) in tree.nodes.iter().enumerate() {
-            if let Some(children) = node.children {
-                for c in children {
-                    parent[c as usize] = k as u32;
-                }
-            }
-        }
         let far = Adjacency::new(tree.nodes.len(), &far_links, |l| (l.a, l.b, [l.clear, l.count]));
         let near = Adjacency::new(scene.len(), &near_links, |l| (l.i, l.j, l.transfer));
         let (far_links, near_links) = (far_links.len(), near_links.len());
-        let bytes = tree.nodes.len() * (size_of::<tree::Node>() + 4) + far.bytes() + near.bytes() + scene.len() * 40;
+        let bytes = HierarchicalColumns::bytes_of(&tree, &far, &near, scene.len());
         let figures = HierarchyFigures {
             nodes: tree.nodes.len(),
             far_links,
@@ -234,9 +230,10 @@ impl HierarchicalColumns {
             occluded,
             seconds: start.elapsed().as_secs_f64(),
             bytes,
+            loaded: false,
         };
         HierarchicalColumns {
-            parent,
+            parent: parents(&tree),
             far,
             near,
             areas: scene.patches().iter().map(|p| p.area()).collect(),
@@ -250,6 +247,11 @@ impl HierarchicalColumns {
     /// What building found and cost.
     pub fn figures(&self) -> HierarchyFigures {
         self.figures
+    }
+
+    /// The bytes held by a tree, its links and the patches' areas, normals and centroids.
+    fn bytes_of(tree: &ClusterTree, far: &Adjacency<[u16; 2]>, near: &Adjacency<Real>, patches: usize) -> usize {
+        tree.nodes.len() * (size_of::<tree::Node>() + 4) + far.bytes() + near.bytes() + patches * 40
     }
 
     /// Calls `f(k)` for the leaf of `patch` and each of its ancestors.
@@ -288,6 +290,19 @@ impl HierarchicalColumns {
             line[q] = transfer / if row { self.areas[p] } else { self.areas[q] };
         }
     }
+}
+
+/// The parent of each node of `tree` (`u32::MAX` for the root).
+fn parents(tree: &ClusterTree) -> Vec<u32> {
+    let mut parent = vec![u32::MAX; tree.nodes.len()];
+    for (k, node) in tree.nodes.iter().enumerate() {
+        if let Some(children) = node.children {
+            for c in children {
+                parent[c as usize] = k as u32;
+            }
+        }
+    }
+    parent
 }
 
 /// The kernel of a far link to first order about the centres, without its `1 / (π r²)`:

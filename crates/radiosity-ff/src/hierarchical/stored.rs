@@ -1,0 +1,225 @@
+//! The hierarchical operator on disk: its links written whole and read back, so that a later
+//! run over the same scene and parameters skips the build (the cache of `radiosity-eval`
+//! keeps it like a stored matrix).
+//!
+//! Only the links are written: the cluster tree is rebuilt from the scene, which is
+//! deterministic and takes milliseconds, and the file records the tree's node count and a
+//! checksum of its patch order, so that links are never read against another tree. The
+//! layout: a postcard header (a magic string, the format version, the caller's key, the
+//! sizes, the build's figures, the body's length and checksum), then the body, the far and
+//! near adjacency lists as raw little-endian arrays (offsets as `u64`, other ends as `u32`,
+//! far values as two `u16`, near values as `f64`), read back bit for bit.
+
+use super::tree::ClusterTree;
+use super::{Adjacency, HierarchicalColumns, HierarchyFigures, parents};
+use crate::error::FfError;
+use radiosity_core::{Real, Scene};
+use serde::{Deserialize, Serialize};
+use xxhash_rust::xxh3::xxh3_64;
+
+const MAGIC: &str = "radiosity hierarchical operator";
+const FORMAT_VERSION: u32 = 1;
+
+/// What the header holds besides the magic string and the version.
+#[derive(Serialize, Deserialize)]
+struct Header {
+    key: String,
+    patches: u64,
+    nodes: u64,
+    /// The checksum of the tree's patch order.
+    order: u64,
+    far_entries: u64,
+    near_entries: u64,
+    figures: StoredFigures,
+    body_len: [u8; 8],
+    body_checksum: [u8; 8],
+}
+
+/// [`HierarchyFigures`] as written.
+#[derive(Serialize, Deserialize)]
+struct StoredFigures {
+    far_links: u64,
+    zeroth_links: u64,
+    near_links: u64,
+    far_pairs: u64,
+    rays: u64,
+    occluded: u64,
+    seconds: f64,
+}
+
+fn order_checksum(tree: &ClusterTree) -> u64 {
+    let bytes: Vec<u8> = tree.order.iter().flat_map(|p| p.to_le_bytes()).collect();
+    xxh3_64(&bytes)
+}
+
+impl HierarchicalColumns {
+    /// The operator's links as bytes, under `key` (what it was built from: the scene and the
+    /// parameters), for [`HierarchicalColumns::from_bytes`].
+    pub fn to_bytes(&self, key: &str) -> Vec<u8> {
+        let f = &self.figures;
+        let header = Header {
+            key: key.to_string(),
+            patches: self.areas.len() as u64,
+            nodes: self.tree.nodes.len() as u64,
+            order: order_checksum(&self.tree),
+            far_entries: self.far.other.len() as u64,
+            near_entries: self.near.other.len() as u64,
+            figures: StoredFigures {
+                far_links: f.far_links as u64,
+                zeroth_links: f.zeroth_links as u64,
+                near_links: f.near_links as u64,
+                far_pairs: f.far_pairs,
+                rays: f.rays,
+                occluded: f.occluded,
+                seconds: f.seconds,
+            },
+            body_len: [0; 8],
+            body_checksum: [0; 8],
+        };
+        let mut out = postcard::to_stdvec(&(MAGIC, FORMAT_VERSION)).expect("postcard encodes a string and a number");
+        out = postcard::to_extend(&header, out).expect("postcard encodes the header");
+        let body_start = out.len();
+        out.reserve(self.far.bytes() + self.near.bytes());
+        let offsets =
+            |out: &mut Vec<u8>, start: &[usize]| start.iter().for_each(|&s| out.extend((s as u64).to_le_bytes()));
+        offsets(&mut out, &self.far.start);
+        self.far.other.iter().for_each(|o| out.extend(o.to_le_bytes()));
+        self.far.value.iter().for_each(|[c, n]| out.extend(c.to_le_bytes().into_iter().chain(n.to_le_bytes())));
+        offsets(&mut out, &self.near.start);
+        self.near.other.iter().for_each(|o| out.extend(o.to_le_bytes()));
+        self.near.value.iter().for_each(|v| out.extend(v.to_le_bytes()));
+        let body_len = (out.len() - body_start) as u64;
+        let checksum = xxh3_64(&out[body_start..]);
+        out[body_start - 16..body_start - 8].copy_from_slice(&body_len.to_le_bytes());
+        out[body_start - 8..body_start].copy_from_slice(&checksum.to_le_bytes());
+        out
+    }
+
+    /// The operator whose links [`HierarchicalColumns::to_bytes`] wrote under `key`, over
+    /// `scene` (whose tree is rebuilt and checked against the file's); its figures are the
+    /// build's, marked [`HierarchyFigures::loaded`].
+    pub fn from_bytes(bytes: &[u8], key: &str, scene: &Scene) -> Result<HierarchicalColumns, FfError> {
+        let refuse = |why: String| FfError::StoredOperator(why);
+        let (magic, rest): (&str, &[u8]) =
+            postcard::take_from_bytes(bytes).map_err(|e| refuse(format!("not a stored operator ({e})")))?;
+        if magic != MAGIC {
+            return Err(refuse("not a stored operator (wrong magic string)".into()));
+        }
+        let (version, rest): (u32, &[u8]) =
+            postcard::take_from_bytes(rest).map_err(|e| refuse(format!("truncated header ({e})")))?;
+        if version != FORMAT_VERSION {
+            return Err(refuse(format!(
+                "written in format version {version}, this build reads version {FORMAT_VERSION}"
+            )));
+        }
+        let (header, body): (Header, &[u8]) =
+            postcard::take_from_bytes(rest).map_err(|e| refuse(format!("truncated header ({e})")))?;
+        if header.key != key {
+            return Err(refuse(format!("it was built for '{}', not for '{key}'", header.key)));
+        }
+        if body.len() as u64 != u64::from_le_bytes(header.body_len) {
+            return Err(refuse("its links are truncated or padded".into()));
+        }
+        if xxh3_64(body) != u64::from_le_bytes(header.body_checksum) {
+            return Err(refuse("its links do not match their checksum (corrupted file)".into()));
+        }
+        let tree = ClusterTree::new(scene);
+        if header.patches != scene.len() as u64
+            || header.nodes != tree.nodes.len() as u64
+            || header.order != order_checksum(&tree)
+        {
+            return Err(refuse(format!(
+                "it was built over {} patches and a tree of {} nodes, not this scene's {} and {}",
+                header.patches,
+                header.nodes,
+                scene.len(),
+                tree.nodes.len()
+            )));
+        }
+        let mut reader = Body { bytes: body };
+        let far = reader.adjacency(tree.nodes.len(), header.far_entries, 4, |b| {
+            [u16::from_le_bytes([b[0], b[1]]), u16::from_le_bytes([b[2], b[3]])]
+        });
+        let near = reader.adjacency(scene.len(), header.near_entries, 8, |b| {
+            Real::from_le_bytes(b.try_into().expect("slices of 8 bytes"))
+        });
+        let (Some(far), Some(near)) = (far, near) else {
+            return Err(refuse("its link lists are inconsistent with their sizes".into()));
+        };
+        if !reader.bytes.is_empty() {
+            return Err(refuse("bytes follow its links".into()));
+        }
+        let s = &header.figures;
+        let bytes = HierarchicalColumns::bytes_of(&tree, &far, &near, scene.len());
+        let figures = HierarchyFigures {
+            nodes: tree.nodes.len(),
+            far_links: s.far_links as usize,
+            zeroth_links: s.zeroth_links as usize,
+            near_links: s.near_links as usize,
+            far_pairs: s.far_pairs,
+            rays: s.rays,
+            occluded: s.occluded,
+            seconds: s.seconds,
+            bytes,
+            loaded: true,
+        };
+        Ok(HierarchicalColumns {
+            parent: parents(&tree),
+            far,
+            near,
+            areas: scene.patches().iter().map(|p| p.area()).collect(),
+            normals: scene.patches().iter().map(|p| p.normal()).collect(),
+            centroids: scene.patches().iter().map(|p| p.centroid()).collect(),
+            tree,
+            figures,
+        })
+    }
+}
+
+/// The body of a file, read front to back.
+struct Body<'b> {
+    bytes: &'b [u8],
+}
+
+impl Body<'_> {
+    /// `len` bytes, or `None` when fewer are left.
+    fn take(&mut self, len: usize) -> Option<&[u8]> {
+        (self.bytes.len() >= len).then(|| {
+            let (head, tail) = self.bytes.split_at(len);
+            self.bytes = tail;
+            head
+        })
+    }
+
+    /// Lists of `keys` keys and `entries` entries of `width` bytes each, or `None` unless the
+    /// offsets run from 0 to `entries` without decreasing and every other end is below `keys`.
+    fn adjacency<T>(
+        &mut self,
+        keys: usize,
+        entries: u64,
+        width: usize,
+        value: impl Fn(&[u8]) -> T,
+    ) -> Option<Adjacency<T>> {
+        let entries = usize::try_from(entries).ok()?;
+        let start: Vec<usize> = self
+            .take((keys + 1).checked_mul(8)?)?
+            .chunks_exact(8)
+            .map(|c| u64::from_le_bytes(c.try_into().expect("chunks of 8 bytes")) as usize)
+            .collect();
+        let ordered =
+            start.first() == Some(&0) && start.last() == Some(&entries) && start.windows(2).all(|w| w[0] <= w[1]);
+        if !ordered {
+            return None;
+        }
+        let other: Vec<u32> = self
+            .take(entries.checked_mul(4)?)?
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes(c.try_into().expect("chunks of 4 bytes")))
+            .collect();
+        if other.iter().any(|&o| o as usize >= keys) {
+            return None;
+        }
+        let value = self.take(entries.checked_mul(width)?)?.chunks_exact(width).map(value).collect();
+        Some(Adjacency { start, other, value })
+    }
+}

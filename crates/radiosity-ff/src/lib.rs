@@ -53,7 +53,7 @@ pub use analytic::AnalyticColumns;
 pub use backend::{Backend, FormFactorInput};
 pub use error::FfError;
 pub use hemicube::HemicubeColumns;
-pub use hierarchical::{HierarchicalColumns, HierarchyFigures, Oracle};
+pub use hierarchical::{BuildProgress, HierarchicalColumns, HierarchyFigures, Oracle};
 pub use matrix::StoredMatrix;
 pub use montecarlo::{MonteCarloColumns, RayTally};
 pub use rays::{HitRay, ShadowSegment, TracedRays};

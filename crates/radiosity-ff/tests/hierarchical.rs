@@ -187,3 +187,23 @@ fn the_operator_read_back_from_its_bytes_is_the_one_written() {
     assert!(refused(&bytes[..bytes.len() - 3], "cornell, eps 0.05", &p).contains("truncated"));
     assert!(refused(b"garbage", "cornell, eps 0.05", &p).contains("not a stored operator"));
 }
+
+#[test]
+fn a_build_settles_every_pair_of_patches_once_and_says_so() {
+    // Every pair of patches is covered by exactly one link or dropped as unseen: the pairs the
+    // build reports settled reach n (n − 1) / 2 exactly, on the report of its last link, with
+    // every link counted (one thread, so that the last report is the last link's).
+    let p = prepared("multi-cubes");
+    let reports = std::sync::Mutex::new(Vec::new());
+    let observe = |b: radiosity_ff::BuildProgress| reports.lock().unwrap().push(b);
+    let params = HierarchicalParams { eps: 0.05, ..HierarchicalParams::default() };
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let f = pool.install(|| HierarchicalColumns::new_observed(p.scene(), &p.visibility, &p.analysis, params, &observe));
+    let reports = reports.into_inner().unwrap();
+    assert!(reports.len() >= 100, "{} reports", reports.len());
+    assert!(reports.windows(2).all(|w| w[0].settled < w[1].settled && w[0].links <= w[1].links));
+    let last = reports.last().unwrap();
+    assert_eq!(last.settled, 1.0);
+    let figures = f.figures();
+    assert_eq!(last.links, (figures.far_links + figures.near_links) as u64);
+}

@@ -20,7 +20,7 @@ use crate::reference::cache::{Cache, Lookup, scene_key};
 use radiosity_core::{ColumnSource, Real};
 use radiosity_ff::guard::MatrixFigures;
 use radiosity_ff::matrix::RebalanceReport;
-use radiosity_ff::{Backend, BackendSpec, HierarchicalColumns, StoredMatrix};
+use radiosity_ff::{Backend, BackendSpec, BuildProgress, HierarchicalColumns, StoredMatrix};
 use radiosity_geom::PreparedScene;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -99,10 +99,18 @@ fn obtain_hierarchical(
             return h;
         }
     }
-    progress.begin("building the hierarchical operator", 0, "");
-    let Backend::Hierarchical(built) = Backend::columns(spec, prepared.into()) else {
-        unreachable!("a hierarchical spec builds the hierarchical operator")
-    };
+    let BackendSpec::Hierarchical(params) = spec else { unreachable!("called with a hierarchical spec") };
+    // The bar counts thousandths of the pairs of patches settled: links high in the tree
+    // settle many at once, so it runs fast at first and slows down.
+    progress.begin("building the hierarchical operator", 1000, "‰ pairs settled");
+    let observe = |p: BuildProgress| progress.advance((p.settled * 1000.0) as u64, &format!("{} links", p.links));
+    let built = HierarchicalColumns::new_observed(
+        prepared.scene(),
+        &prepared.visibility,
+        &prepared.analysis,
+        *params,
+        &observe,
+    );
     progress.end();
     if let Some(cache) = cache {
         if let Err(e) = cache.write("hierarchical", &key, &built.to_bytes(&key)) {

@@ -58,6 +58,7 @@
 //! "A unified hierarchical algorithm for global illumination with scattering volumes and object
 //! clusters", IEEE TVCG 1(3)).
 
+use super::BuildProgress;
 use super::brightness::Brightness;
 use super::kernel_factor;
 use super::tree::ClusterTree;
@@ -67,6 +68,7 @@ use radiosity_geom::Visibility;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use std::f64::consts::PI;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// A far link between nodes `a` and `b`: 12 bytes, its geometry worked out again from the
 /// nodes' centres when it is used ([`Span::new`]).
@@ -188,6 +190,35 @@ enum Seen {
     Visible { clear: u16, count: u16 },
 }
 
+/// What refinement reports as it goes ([`BuildProgress`]): the pairs of patches settled
+/// (linked, or dropped as unseen), and the links made, to an observer, every thousandth of the
+/// pairs. Counting does not touch the links, so the build stays deterministic.
+pub(crate) struct Watch<'a> {
+    pairs: AtomicU64,
+    links: AtomicU64,
+    /// `n (n − 1) / 2`.
+    total: u64,
+    observe: &'a (dyn Fn(BuildProgress) + Sync),
+}
+
+impl<'a> Watch<'a> {
+    /// A watch over the pairs of `patches` patches.
+    pub fn new(patches: usize, observe: &'a (dyn Fn(BuildProgress) + Sync)) -> Watch<'a> {
+        let n = patches as u64;
+        Watch { pairs: AtomicU64::new(0), links: AtomicU64::new(0), total: n * n.saturating_sub(1) / 2, observe }
+    }
+
+    /// The `pairs` pairs of a link settled, `linked` when a link was kept for them.
+    fn settle(&self, pairs: u64, linked: bool) {
+        let links = self.links.fetch_add(u64::from(linked), Ordering::Relaxed) + u64::from(linked);
+        let before = self.pairs.fetch_add(pairs, Ordering::Relaxed);
+        let permille = |p: u64| (p as u128 * 1000 / self.total.max(1) as u128) as u64;
+        if permille(before + pairs) > permille(before) {
+            (self.observe)(BuildProgress { settled: (before + pairs) as Real / self.total.max(1) as Real, links });
+        }
+    }
+}
+
 /// What refinement reads.
 pub(crate) struct Refiner<'a> {
     pub scene: &'a Scene,
@@ -213,6 +244,8 @@ pub(crate) struct Refiner<'a> {
     /// The cumulative area of the patches in tree order (`cumulative[k]` is the area of the
     /// first `k`), for sampling points by area.
     pub cumulative: Vec<Real>,
+    /// Where progress is reported.
+    pub watch: Watch<'a>,
 }
 
 /// Nodes with more patches than this refine their links on other threads.
@@ -278,10 +311,12 @@ impl Refiner<'_> {
         let away = |axis: Vec3, cone: Real, towards: Vec3| {
             axis.dot(towards).clamp(-1.0, 1.0).acos() - cone - spread >= 0.5 * PI
         };
+        let pairs = u64::from(na.count) * u64::from(nb.count);
         if (spread < PI && (away(na.axis, na.spread, d) || away(nb.axis, nb.spread, -d)))
             || self.behind_plane(a, b)
             || self.behind_plane(b, a)
         {
+            self.watch.settle(pairs, false);
             return;
         }
         let (leaf_a, leaf_b) = (na.is_leaf(), nb.is_leaf());
@@ -307,7 +342,7 @@ impl Refiner<'_> {
             if let Some(order) = order {
                 let small = bound <= self.shadows || (leaf_a && leaf_b);
                 let visible = match self.visible_fraction(a, b, small, &mut traced, out) {
-                    Seen::Occluded => return,
+                    Seen::Occluded => return self.watch.settle(pairs, false),
                     Seen::Split => None,
                     Seen::Visible { clear, count } => Some((clear, count | order)),
                 };
@@ -330,7 +365,7 @@ impl Refiner<'_> {
                         out.zeroth += u64::from(order == ZEROTH);
                         out.far.push(link);
                     }
-                    return;
+                    return self.watch.settle(pairs, true);
                 }
             }
         }
@@ -340,7 +375,7 @@ impl Refiner<'_> {
             if f > 0.0 {
                 out.near.push(NearLink { i, j, transfer: self.scene.patches()[i as usize].area() * f });
             }
-            return;
+            return self.watch.settle(1, f > 0.0);
         }
         // Split the larger node that can be split.
         let split_a = !leaf_a && (leaf_b || na.radius >= nb.radius);

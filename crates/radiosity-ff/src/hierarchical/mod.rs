@@ -56,7 +56,7 @@ mod tree;
 use crate::analytic::{AnalyticColumns, AnalyticParams};
 use brightness::Brightness;
 pub use brightness::Oracle;
-use links::{Links, Refiner, Span};
+use links::{Links, Refiner, Span, Watch};
 use radiosity_core::{ColumnSource, Real, Scene, Vec3};
 use radiosity_geom::{ParamDoc, SceneAnalysis, Visibility};
 use rayon::prelude::*;
@@ -167,6 +167,17 @@ pub struct HierarchyFigures {
     pub loaded: bool,
 }
 
+/// How far a build has come ([`HierarchicalColumns::new_observed`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BuildProgress {
+    /// The share of the pairs of patches settled: covered by a link, or dropped as unseen. It
+    /// ends at 1; it is not a share of the time, since links high in the tree settle many
+    /// pairs at once.
+    pub settled: Real,
+    /// Links made so far.
+    pub links: u64,
+}
+
 /// The hierarchical operator over a scene.
 #[derive(Debug)]
 pub struct HierarchicalColumns {
@@ -193,6 +204,18 @@ impl HierarchicalColumns {
         analysis: &SceneAnalysis,
         params: HierarchicalParams,
     ) -> HierarchicalColumns {
+        HierarchicalColumns::new_observed(scene, visibility, analysis, params, &|_| {})
+    }
+
+    /// [`HierarchicalColumns::new`], calling `observe` from the building threads every
+    /// thousandth of the pairs of patches settled.
+    pub fn new_observed(
+        scene: &Scene,
+        visibility: &Visibility,
+        analysis: &SceneAnalysis,
+        params: HierarchicalParams,
+        observe: &(dyn Fn(BuildProgress) + Sync),
+    ) -> HierarchicalColumns {
         let start = Instant::now();
         let tree = ClusterTree::new(scene);
         let near_params = AnalyticParams { seed: params.seed, budget: params.budget, ..AnalyticParams::default() };
@@ -214,6 +237,7 @@ impl HierarchicalColumns {
             seed: params.seed,
             tolerance: 1e-9 * scene.diagonal(),
             cumulative,
+            watch: Watch::new(scene.len(), observe),
         };
         let Links { far: far_links, near: near_links, rays, occluded, far_pairs, zeroth } = refiner.refine_all();
         let far = Adjacency::new(tree.nodes.len(), &far_links, |l| (l.a, l.b, [l.clear, l.count]));

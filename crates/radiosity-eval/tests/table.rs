@@ -10,6 +10,7 @@ fn table() -> ConvergenceTable {
         solver: solver.to_string(),
         step,
         columns,
+        products: 0,
         seconds,
         ff_seconds,
         e_rms,
@@ -55,6 +56,26 @@ fn without_timings() {
     let (csv, markdown) = (String::from_utf8(csv).unwrap(), String::from_utf8(markdown).unwrap());
     assert!(csv.starts_with("solver,step,columns,e_rms,e_max,residual,bound\n"), "{csv}");
     insta::assert_snapshot!(format!("{csv}\n{markdown}"));
+}
+
+#[test]
+fn products_are_written_when_a_row_made_one() {
+    // A table of column methods has no `products` column; one where a row made a product by F
+    // (a Krylov solver, `jacobi:sweep=product`) has it, after `columns`, in both formats.
+    let mut without = Vec::new();
+    table().write_csv(&mut without).unwrap();
+    assert!(String::from_utf8(without).unwrap().starts_with("solver,step,columns,seconds,"));
+    let mut t = table();
+    let mut krylov = t.rows()[2].clone();
+    (krylov.solver, krylov.products) = ("gmres-30".to_string(), 7);
+    t.push(krylov);
+    let (mut csv, mut markdown) = (Vec::new(), Vec::new());
+    t.write_csv(&mut csv).unwrap();
+    t.without_timings().write_markdown(&mut markdown).unwrap();
+    let (csv, markdown) = (String::from_utf8(csv).unwrap(), String::from_utf8(markdown).unwrap());
+    assert!(csv.starts_with("solver,step,columns,products,seconds,ff_seconds,"), "{csv}");
+    assert!(csv.contains("\ngmres-30,960,512,7,") && csv.contains("\npr,480,480,0,"), "{csv}");
+    assert!(markdown.starts_with("| solver | step | columns | products | e_rms |"), "{markdown}");
 }
 
 fn check(x: f64, digits: usize, expect: &str) {

@@ -74,6 +74,8 @@ pub struct TableRow {
     pub step: u64,
     /// Form-factor columns computed.
     pub columns: u64,
+    /// Products by F the source computed itself.
+    pub products: u64,
     /// Wall-clock seconds of the run so far (metrics excluded).
     pub seconds: Real,
     /// Seconds spent computing form factors.
@@ -196,6 +198,7 @@ impl Observer for Recorder<'_> {
                 solver: self.solver.clone(),
                 step: state.step,
                 columns: state.columns,
+                products: state.products,
                 seconds,
                 ff_seconds,
                 e_rms,

@@ -5,18 +5,23 @@
 //! significant digits (default 4), so tables under snapshot tests stay stable across platforms
 //! and round-off. Tables write to any [`std::io::Write`]; opening files is the caller's business.
 //! Timings vary from run to run, so a table can leave them out
-//! ([`ConvergenceTable::without_timings`]) and stay deterministic.
+//! ([`ConvergenceTable::without_timings`]) and stay deterministic. The `products` column (the
+//! products by F a source computed itself, which the Krylov solvers and `jacobi:sweep=product`
+//! make) is written only when some row made one, so tables of column methods read as before.
 
 use crate::lab::recorder::TableRow;
 use radiosity_core::Real;
 use std::io::{self, Write};
 
 /// The columns of a table, in order.
-pub const HEADER: [&str; 9] =
-    ["solver", "step", "columns", "seconds", "ff_seconds", "e_rms", "e_max", "residual", "bound"];
+pub const HEADER: [&str; 10] =
+    ["solver", "step", "columns", "products", "seconds", "ff_seconds", "e_rms", "e_max", "residual", "bound"];
+
+/// The position in [`HEADER`] of `products`.
+const PRODUCTS_COLUMN: usize = 3;
 
 /// The positions in [`HEADER`] of the timing columns, `seconds` and `ff_seconds`.
-const TIMING_COLUMNS: [usize; 2] = [3, 4];
+const TIMING_COLUMNS: [usize; 2] = [4, 5];
 
 /// Rows of convergence data, the precision they are written with, and whether their timings
 /// are written.
@@ -62,14 +67,16 @@ impl ConvergenceTable {
         &self.rows
     }
 
-    /// The columns written, in order: [`HEADER`], less the timings if left out.
+    /// The columns written, in order: [`HEADER`], less the timings if left out and `products`
+    /// if no row made one.
     fn header(&self) -> Vec<&'static str> {
         self.written(HEADER)
     }
 
     /// The entries of `all` (one per column of [`HEADER`]) that are written.
-    fn written<T>(&self, all: [T; 9]) -> Vec<T> {
-        let keep = |i: &usize| self.timings || !TIMING_COLUMNS.contains(i);
+    fn written<T>(&self, all: [T; 10]) -> Vec<T> {
+        let products = self.rows.iter().any(|r| r.products > 0);
+        let keep = |i: &usize| (self.timings || !TIMING_COLUMNS.contains(i)) && (products || *i != PRODUCTS_COLUMN);
         all.into_iter().enumerate().filter(|(i, _)| keep(i)).map(|(_, cell)| cell).collect()
     }
 
@@ -79,6 +86,7 @@ impl ConvergenceTable {
             row.solver.clone(),
             row.step.to_string(),
             row.columns.to_string(),
+            row.products.to_string(),
             round_significant(row.seconds, d),
             round_significant(row.ff_seconds, d),
             round_significant(row.e_rms, d),

@@ -233,6 +233,7 @@ fn bad_backends_are_refused() {
         ("hierarchical:budget=-1", &["backend 'hierarchical'", "budget=-1"]),
         ("hierarchical:oracle=light", &["backend 'hierarchical'", "oracle=light", "flux or area"]),
         ("hierarchical:floor=0", &["backend 'hierarchical'", "floor=0", "(0, 1]"]),
+        ("hierarchical:passes=5", &["backend 'hierarchical'", "passes=5", "from 1 to 4"]),
         ("analytic:bogus=1", &["backend 'analytic'", "no parameter 'bogus'", "order, tol, rays, budget, seed"]),
         ("matrix:rebalance=maybe", &["backend 'matrix'", "rebalance=maybe", "true or false"]),
     ];

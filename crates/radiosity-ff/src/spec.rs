@@ -100,6 +100,7 @@ impl BackendSpec {
                         Some(_) => return Err(p.reject("oracle", "flux or area").into()),
                     },
                     floor: p.real("floor", defaults.floor, |f| f > 0.0 && f <= 1.0, "a weight in (0, 1]")?,
+                    passes: p.count("passes", defaults.passes, 1, 4)?,
                 })
             }
             "matrix" => {
@@ -135,7 +136,7 @@ impl BackendSpec {
             BackendSpec::MonteCarlo(p) => format!("montecarlo:rays={}:seed={}", p.rays, p.seed),
             BackendSpec::Hierarchical(p) => {
                 format!(
-                    "hierarchical:eps={:e}:shadows={}:rays={}:budget={}:seed={}:oracle={}:floor={}",
+                    "hierarchical:eps={:e}:shadows={}:rays={}:budget={}:seed={}:oracle={}:floor={}:passes={}",
                     p.eps,
                     p.shadows,
                     p.rays,
@@ -145,7 +146,8 @@ impl BackendSpec {
                         Oracle::Flux => "flux",
                         Oracle::Area => "area",
                     },
-                    p.floor
+                    p.floor,
+                    p.passes
                 )
             }
             BackendSpec::Matrix { of, rebalance } => {

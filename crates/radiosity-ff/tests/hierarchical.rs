@@ -207,3 +207,35 @@ fn a_build_settles_every_pair_of_patches_once_and_says_so() {
     let figures = f.figures();
     assert_eq!(last.links, (figures.far_links + figures.near_links) as u64);
 }
+
+#[test]
+fn a_pass_driven_by_the_solution_refines_and_keeps_every_guarantee() {
+    // `passes=2` weighs a second refinement by the radiosity of the first pass's operator: it
+    // refines some links further and coarsens none, and its entries stay reciprocal and
+    // non-negative, its rows the columns, its product the column loop.
+    let p = prepared("cornell:res=6");
+    let params = HierarchicalParams { eps: 0.05, ..HierarchicalParams::default() };
+    let one = HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, params);
+    let two =
+        HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, HierarchicalParams { passes: 2, ..params });
+    let (f1, f2) = (one.figures(), two.figures());
+    assert!(f2.far_links + f2.near_links > f1.far_links + f1.near_links, "{f1:?} then {f2:?}");
+    assert!(f2.rays > f1.rays, "the refined links traced rays of their own");
+    let area: Vec<Real> = p.scene().patches().iter().map(|q| q.area()).collect();
+    assert!(measured_reciprocity(&two, &area).unwrap() <= two.reciprocity_bound().unwrap());
+    let cols = columns(&two);
+    assert!(cols.iter().flatten().all(|v| *v >= 0.0 && v.is_finite()));
+    let n = area.len();
+    let mut row = vec![0.0; n];
+    for i in 0..n {
+        assert!(two.fill_row(i, &mut row));
+        assert!(row.iter().zip(&cols).all(|(v, c)| *v == c[i]), "row {i}");
+    }
+    let x: Vec<Real> = (0..n).map(|k| 0.5 + (k % 13) as Real).collect();
+    let (mut native, mut looped, mut scratch) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    assert!(two.multiply(&x, 1, &mut native));
+    multiply_by_columns(&x, 1, &mut looped, &mut scratch, |j, c| two.fill_column(j, c));
+    for (a, b) in native.iter().zip(&looped) {
+        assert!((a - b).abs() <= 1e-12 * b.abs().max(1.0), "{a} against {b}");
+    }
+}

@@ -14,10 +14,26 @@
 //! image generation", SIGGRAPH), per channel, the largest channel taken. The estimate is wrong
 //! where a patch is lit or shadowed more than on average, so neither weight falls below `floor`:
 //! every link is still within `eps / floor` of a row of `F` towards a receiver that reflects,
-//! and within `eps / floor²` between two patches that are both near black and dim.
+//! and within `eps / floor²` between two patches that are both near black and dim. A later
+//! refinement pass takes `B` from the operator's own radiosity ([`Brightness::from_radiosity`]).
 
 use super::tree::ClusterTree;
 use radiosity_core::{Real, Scene};
+
+/// Each patch's weights from an estimate of its radiosity: relative to the estimate's
+/// area-weighted RMS and its reflectivity, neither below `floor`; left as they are when the
+/// estimate is zero everywhere.
+fn weigh(scene: &Scene, estimate: &[Real], floor: Real, brightness: &mut [Real], reflect: &mut [Real]) {
+    let area = scene.total_area();
+    let mean_square = scene.patches().iter().zip(estimate).map(|(p, b)| p.area() * b * b).sum::<Real>() / area;
+    if mean_square > 0.0 {
+        let reference = mean_square.sqrt();
+        for i in 0..scene.len() {
+            brightness[i] = (estimate[i] / reference).max(floor);
+            reflect[i] = scene.reflectivity(i).max().max(floor);
+        }
+    }
+}
 
 /// Per node of the tree: its flux in units of `B_ref` and the largest reflectivity of its
 /// patches.
@@ -64,15 +80,24 @@ impl Brightness {
                     (0..3).map(|c| e.0[c] + rho.0[c] * ambient[c]).fold(0.0, Real::max)
                 })
                 .collect();
-            let mean_square = scene.patches().iter().zip(&estimate).map(|(p, b)| p.area() * b * b).sum::<Real>() / area;
-            if mean_square > 0.0 {
-                let reference = mean_square.sqrt();
-                for i in 0..n {
-                    brightness[i] = (estimate[i] / reference).max(floor);
-                    reflect[i] = scene.reflectivity(i).max().max(floor);
-                }
-            }
+            weigh(scene, &estimate, floor, &mut brightness, &mut reflect);
         }
+        Brightness::of_patches(scene, tree, &brightness, &reflect)
+    }
+
+    /// The weights of every node of `tree` from a radiosity `b` of `scene` (3 channels,
+    /// patch-major; the largest channel taken), each no smaller than `floor`: the oracle of a
+    /// refinement pass driven by the solution (multigridding).
+    pub fn from_radiosity(scene: &Scene, tree: &ClusterTree, b: &[Real], floor: Real) -> Brightness {
+        let n = scene.len();
+        let estimate: Vec<Real> = (0..n).map(|i| b[3 * i..3 * i + 3].iter().copied().fold(0.0, Real::max)).collect();
+        let (mut brightness, mut reflect) = (vec![1.0; n], vec![1.0; n]);
+        weigh(scene, &estimate, floor, &mut brightness, &mut reflect);
+        Brightness::of_patches(scene, tree, &brightness, &reflect)
+    }
+
+    /// The nodes' flux and largest reflectivity from their patches' weights.
+    fn of_patches(scene: &Scene, tree: &ClusterTree, brightness: &[Real], reflect: &[Real]) -> Brightness {
         let nodes = &tree.nodes;
         let (mut flux, mut most) = (vec![0.0; nodes.len()], vec![0.0; nodes.len()]);
         // Children come after their parent: a backward pass sees them first.

@@ -67,6 +67,7 @@ use radiosity_core::{Real, Scene, Vec3};
 use radiosity_geom::Visibility;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
+use rayon::prelude::*;
 use std::f64::consts::PI;
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -320,26 +321,8 @@ impl Refiner<'_> {
             return;
         }
         let (leaf_a, leaf_b) = (na.is_leaf(), nb.is_leaf());
-        let (alpha, beta, rho) = (na.min_cos(d), nb.min_cos(-d), reach / r);
-        // The kernel to first order, evaluated at the patches' centroids, stays non-negative for
-        // every pair of the link: its first-order terms are at most ρ_c (2αβ + α + β) against
-        // αβ, with ρ_c the centroids' largest offsets from the centres over r.
-        let rho_c = (na.centroid_radius + nb.centroid_radius) / r;
-        // Cosines below `MIN_COSINE` are taken as zero: the cones bound them to a few roundings.
-        if r > reach && alpha > MIN_COSINE && beta > MIN_COSINE {
-            let bound = self.brightness.bound(a, b, r);
-            let second = (2.0 * (rho + spread)).powi(2);
-            // To first order where that stays non-negative, otherwise to zeroth order (the
-            // cosines with d alone, non-negative wherever every patch faces the other side),
-            // whose error adds the first-order terms, at most 4ρ_c, within a share of eps.
-            let order = if alpha * beta * (1.0 - 2.0 * rho_c) >= rho_c * (alpha + beta) && bound * second <= self.eps {
-                Some(0)
-            } else if bound * (4.0 * rho_c + second) <= ZEROTH_SHARE * self.eps {
-                Some(ZEROTH)
-            } else {
-                None
-            };
-            if let Some(order) = order {
+        {
+            if let Some((order, bound)) = self.far_order(a, b) {
                 let small = bound <= self.shadows || (leaf_a && leaf_b);
                 let visible = match self.visible_fraction(a, b, small, &mut traced, out) {
                     Seen::Occluded => return self.watch.settle(pairs, false),
@@ -413,6 +396,65 @@ impl Refiner<'_> {
             self.refine_pair(p0.0, p0.1, t0, out);
             self.refine_pair(p1.0, p1.1, t1, out);
         }
+    }
+
+    /// The order a far link between `a` and `b` may take and its weighted transfer bound, or
+    /// `None` when it may not be far (module doc).
+    fn far_order(&self, a: u32, b: u32) -> Option<(u16, Real)> {
+        let (na, nb) = (&self.tree.nodes[a as usize], &self.tree.nodes[b as usize]);
+        let between = nb.centre - na.centre;
+        let (r, reach) = (between.length(), na.radius + nb.radius);
+        if r <= reach {
+            return None;
+        }
+        let (d, rho) = (between / r, reach / r);
+        let spread = rho.asin();
+        let (alpha, beta) = (na.min_cos(d), nb.min_cos(-d));
+        // Cosines below `MIN_COSINE` are taken as zero: the cones bound them to a few roundings.
+        if alpha <= MIN_COSINE || beta <= MIN_COSINE {
+            return None;
+        }
+        // The kernel to first order, evaluated at the patches' centroids, stays non-negative for
+        // every pair of the link: its first-order terms are at most ρ_c (2αβ + α + β) against
+        // αβ, with ρ_c the centroids' largest offsets from the centres over r.
+        let rho_c = (na.centroid_radius + nb.centroid_radius) / r;
+        let bound = self.brightness.bound(a, b, r);
+        let second = (2.0 * (rho + spread)).powi(2);
+        // To first order where that stays non-negative, otherwise to zeroth order (the cosines
+        // with d alone, non-negative wherever every patch faces the other side), whose error
+        // adds the first-order terms, at most 4ρ_c, within a share of eps.
+        if alpha * beta * (1.0 - 2.0 * rho_c) >= rho_c * (alpha + beta) && bound * second <= self.eps {
+            Some((0, bound))
+        } else if bound * (4.0 * rho_c + second) <= ZEROTH_SHARE * self.eps {
+            Some((ZEROTH, bound))
+        } else {
+            None
+        }
+    }
+
+    /// A refinement pass under this refiner's brightness over the far links `far` of an
+    /// earlier one: a link that may still be far is kept with its rays' tally (not traced
+    /// again), at the order now allowed; any other is refined from its two nodes. The order of the links is fixed by
+    /// `far`, not by the threads.
+    pub fn refine_again(&self, far: &[FarLink]) -> Links {
+        far.par_chunks(4096)
+            .map(|chunk| {
+                let mut out = Links::default();
+                for link in chunk {
+                    match self.far_order(link.a, link.b) {
+                        Some((order, _)) => {
+                            out.zeroth += u64::from(order == ZEROTH);
+                            out.far.push(FarLink { count: (link.count & !ZEROTH) | order, ..*link });
+                        }
+                        None => self.refine_pair(link.a, link.b, Vec::new(), &mut out),
+                    }
+                }
+                out
+            })
+            .reduce(Links::default, |mut x, y| {
+                x.append(y);
+                x
+            })
     }
 
     /// What the rays of the link between `a` and `b` tell (module doc): a small link keeps what

@@ -24,6 +24,13 @@
 //! (`brightness`: links from the lights are refined further, links between dim or dark
 //! patches less), and `V` is sampled.
 //!
+//! With `passes` above 1 the refinement is driven again by the solution (multigridding,
+//! Hanrahan, Salzman & Aupperle's BF refinement on the current `B`): the operator of a pass is
+//! swept from the emission (`SWEEPS` Jacobi products), the brightness is taken from that
+//! radiosity instead of the estimate, and every far link that may no longer be far under it is
+//! refined again from its nodes; the others keep their rays' tally. A pass refines and never
+//! coarsens.
+//!
 //! A far link is stored as its two nodes and its rays' tally, 12 bytes; its direction, length
 //! and `g` are worked out again from the nodes' centres wherever it is used, to the same bits.
 //!
@@ -87,6 +94,9 @@ pub struct HierarchicalParams {
     /// flux oracle: every link stays within `eps / floor²` of a row of `F` (`eps / floor`
     /// towards a receiver that reflects).
     pub floor: Real,
+    /// Refinement passes: the first driven by the estimated brightness, each later one by the
+    /// radiosity of the operator the pass before built (multigridding, module doc).
+    pub passes: usize,
 }
 
 impl Default for HierarchicalParams {
@@ -99,6 +109,7 @@ impl Default for HierarchicalParams {
             seed: 0,
             oracle: Oracle::Flux,
             floor: 0.1,
+            passes: 1,
         }
     }
 }
@@ -135,6 +146,11 @@ pub const HIERARCHICAL_PARAMS: &[ParamDoc] = &[
         key: "floor",
         default: "0.1",
         doc: "the flux oracle's smallest weight of a brightness or a reflectivity, in (0, 1]: every link stays within eps/floor² of a row of F",
+    },
+    ParamDoc {
+        key: "passes",
+        default: "1",
+        doc: "refinement passes, 1 to 4: the first by the estimated brightness, each later one by the radiosity the pass before gives",
     },
 ];
 
@@ -239,9 +255,33 @@ impl HierarchicalColumns {
             cumulative,
             watch: Watch::new(scene.len(), observe),
         };
-        let Links { far: far_links, near: near_links, rays, occluded, far_pairs, zeroth } = refiner.refine_all();
-        let far = Adjacency::new(tree.nodes.len(), &far_links, |l| (l.a, l.b, [l.clear, l.count]));
-        let near = Adjacency::new(scene.len(), &near_links, |l| (l.i, l.j, l.transfer));
+        let mut links = refiner.refine_all();
+        for _ in 1..params.passes {
+            // Multigridding: the radiosity of this pass's operator weighs the next pass.
+            let b = HierarchicalColumns::assemble(scene, tree.clone(), &links, start).radiosity(scene, SWEEPS);
+            let again = Refiner {
+                brightness: Brightness::from_radiosity(scene, &tree, &b, params.floor),
+                watch: Watch::new(scene.len(), &|_| {}),
+                cumulative: refiner.cumulative.clone(),
+                strata: refiner.strata.clone(),
+                ..refiner
+            };
+            let Links { far, near, rays, occluded, far_pairs, zeroth: _ } = std::mem::take(&mut links);
+            let mut next = again.refine_again(&far);
+            next.near.splice(0..0, near);
+            (next.rays, next.occluded, next.far_pairs) =
+                (next.rays + rays, next.occluded + occluded, next.far_pairs + far_pairs);
+            links = next;
+        }
+        HierarchicalColumns::assemble(scene, tree, &links, start)
+    }
+
+    /// The operator of `links` over `tree`, its figures timed from `start`.
+    fn assemble(scene: &Scene, tree: ClusterTree, links: &Links, start: Instant) -> HierarchicalColumns {
+        let Links { far: far_links, near: near_links, rays, occluded, far_pairs, zeroth } = links;
+        let (rays, occluded, far_pairs, zeroth) = (*rays, *occluded, *far_pairs, *zeroth);
+        let far = Adjacency::new(tree.nodes.len(), far_links, |l| (l.a, l.b, [l.clear, l.count]));
+        let near = Adjacency::new(scene.len(), near_links, |l| (l.i, l.j, l.transfer));
         let (far_links, near_links) = (far_links.len(), near_links.len());
         let bytes = HierarchicalColumns::bytes_of(&tree, &far, &near, scene.len());
         let figures = HierarchyFigures {
@@ -266,6 +306,21 @@ impl HierarchicalColumns {
             tree,
             figures,
         }
+    }
+
+    /// An approximation of the operator's radiosity over `scene` in RGB: `sweeps` Jacobi
+    /// sweeps from the emission, each one product.
+    fn radiosity(&self, scene: &Scene, sweeps: usize) -> Vec<Real> {
+        let n = scene.len();
+        let e: Vec<Real> = (0..3 * n).map(|idx| scene.emission(idx / 3).0[idx % 3]).collect();
+        let (mut b, mut fb) = (e.clone(), vec![0.0; 3 * n]);
+        for _ in 0..sweeps {
+            self.multiply(&b, 3, &mut fb);
+            for (idx, v) in b.iter_mut().enumerate() {
+                *v = e[idx] + scene.reflectivity(idx / 3).0[idx % 3] * fb[idx];
+            }
+        }
+        b
     }
 
     /// What building found and cost.
@@ -345,6 +400,10 @@ fn kernel_factor(span: &Span, (n, a): (Vec3, Vec3), (m, b): (Vec3, Vec3)) -> Rea
     let (alpha, beta) = (n.dot(e), -m.dot(e));
     alpha * beta * (1.0 - 2.0 * e.dot(delta) / span.r) + (beta * n.dot(p_delta) - alpha * m.dot(p_delta)) / span.r
 }
+
+/// The Jacobi sweeps of the radiosity a later refinement pass is weighed by: light bounced
+/// this many times, enough for an oracle that only needs each patch's brightness to a factor.
+const SWEEPS: usize = 8;
 
 /// Links by the node or patch at either end: for each of `len` keys, the other end and the
 /// link's value, ordered by the other end (so that a product reads its vector in order).

@@ -109,6 +109,10 @@ fn compare(args: &Args, prepared: &PreparedScene, spec: &BackendSpec, reference:
         Backend::Hierarchical(h) if h.figures().loaded => {
             format!("read from the cache in {built:.3} s (built in {:.3} s)", h.figures().seconds)
         }
+        Backend::Hierarchical(h) => {
+            let seconds = h.figures().seconds;
+            format!("built in {seconds:.3} s, written to the cache in {:.3} s more", built - seconds)
+        }
         _ => format!("built in {built:.3} s"),
     };
     let mut out = format!("scene        {}: {n} patches\nbackend      {} {how}\n", args.scene, spec.canonical());

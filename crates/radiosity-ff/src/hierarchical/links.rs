@@ -152,6 +152,8 @@ pub(crate) struct Links {
     pub far_pairs: u64,
     /// Of the far links, those to zeroth order.
     pub zeroth: u64,
+    /// Pairs of patches settled and links made since they were last reported ([`Watch`]).
+    unreported: (u64, u64),
 }
 
 impl Links {
@@ -162,6 +164,7 @@ impl Links {
         self.occluded += other.occluded;
         self.far_pairs += other.far_pairs;
         self.zeroth += other.zeroth;
+        self.unreported = (self.unreported.0 + other.unreported.0, self.unreported.1 + other.unreported.1);
     }
 }
 
@@ -193,7 +196,9 @@ enum Seen {
 
 /// What refinement reports as it goes ([`BuildProgress`]): the pairs of patches settled
 /// (linked, or dropped as unseen), and the links made, to an observer, every thousandth of the
-/// pairs. Counting does not touch the links, so the build stays deterministic.
+/// pairs. Each task counts in its own [`Links`] and adds to the shared counts a thousandth at a
+/// time, so that the threads do not contend; counting does not touch the links, so the build
+/// stays deterministic.
 pub(crate) struct Watch<'a> {
     pairs: AtomicU64,
     links: AtomicU64,
@@ -209,9 +214,19 @@ impl<'a> Watch<'a> {
         Watch { pairs: AtomicU64::new(0), links: AtomicU64::new(0), total: n * n.saturating_sub(1) / 2, observe }
     }
 
-    /// The `pairs` pairs of a link settled, `linked` when a link was kept for them.
-    fn settle(&self, pairs: u64, linked: bool) {
-        let links = self.links.fetch_add(u64::from(linked), Ordering::Relaxed) + u64::from(linked);
+    /// The `pairs` pairs of a link settled into `out`, `linked` when a link was kept for them.
+    fn settle(&self, out: &mut Links, pairs: u64, linked: bool) {
+        out.unreported = (out.unreported.0 + pairs, out.unreported.1 + u64::from(linked));
+        if out.unreported.0 >= self.total / 1000 {
+            self.flush(out);
+        }
+    }
+
+    /// Adds what `out` has not reported to the shared counts, and reports each thousandth of
+    /// the pairs crossed.
+    fn flush(&self, out: &mut Links) {
+        let (pairs, linked) = std::mem::take(&mut out.unreported);
+        let links = self.links.fetch_add(linked, Ordering::Relaxed) + linked;
         let before = self.pairs.fetch_add(pairs, Ordering::Relaxed);
         let permille = |p: u64| (p as u128 * 1000 / self.total.max(1) as u128) as u64;
         if permille(before + pairs) > permille(before) {
@@ -258,6 +273,7 @@ impl Refiner<'_> {
     pub fn refine_all(&self) -> Links {
         let mut links = Links::default();
         self.refine_self(0, &mut links);
+        self.watch.flush(&mut links);
         links
     }
 
@@ -317,15 +333,14 @@ impl Refiner<'_> {
             || self.behind_plane(a, b)
             || self.behind_plane(b, a)
         {
-            self.watch.settle(pairs, false);
-            return;
+            return self.watch.settle(out, pairs, false);
         }
         let (leaf_a, leaf_b) = (na.is_leaf(), nb.is_leaf());
         {
             if let Some((order, bound)) = self.far_order(a, b) {
                 let small = bound <= self.shadows || (leaf_a && leaf_b);
                 let visible = match self.visible_fraction(a, b, small, &mut traced, out) {
-                    Seen::Occluded => return self.watch.settle(pairs, false),
+                    Seen::Occluded => return self.watch.settle(out, pairs, false),
                     Seen::Split => None,
                     Seen::Visible { clear, count } => Some((clear, count | order)),
                 };
@@ -348,7 +363,7 @@ impl Refiner<'_> {
                         out.zeroth += u64::from(order == ZEROTH);
                         out.far.push(link);
                     }
-                    return self.watch.settle(pairs, true);
+                    return self.watch.settle(out, pairs, true);
                 }
             }
         }
@@ -358,7 +373,7 @@ impl Refiner<'_> {
             if f > 0.0 {
                 out.near.push(NearLink { i, j, transfer: self.scene.patches()[i as usize].area() * f });
             }
-            return self.watch.settle(1, f > 0.0);
+            return self.watch.settle(out, 1, f > 0.0);
         }
         // Split the larger node that can be split.
         let split_a = !leaf_a && (leaf_b || na.radius >= nb.radius);

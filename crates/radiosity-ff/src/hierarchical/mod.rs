@@ -266,7 +266,7 @@ impl HierarchicalColumns {
                 strata: refiner.strata.clone(),
                 ..refiner
             };
-            let Links { far, near, rays, occluded, far_pairs, zeroth: _ } = std::mem::take(&mut links);
+            let Links { far, near, rays, occluded, far_pairs, .. } = std::mem::take(&mut links);
             let mut next = again.refine_again(&far);
             next.near.splice(0..0, near);
             (next.rays, next.occluded, next.far_pairs) =
@@ -278,7 +278,7 @@ impl HierarchicalColumns {
 
     /// The operator of `links` over `tree`, its figures timed from `start`.
     fn assemble(scene: &Scene, tree: ClusterTree, links: &Links, start: Instant) -> HierarchicalColumns {
-        let Links { far: far_links, near: near_links, rays, occluded, far_pairs, zeroth } = links;
+        let Links { far: far_links, near: near_links, rays, occluded, far_pairs, zeroth, .. } = links;
         let (rays, occluded, far_pairs, zeroth) = (*rays, *occluded, *far_pairs, *zeroth);
         let far = Adjacency::new(tree.nodes.len(), far_links, |l| (l.a, l.b, [l.clear, l.count]));
         let near = Adjacency::new(scene.len(), near_links, |l| (l.i, l.j, l.transfer));

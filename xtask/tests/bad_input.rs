@@ -215,7 +215,7 @@ fn bad_stop_rules_are_refused() {
 #[test]
 fn bad_backends_are_refused() {
     // (backend, words of the sentence)
-    let cases: [(&str, &[&str]); 16] = [
+    let cases: [(&str, &[&str]); 17] = [
         (
             "radiance",
             &["unknown form-factor backend 'radiance'", "analytic, hemicube, montecarlo, hierarchical, matrix"],

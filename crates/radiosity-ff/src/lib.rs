@@ -33,6 +33,7 @@ pub mod analytic;
 pub mod backend;
 pub mod error;
 pub mod ff_point_polygon;
+mod framing;
 pub mod guard;
 pub mod hemicube;
 pub mod hierarchical;

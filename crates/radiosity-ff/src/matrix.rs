@@ -92,13 +92,14 @@
 //!
 //! [`StoredMatrix::to_bytes`] writes a header (a magic string, the format version, the key the
 //! caller computed the matrix from, `n`, the number of non-zeros, and the length and xxh3
-//! checksum of the body) followed by the entries, all with postcard.
+//! checksum of the body; the frame of `framing`) followed by the entries, all with postcard.
 //! [`StoredMatrix::from_bytes`] refuses another format version, another key, a truncated or
 //! corrupted body, and entries that do not fit the header, each with a clear
 //! [`FfError::StoredMatrix`]. Where files live is the caller's business (only `eval` and
 //! `xtask` write files).
 
 use crate::error::FfError;
+use crate::framing::{frame, unframe};
 use crate::guard::{MatrixFigures, matrix_figures};
 use radiosity_core::column::reciprocity_after_f32;
 use radiosity_core::{ColumnSource, Real};
@@ -716,8 +717,6 @@ impl StoredMatrix {
 
     /// Encodes the matrix with `key` (what it was computed from) for a cache file.
     pub fn to_bytes(&self, key: &str) -> Vec<u8> {
-        // One buffer: the header is written with a zero length and checksum, which are filled
-        // in once the body follows it (they are its last 16 bytes, fixed-size).
         let header = Header {
             key: key.to_string(),
             n: self.n as u64,
@@ -726,47 +725,22 @@ impl StoredMatrix {
             body_len: [0; 8],
             body_checksum: [0; 8],
         };
-        let mut out = Vec::with_capacity(self.bytes() + self.n + key.len() + 128);
-        out = postcard::to_extend(&(MAGIC, FORMAT_VERSION), out).expect("postcard encodes a string and a number");
-        out = postcard::to_extend(&header, out).expect("postcard encodes the header");
-        let body_start = out.len();
-        out = postcard::to_extend(&self.entries, out).expect("postcard encodes vectors and matrices into a Vec");
-        let body_len = (out.len() - body_start) as u64;
-        let checksum = xxhash_rust::xxh3::xxh3_64(&out[body_start..]);
-        out[body_start - 16..body_start - 8].copy_from_slice(&body_len.to_le_bytes());
-        out[body_start - 8..body_start].copy_from_slice(&checksum.to_le_bytes());
-        out
+        let capacity = self.bytes() + self.n + key.len() + 128;
+        frame(MAGIC, FORMAT_VERSION, &header, capacity, |out| {
+            postcard::to_extend(&self.entries, out).expect("postcard encodes vectors and matrices into a Vec")
+        })
     }
 
     /// Decodes a matrix written by [`StoredMatrix::to_bytes`] with the same `key`.
     pub fn from_bytes(bytes: &[u8], key: &str) -> Result<StoredMatrix, FfError> {
         let refuse = |why: String| FfError::StoredMatrix(why);
-        let (magic, rest): (&str, &[u8]) =
-            postcard::take_from_bytes(bytes).map_err(|e| refuse(format!("not a stored form-factor matrix ({e})")))?;
-        if magic != MAGIC {
-            return Err(refuse("not a stored form-factor matrix (wrong magic string)".into()));
-        }
-        let (version, rest): (u32, &[u8]) =
-            postcard::take_from_bytes(rest).map_err(|e| refuse(format!("truncated header ({e})")))?;
-        if version != FORMAT_VERSION {
-            return Err(refuse(format!(
-                "written in format version {version}, this build reads version {FORMAT_VERSION}"
-            )));
-        }
-        let (header, body): (Header, &[u8]) =
-            postcard::take_from_bytes(rest).map_err(|e| refuse(format!("truncated header ({e})")))?;
+        let (header, body) =
+            unframe(bytes, (MAGIC, FORMAT_VERSION), ("a stored form-factor matrix", "the entries"), |h: &Header| {
+                (h.body_len, h.body_checksum)
+            })
+            .map_err(refuse)?;
         if header.key != key {
             return Err(refuse(format!("it was computed for '{}', not for '{key}'", header.key)));
-        }
-        let body_len = u64::from_le_bytes(header.body_len);
-        if body.len() as u64 != body_len {
-            return Err(refuse(format!(
-                "the entries take {} bytes where the header promises {body_len} (truncated or padded file)",
-                body.len()
-            )));
-        }
-        if xxhash_rust::xxh3::xxh3_64(body) != u64::from_le_bytes(header.body_checksum) {
-            return Err(refuse("the entries do not match their checksum (corrupted file)".into()));
         }
         let entries: Entries =
             postcard::from_bytes(body).map_err(|e| refuse(format!("the entries cannot be decoded ({e})")))?;

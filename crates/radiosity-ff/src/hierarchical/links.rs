@@ -336,35 +336,33 @@ impl Refiner<'_> {
             return self.watch.settle(out, pairs, false);
         }
         let (leaf_a, leaf_b) = (na.is_leaf(), nb.is_leaf());
-        {
-            if let Some((order, bound)) = self.far_order(a, b) {
-                let small = bound <= self.shadows || (leaf_a && leaf_b);
-                let visible = match self.visible_fraction(a, b, small, &mut traced, out) {
-                    Seen::Occluded => return self.watch.settle(out, pairs, false),
-                    Seen::Split => None,
-                    Seen::Visible { clear, count } => Some((clear, count | order)),
-                };
-                if let Some((clear, count)) = visible {
-                    let link = FarLink { a, b, clear, count };
-                    if leaf_a && leaf_b {
-                        let span = Span::new(self.tree, a, b, clear, count);
-                        // Two patches: the entry the far link gives, stored as one number, so
-                        // that products and columns read it like a near link's.
-                        let (i, j) = (self.tree.order[na.first as usize], self.tree.order[nb.first as usize]);
-                        let (p, q) = (&self.scene.patches()[i as usize], &self.scene.patches()[j as usize]);
-                        let kappa = kernel_factor(
-                            &span,
-                            (p.normal(), p.centroid() - na.centre),
-                            (q.normal(), q.centroid() - nb.centre),
-                        );
-                        out.near.push(NearLink { i, j, transfer: p.area() * q.area() * span.g * kappa });
-                        out.far_pairs += 1;
-                    } else {
-                        out.zeroth += u64::from(order == ZEROTH);
-                        out.far.push(link);
-                    }
-                    return self.watch.settle(out, pairs, true);
+        if let Some((order, bound)) = self.far_order(a, b) {
+            let small = bound <= self.shadows || (leaf_a && leaf_b);
+            let visible = match self.visible_fraction(a, b, small, &mut traced, out) {
+                Seen::Occluded => return self.watch.settle(out, pairs, false),
+                Seen::Split => None,
+                Seen::Visible { clear, count } => Some((clear, count | order)),
+            };
+            if let Some((clear, count)) = visible {
+                let link = FarLink { a, b, clear, count };
+                if leaf_a && leaf_b {
+                    let span = Span::new(self.tree, a, b, clear, count);
+                    // Two patches: the entry the far link gives, stored as one number, so
+                    // that products and columns read it like a near link's.
+                    let (i, j) = (self.tree.order[na.first as usize], self.tree.order[nb.first as usize]);
+                    let (p, q) = (&self.scene.patches()[i as usize], &self.scene.patches()[j as usize]);
+                    let kappa = kernel_factor(
+                        &span,
+                        (p.normal(), p.centroid() - na.centre),
+                        (q.normal(), q.centroid() - nb.centre),
+                    );
+                    out.near.push(NearLink { i, j, transfer: p.area() * q.area() * span.g * kappa });
+                    out.far_pairs += 1;
+                } else {
+                    out.zeroth += u64::from(order == ZEROTH);
+                    out.far.push(link);
                 }
+                return self.watch.settle(out, pairs, true);
             }
         }
         if leaf_a && leaf_b {

@@ -296,6 +296,17 @@ impl HierarchicalColumns {
             bytes,
             loaded: false,
         };
+        HierarchicalColumns::from_parts(scene, tree, far, near, figures)
+    }
+
+    /// The operator of `tree` and its links over `scene`.
+    fn from_parts(
+        scene: &Scene,
+        tree: ClusterTree,
+        far: Adjacency<[u16; 2]>,
+        near: Adjacency<Real>,
+        figures: HierarchyFigures,
+    ) -> HierarchicalColumns {
         HierarchicalColumns {
             parent: parents(&tree),
             far,

@@ -11,8 +11,9 @@
 //! far values as two `u16`, near values as `f64`), read back bit for bit.
 
 use super::tree::ClusterTree;
-use super::{Adjacency, HierarchicalColumns, HierarchyFigures, parents};
+use super::{Adjacency, HierarchicalColumns, HierarchyFigures};
 use crate::error::FfError;
+use crate::framing::{frame, unframe};
 use radiosity_core::{Real, Scene};
 use serde::{Deserialize, Serialize};
 use xxhash_rust::xxh3::xxh3_64;
@@ -76,23 +77,17 @@ impl HierarchicalColumns {
             body_len: [0; 8],
             body_checksum: [0; 8],
         };
-        let mut out = postcard::to_stdvec(&(MAGIC, FORMAT_VERSION)).expect("postcard encodes a string and a number");
-        out = postcard::to_extend(&header, out).expect("postcard encodes the header");
-        let body_start = out.len();
-        out.reserve(self.far.bytes() + self.near.bytes());
-        let offsets =
-            |out: &mut Vec<u8>, start: &[usize]| start.iter().for_each(|&s| out.extend((s as u64).to_le_bytes()));
-        offsets(&mut out, &self.far.start);
-        self.far.other.iter().for_each(|o| out.extend(o.to_le_bytes()));
-        self.far.value.iter().for_each(|[c, n]| out.extend(c.to_le_bytes().into_iter().chain(n.to_le_bytes())));
-        offsets(&mut out, &self.near.start);
-        self.near.other.iter().for_each(|o| out.extend(o.to_le_bytes()));
-        self.near.value.iter().for_each(|v| out.extend(v.to_le_bytes()));
-        let body_len = (out.len() - body_start) as u64;
-        let checksum = xxh3_64(&out[body_start..]);
-        out[body_start - 16..body_start - 8].copy_from_slice(&body_len.to_le_bytes());
-        out[body_start - 8..body_start].copy_from_slice(&checksum.to_le_bytes());
-        out
+        frame(MAGIC, FORMAT_VERSION, &header, self.far.bytes() + self.near.bytes() + 256, |mut out| {
+            let offsets =
+                |out: &mut Vec<u8>, start: &[usize]| start.iter().for_each(|&s| out.extend((s as u64).to_le_bytes()));
+            offsets(&mut out, &self.far.start);
+            self.far.other.iter().for_each(|o| out.extend(o.to_le_bytes()));
+            self.far.value.iter().for_each(|[c, n]| out.extend(c.to_le_bytes().into_iter().chain(n.to_le_bytes())));
+            offsets(&mut out, &self.near.start);
+            self.near.other.iter().for_each(|o| out.extend(o.to_le_bytes()));
+            self.near.value.iter().for_each(|v| out.extend(v.to_le_bytes()));
+            out
+        })
     }
 
     /// The operator whose links [`HierarchicalColumns::to_bytes`] wrote under `key`, over
@@ -100,28 +95,13 @@ impl HierarchicalColumns {
     /// build's, marked [`HierarchyFigures::loaded`].
     pub fn from_bytes(bytes: &[u8], key: &str, scene: &Scene) -> Result<HierarchicalColumns, FfError> {
         let refuse = |why: String| FfError::StoredOperator(why);
-        let (magic, rest): (&str, &[u8]) =
-            postcard::take_from_bytes(bytes).map_err(|e| refuse(format!("not a stored operator ({e})")))?;
-        if magic != MAGIC {
-            return Err(refuse("not a stored operator (wrong magic string)".into()));
-        }
-        let (version, rest): (u32, &[u8]) =
-            postcard::take_from_bytes(rest).map_err(|e| refuse(format!("truncated header ({e})")))?;
-        if version != FORMAT_VERSION {
-            return Err(refuse(format!(
-                "written in format version {version}, this build reads version {FORMAT_VERSION}"
-            )));
-        }
-        let (header, body): (Header, &[u8]) =
-            postcard::take_from_bytes(rest).map_err(|e| refuse(format!("truncated header ({e})")))?;
+        let (header, body) =
+            unframe(bytes, (MAGIC, FORMAT_VERSION), ("a stored operator", "its links"), |h: &Header| {
+                (h.body_len, h.body_checksum)
+            })
+            .map_err(refuse)?;
         if header.key != key {
             return Err(refuse(format!("it was built for '{}', not for '{key}'", header.key)));
-        }
-        if body.len() as u64 != u64::from_le_bytes(header.body_len) {
-            return Err(refuse("its links are truncated or padded".into()));
-        }
-        if xxh3_64(body) != u64::from_le_bytes(header.body_checksum) {
-            return Err(refuse("its links do not match their checksum (corrupted file)".into()));
         }
         let tree = ClusterTree::new(scene);
         if header.patches != scene.len() as u64
@@ -163,16 +143,7 @@ impl HierarchicalColumns {
             bytes,
             loaded: true,
         };
-        Ok(HierarchicalColumns {
-            parent: parents(&tree),
-            far,
-            near,
-            areas: scene.patches().iter().map(|p| p.area()).collect(),
-            normals: scene.patches().iter().map(|p| p.normal()).collect(),
-            centroids: scene.patches().iter().map(|p| p.centroid()).collect(),
-            tree,
-            figures,
-        })
+        Ok(HierarchicalColumns::from_parts(scene, tree, far, near, figures))
     }
 }
 

@@ -154,8 +154,8 @@ pub const HIERARCHICAL_PARAMS: &[ParamDoc] = &[
     },
 ];
 
-/// What building the operator found and cost.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// What building the operator found and cost (written with the links when they are cached).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct HierarchyFigures {
     /// Nodes of the cluster tree.
     pub nodes: usize,

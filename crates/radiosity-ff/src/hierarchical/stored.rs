@@ -19,7 +19,7 @@ use serde::{Deserialize, Serialize};
 use xxhash_rust::xxh3::xxh3_64;
 
 const MAGIC: &str = "radiosity hierarchical operator";
-const FORMAT_VERSION: u32 = 1;
+const FORMAT_VERSION: u32 = 2;
 
 /// What the header holds besides the magic string and the version.
 #[derive(Serialize, Deserialize)]
@@ -31,21 +31,9 @@ struct Header {
     order: u64,
     far_entries: u64,
     near_entries: u64,
-    figures: StoredFigures,
+    figures: HierarchyFigures,
     body_len: [u8; 8],
     body_checksum: [u8; 8],
-}
-
-/// [`HierarchyFigures`] as written.
-#[derive(Serialize, Deserialize)]
-struct StoredFigures {
-    far_links: u64,
-    zeroth_links: u64,
-    near_links: u64,
-    far_pairs: u64,
-    rays: u64,
-    occluded: u64,
-    seconds: f64,
 }
 
 fn order_checksum(tree: &ClusterTree) -> u64 {
@@ -57,7 +45,6 @@ impl HierarchicalColumns {
     /// The operator's links as bytes, under `key` (what it was built from: the scene and the
     /// parameters), for [`HierarchicalColumns::from_bytes`].
     pub fn to_bytes(&self, key: &str) -> Vec<u8> {
-        let f = &self.figures;
         let header = Header {
             key: key.to_string(),
             patches: self.areas.len() as u64,
@@ -65,15 +52,7 @@ impl HierarchicalColumns {
             order: order_checksum(&self.tree),
             far_entries: self.far.other.len() as u64,
             near_entries: self.near.other.len() as u64,
-            figures: StoredFigures {
-                far_links: f.far_links as u64,
-                zeroth_links: f.zeroth_links as u64,
-                near_links: f.near_links as u64,
-                far_pairs: f.far_pairs,
-                rays: f.rays,
-                occluded: f.occluded,
-                seconds: f.seconds,
-            },
+            figures: self.figures,
             body_len: [0; 8],
             body_checksum: [0; 8],
         };
@@ -129,20 +108,7 @@ impl HierarchicalColumns {
         if !reader.bytes.is_empty() {
             return Err(refuse("bytes follow its links".into()));
         }
-        let s = &header.figures;
-        let bytes = HierarchicalColumns::bytes_of(&tree, &far, &near, scene.len());
-        let figures = HierarchyFigures {
-            nodes: tree.nodes.len(),
-            far_links: s.far_links as usize,
-            zeroth_links: s.zeroth_links as usize,
-            near_links: s.near_links as usize,
-            far_pairs: s.far_pairs,
-            rays: s.rays,
-            occluded: s.occluded,
-            seconds: s.seconds,
-            bytes,
-            loaded: true,
-        };
+        let figures = HierarchyFigures { loaded: true, ..header.figures };
         Ok(HierarchicalColumns::from_parts(scene, tree, far, near, figures))
     }
 }

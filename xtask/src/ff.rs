@@ -120,7 +120,8 @@ fn compare(args: &Args, prepared: &PreparedScene, spec: &BackendSpec, reference:
         let f = h.figures();
         out += &format!(
             "hierarchy    {} nodes, {} far links ({} of them to zeroth order), {} near links ({} of them far pairs of \
-             patches), {} shadow rays ({} links occluded), {}\n",
+             patches), {} shadow rays ({} links occluded), {}; {} rows capped at 1 by closure (lowest weight \
+             {:.3}), {} above 1 by their near links alone\n",
             f.nodes,
             f.far_links,
             f.zeroth_links,
@@ -128,7 +129,10 @@ fn compare(args: &Args, prepared: &PreparedScene, spec: &BackendSpec, reference:
             f.far_pairs,
             f.rays,
             f.occluded,
-            human_bytes(f.bytes)
+            human_bytes(f.bytes),
+            f.capped,
+            f.lowest_weight,
+            f.near_above
         );
     }
     let x = vec![1.0; n];

@@ -46,7 +46,7 @@ pub enum Backend<'a> {
     /// See [`MonteCarloColumns`].
     MonteCarlo(MonteCarloColumns<'a>),
     /// See [`HierarchicalColumns`].
-    Hierarchical(HierarchicalColumns),
+    Hierarchical(Box<HierarchicalColumns>),
     /// See [`StoredMatrix`].
     Matrix(StoredMatrix),
 }
@@ -63,9 +63,12 @@ impl<'a> Backend<'a> {
             BackendSpec::MonteCarlo(p) => {
                 Backend::MonteCarlo(MonteCarloColumns::new(input.scene, input.visibility, *p))
             }
-            BackendSpec::Hierarchical(p) => {
-                Backend::Hierarchical(HierarchicalColumns::new(input.scene, input.visibility, input.analysis, *p))
-            }
+            BackendSpec::Hierarchical(p) => Backend::Hierarchical(Box::new(HierarchicalColumns::new(
+                input.scene,
+                input.visibility,
+                input.analysis,
+                *p,
+            ))),
             BackendSpec::Matrix { of, .. } => Backend::columns(of, input),
         }
     }
@@ -93,7 +96,7 @@ impl<'a> Backend<'a> {
             Backend::Analytic(b) => b,
             Backend::Hemicube(b) => b,
             Backend::MonteCarlo(b) => b,
-            Backend::Hierarchical(b) => b,
+            Backend::Hierarchical(b) => b.as_ref(),
             Backend::Matrix(b) => b,
         }
     }

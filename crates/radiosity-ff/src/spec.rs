@@ -101,6 +101,7 @@ impl BackendSpec {
                     },
                     floor: p.real("floor", defaults.floor, |f| f > 0.0 && f <= 1.0, "a weight in (0, 1]")?,
                     passes: p.count("passes", defaults.passes, 1, 4)?,
+                    closure: p.flag("closure", defaults.closure)?,
                 })
             }
             "matrix" => {
@@ -136,7 +137,7 @@ impl BackendSpec {
             BackendSpec::MonteCarlo(p) => format!("montecarlo:rays={}:seed={}", p.rays, p.seed),
             BackendSpec::Hierarchical(p) => {
                 format!(
-                    "hierarchical:eps={:e}:shadows={}:rays={}:budget={}:seed={}:oracle={}:floor={}:passes={}",
+                    "hierarchical:eps={:e}:shadows={}:rays={}:budget={}:seed={}:oracle={}:floor={}:passes={}:closure={}",
                     p.eps,
                     p.shadows,
                     p.rays,
@@ -147,7 +148,8 @@ impl BackendSpec {
                         Oracle::Area => "area",
                     },
                     p.floor,
-                    p.passes
+                    p.passes,
+                    p.closure
                 )
             }
             BackendSpec::Matrix { of, rebalance } => {

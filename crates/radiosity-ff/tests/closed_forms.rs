@@ -162,7 +162,7 @@ fn bad_backend_arguments_are_clear_errors() {
     assert!(e.contains("form-factor backend 'hemicube'") && e.contains("no parameter 'order'"), "{e}");
     assert_eq!(
         BackendSpec::parse("hierarchical").unwrap().canonical(),
-        "hierarchical:eps=3e-3:shadows=0.05:rays=14:budget=512:seed=0:oracle=flux:floor=0.1:passes=1"
+        "hierarchical:eps=3e-3:shadows=0.05:rays=14:budget=512:seed=0:oracle=flux:floor=0.1:passes=1:closure=true"
     );
     assert_eq!(
         BackendSpec::parse("matrix:of=hemicube:res=64").unwrap().canonical(),

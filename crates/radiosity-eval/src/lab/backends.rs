@@ -64,7 +64,9 @@ pub fn backend<'p>(
 ) -> Result<Backend<'p>, LabError> {
     Ok(match spec {
         BackendSpec::Matrix { .. } => Backend::Matrix(obtain_matrix(prepared, spec, cache, progress)?.matrix),
-        BackendSpec::Hierarchical(_) => Backend::Hierarchical(obtain_hierarchical(prepared, spec, cache, progress)),
+        BackendSpec::Hierarchical(_) => {
+            Backend::Hierarchical(Box::new(obtain_hierarchical(prepared, spec, cache, progress)))
+        }
         _ => Backend::columns(spec, prepared.into()),
     })
 }

@@ -143,13 +143,14 @@ pub(crate) struct NearLink {
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Links {
     pub far: Vec<FarLink>,
+    /// Near links with the analytic backend's entry.
     pub near: Vec<NearLink>,
+    /// Far links between two patches, stored as the entry their kernel gives.
+    pub pairs: Vec<NearLink>,
     /// Shadow rays traced for far links.
     pub rays: u64,
     /// Links dropped as fully occluded by their rays.
     pub occluded: u64,
-    /// Of the near links, those between patches far enough apart for a far link.
-    pub far_pairs: u64,
     /// Of the far links, those to zeroth order.
     pub zeroth: u64,
     /// Pairs of patches settled and links made since they were last reported ([`Watch`]).
@@ -160,9 +161,9 @@ impl Links {
     fn append(&mut self, mut other: Links) {
         self.far.append(&mut other.far);
         self.near.append(&mut other.near);
+        self.pairs.append(&mut other.pairs);
         self.rays += other.rays;
         self.occluded += other.occluded;
-        self.far_pairs += other.far_pairs;
         self.zeroth += other.zeroth;
         self.unreported = (self.unreported.0 + other.unreported.0, self.unreported.1 + other.unreported.1);
     }
@@ -356,8 +357,7 @@ impl Refiner<'_> {
                         (p.normal(), p.centroid() - na.centre),
                         (q.normal(), q.centroid() - nb.centre),
                     );
-                    out.near.push(NearLink { i, j, transfer: p.area() * q.area() * span.g * kappa });
-                    out.far_pairs += 1;
+                    out.pairs.push(NearLink { i, j, transfer: p.area() * q.area() * span.g * kappa });
                 } else {
                     out.zeroth += u64::from(order == ZEROTH);
                     out.far.push(link);

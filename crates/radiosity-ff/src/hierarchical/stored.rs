@@ -6,12 +6,13 @@
 //! deterministic and takes milliseconds, and the file records the tree's node count and a
 //! checksum of its patch order, so that links are never read against another tree. The
 //! layout: a postcard header (a magic string, the format version, the caller's key, the
-//! sizes, the build's figures, the body's length and checksum), then the body, the far and
-//! near adjacency lists as raw little-endian arrays (offsets as `u64`, other ends as `u32`,
-//! far values as two `u16`, near values as `f64`), read back bit for bit.
+//! sizes, the build's figures, the body's length and checksum), then the body, the far, near
+//! and pair adjacency lists as raw little-endian arrays (offsets as `u64`, other ends as
+//! `u32`, far values as two `u16`, near and pair values as `f64`) and the closure
+//! weights (`f64`), read back bit for bit.
 
 use super::tree::ClusterTree;
-use super::{Adjacency, HierarchicalColumns, HierarchyFigures};
+use super::{Adjacency, HierarchicalColumns, HierarchyFigures, Lists};
 use crate::error::FfError;
 use crate::framing::{frame, unframe};
 use radiosity_core::{Real, Scene};
@@ -19,7 +20,7 @@ use serde::{Deserialize, Serialize};
 use xxhash_rust::xxh3::xxh3_64;
 
 const MAGIC: &str = "radiosity hierarchical operator";
-const FORMAT_VERSION: u32 = 2;
+const FORMAT_VERSION: u32 = 3;
 
 /// What the header holds besides the magic string and the version.
 #[derive(Serialize, Deserialize)]
@@ -31,6 +32,7 @@ struct Header {
     order: u64,
     far_entries: u64,
     near_entries: u64,
+    pair_entries: u64,
     figures: HierarchyFigures,
     body_len: [u8; 8],
     body_checksum: [u8; 8],
@@ -52,19 +54,24 @@ impl HierarchicalColumns {
             order: order_checksum(&self.tree),
             far_entries: self.far.other.len() as u64,
             near_entries: self.near.other.len() as u64,
+            pair_entries: self.pairs.other.len() as u64,
             figures: self.figures,
             body_len: [0; 8],
             body_checksum: [0; 8],
         };
-        frame(MAGIC, FORMAT_VERSION, &header, self.far.bytes() + self.near.bytes() + 256, |mut out| {
+        let size = self.far.bytes() + self.near.bytes() + self.pairs.bytes() + self.weights.len() * 8 + 256;
+        frame(MAGIC, FORMAT_VERSION, &header, size, |mut out| {
             let offsets =
                 |out: &mut Vec<u8>, start: &[usize]| start.iter().for_each(|&s| out.extend((s as u64).to_le_bytes()));
             offsets(&mut out, &self.far.start);
             self.far.other.iter().for_each(|o| out.extend(o.to_le_bytes()));
             self.far.value.iter().for_each(|[c, n]| out.extend(c.to_le_bytes().into_iter().chain(n.to_le_bytes())));
-            offsets(&mut out, &self.near.start);
-            self.near.other.iter().for_each(|o| out.extend(o.to_le_bytes()));
-            self.near.value.iter().for_each(|v| out.extend(v.to_le_bytes()));
+            for list in [&self.near, &self.pairs] {
+                offsets(&mut out, &list.start);
+                list.other.iter().for_each(|o| out.extend(o.to_le_bytes()));
+                list.value.iter().for_each(|v| out.extend(v.to_le_bytes()));
+            }
+            self.weights.iter().for_each(|w| out.extend(w.to_le_bytes()));
             out
         })
     }
@@ -99,17 +106,18 @@ impl HierarchicalColumns {
         let far = reader.adjacency(tree.nodes.len(), header.far_entries, 4, |b| {
             [u16::from_le_bytes([b[0], b[1]]), u16::from_le_bytes([b[2], b[3]])]
         });
-        let near = reader.adjacency(scene.len(), header.near_entries, 8, |b| {
-            Real::from_le_bytes(b.try_into().expect("slices of 8 bytes"))
-        });
-        let (Some(far), Some(near)) = (far, near) else {
+        let real = |b: &[u8]| Real::from_le_bytes(b.try_into().expect("slices of 8 bytes"));
+        let near = reader.adjacency(scene.len(), header.near_entries, 8, real);
+        let pairs = reader.adjacency(scene.len(), header.pair_entries, 8, real);
+        let weights: Option<Vec<Real>> = reader.take(scene.len() * 8).map(|b| b.chunks_exact(8).map(real).collect());
+        let (Some(far), Some(near), Some(pairs), Some(weights)) = (far, near, pairs, weights) else {
             return Err(refuse("its link lists are inconsistent with their sizes".into()));
         };
         if !reader.bytes.is_empty() {
             return Err(refuse("bytes follow its links".into()));
         }
         let figures = HierarchyFigures { loaded: true, ..header.figures };
-        Ok(HierarchicalColumns::from_parts(scene, tree, far, near, figures))
+        Ok(HierarchicalColumns::from_parts(scene, tree, Lists { far, near, pairs, weights }, figures))
     }
 }
 

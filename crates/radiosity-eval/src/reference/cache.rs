@@ -2,7 +2,8 @@
 //! matrices (the `matrix` backend) and reference solutions.
 //!
 //! An entry is named by the xxh3 hash of its **key**, a string holding everything the value
-//! depends on: the format version, the crate version, the scene's name, its patch count and a
+//! depends on: the format version, the crate version and the revision of the backends' entries
+//! ([`radiosity_ff::ENTRIES_REVISION`]), the scene's name, its patch count and a
 //! fingerprint of every patch's vertices (a file edited in place keeps its name, not its
 //! geometry), and the canonical backend argument with the parameters of what was computed.
 //! The key is stored inside the entry with a checksum of the body and both are checked on
@@ -83,8 +84,9 @@ impl Cache {
     }
 }
 
-/// The part of every key that names the scene: its name, patch count and a fingerprint of
-/// every patch's vertices.
+/// The part of every key that names the build and the scene: the crate version and the
+/// revision of the backends' entries, the scene's name, patch count and a fingerprint of every
+/// patch's vertices.
 pub fn scene_key(scene: &Scene) -> String {
     let mut geometry = Xxh3Default::new();
     for p in scene.patches() {
@@ -96,8 +98,9 @@ pub fn scene_key(scene: &Scene) -> String {
         }
     }
     format!(
-        "radiosity {}; scene {}; {} patches; geometry {:016x}",
+        "radiosity {} (entries revision {}); scene {}; {} patches; geometry {:016x}",
         env!("CARGO_PKG_VERSION"),
+        radiosity_ff::ENTRIES_REVISION,
         scene.name(),
         scene.len(),
         geometry.digest()

@@ -44,12 +44,12 @@
 //! is set by `order` and by the panel budget on touching pairs. Panels are quartered in both
 //! directions; grading only across the shared edge would spend the budget better.
 //!
-//! Panels are quartered depth first. When a pair's budget runs out that way, its first panels
-//! took it all and the rest were integrated whole, however near the shooter: a long strip whose
+//! Panels are quartered a level at a time, every panel of a level before any of the next.
+//! Quartered depth first (before d31c293), a pair whose budget ran out had spent it all on its
+//! first panels and integrated the rest whole, however near the shooter: a long strip whose
 //! edge lies across the shooter (a chair seat's patch on its platform in RenderPark's office3)
-//! came out 20% high. Such a pair is integrated again with the same budget spent a level at a
-//! time, every panel of a level before any of the next (tested against cosine-weighted rays).
-//! Pairs whose budget lasts keep their depth-first values to the bit.
+//! came out 20% high (tested against cosine-weighted rays). A pair whose budget lasts gets the
+//! same panels either way.
 //!
 //! The inner integral is analytic, so the `1/r²` singularity of the area-to-area kernel
 //! never appears: patches touching along an edge give finite, accurate values.
@@ -420,25 +420,26 @@ impl<'a> AnalyticColumns<'a> {
             }
         }
         let pieces = &pieces[..len];
-        let mut budget = PANEL_BUDGET;
-        let sum: Real = pieces
-            .iter()
-            .map(|(piece, edge)| self.integrate(piece, *edge, shooter, Panel::WHOLE, 0, &mut budget))
-            .sum();
-        if budget >= 4 {
-            return sum / pi.area();
+        // Pieces that the rule meets whole need no list of panels.
+        let orders: [Option<usize>; MAX_CLIPPED] = std::array::from_fn(|k| {
+            pieces.get(k).and_then(|(piece, edge)| self.panel_order(piece, *edge, shooter, Panel::WHOLE))
+        });
+        if orders[..len].iter().all(Option::is_some) {
+            let whole = pieces.iter().zip(orders);
+            return whole
+                .map(|((piece, _), q)| self.panel_rule(piece, shooter, Panel::WHOLE, q.unwrap()))
+                .sum::<Real>()
+                / pi.area();
         }
-        // The budget ran out (panels are taken four at a time from a multiple of four):
-        // depth first, the first panels took it all and the last were integrated whole,
-        // however near the shooter. Spend it again level by level.
         self.integrate_by_levels(pieces, shooter) / pi.area()
     }
 
-    /// `∫ F(dA_x → P_j) dA_x` over `pieces` (patches and their longest edges), their panels
-    /// quartered as [`Self::integrate`] does but a level at a time, every panel of a level
-    /// before any of the next, while the pair's panel budget lasts: where the whole receiver
-    /// is near the shooter (nearly touching over its area, not along an edge), the budget is
-    /// spread over it instead of spent on its first corner.
+    /// `∫ F(dA_x → P_j) dA_x` over `pieces` (patches and their longest edges): on each panel,
+    /// Gauss–Legendre of the smallest order predicted to meet the tolerance at its distance
+    /// from `P_j`, or, if none is, the sum over its quarters, while depth and the pair's panel
+    /// budget last; near a shared edge this grades panels geometrically towards it. Panels are
+    /// quartered a level at a time, every panel of a level before any of the next, so that a
+    /// budget that runs out is spread over the receiver, not spent on its first corner.
     fn integrate_by_levels(&self, pieces: &[(Patch, Real)], shooter: Shooter<'_>) -> Real {
         // A level holds at most the pieces and four panels for each four of the budget; two
         // levels on the stack, since a pair allocates nothing.
@@ -471,34 +472,6 @@ impl<'a> AnalyticColumns<'a> {
             (level, next, len) = (next, level, filled);
         }
         sum
-    }
-
-    /// `∫_panel F(dA_x → P_j) dA_x`: Gauss–Legendre of the smallest order predicted to meet
-    /// the tolerance at the panel's distance from `P_j`, or, if none is, the sum over the
-    /// panel's quarters, while depth and the pair's panel `budget` last. Near a shared edge
-    /// this grades panels geometrically towards it.
-    fn integrate(
-        &self,
-        pi: &Patch,
-        edge: Real,
-        shooter: Shooter<'_>,
-        panel: Panel,
-        depth: u32,
-        budget: &mut usize,
-    ) -> Real {
-        let order = match self.panel_order(pi, edge, shooter, panel) {
-            Some(q) => q,
-            None if depth < MAX_DEPTH && *budget >= 4 => {
-                *budget -= 4;
-                return panel
-                    .quarters()
-                    .iter()
-                    .map(|&quarter| self.integrate(pi, edge, shooter, quarter, depth + 1, budget))
-                    .sum();
-            }
-            None => self.params.order,
-        };
-        self.panel_rule(pi, shooter, panel, order)
     }
 
     /// The smallest order predicted to meet the tolerance on `panel` of `pi` (longest edge

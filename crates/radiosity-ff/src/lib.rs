@@ -55,8 +55,8 @@ pub use analytic::AnalyticColumns;
 /// The revision of the backends' entries: raised whenever a backend computes different
 /// entries for the same canonical argument (a change of rule, not of parameters), so that
 /// caches keyed by the canonical argument ([`BackendSpec::canonical`]) and this revision are
-/// not read across it. 2: the analytic backend's pairs whose panel budget ran out are
-/// integrated again a level at a time.
+/// not read across it. 2: the analytic backend quarters a pair's panels a level at a time,
+/// not depth first.
 pub const ENTRIES_REVISION: u32 = 2;
 pub use backend::{Backend, FormFactorInput};
 pub use error::FfError;

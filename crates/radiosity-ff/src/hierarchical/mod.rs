@@ -350,7 +350,7 @@ impl HierarchicalColumns {
             rays: *rays,
             occluded: *occluded,
             seconds: start.elapsed().as_secs_f64(),
-            bytes: HierarchicalColumns::bytes_of(&tree, &[&far.bytes(), &near.bytes(), &pairs.bytes()], scene.len()),
+            bytes: HierarchicalColumns::bytes_of(&tree, &[far.bytes(), near.bytes(), pairs.bytes()], scene.len()),
             capped: 0,
             near_above: 0,
             lowest_weight: 1.0,
@@ -418,8 +418,8 @@ impl HierarchicalColumns {
 
     /// The bytes held by a tree, its link lists (`lists`, their bytes) and the patches' areas,
     /// normals, centroids and weights.
-    fn bytes_of(tree: &ClusterTree, lists: &[&usize], patches: usize) -> usize {
-        tree.nodes.len() * (size_of::<tree::Node>() + 4) + lists.iter().copied().sum::<usize>() + patches * 48
+    fn bytes_of(tree: &ClusterTree, lists: &[usize], patches: usize) -> usize {
+        tree.nodes.len() * (size_of::<tree::Node>() + 4) + lists.iter().sum::<usize>() + patches * 48
     }
 
     /// Calls `f(k)` for the leaf of `patch` and each of its ancestors.

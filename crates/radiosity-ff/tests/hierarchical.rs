@@ -159,6 +159,7 @@ fn closure_holds_every_row_to_one_by_lowering_entries() {
         }
         let figures = closed.figures();
         assert_eq!(above, figures.near_above, "{arg}");
+        assert_eq!(raw.figures().near_above, figures.near_above, "{arg}: the same near links");
         assert!(figures.capped > 0 && raw.figures().capped == 0, "{arg}: {figures:?}");
         assert!(figures.lowest_weight < 1.0 && figures.lowest_weight >= 0.0);
         for (r, c) in raw_cols.iter().flatten().zip(closed_cols.iter().flatten()) {

@@ -222,8 +222,8 @@ pub struct HierarchyFigures {
     /// Patches whose far links and far pairs closure weighs below 1: the rows that would
     /// otherwise sum above 1.
     pub capped: usize,
-    /// Rows whose near links alone sum above 1 (their analytic entries' noise), which closure
-    /// leaves above 1.
+    /// Rows whose near links alone sum above 1 (their analytic entries' noise), counted with
+    /// closure or without; closure leaves them above 1.
     pub near_above: usize,
     /// The smallest closure weight (1 when no row was capped).
     pub lowest_weight: Real,
@@ -328,8 +328,10 @@ impl HierarchicalColumns {
             links = next;
         }
         let mut operator = HierarchicalColumns::assemble(scene, tree, &links, start);
+        let near = operator.near_sums();
+        operator.figures.near_above = near.iter().filter(|&&s| s > 1.0).count();
         if params.closure {
-            operator.close();
+            operator.close(&near);
         }
         operator.figures.seconds = start.elapsed().as_secs_f64();
         operator
@@ -467,12 +469,10 @@ impl HierarchicalColumns {
     /// Holds every row to at most 1 (closure, module doc) as far as its estimated part can:
     /// the weights that bring each row whose near part and weighed estimated part sum above 1
     /// down to 1.
-    fn close(&mut self) {
-        let n = self.areas.len();
-        let near = self.near_sums();
-        let ones = vec![1.0; n];
-        let weights = capped_weights(&near, |w, out| self.estimated_product(&ones, 1, w, out));
-        self.figures.near_above = near.iter().filter(|&&s| s > 1.0).count();
+    /// `near` holds each row's near part ([`Self::near_sums`]).
+    fn close(&mut self, near: &[Real]) {
+        let ones = vec![1.0; self.areas.len()];
+        let weights = capped_weights(near, |w, out| self.estimated_product(&ones, 1, w, out));
         self.figures.capped = weights.iter().filter(|&&w| w < 1.0).count();
         self.figures.lowest_weight = weights.iter().copied().fold(1.0, Real::min);
         self.weights = weights;

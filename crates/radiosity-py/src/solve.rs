@@ -1,0 +1,201 @@
+//! `radiosity.solve(scene, solver, ...)`: one run of a built-in solver (or the reference) over
+//! a backend, measured as `cargo xtask solve` measures it: its radiosity, its figures
+//! (`stats`, the keys of the command's JSON `stats`) and its recorded points.
+
+use crate::errors::value_error;
+use crate::form_factors::cache;
+use crate::scene::Scene;
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use radiosity_core::Real;
+use radiosity_eval::{FinalMetrics, Lab, LabOptions, NoProgress, Point, RecordPlan, ReferenceKind};
+use radiosity_ff::BackendSpec;
+use radiosity_solvers::{SolverError, SolverRegistry, State, StopRules, Value};
+
+/// What a run left.
+#[pyclass(frozen, module = "radiosity")]
+pub struct Run {
+    /// The displayed radiosity, patch-major.
+    radiosity: Vec<Real>,
+    channels: usize,
+    solver: String,
+    backend: String,
+    termination: String,
+    state: State,
+    last: FinalMetrics,
+    record: Vec<(String, Value)>,
+    points: Vec<Point>,
+    reference: (String, String),
+}
+
+/// Runs `solver` (a built-in name, or `reference` for the exact solution) on `scene` over the
+/// backend `ff` until `until` holds (a stop-rule list: `rms=1e-3`, `columns=2n`,
+/// `residual=1e-6`, `time=10s`, comma-separated), measured against the reference `reference`
+/// (`auto`, `matrix`, `shooting` or `none`), with the GIL released while it runs.
+#[pyfunction]
+#[pyo3(signature = (scene, solver, ff = "analytic", until = "columns=2n", reference = "auto"))]
+pub fn solve(py: Python<'_>, scene: &Scene, solver: &str, ff: &str, until: &str, reference: &str) -> PyResult<Run> {
+    let spec = BackendSpec::parse(ff).map_err(value_error)?;
+    // Built here to refuse a bad name before any work, and again inside the run: a solver
+    // is not `Send`.
+    let build = |name: &str| {
+        SolverRegistry::builtin().build(name).map_err(|e| match e {
+            SolverError::UnknownSolver { .. } => value_error(format!("{e};\n  or reference, the exact solution")),
+            e => value_error(e),
+        })
+    };
+    let named = (solver != "reference").then(|| build(solver).map(|s| s.name())).transpose()?;
+    let kind: ReferenceKind = reference.parse().map_err(value_error)?;
+    if named.is_none() && kind == ReferenceKind::None {
+        return Err(value_error(
+            "the solver reference needs a reference: use reference='auto', 'matrix' or 'shooting', not 'none'",
+        ));
+    }
+    let rules = StopRules::parse(until).map_err(value_error)?;
+    if rules.needs_error() && kind == ReferenceKind::None {
+        return Err(value_error(
+            "an rms= rule needs a reference to measure e_rms against, and reference='none' computes none",
+        ));
+    }
+    let prepared = scene.prepared.clone();
+    let solver = solver.to_string();
+    py.detach(move || {
+        let mut built = named.map(|_| SolverRegistry::builtin().build(&solver)).transpose()?;
+        let options = LabOptions::default().with_cache(cache()).with_reference(kind);
+        let lab = Lab::new(&prepared, &spec, options, &NoProgress)?;
+        let chosen = (lab.chosen().kind.to_string(), lab.chosen().why.clone());
+        let run = match built.as_mut() {
+            None => {
+                let state = lab.reference_state()?;
+                let method = lab.reference().map(|r| r.method().to_string()).unwrap_or_default();
+                Run::new(
+                    state,
+                    "reference".into(),
+                    lab.backend().into(),
+                    format!("solved exactly: {method}"),
+                    lab.reference_metrics()?,
+                    Vec::new(),
+                    Vec::new(),
+                    chosen,
+                )
+            }
+            Some(solver) => {
+                let o = lab.run(solver.as_mut(), &rules, &RecordPlan::errors_only(), &NoProgress)?;
+                let record = o.record.iter().map(|(k, v)| (k.to_string(), v.clone())).collect();
+                Run::new(o.state, o.solver, lab.backend().into(), o.termination, o.last, record, o.points, chosen)
+            }
+        };
+        Ok::<Run, Box<dyn std::error::Error + Send + Sync>>(run)
+    })
+    .map_err(value_error)
+}
+
+impl Run {
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        state: State,
+        solver: String,
+        backend: String,
+        termination: String,
+        last: FinalMetrics,
+        record: Vec<(String, Value)>,
+        points: Vec<Point>,
+        reference: (String, String),
+    ) -> Run {
+        Run {
+            radiosity: state.radiosity.clone(),
+            channels: state.channels,
+            solver,
+            backend,
+            termination,
+            state,
+            last,
+            record,
+            points,
+            reference,
+        }
+    }
+}
+
+#[pymethods]
+impl Run {
+    /// The radiosity, shape `(n, channels)`.
+    #[getter]
+    fn radiosity<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<Real>> {
+        let n = self.radiosity.len() / self.channels.max(1);
+        Array2::from_shape_vec((n, self.channels), self.radiosity.clone()).expect("n × channels").into_pyarray(py)
+    }
+
+    /// The solver's name, parameters spelled out.
+    #[getter]
+    fn solver(&self) -> &str {
+        &self.solver
+    }
+
+    /// The backend's canonical spec.
+    #[getter]
+    fn backend(&self) -> &str {
+        &self.backend
+    }
+
+    /// The run's figures, with the keys of `cargo xtask solve --json`'s `stats`: `columns`,
+    /// `columns_reused`, `products`, `steps`, `seconds`, `ff_seconds`, `group_seconds`,
+    /// `e_rms`, `e_max`, `residual`, `bound`, `termination`, `record` (the solver's own
+    /// figures) and `reference` (`kind`, `why`). Figures not known are `None`.
+    #[getter]
+    fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let s = &self.state;
+        let d = PyDict::new(py);
+        d.set_item("columns", s.columns)?;
+        d.set_item("columns_reused", s.columns_reused)?;
+        d.set_item("products", s.products)?;
+        d.set_item("steps", s.step)?;
+        d.set_item("seconds", s.ff_seconds + s.solve_seconds)?;
+        d.set_item("ff_seconds", s.ff_seconds)?;
+        d.set_item("group_seconds", s.group_seconds)?;
+        d.set_item("e_rms", self.last.e_rms)?;
+        d.set_item("e_max", self.last.e_max)?;
+        d.set_item("residual", self.last.residual.or(self.last.solver_residual))?;
+        d.set_item("bound", self.last.bound)?;
+        d.set_item("termination", &self.termination)?;
+        let record = PyDict::new(py);
+        for (k, v) in &self.record {
+            match v {
+                Value::Count(c) => record.set_item(k, *c)?,
+                Value::Real(r) => record.set_item(k, *r)?,
+                other => record.set_item(k, other.to_string())?,
+            }
+        }
+        d.set_item("record", record)?;
+        let reference = PyDict::new(py);
+        reference.set_item("kind", &self.reference.0)?;
+        reference.set_item("why", &self.reference.1)?;
+        d.set_item("reference", reference)?;
+        Ok(d)
+    }
+
+    /// The recorded points as a dict of arrays: `step`, `columns`, `products`, `seconds`,
+    /// `e_rms` and `bound` (NaN where not known).
+    #[getter]
+    fn points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        let column = |f: fn(&Point) -> Real| self.points.iter().map(f).collect::<Vec<Real>>();
+        for (name, f) in [
+            ("step", (|p: &Point| p.step as Real) as fn(&Point) -> Real),
+            ("columns", |p| p.columns as Real),
+            ("products", |p| p.products as Real),
+            ("seconds", |p| p.seconds),
+            ("e_rms", |p| p.e_rms),
+            ("bound", |p| p.bound),
+        ] {
+            d.set_item(name, PyArray1::from_vec(py, column(f)))?;
+        }
+        Ok(d)
+    }
+
+    fn __repr__(&self) -> String {
+        format!("Run({} with {}: {})", self.solver, self.backend, self.termination)
+    }
+}

@@ -17,9 +17,6 @@ use radiosity_solvers::{SolverError, SolverRegistry, State, StopRules, Value};
 /// What a run left.
 #[pyclass(frozen, module = "radiosity")]
 pub struct Run {
-    /// The displayed radiosity, patch-major.
-    radiosity: Vec<Real>,
-    channels: usize,
     solver: String,
     backend: String,
     termination: String,
@@ -104,18 +101,7 @@ impl Run {
         points: Vec<Point>,
         reference: (String, String),
     ) -> Run {
-        Run {
-            radiosity: state.radiosity.clone(),
-            channels: state.channels,
-            solver,
-            backend,
-            termination,
-            state,
-            last,
-            record,
-            points,
-            reference,
-        }
+        Run { solver, backend, termination, state, last, record, points, reference }
     }
 }
 
@@ -124,8 +110,8 @@ impl Run {
     /// The radiosity, shape `(n, channels)`.
     #[getter]
     fn radiosity<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<Real>> {
-        let n = self.radiosity.len() / self.channels.max(1);
-        Array2::from_shape_vec((n, self.channels), self.radiosity.clone()).expect("n × channels").into_pyarray(py)
+        let (values, k) = (&self.state.radiosity, self.state.channels);
+        Array2::from_shape_vec((values.len() / k.max(1), k), values.clone()).expect("n × channels").into_pyarray(py)
     }
 
     /// The solver's name, parameters spelled out.

@@ -115,6 +115,30 @@ fn a_run_records_the_bound_beside_e_rms_and_ends_on_it() {
 }
 
 #[test]
+fn a_watch_sees_every_point_with_its_state_and_can_end_the_run() {
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let lab = lab(&scene, LabOptions::default());
+    let mut solver = SolverRegistry::builtin().build("xu").unwrap();
+    let rules = StopRules::parse("columns=2n").unwrap();
+    let mut seen = Vec::new();
+    let mut watch = |p: &radiosity_eval::Point, state: &State| {
+        // The point is the state's: its step, and its e_rms against the reference.
+        let e = errors_against(lab.system(), lab.reference().unwrap().values(), &state.radiosity).unwrap();
+        assert_eq!((p.step, p.e_rms), (state.step, e.e_rms));
+        seen.push(p.step);
+        if p.step == 7 { std::ops::ControlFlow::Break(()) } else { std::ops::ControlFlow::Continue(()) }
+    };
+    let o = lab.run_watched(solver.as_mut(), &rules, &RecordPlan::default(), &NoProgress, &mut watch).unwrap();
+    assert_eq!(seen, (0..=7).collect::<Vec<u64>>());
+    assert_eq!(o.state.step, 7);
+    assert_eq!(o.termination, "stopped by its observer after 7 steps");
+    assert_eq!(o.points.last().unwrap().step, 7);
+    // A run that is not stopped goes on to its rule.
+    let o = lab.run(solver.as_mut(), &rules, &RecordPlan::default(), &NoProgress).unwrap();
+    assert!(o.state.step > 7, "{}", o.termination);
+}
+
+#[test]
 fn reference_none_measures_the_bound_alone_without_any_matrix() {
     let scene = PreparedScene::load("cornell:res=2").unwrap();
     let options = LabOptions::default().with_reference(ReferenceKind::None);

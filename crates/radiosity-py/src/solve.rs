@@ -13,6 +13,7 @@ use radiosity_core::Real;
 use radiosity_eval::{FinalMetrics, Lab, LabOptions, NoProgress, Point, RecordPlan, ReferenceKind};
 use radiosity_ff::BackendSpec;
 use radiosity_solvers::{SolverError, SolverRegistry, State, StopRules, Value};
+use std::ops::ControlFlow;
 
 /// What a run left.
 #[pyclass(frozen, module = "radiosity")]
@@ -31,9 +32,23 @@ pub struct Run {
 /// backend `ff` until `until` holds (a stop-rule list: `rms=1e-3`, `columns=2n`,
 /// `residual=1e-6`, `time=10s`, comma-separated), measured against the reference `reference`
 /// (`auto`, `matrix`, `shooting` or `none`), with the GIL released while it runs.
+///
+/// `callback(point)`, when given, is called with every recorded point, after every step and
+/// on the initial state: a dict of `step`, `columns`, `products`, `seconds`, `e_rms`,
+/// `bound` (NaN where not known) and `radiosity` (`n × channels`). A true return value ends
+/// the run there (`stats["termination"]` says so); an exception ends it and is raised again
+/// from `solve`. Its time is not the run's.
 #[pyfunction]
-#[pyo3(signature = (scene, solver, ff = "analytic", until = "columns=2n", reference = "auto"))]
-pub fn solve(py: Python<'_>, scene: &Scene, solver: &str, ff: &str, until: &str, reference: &str) -> PyResult<Run> {
+#[pyo3(signature = (scene, solver, ff = "analytic", until = "columns=2n", reference = "auto", callback = None))]
+pub fn solve(
+    py: Python<'_>,
+    scene: &Scene,
+    solver: &str,
+    ff: &str,
+    until: &str,
+    reference: &str,
+    callback: Option<Py<PyAny>>,
+) -> PyResult<Run> {
     let spec = BackendSpec::parse(ff).map_err(value_error)?;
     // Built here to refuse a bad name before any work, and again inside the run: a solver
     // is not `Send`.
@@ -58,7 +73,19 @@ pub fn solve(py: Python<'_>, scene: &Scene, solver: &str, ff: &str, until: &str,
     }
     let prepared = scene.prepared.clone();
     let solver = solver.to_string();
-    py.detach(move || {
+    let mut failure = None;
+    let mut watch = |point: &Point, state: &State| match &callback {
+        None => ControlFlow::Continue(()),
+        Some(callback) => Python::attach(|py| match call_back(py, callback, point, state) {
+            Ok(true) => ControlFlow::Break(()),
+            Ok(false) => ControlFlow::Continue(()),
+            Err(e) => {
+                failure = Some(e);
+                ControlFlow::Break(())
+            }
+        }),
+    };
+    let run = py.detach(|| {
         let mut built = named.map(|_| SolverRegistry::builtin().build(&solver)).transpose()?;
         let options = LabOptions::default().with_cache(cache()).with_reference(kind);
         let lab = Lab::new(&prepared, &spec, options, &NoProgress)?;
@@ -79,14 +106,37 @@ pub fn solve(py: Python<'_>, scene: &Scene, solver: &str, ff: &str, until: &str,
                 )
             }
             Some(solver) => {
-                let o = lab.run(solver.as_mut(), &rules, &RecordPlan::errors_only(), &NoProgress)?;
+                let o =
+                    lab.run_watched(solver.as_mut(), &rules, &RecordPlan::errors_only(), &NoProgress, &mut watch)?;
                 let record = o.record.iter().map(|(k, v)| (k.to_string(), v.clone())).collect();
                 Run::new(o.state, o.solver, lab.backend().into(), o.termination, o.last, record, o.points, chosen)
             }
         };
         Ok::<Run, Box<dyn std::error::Error + Send + Sync>>(run)
-    })
-    .map_err(value_error)
+    });
+    match failure {
+        Some(e) => Err(e),
+        None => run.map_err(value_error),
+    }
+}
+
+/// Shows `callback` the point and its radiosity; whether it asked to stop.
+fn call_back(py: Python<'_>, callback: &Py<PyAny>, point: &Point, state: &State) -> PyResult<bool> {
+    let d = PyDict::new(py);
+    d.set_item("step", point.step)?;
+    d.set_item("columns", point.columns)?;
+    d.set_item("products", point.products)?;
+    d.set_item("seconds", point.seconds)?;
+    d.set_item("e_rms", point.e_rms)?;
+    d.set_item("bound", point.bound)?;
+    d.set_item("radiosity", radiosity_array(py, state))?;
+    callback.call1(py, (d,))?.is_truthy(py)
+}
+
+/// The state's radiosity as an `n × channels` array.
+fn radiosity_array<'py>(py: Python<'py>, state: &State) -> Bound<'py, PyArray2<Real>> {
+    let (values, k) = (&state.radiosity, state.channels);
+    Array2::from_shape_vec((values.len() / k.max(1), k), values.clone()).expect("n × channels").into_pyarray(py)
 }
 
 impl Run {
@@ -110,8 +160,7 @@ impl Run {
     /// The radiosity, shape `(n, channels)`.
     #[getter]
     fn radiosity<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<Real>> {
-        let (values, k) = (&self.state.radiosity, self.state.channels);
-        Array2::from_shape_vec((values.len() / k.max(1), k), values.clone()).expect("n × channels").into_pyarray(py)
+        radiosity_array(py, &self.state)
     }
 
     /// The solver's name, parameters spelled out.

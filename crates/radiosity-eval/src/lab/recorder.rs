@@ -9,6 +9,7 @@ use crate::reference::metrics::{Evaluator, Metrics, errors_against};
 use radiosity_core::{LinearSystem, Real};
 use radiosity_solvers::{ErrorMonitor, Observer, Record, ResidualBound, State};
 use std::cell::Cell;
+use std::ops::ControlFlow;
 use std::rc::Rc;
 use std::time::Instant;
 
@@ -117,6 +118,12 @@ pub struct Recorder<'a> {
     pub(super) charged: Option<&'a ChargedColumns>,
     /// The e_rms of the last state observed, which [`Recorder::monitor`] hands the `rms=` rule.
     pub(super) latest: Rc<Cell<Option<Real>>>,
+    /// Shown every point recorded with its state; `Break` ends the run ([`Lab::run_watched`]).
+    ///
+    /// [`Lab::run_watched`]: crate::Lab::run_watched
+    pub(super) watch: Option<&'a mut dyn FnMut(&Point, &State) -> ControlFlow<()>>,
+    /// Whether the watch asked the run to end.
+    pub(super) stop: bool,
 }
 
 impl<'a> Recorder<'a> {
@@ -141,6 +148,8 @@ impl<'a> Recorder<'a> {
             by_columns: true,
             charged: None,
             latest: Rc::default(),
+            watch: None,
+            stop: false,
         }
     }
 
@@ -220,15 +229,12 @@ impl Observer for Recorder<'_> {
             }
         }
         let wall = (start - self.clock).as_secs_f64() - self.overhead;
-        self.points.push(Point {
-            step: state.step,
-            columns: state.columns,
-            products: state.products,
-            seconds,
-            wall,
-            e_rms,
-            bound,
-        });
+        let point =
+            Point { step: state.step, columns: state.columns, products: state.products, seconds, wall, e_rms, bound };
+        self.points.push(point);
+        if let Some(watch) = self.watch.as_mut() {
+            self.stop |= watch(&point, state).is_break();
+        }
         if let Some(progress) = self.progress {
             let message = match (e_rms.is_nan(), bound.is_nan()) {
                 (false, _) => format!("e_rms {e_rms:.2e}"),
@@ -243,6 +249,10 @@ impl Observer for Recorder<'_> {
 
     fn wants_residual_bound(&self) -> bool {
         self.contraction.is_some()
+    }
+
+    fn wants_stop(&self) -> bool {
+        self.stop
     }
 
     fn observe_residual_bound(&mut self, _state: &State, bound: Option<&ResidualBound>) {

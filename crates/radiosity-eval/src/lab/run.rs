@@ -3,7 +3,7 @@
 
 use crate::error::LabError;
 use crate::lab::outcome::{FinalMetrics, Outcome};
-use crate::lab::recorder::{RecordPlan, Recorder, matrix_relative_bound};
+use crate::lab::recorder::{Point, RecordPlan, Recorder, matrix_relative_bound};
 use crate::lab::setup::{Lab, ReferenceOrigin};
 use crate::progress::Progress;
 use crate::reference::certificate::SolverBound;
@@ -11,6 +11,7 @@ use crate::reference::metrics::errors;
 use crate::reference::solution::Method;
 use radiosity_core::Real;
 use radiosity_solvers::{Executor, ObserverMode, Problem, Solver, State, StepKind, StopRule, StopRules};
+use std::ops::ControlFlow;
 use std::rc::Rc;
 use std::time::Instant;
 
@@ -36,6 +37,21 @@ impl Lab<'_> {
         rules: &StopRules,
         plan: &RecordPlan,
         progress: &dyn Progress,
+    ) -> Result<Outcome, LabError> {
+        self.run_watched(solver, rules, plan, progress, &mut |_, _| ControlFlow::Continue(()))
+    }
+
+    /// [`Lab::run`], showing `watch` every point recorded (after every step) with its state,
+    /// outside the run's timed region; `ControlFlow::Break` ends the run before its next step
+    /// ([`radiosity_solvers::TerminationReason::Stopped`]), with its state, points and final
+    /// metrics as any other.
+    pub fn run_watched(
+        &self,
+        solver: &mut dyn Solver,
+        rules: &StopRules,
+        plan: &RecordPlan,
+        progress: &dyn Progress,
+        watch: &mut dyn FnMut(&Point, &State) -> ControlFlow<()>,
     ) -> Result<Outcome, LabError> {
         if let Some(w) = self.row_warning(solver) {
             progress.warn(&w);
@@ -67,6 +83,8 @@ impl Lab<'_> {
             by_columns: unit == "columns",
             charged: self.charged.as_deref(),
             latest: Rc::default(),
+            watch: Some(watch),
+            stop: false,
         };
         progress.begin(&name, target, unit);
         // Every run starts from columns as costly as the first ones: what an earlier run left

@@ -72,3 +72,34 @@ def test_only_a_stored_matrix_goes_to_scipy(cornell_ff):
 
     with pytest.raises(ValueError, match="matrix:of="):
         cornell_ff.to_scipy()
+
+
+def test_a_callback_sees_every_point_and_can_stop_the_run(cornell):
+    seen = []
+
+    def watch(point):
+        seen.append((point["step"], point["e_rms"], point["radiosity"].copy()))
+        return point["step"] == 12
+
+    run = radiosity.solve(cornell, "xu", until="columns=2n", callback=watch)
+    assert [s for s, _, _ in seen] == list(range(13))
+    assert run.stats["steps"] == 12 and run.stats["termination"] == "stopped by its observer after 12 steps"
+    # The last point the callback saw is the run's final state and error.
+    assert np.array_equal(seen[-1][2], run.radiosity)
+    assert seen[-1][1] == run.stats["e_rms"]
+    # Errors fall as the run goes, and the first point is the emission alone.
+    assert np.array_equal(seen[0][2], cornell.emission) and seen[-1][1] < seen[0][1]
+
+
+def test_an_exception_in_a_callback_ends_the_run_and_is_raised_again(cornell):
+    class Enough(Exception):
+        pass
+
+    def watch(point):
+        if point["step"] == 3:
+            raise Enough("seen enough")
+
+    import pytest
+
+    with pytest.raises(Enough, match="seen enough"):
+        radiosity.solve(cornell, "xu", callback=watch)

@@ -7,7 +7,7 @@
 //!
 //! ## Observers, the error monitor and breakdowns
 //!
-//! As in argmin, observers only watch, and a run has any number of them, each with an
+//! As in argmin, observers watch, and a run has any number of them, each with an
 //! [`ObserverMode`] ([`Executor::add_observer`]): an [`Observer`] is called once on the initial
 //! state ([`Observer::observe_init`], after [`Solver::init`]), after every step its mode takes
 //! ([`Observer::observe_step`], with the figures the step handed back) and once with the
@@ -20,7 +20,9 @@
 //! such a rule and no monitor is refused before its first step
 //! ([`SolverError::ErrorNotMeasured`]), since the rule could never hold and the run would go
 //! on to the step cap. At the end the executor stores the solver's own figures
-//! ([`Solver::record`]) in [`Run::record`].
+//! ([`Solver::record`]) in [`Run::record`]. An observer may also end the run between steps
+//! ([`Observer::wants_stop`]: a caller that has seen enough), which then ends with
+//! [`TerminationReason::Stopped`] and its state; it changes nothing else.
 //!
 //! A method that cannot go on (conjugate gradients on a system seen not to be positive
 //! definite) reports [`SolverError::Breakdown`] from its step, leaving the state as it was;
@@ -211,6 +213,12 @@ pub trait Observer {
     fn observe_residual_bound(&mut self, state: &State, bound: Option<&ResidualBound>) {
         let _ = (state, bound);
     }
+
+    /// Whether the run should end before its next step (false by default): asked after every
+    /// call of the observer; the run then ends with [`TerminationReason::Stopped`].
+    fn wants_stop(&self) -> bool {
+        false
+    }
 }
 
 /// When an observer is called (argmin's modes).
@@ -322,6 +330,9 @@ impl<'a> Executor<'a> {
         let per_step = if self.solver.step_kind() == StepKind::Product { n.max(1) as f64 } else { 1.0 };
         let cap = explicit.fold((self.rules.step_cap * n as f64 / per_step).ceil() as u64, u64::max);
         let termination = loop {
+            if self.observers.iter().any(|(o, _)| o.wants_stop()) {
+                break TerminationReason::Stopped { step: state.step };
+            }
             if let Some(reason) = self.check(problem, &state, error, n, &mut watch)? {
                 break reason;
             }

@@ -184,6 +184,12 @@ pub enum TerminationReason {
         /// The smallest residual power before it.
         minimum: Real,
     },
+    /// An observer asked the run to end ([`crate::Observer::wants_stop`]): a caller watching
+    /// it (a Python callback, an interactive session) had seen enough.
+    Stopped {
+        /// The steps taken.
+        step: u64,
+    },
     /// The method could not go on ([`crate::SolverError::Breakdown`]): the state is the one
     /// before the step that broke down.
     Breakdown {
@@ -207,6 +213,7 @@ impl std::fmt::Display for TerminationReason {
             TerminationReason::Diverged { step, residual, minimum } => {
                 write!(f, "diverged: the residual power rose from {minimum:.1e} to {residual:.1e} by step {step}")
             }
+            TerminationReason::Stopped { step } => write!(f, "stopped by its observer after {step} steps"),
             TerminationReason::Breakdown { step, reason } => write!(f, "broke down at step {step}: {reason}"),
         }
     }

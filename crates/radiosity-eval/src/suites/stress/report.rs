@@ -69,6 +69,7 @@ fn stop_kind(t: &TerminationReason) -> &'static str {
         TerminationReason::RoundOff => "round-off",
         TerminationReason::StepCap(_) => "step cap",
         TerminationReason::Diverged { .. } => "diverged",
+        TerminationReason::Stopped { .. } => "stopped",
         TerminationReason::Breakdown { .. } => "breakdown",
     }
 }

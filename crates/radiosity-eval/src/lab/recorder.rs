@@ -92,6 +92,9 @@ pub struct TableRow {
     pub bound: Real,
 }
 
+/// What watches a run's points ([`crate::Lab::run_watched`]): `Break` ends the run.
+pub(crate) type PointWatch<'w> = dyn FnMut(&Point, &State) -> ControlFlow<()> + 'w;
+
 /// Records e_rms and the certified bound after every step and every metric at planned steps
 /// ([`RecordPlan`]), outside the run's timed region, its own time kept apart as measurement.
 pub struct Recorder<'a> {
@@ -121,7 +124,7 @@ pub struct Recorder<'a> {
     /// Shown every point recorded with its state; `Break` ends the run ([`Lab::run_watched`]).
     ///
     /// [`Lab::run_watched`]: crate::Lab::run_watched
-    pub(super) watch: Option<&'a mut dyn FnMut(&Point, &State) -> ControlFlow<()>>,
+    pub(super) watch: Option<&'a mut PointWatch<'a>>,
     /// Whether the watch asked the run to end.
     pub(super) stop: bool,
 }

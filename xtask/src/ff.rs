@@ -12,15 +12,21 @@
 //! `e_rms` between `B̃` and the other backend's exact solution (its stored matrix, cached like
 //! a reference).
 //!
+//! With `--out FILE` the assembled matrix is also written for other programs
+//! ([`radiosity_eval::exchange`]): `FILE.mtx` as Matrix Market, with the patches' areas,
+//! emissions and reflectivities in `FILE.patches.mtx` beside it, or `FILE.npz` as NumPy's
+//! archive with all of them (`scipy.sparse.load_npz` reads its `F`).
+//!
 //! With `--ff matrix…` the assembled (and, with `rebalance=true`, rebalanced) matrix is kept in
 //! the cache ([`radiosity_eval::Cache`], `target/ff-cache/` or `$RADIOSITY_CACHE_DIR`) and
 //! loaded from it next time; a file that is unreadable or has another key is reported as a
 //! warning and replaced.
 
 use crate::bars::Bars;
-use crate::experiment::{cache, prepare};
+use crate::experiment::{cache, check_output_file, prepare};
 use anyhow::{Result, bail};
 use radiosity_core::LinearSystem;
+use radiosity_eval::exchange::{self, Format, SparseColumns};
 use radiosity_eval::{
     Lab, LabError, LabOptions, ObtainedMatrix, OperatorDistanceParams, Progress, ReferenceKind, obtain_matrix,
     operator_distance,
@@ -33,6 +39,7 @@ use radiosity_geom::{Closure, PreparedScene};
 use serde::Serialize;
 use serde::ser::{SerializeSeq, Serializer};
 use std::io::Write;
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// Scenes with more patches are assembled only with `--force`.
@@ -64,12 +71,21 @@ pub struct Args {
     /// Rows sampled for `--against`.
     #[arg(long, value_name = "N", default_value_t = 20)]
     rows: usize,
+    /// Also write the system for other programs: `F.mtx` (Matrix Market, with the patches'
+    /// areas, emissions and reflectivities in `F.patches.mtx`) or `system.npz` (NumPy, F as
+    /// `scipy.sparse.load_npz` reads it, with `area`, `emission` and `reflectivity`).
+    #[arg(long, value_name = "FILE", conflicts_with = "against")]
+    out: Option<PathBuf>,
 }
 
 /// Runs `ff`.
 pub fn run(args: &Args) -> Result<()> {
     let spec = BackendSpec::parse(&args.ff)?;
     let against = args.against.as_deref().map(BackendSpec::parse).transpose()?;
+    if let Some(out) = &args.out {
+        check_output_file(out)?;
+        Format::of(out)?;
+    }
     let prepared = prepare(&args.scene)?;
     if let Some(reference) = against {
         return compare(args, &prepared, &spec, &reference);
@@ -87,6 +103,15 @@ pub fn run(args: &Args) -> Result<()> {
     let obtained = obtain_matrix(&prepared, &spec, Some(&cache()), &Bars::new())?;
     let figures = obtained.matrix.figures(&areas(&prepared));
     let worst = worst_rows(prepared.scene(), &prepared.analysis, &obtained.matrix, WORST_ROWS);
+    if let Some(out) = &args.out {
+        let comments = [
+            format!("form factors F of the scene {}, backend {}", args.scene, spec.canonical()),
+            "the system (I - diag(rho) F) B = E, one per channel; A_i F_ij = A_j F_ji".to_string(),
+        ];
+        let system = LinearSystem::from_scene(prepared.scene());
+        let written = exchange::write_files(out, &SparseColumns::of(&obtained.matrix), &system, &comments)?;
+        eprintln!("wrote {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(" and "));
+    }
     if args.json {
         print_json(&prepared, &spec, &obtained, &figures, &worst)
     } else {

@@ -272,6 +272,49 @@ fn numbers(v: &Value) -> Vec<f64> {
 }
 
 #[test]
+fn ff_out_writes_the_printed_matrix_for_other_programs() {
+    let dir = std::env::temp_dir().join(format!("radiosity-ff-out-{}", std::process::id()));
+    let mtx = dir.join("F.mtx");
+    let r = ff_json(&["--scene", "furnace:res=2", "--out", mtx.to_str().unwrap()]);
+    let f: Vec<Vec<f64>> = r["F"].as_array().unwrap().iter().map(numbers).collect();
+    // Matrix Market: a banner, comments, `n n nnz`, then 1-based `i j F_ij`, every non-zero
+    // entry of the printed matrix, read back to the same f32.
+    let text = std::fs::read_to_string(&mtx).unwrap();
+    let mut lines = text.lines().filter(|l| !l.starts_with('%'));
+    assert!(text.starts_with("%%MatrixMarket matrix coordinate real general\n"), "{text}");
+    let size: Vec<usize> = lines.next().unwrap().split(' ').map(|v| v.parse().unwrap()).collect();
+    let nonzeros = f.iter().flatten().filter(|v| **v != 0.0).count();
+    assert_eq!(size, [24, 24, nonzeros]);
+    for line in lines {
+        let v: Vec<&str> = line.split(' ').collect();
+        let (i, j, value): (usize, usize, f64) = (v[0].parse().unwrap(), v[1].parse().unwrap(), v[2].parse().unwrap());
+        assert_eq!(value as f32, f[i - 1][j - 1] as f32, "F[{i}][{j}]");
+    }
+    // The patches beside it: area, then emission and reflectivity (one channel), column-major.
+    let patches = std::fs::read_to_string(dir.join("F.patches.mtx")).unwrap();
+    let values: Vec<f64> =
+        patches.lines().filter(|l| !l.starts_with('%')).skip(1).map(|l| l.parse().unwrap()).collect();
+    assert!(patches.contains("% columns: area emission[0] reflectivity[0]\n"), "{patches}");
+    assert_eq!(values.len(), 24 * 3);
+    for (i, p) in r["patches"].as_array().unwrap().iter().enumerate() {
+        assert_eq!(values[i], p["area"].as_f64().unwrap());
+        // The furnace emits 1 and reflects 0.5 everywhere.
+        assert_eq!((values[24 + i], values[48 + i]), (1.0, 0.5));
+    }
+    // NumPy: a zip archive holding scipy.sparse's keys and the patches' arrays.
+    let npz = dir.join("system.npz");
+    xtask(&["ff", "--scene", "furnace:res=2", "--out", npz.to_str().unwrap()]).success();
+    let bytes = std::fs::read(&npz).unwrap();
+    assert!(bytes.starts_with(b"PK\x03\x04"));
+    for name in ["format", "shape", "data", "indices", "indptr", "area", "emission", "reflectivity"] {
+        let entry = format!("{name}.npy");
+        assert!(bytes.windows(entry.len()).any(|w| w == entry.as_bytes()), "no {entry}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(failure(&["ff", "--scene", "furnace:res=2", "--out", "F.csv"]).contains(".mtx (Matrix Market) or .npz"));
+}
+
+#[test]
 fn ff_json_has_the_promised_keys_and_a_closed_furnace_sums_to_one() {
     let r = ff_json(&["--scene", "furnace:res=2"]);
     for key in ["patches", "F", "row_sums", "max_reciprocity_error"] {

@@ -34,7 +34,11 @@
 //!   [`vertex_radiosity`], tone mapped, as PNG) and the scene as binary glTF with its
 //!   radiosity as vertex colours ([`export_glb`]), which loads back as the same system.
 //!
-//! `bench`, `stress` and `paper` stay public modules: each is a family whose members' short
+//! - **exchange**: the system in files other programs read ([`exchange`]): Matrix Market and
+//!   NumPy's `.npz` (which `scipy.sparse.load_npz` reads), from [`exchange::SparseColumns`],
+//!   a stored matrix's non-zeros column by column.
+//!
+//! `bench`, `stress`, `paper` and `exchange` stay public modules: each is a family whose members' short
 //! names (`run`, `report`, `CASES`, `select`, `RULES`, `section`) clash at the root or say
 //! nothing without the family's name.
 //!
@@ -60,6 +64,7 @@
 //! ```
 
 mod error;
+pub mod exchange;
 mod lab;
 mod progress;
 mod reference;

@@ -10,6 +10,7 @@ use numpy::ndarray::{Array2, ShapeBuilder};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayDyn, PyReadonlyArray1, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use radiosity_core::{ColumnSource, LinearSystem, Real, operator};
+use radiosity_eval::exchange::{SparseColumns, write_files};
 use radiosity_eval::{CACHE_DIR_VAR, Cache, NoProgress, backend};
 use radiosity_ff::{Backend, BackendSpec};
 use radiosity_geom::PreparedScene;
@@ -44,6 +45,17 @@ pub(crate) fn cache() -> Option<Cache> {
 }
 
 impl FormFactors {
+    /// The stored matrix's non-zero entries, or the error saying that this backend stores none.
+    fn stored(&self) -> PyResult<SparseColumns> {
+        self.with(|b| match b {
+            Backend::Matrix(m) => Ok(SparseColumns::of(m)),
+            _ => Err(value_error(format!(
+                "{} is not a stored matrix: take form_factors(\"matrix:of={}\"), assembled where it fits the memory budget",
+                self.spec, self.spec
+            ))),
+        })
+    }
+
     /// Builds the backend `spec` on `prepared`, with the GIL released.
     pub(crate) fn build(py: Python<'_>, prepared: Arc<PreparedScene>, spec: &str) -> PyResult<FormFactors> {
         let parsed = BackendSpec::parse(spec).map_err(value_error)?;
@@ -161,27 +173,20 @@ impl FormFactors {
     /// solves. Other backends raise `ValueError`: their matrix is `matrix:of=SPEC`, which is
     /// assembled only where it fits the memory budget.
     fn to_scipy<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let n = self.len();
-        let (indptr, indices, data) = self.with(|b| match b {
-            Backend::Matrix(m) => {
-                let (mut indptr, mut indices, mut data) = (Vec::with_capacity(n + 1), Vec::new(), Vec::new());
-                indptr.push(0i64);
-                for j in 0..n {
-                    m.for_each_in_column(j, |i, f| {
-                        indices.push(i as i64);
-                        data.push(Real::from(f));
-                    });
-                    indptr.push(indices.len() as i64);
-                }
-                Ok((indptr, indices, data))
-            }
-            _ => Err(value_error(format!(
-                "{} is not a stored matrix: to_scipy() takes form_factors(\"matrix:of={}\"), assembled where it fits the memory budget",
-                self.spec, self.spec
-            ))),
-        })?;
-        let arrays = (data.into_pyarray(py), indices.into_pyarray(py), indptr.into_pyarray(py));
+        let f = self.stored()?;
+        let (n, indptr, indices, values) = (f.n, f.indptr, f.indices, f.values);
+        let arrays = (values.into_pyarray(py), indices.into_pyarray(py), indptr.into_pyarray(py));
         py.import("scipy.sparse")?.getattr("csc_array")?.call1((arrays, (n, n)))
+    }
+
+    /// Writes the stored matrix with the scene's areas, emissions and reflectivities to `path`
+    /// as `cargo xtask ff --out` does: `.mtx` (Matrix Market, the patches in `.patches.mtx`
+    /// beside it) or `.npz` (NumPy, `F` as `scipy.sparse.load_npz` reads it); the paths
+    /// written. `radiosity.read_system(path)` reads them back.
+    fn write<'py>(&self, py: Python<'py>, path: std::path::PathBuf) -> PyResult<Vec<std::path::PathBuf>> {
+        let f = self.stored()?;
+        let comments = [format!("form factors F, backend {}", self.spec)];
+        py.detach(|| write_files(&path, &f, &self.system, &comments)).map_err(value_error)
     }
 
     /// `F` as a `scipy.sparse.linalg.LinearOperator`, its products this backend's

@@ -13,5 +13,6 @@ rules or shapes) and ``IndexError`` (patch indices), with the command line's mes
 """
 
 from ._radiosity import FormFactors, Run, Scene, __version__, load, solve
+from .exchange import read_system
 
-__all__ = ["FormFactors", "Run", "Scene", "__version__", "load", "solve"]
+__all__ = ["FormFactors", "Run", "Scene", "__version__", "load", "read_system", "solve"]

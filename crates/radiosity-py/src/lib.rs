@@ -9,6 +9,8 @@
 //! - [`scene`]: `radiosity.load(spec)` and the `Scene` with its arrays;
 //! - [`form_factors`]: `scene.form_factors(spec)`, a backend's columns, rows and products;
 //! - [`solve`]: `radiosity.solve(scene, solver, ...)`, one run of a built-in solver;
+//! - [`lab`]: `radiosity.Lab(scene, ff).compare([...])`, built-in and Python solvers in one
+//!   comparison;
 //! - [`errors`]: the workspace's errors as Python exceptions, with the command line's
 //!   one-sentence messages.
 //!
@@ -18,6 +20,7 @@
 
 pub mod errors;
 pub mod form_factors;
+pub mod lab;
 pub mod scene;
 pub mod solve;
 
@@ -29,6 +32,9 @@ fn _radiosity(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(scene::load, m)?)?;
     m.add_function(wrap_pyfunction!(solve::solve, m)?)?;
+    m.add_function(wrap_pyfunction!(lab::compare, m)?)?;
+    m.add_class::<lab::PyProblem>()?;
+    m.add_class::<lab::PyComparison>()?;
     m.add_class::<scene::Scene>()?;
     m.add_class::<form_factors::FormFactors>()?;
     m.add_class::<solve::Run>()?;

@@ -1,0 +1,34 @@
+"""The laboratory: built-in solvers and solvers written in Python, compared on one scene.
+
+A Python solver is any object with ``step(problem, state)``; optionally ``name``, ``kind``
+(``"shot"``, the default, ``"gather"`` or ``"product"``), ``init(problem, state)``,
+``residual_power(problem, state)`` and ``residual_bound(problem, state)``. ``problem`` gives
+``n``, ``channels``, ``areas``, ``emission``, ``reflectivity`` and the counted
+``column(j)``, ``row(i)`` and ``multiply(x)``; ``state`` has ``radiosity`` and ``unshot``,
+``(n, channels)`` arrays to update in place (or replace with arrays of the same shape), and
+``step``. ``residual_bound`` returns ``(d, e)`` or ``(d, e, nonnegative)``: two
+``(n, channels)`` arrays with ``|r| <= rho F |d| + |e|`` elementwise for the residual
+``r = E + rho F B - B`` of ``state.radiosity`` (a shooting method's is ``(state.unshot, 0)``),
+and whether ``r >= 0`` is known (which tightens the bound); the lab then certifies the run's
+error as it does a built-in solver's.
+"""
+
+from . import _radiosity
+
+
+class Lab:
+    """A scene and a form-factor backend on which solvers are compared.
+
+    ``reference`` is the reference kind (``auto``, ``matrix``, ``shooting`` or ``none``). The
+    reference is computed for each comparison unless ``$RADIOSITY_CACHE_DIR`` keeps it.
+    """
+
+    def __init__(self, scene, ff="analytic", reference="auto"):
+        self.scene = scene
+        self.ff = ff
+        self.reference = reference
+
+    def compare(self, solvers, until="columns=2n"):
+        """Runs ``solvers`` (names and Python solver objects) under the stop rules ``until``;
+        a ``Comparison`` with ``table()``, ``summary()`` and ``write(dir)``."""
+        return _radiosity.compare(self.scene, list(solvers), ff=self.ff, until=until, reference=self.reference)

@@ -1,9 +1,10 @@
 //! `scene.form_factors(spec)`: a form-factor backend's columns, rows and products as numpy
 //! arrays, each computed in Rust with the GIL released.
 //!
-//! The backend borrows its scene (the analytic backend reads the scene's patches and BVH in
-//! place), so the two are kept together in one [`self_cell`]: the scene's `Arc` and the
-//! backend built on it.
+//! A column backend borrows its scene (the analytic backend reads the scene's patches and BVH
+//! in place), so the two are kept together in one [`self_cell`]: the scene's `Arc` and the
+//! backend built on it. A stored matrix (`matrix`) is held as the lab holds it
+//! ([`radiosity_eval::FormFactors`]), whose product is one parallel pass over its entries.
 
 use crate::errors::{check_patch, value_error};
 use numpy::ndarray::{Array2, ShapeBuilder};
@@ -11,7 +12,7 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayDyn, PyReadonlyArray1, PyRea
 use pyo3::prelude::*;
 use radiosity_core::{ColumnSource, LinearSystem, Real, operator};
 use radiosity_eval::exchange::{SparseColumns, write_files};
-use radiosity_eval::{CACHE_DIR_VAR, Cache, NoProgress, backend};
+use radiosity_eval::{CACHE_DIR_VAR, Cache, NoProgress, backend, obtain_matrix};
 use radiosity_ff::{Backend, BackendSpec};
 use radiosity_geom::PreparedScene;
 use radiosity_solvers::Problem;
@@ -28,10 +29,18 @@ self_cell!(
     }
 );
 
+/// Where the entries come from.
+enum Source {
+    /// A column backend with its scene.
+    Columns(SceneBackend),
+    /// A stored matrix.
+    Matrix(radiosity_eval::FormFactors),
+}
+
 /// The form factors `F` of one backend on one scene.
 #[pyclass(frozen, module = "radiosity")]
 pub struct FormFactors {
-    cell: SceneBackend,
+    source: Source,
     /// The system of the scene (its areas give rows from columns by reciprocity).
     system: LinearSystem,
     /// The backend's canonical spec.
@@ -47,13 +56,13 @@ pub(crate) fn cache() -> Option<Cache> {
 impl FormFactors {
     /// The stored matrix's non-zero entries, or the error saying that this backend stores none.
     fn stored(&self) -> PyResult<SparseColumns> {
-        self.with(|b| match b {
-            Backend::Matrix(m) => Ok(SparseColumns::of(m)),
-            _ => Err(value_error(format!(
+        match &self.source {
+            Source::Matrix(m) => Ok(SparseColumns::of(m.stored().expect("a matrix read as stored"))),
+            Source::Columns(_) => Err(value_error(format!(
                 "{} is not a stored matrix: take form_factors(\"matrix:of={}\"), assembled where it fits the memory budget",
                 self.spec, self.spec
             ))),
-        })
+        }
     }
 
     /// Builds the backend `spec` on `prepared`, with the GIL released.
@@ -61,10 +70,14 @@ impl FormFactors {
         let parsed = BackendSpec::parse(spec).map_err(value_error)?;
         let system = LinearSystem::from_scene(prepared.scene());
         let cache = cache();
-        let cell = py
-            .detach(|| SceneBackend::try_new(prepared, |p| backend(p, &parsed, cache.as_ref(), &NoProgress)))
+        let source = py
+            .detach(|| match parsed {
+                BackendSpec::Matrix { .. } => obtain_matrix(&prepared, &parsed, cache.as_ref(), &NoProgress)
+                    .map(|obtained| Source::Matrix(radiosity_eval::FormFactors::from_stored(obtained.matrix))),
+                _ => SceneBackend::try_new(prepared, |p| backend(p, &parsed, cache.as_ref(), &NoProgress)).map(Source::Columns),
+            })
             .map_err(value_error)?;
-        Ok(FormFactors { cell, system, spec: parsed.canonical() })
+        Ok(FormFactors { source, system, spec: parsed.canonical() })
     }
 
     /// The number of patches.
@@ -73,8 +86,11 @@ impl FormFactors {
     }
 
     /// Runs `f` on the backend.
-    fn with<R>(&self, f: impl FnOnce(&Backend<'_>) -> R) -> R {
-        self.cell.with_dependent(|_, backend| f(backend))
+    fn with<R>(&self, f: impl FnOnce(&dyn ColumnSource) -> R) -> R {
+        match &self.source {
+            Source::Columns(cell) => cell.with_dependent(|_, backend| f(backend)),
+            Source::Matrix(m) => f(m),
+        }
     }
 }
 
@@ -115,7 +131,10 @@ impl FormFactors {
     /// reciprocity.
     #[getter]
     fn exact_rows(&self) -> bool {
-        self.with(|b| b.serves_rows())
+        match &self.source {
+            Source::Columns(cell) => cell.with_dependent(|_, backend| backend.serves_rows()),
+            Source::Matrix(_) => true,
+        }
     }
 
     /// The columns `js` of `F` as an `n × len(js)` array (column-major), computed in

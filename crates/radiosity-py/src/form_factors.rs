@@ -74,7 +74,8 @@ impl FormFactors {
             .detach(|| match parsed {
                 BackendSpec::Matrix { .. } => obtain_matrix(&prepared, &parsed, cache.as_ref(), &NoProgress)
                     .map(|obtained| Source::Matrix(radiosity_eval::FormFactors::from_stored(obtained.matrix))),
-                _ => SceneBackend::try_new(prepared, |p| backend(p, &parsed, cache.as_ref(), &NoProgress)).map(Source::Columns),
+                _ => SceneBackend::try_new(prepared, |p| backend(p, &parsed, cache.as_ref(), &NoProgress))
+                    .map(Source::Columns),
             })
             .map_err(value_error)?;
         Ok(FormFactors { source, system, spec: parsed.canonical() })

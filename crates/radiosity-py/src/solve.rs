@@ -8,7 +8,7 @@ use crate::scene::Scene;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyList};
 use radiosity_core::Real;
 use radiosity_eval::{FinalMetrics, Lab, LabOptions, NoProgress, Point, RecordPlan, ReferenceKind};
 use radiosity_ff::BackendSpec;
@@ -25,6 +25,8 @@ pub struct Run {
     last: FinalMetrics,
     record: Vec<(String, Value)>,
     points: Vec<Point>,
+    /// With an `rms=` rule: where `e_rms` first fell to each power of ten.
+    reached: Vec<(Real, Point)>,
     reference: (String, String),
 }
 
@@ -94,22 +96,33 @@ pub fn solve(
             None => {
                 let state = lab.reference_state()?;
                 let method = lab.reference().map(|r| r.method().to_string()).unwrap_or_default();
-                Run::new(
+                Run {
                     state,
-                    "reference".into(),
-                    lab.backend().into(),
-                    format!("solved exactly: {method}"),
-                    lab.reference_metrics()?,
-                    Vec::new(),
-                    Vec::new(),
-                    chosen,
-                )
+                    solver: "reference".into(),
+                    backend: lab.backend().into(),
+                    termination: format!("solved exactly: {method}"),
+                    last: lab.reference_metrics()?,
+                    record: Vec::new(),
+                    points: Vec::new(),
+                    reached: Vec::new(),
+                    reference: chosen,
+                }
             }
             Some(solver) => {
                 let o =
                     lab.run_watched(solver.as_mut(), &rules, &RecordPlan::errors_only(), &NoProgress, &mut watch)?;
-                let record = o.record.iter().map(|(k, v)| (k.to_string(), v.clone())).collect();
-                Run::new(o.state, o.solver, lab.backend().into(), o.termination, o.last, record, o.points, chosen)
+                let reached = if rules.needs_error() { o.reached_powers() } else { Vec::new() };
+                Run {
+                    record: o.record.iter().map(|(k, v)| (k.to_string(), v.clone())).collect(),
+                    reached,
+                    state: o.state,
+                    solver: o.solver,
+                    backend: lab.backend().into(),
+                    termination: o.termination,
+                    last: o.last,
+                    points: o.points,
+                    reference: chosen,
+                }
             }
         };
         Ok::<Run, Box<dyn std::error::Error + Send + Sync>>(run)
@@ -139,22 +152,6 @@ fn radiosity_array<'py>(py: Python<'py>, state: &State) -> Bound<'py, PyArray2<R
     Array2::from_shape_vec((values.len() / k.max(1), k), values.clone()).expect("n × channels").into_pyarray(py)
 }
 
-impl Run {
-    #[allow(clippy::too_many_arguments)]
-    fn new(
-        state: State,
-        solver: String,
-        backend: String,
-        termination: String,
-        last: FinalMetrics,
-        record: Vec<(String, Value)>,
-        points: Vec<Point>,
-        reference: (String, String),
-    ) -> Run {
-        Run { solver, backend, termination, state, last, record, points, reference }
-    }
-}
-
 #[pymethods]
 impl Run {
     /// The radiosity, shape `(n, channels)`.
@@ -177,8 +174,10 @@ impl Run {
 
     /// The run's figures, with the keys of `cargo xtask solve --json`'s `stats`: `columns`,
     /// `columns_reused`, `products`, `steps`, `seconds`, `ff_seconds`, `group_seconds`,
-    /// `e_rms`, `e_max`, `residual`, `bound`, `termination`, `record` (the solver's own
-    /// figures) and `reference` (`kind`, `why`). Figures not known are `None`.
+    /// `e_rms`, `e_max`, `residual` and `residual_of` (which vector it is the residual of),
+    /// `bound`, `termination`, `reached` (with an `rms=` rule, where `e_rms` first fell to
+    /// each power of ten), `record` (the solver's own figures) and `reference` (`kind`,
+    /// `why`). Figures not known are `None`.
     #[getter]
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let s = &self.state;
@@ -192,9 +191,25 @@ impl Run {
         d.set_item("group_seconds", s.group_seconds)?;
         d.set_item("e_rms", self.last.e_rms)?;
         d.set_item("e_max", self.last.e_max)?;
-        d.set_item("residual", self.last.residual.or(self.last.solver_residual))?;
+        let (residual, residual_of) = match (self.last.residual, self.last.solver_residual) {
+            (Some(r), _) => (Some(r), Some("displayed radiosity")),
+            (None, Some(r)) => (Some(r), Some("the solver's own (for shooting methods, the shot radiosity)")),
+            (None, None) => (None, None),
+        };
+        d.set_item("residual", residual)?;
+        d.set_item("residual_of", residual_of)?;
         d.set_item("bound", self.last.bound)?;
         d.set_item("termination", &self.termination)?;
+        let reached = PyList::empty(py);
+        for (e_rms, p) in &self.reached {
+            let r = PyDict::new(py);
+            r.set_item("e_rms", e_rms)?;
+            r.set_item("steps", p.step)?;
+            r.set_item("columns", p.columns)?;
+            r.set_item("seconds", p.seconds)?;
+            reached.append(r)?;
+        }
+        d.set_item("reached", reached)?;
         let record = PyDict::new(py);
         for (k, v) in &self.record {
             match v {

@@ -22,7 +22,12 @@ def test_a_run_stops_at_its_rule_and_reports_it(cornell):
     stats = run.stats
     assert stats["e_rms"] <= 1e-3 and stats["columns"] > 0 and stats["steps"] == stats["columns"]
     assert "e_rms reached" in stats["termination"]
-    assert stats["reference"]["kind"] == "matrix"
+    assert stats["reference"]["kind"] == "matrix" and stats["residual_of"] == "displayed radiosity"
+    # Where e_rms first fell to each power of ten, in order, the last at the rule.
+    reached = stats["reached"]
+    assert [r["e_rms"] for r in reached] == [1e-1, 1e-2, 1e-3]
+    assert all(a["columns"] <= b["columns"] for a, b in zip(reached, reached[1:]))
+    assert reached[-1]["columns"] == stats["columns"]
     # The certified bound covers the error it bounds, and the recorded points end where the run did.
     assert stats["bound"] is not None and stats["bound"] > 0
     assert run.points["columns"][-1] == stats["columns"]

@@ -65,10 +65,15 @@ impl FormFactors {
         }
     }
 
-    /// Builds the backend `spec` on `prepared`, with the GIL released.
-    pub(crate) fn build(py: Python<'_>, prepared: Arc<PreparedScene>, spec: &str) -> PyResult<FormFactors> {
+    /// Builds the backend `spec` on `prepared` (whose system is `system`), with the GIL
+    /// released.
+    pub(crate) fn build(
+        py: Python<'_>,
+        prepared: Arc<PreparedScene>,
+        system: LinearSystem,
+        spec: &str,
+    ) -> PyResult<FormFactors> {
         let parsed = BackendSpec::parse(spec).map_err(value_error)?;
-        let system = LinearSystem::from_scene(prepared.scene());
         let cache = cache();
         let source = py
             .detach(|| match parsed {

@@ -109,7 +109,8 @@ impl Scene {
     /// `$RADIOSITY_CACHE_DIR` when that is set.
     #[pyo3(signature = (spec = "analytic"))]
     fn form_factors(slf: &Bound<'_, Self>, spec: &str) -> PyResult<FormFactors> {
-        FormFactors::build(slf.py(), slf.get().prepared.clone(), spec)
+        let scene = slf.get();
+        FormFactors::build(slf.py(), scene.prepared.clone(), scene.system.clone(), spec)
     }
 
     /// `I − diag(ρ_c) F` of channel `channel` (which may be left out on a grey scene) as a

@@ -19,10 +19,10 @@
 //!
 //! An exception raised by Python ends the comparison and is raised again from `compare`.
 
-use crate::errors::value_error;
+use crate::arrays::patch_major;
+use crate::errors::{check_measurable, value_error};
 use crate::form_factors::cache;
 use crate::scene::Scene;
-use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -235,7 +235,7 @@ impl Link {
 
 impl PyProblem {
     fn matrix<'py>(&self, py: Python<'py>, values: &[Real]) -> Bound<'py, numpy::PyArray2<Real>> {
-        Array2::from_shape_vec((self.n, self.channels), values.to_vec()).expect("n × channels").into_pyarray(py)
+        patch_major(py, values.to_vec(), self.channels)
     }
 
     fn patch(&self, index: usize) -> PyResult<usize> {
@@ -330,7 +330,7 @@ fn answer(
     (radiosity, unshot, step): (Vec<Real>, Vec<Real>, u64),
 ) -> PyResult<ToWorker> {
     let (n, k) = (problem.get().n, problem.get().channels);
-    let shape = |v: Vec<Real>| Array2::from_shape_vec((n, k), v).expect("n × channels").into_pyarray(py);
+    let shape = |v: Vec<Real>| patch_major(py, v, k);
     let kwargs = PyDict::new(py);
     kwargs.set_item("radiosity", shape(radiosity))?;
     kwargs.set_item("unshot", shape(unshot))?;
@@ -410,11 +410,7 @@ pub fn compare(
     let spec = BackendSpec::parse(ff).map_err(value_error)?;
     let rules = StopRules::parse(until).map_err(value_error)?;
     let kind: ReferenceKind = reference.parse().map_err(value_error)?;
-    if rules.needs_error() && kind == ReferenceKind::None {
-        return Err(value_error(
-            "an rms= rule needs a reference to measure e_rms against, and reference='none' computes none",
-        ));
-    }
+    check_measurable(&rules, kind)?;
     let registry = SolverRegistry::builtin();
     let mut entries = Vec::new();
     let mut objects = Vec::new();

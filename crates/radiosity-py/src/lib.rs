@@ -18,6 +18,7 @@
 //! columns, products, solves), and a panic inside becomes a Python exception (pyo3's
 //! `PanicException`) instead of ending the interpreter.
 
+pub mod arrays;
 pub mod errors;
 pub mod form_factors;
 pub mod lab;

@@ -1,10 +1,10 @@
 //! `radiosity.load(spec)` and the `Scene`: a prepared scene (loaded, its BVH built, analysed)
 //! with its patches' areas, reflectivities, emissions, centroids and normals as numpy arrays.
 
+use crate::arrays::patch_major;
 use crate::errors::value_error;
 use crate::form_factors::FormFactors;
-use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray1, PyArray2};
+use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use radiosity_core::{LinearSystem, Real};
 use radiosity_geom::PreparedScene;
@@ -29,13 +29,6 @@ pub fn load(py: Python<'_>, spec: &str) -> PyResult<Scene> {
     let prepared = py.detach(|| PreparedScene::load(spec)).map_err(value_error)?;
     let system = LinearSystem::from_scene(prepared.scene());
     Ok(Scene { prepared: Arc::new(prepared), system, spec: spec.to_string() })
-}
-
-/// `values` (patch-major, `width` per patch) as an `n × width` array.
-fn matrix<'py>(py: Python<'py>, values: Vec<Real>, width: usize) -> Bound<'py, PyArray2<Real>> {
-    let n = values.len() / width.max(1);
-    let array = Array2::from_shape_vec((n, width), values).expect("patch-major values of n × width");
-    array.into_pyarray(py)
 }
 
 #[pymethods]
@@ -67,27 +60,27 @@ impl Scene {
     /// The patches' reflectivities, shape `(n, channels)`.
     #[getter]
     fn reflectivity<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<Real>> {
-        matrix(py, self.system.reflectivities().to_vec(), self.channels())
+        patch_major(py, self.system.reflectivities().to_vec(), self.channels())
     }
 
     /// The patches' emissions, shape `(n, channels)`.
     #[getter]
     fn emission<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<Real>> {
-        matrix(py, self.system.emissions().to_vec(), self.channels())
+        patch_major(py, self.system.emissions().to_vec(), self.channels())
     }
 
     /// The patches' centroids, shape `(n, 3)`.
     #[getter]
     fn centroids<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<Real>> {
         let values = self.prepared.scene().patches().iter().flat_map(|p| p.centroid().to_array()).collect();
-        matrix(py, values, 3)
+        patch_major(py, values, 3)
     }
 
     /// The patches' unit normals, shape `(n, 3)`.
     #[getter]
     fn normals<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<Real>> {
         let values = self.prepared.scene().patches().iter().flat_map(|p| p.normal().to_array()).collect();
-        matrix(py, values, 3)
+        patch_major(py, values, 3)
     }
 
     /// What the analysis left out of the pipeline because the scene does not need it (the

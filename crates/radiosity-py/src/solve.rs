@@ -2,11 +2,11 @@
 //! a backend, measured as `cargo xtask solve` measures it: its radiosity, its figures
 //! (`stats`, the keys of the command's JSON `stats`) and its recorded points.
 
-use crate::errors::value_error;
+use crate::arrays::patch_major;
+use crate::errors::{check_measurable, value_error};
 use crate::form_factors::cache;
 use crate::scene::Scene;
-use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray1, PyArray2};
+use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use radiosity_core::Real;
@@ -68,11 +68,7 @@ pub fn solve(
         ));
     }
     let rules = StopRules::parse(until).map_err(value_error)?;
-    if rules.needs_error() && kind == ReferenceKind::None {
-        return Err(value_error(
-            "an rms= rule needs a reference to measure e_rms against, and reference='none' computes none",
-        ));
-    }
+    check_measurable(&rules, kind)?;
     let prepared = scene.prepared.clone();
     let solver = solver.to_string();
     let mut failure = None;
@@ -148,8 +144,7 @@ fn call_back(py: Python<'_>, callback: &Py<PyAny>, point: &Point, state: &State)
 
 /// The state's radiosity as an `n × channels` array.
 fn radiosity_array<'py>(py: Python<'py>, state: &State) -> Bound<'py, PyArray2<Real>> {
-    let (values, k) = (&state.radiosity, state.channels);
-    Array2::from_shape_vec((values.len() / k.max(1), k), values.clone()).expect("n × channels").into_pyarray(py)
+    patch_major(py, state.radiosity.clone(), state.channels)
 }
 
 #[pymethods]

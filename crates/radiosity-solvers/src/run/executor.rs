@@ -214,8 +214,9 @@ pub trait Observer {
         let _ = (state, bound);
     }
 
-    /// Whether the run should end before its next step (false by default): asked after every
-    /// call of the observer; the run then ends with [`TerminationReason::Stopped`].
+    /// Whether the run should end before its next step (false by default): asked of every
+    /// observer before every step, whatever its mode; the run then ends with
+    /// [`TerminationReason::Stopped`].
     fn wants_stop(&self) -> bool {
         false
     }

@@ -56,8 +56,9 @@ pub use analytic::AnalyticColumns;
 /// entries for the same canonical argument (a change of rule, not of parameters), so that
 /// caches keyed by the canonical argument ([`BackendSpec::canonical`]) and this revision are
 /// not read across it. 2: the analytic backend quarters a pair's panels a level at a time,
-/// not depth first.
-pub const ENTRIES_REVISION: u32 = 2;
+/// not depth first. 3: a pair whose visibility probe agrees is estimated from at least a
+/// sixteenth of its rays (`pair_visibility`, "Probes").
+pub const ENTRIES_REVISION: u32 = 3;
 pub use backend::{Backend, FormFactorInput};
 pub use error::FfError;
 pub use hemicube::HemicubeColumns;

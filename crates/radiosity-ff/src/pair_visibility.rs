@@ -55,11 +55,15 @@
 //! ## Probes
 //!
 //! A pair given `k ≥ 16` rays is first probed with `m = ⌈√k⌉` segments drawn from its grid: if all
-//! agree, it is estimated from `m` fresh segments, otherwise from `k`. The estimate never reuses
-//! the probe, so it is independent of the decision and its expectation is `V` either way:
-//! hierarchical radiosity's visibility classification (Hanrahan, Salzman & Aupperle 1991), with
-//! rays for shafts. A chance agreement costs variance at most about `e^{−1} / m² = 0.37 / k`. The
-//! random stream is keyed by the unordered pair, so `V_ab = V_ba` exactly.
+//! agree, it is estimated from `f = max(m, ⌈k / 16⌉)` fresh segments, otherwise from `k`. The
+//! estimate never reuses the probe, so it is independent of the decision and its expectation is
+//! `V` either way: hierarchical radiosity's visibility classification (Hanrahan, Salzman &
+//! Aupperle 1991), with rays for shafts. A chance agreement costs variance at most about
+//! `e^{−1} / (m f)`: `0.37 / k` up to `k = 256`, and `5.9 / k^{3/2}` beyond. The pairs of
+//! `k > 256` are those with the largest unoccluded factors, where a chance agreement moves a row
+//! the most (`U` times the error), and the larger estimates add at most a sixteenth of the
+//! segments those pairs are given. The random stream is keyed by the
+//! unordered pair, so `V_ab = V_ba` exactly.
 //!
 //! ## References
 //!
@@ -218,7 +222,7 @@ pub fn visible_fraction(
         let grid = pair.grid(k);
         let probe = probe_size(k);
         let agreed = pair.probe(&grid, probe, rng, trace);
-        let fresh = if agreed { probe } else { k };
+        let fresh = if agreed { agreed_estimate_size(k) } else { k };
         if let (true, Some(joint)) = (fresh < MANY, &joint) {
             joint.sample(fresh, rng, &mut |x, y| trace(x, ia, y, ib), &mut sums);
         } else if fresh < MANY {
@@ -284,11 +288,21 @@ fn path_for(k: usize, joint: bool) -> SamplingPath {
     }
 }
 
-/// The segments of the probe of a pair given `k ≥ 16` rays, and of its estimate when the
-/// probe agrees: `⌈√k⌉` (module documentation, "Probes").
+/// The segments of the probe of a pair given `k ≥ 16` rays: `⌈√k⌉` (module documentation,
+/// "Probes").
 fn probe_size(k: usize) -> usize {
     (k as Real).sqrt().ceil() as usize
 }
+
+/// The fresh segments that estimate a pair given `k ≥ 16` rays whose probe agreed: `⌈√k⌉`, or
+/// `⌈k / 16⌉` from `k = 256` on (module documentation, "Probes").
+fn agreed_estimate_size(k: usize) -> usize {
+    probe_size(k).max(k.div_ceil(AGREED_SHARE))
+}
+
+/// An agreed pair's estimate takes at least `1 / AGREED_SHARE` of its rays (module
+/// documentation, "Probes").
+const AGREED_SHARE: usize = 16;
 
 /// The largest ratio of the kernel's bound over `L × H` to its value between the centres for
 /// which a pair's few segments are drawn jointly ([`Joint`]): about half the proposals or

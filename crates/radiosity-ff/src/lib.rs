@@ -57,8 +57,9 @@ pub use analytic::AnalyticColumns;
 /// caches keyed by the canonical argument ([`BackendSpec::canonical`]) and this revision are
 /// not read across it. 2: the analytic backend quarters a pair's panels a level at a time,
 /// not depth first. 3: a pair whose visibility probe agrees is estimated from at least a
-/// sixteenth of its rays (`pair_visibility`, "Probes").
-pub const ENTRIES_REVISION: u32 = 3;
+/// sixteenth of its rays (`pair_visibility`, "Probes"). 4: the hierarchical operator's tree
+/// is split between 54 orientation classes, not 6.
+pub const ENTRIES_REVISION: u32 = 4;
 pub use backend::{Backend, FormFactorInput};
 pub use error::FfError;
 pub use hemicube::HemicubeColumns;

@@ -1,11 +1,19 @@
 //! The cluster tree of the hierarchical operator: a binary tree over the scene's patches, each
 //! node with a bounding sphere, a cone bounding its patches' normals and its area.
 //!
-//! Nodes holding patches of more than one orientation class (the normal's largest component
-//! and its sign) are first split between classes, at the class boundary nearest the middle;
-//! below, nodes are split at the median centroid along the longest side of their centroids'
-//! box, so the tree is balanced and the same whatever the thread count: ties are broken by
-//! patch index. Nodes are stored in pre-order, so a parent comes before its children
+//! Nodes holding patches of more than one orientation class are first split between classes,
+//! at the class boundary nearest the middle; below, nodes are split at the median centroid
+//! along the longest side of their centroids' box, so the tree is balanced and the same
+//! whatever the thread count: ties are broken by patch index.
+//!
+//! A class is a face of the cube the normal points through (its largest component and that
+//! component's sign) cut into 3 × 3 by the two other components over it, at `±tan 20°`
+//! ([`class`]): 54 classes. A far link needs every patch of both its nodes facing the other
+//! ([`super::links`]), so a node's cone of normals bounds how coarse its links can be. Patches
+//! facing along an axis all fall in their face's centre class, so a scene of boxes is split as
+//! by the six faces alone; the patches of curved objects (the cylinders, cones and spheres of
+//! MGF furniture) are grouped by the way they face to within about 20° instead of 55°, and
+//! their clusters link far at coarser levels (measured in `docs/hierarchical.md`). Nodes are stored in pre-order, so a parent comes before its children
 //! (a pass forward pushes down, a pass backward gathers up), and the patches of a node are a
 //! contiguous range of [`ClusterTree::order`].
 
@@ -129,19 +137,35 @@ impl ClusterTree {
     }
 }
 
-/// The class of a patch's orientation: its normal's largest component, and that component's
-/// sign (six classes).
+/// Where the two minor components of a normal, over its largest, are cut into bins:
+/// `tan 20°`.
+const BIN_EDGE: Real = 0.363_970_234_266_202_4;
+
+/// The class of a patch's orientation (module documentation): its normal's largest component
+/// and that component's sign (a face of the cube), and the bin of each of the two other
+/// components over it (below `−tan 20°`, within, above): 54 classes.
 fn class(scene: &Scene, i: u32) -> u8 {
     let n = scene.patches()[i as usize].normal();
     let a = n.abs();
-    let axis = if a.x >= a.y && a.x >= a.z {
+    let axis: usize = if a.x >= a.y && a.x >= a.z {
         0
     } else if a.y >= a.z {
         1
     } else {
         2
     };
-    2 * axis + u8::from(n[axis as usize] < 0.0)
+    let face = 2 * axis as u8 + u8::from(n[axis] < 0.0);
+    let bin = |c: Real| {
+        let t = c / a[axis];
+        if t < -BIN_EDGE {
+            0
+        } else if t > BIN_EDGE {
+            2
+        } else {
+            1
+        }
+    };
+    9 * face + 3 * bin(n[(axis + 1) % 3]) + bin(n[(axis + 2) % 3])
 }
 
 /// True when every patch of `patches` has the class of the first.
@@ -202,5 +226,47 @@ fn bounds(scene: &Scene, patches: &[u32], first: usize) -> Node {
         first: first as u32,
         count: patches.len() as u32,
         children: None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use radiosity_core::{Material, Spectrum};
+    use radiosity_geom::SceneBuilder;
+
+    /// The sides of a cylinder of 72 facets about the z axis, facing out: their normals turn
+    /// through every horizontal direction.
+    fn cylinder() -> Scene {
+        let mut b = SceneBuilder::new("cylinder");
+        let m = b.material(Material::new("grey", Spectrum::grey(0.5), Spectrum::ZERO)).unwrap();
+        let o = b.object("cylinder");
+        let at = |k: usize, z: Real| {
+            let angle = 2.0 * PI * k as Real / 72.0;
+            Vec3::new(angle.cos(), angle.sin(), z)
+        };
+        for k in 0..72 {
+            b.polygon(&[at(k, 0.0), at(k + 1, 0.0), at(k + 1, 1.0), at(k, 1.0)], m, o).unwrap();
+        }
+        b.build().unwrap()
+    }
+
+    #[test]
+    fn nodes_of_one_class_face_one_way_within_twenty_degrees() {
+        // Horizontal normals fall in three classes of each of the four side faces, 40° wide at
+        // most (between ±20° and ±45° of the face's axis): every node within a class has a
+        // cone of at most about 20°. By the face alone, it would be 45°.
+        let scene = cylinder();
+        let tree = ClusterTree::new(&scene);
+        let mut within = 0;
+        for (k, node) in tree.nodes.iter().enumerate() {
+            let patches = tree.patches_of(k as u32);
+            if one_class(&scene, patches) {
+                within += 1;
+                assert!(node.spread <= 20.5_f64.to_radians(), "node {k}: cone {}°", node.spread.to_degrees());
+            }
+        }
+        assert_eq!(tree.order.len(), 72);
+        assert!(within >= 72, "{within} nodes of one class");
     }
 }

@@ -13,9 +13,11 @@
 //! facing along an axis all fall in their face's centre class, so a scene of boxes is split as
 //! by the six faces alone; the patches of curved objects (the cylinders, cones and spheres of
 //! MGF furniture) are grouped by the way they face to within about 20° instead of 55°, and
-//! their clusters link far at coarser levels (measured in `docs/hierarchical.md`). Nodes are stored in pre-order, so a parent comes before its children
-//! (a pass forward pushes down, a pass backward gathers up), and the patches of a node are a
-//! contiguous range of [`ClusterTree::order`].
+//! their clusters link far at coarser levels (measured in `docs/hierarchical.md`).
+//!
+//! Nodes are stored in pre-order, so a parent comes before its children (a pass forward pushes
+//! down, a pass backward gathers up), and the patches of a node are a contiguous range of
+//! [`ClusterTree::order`].
 
 use radiosity_core::{Real, Scene, Vec3};
 use std::f64::consts::PI;

@@ -64,6 +64,28 @@ fn estimate(budget: RayBudget, seed: u64) -> Real {
     estimate_strip(0.5, budget, seed)
 }
 
+/// The floor-to-wall estimate with `rays` rays, `u` taken as their factor, each segment clear
+/// when `clear` says so of its point on the floor; with the number of segments traced.
+fn floor_to_wall(u: Real, rays: usize, seed: u64, mut clear: impl FnMut(Vec3) -> bool) -> (Real, usize) {
+    let (floor, wall) = floor_and_wall();
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+    let mut traced = 0;
+    let mut trace = |x: Vec3, _: usize, _: Vec3, _: usize| {
+        traced += 1;
+        clear(x)
+    };
+    let v = visible_fraction((&floor, 0), (&wall, 1), u, RayBudget { rays, per_unit: 0 }, 1e-12, &mut rng, &mut trace);
+    (v, traced)
+}
+
+/// The mean of `values` and its standard error.
+fn mean_and_error(values: &[Real]) -> (Real, Real) {
+    let n = values.len() as Real;
+    let mean = values.iter().sum::<Real>() / n;
+    let spread = (values.iter().map(|v| (v - mean).powi(2)).sum::<Real>() / (n - 1.0)).sqrt();
+    (mean, spread / n.sqrt())
+}
+
 #[test]
 fn the_exact_fraction_is_well_above_the_area_fraction() {
     // What the test can tell apart: about 0.72 against 0.5.
@@ -95,9 +117,7 @@ fn a_probed_pair_is_unbiased() {
     // 64 rays: a probe of 8 decides, and either 8 or 64 fresh rays estimate.
     let trials = 400;
     let values: Vec<Real> = (0..trials).map(|s| estimate(RayBudget { rays: 64, per_unit: 0 }, s)).collect();
-    let mean = values.iter().sum::<Real>() / trials as Real;
-    let spread = (values.iter().map(|v| (v - mean).powi(2)).sum::<Real>() / (trials - 1) as Real).sqrt();
-    let standard_error = spread / (trials as Real).sqrt();
+    let (mean, standard_error) = mean_and_error(&values);
     assert!((mean - exact()).abs() < 4.0 * standard_error + 2e-3, "{mean} against {} ± {standard_error}", exact());
 }
 
@@ -106,31 +126,15 @@ fn a_probed_pair_with_many_rays_is_unbiased() {
     // 1024 rays and only a strip of 1% of the floor's width visible: the probe of 32 finds
     // every segment blocked in some trials, and the estimate is then drawn from 64 fresh
     // segments (a sixteenth of the rays), otherwise from 1024.
-    let (floor, wall) = floor_and_wall();
     let (w, trials) = (0.01, 400);
     let u = perpendicular(1.0, 1.0, 1.0);
     let (mut values, mut agreed) = (Vec::new(), 0);
     for seed in 0..trials {
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
-        let mut traced = 0;
-        let mut strip = |x: Vec3, _: usize, _: Vec3, _: usize| {
-            traced += 1;
-            x.z <= w
-        };
-        values.push(visible_fraction(
-            (&floor, 0),
-            (&wall, 1),
-            u,
-            RayBudget { rays: 1024, per_unit: 0 },
-            1e-12,
-            &mut rng,
-            &mut strip,
-        ));
+        let (v, traced) = floor_to_wall(u, 1024, seed, |x| x.z <= w);
+        values.push(v);
         agreed += usize::from(traced == 32 + 64);
     }
-    let mean = values.iter().sum::<Real>() / trials as Real;
-    let spread = (values.iter().map(|v| (v - mean).powi(2)).sum::<Real>() / (trials - 1) as Real).sqrt();
-    let standard_error = spread / (trials as Real).sqrt();
+    let (mean, standard_error) = mean_and_error(&values);
     let v = exact_strip(w);
     assert!(agreed >= trials as usize / 20, "the probe agreed in {agreed} of {trials} trials");
     assert!((mean - v).abs() < 4.0 * standard_error, "{mean} against {v} ± {standard_error}");
@@ -140,42 +144,16 @@ fn a_probed_pair_with_many_rays_is_unbiased() {
 fn an_agreed_pair_is_estimated_from_a_sixteenth_of_its_rays_from_256_on() {
     // A fully visible pair: the probe of ⌈√k⌉ agrees, and the estimate takes
     // max(⌈√k⌉, ⌈k / 16⌉) fresh segments.
-    let (floor, wall) = floor_and_wall();
     for (rays, segments) in [(16, 4 + 4), (100, 10 + 10), (256, 16 + 16), (1024, 32 + 64), (4096, 64 + 256)] {
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
-        let mut traced = 0;
-        let v = visible_fraction(
-            (&floor, 0),
-            (&wall, 1),
-            0.2,
-            RayBudget { rays, per_unit: 0 },
-            1e-12,
-            &mut rng,
-            &mut |_, _, _, _| {
-                traced += 1;
-                true
-            },
-        );
-        assert_eq!((v, traced), (1.0, segments), "{rays} rays");
+        assert_eq!(floor_to_wall(0.2, rays, 5, |_| true), (1.0, segments), "{rays} rays");
     }
 }
 
 #[test]
 fn fully_visible_and_hidden_pairs_are_exact() {
-    let (floor, wall) = floor_and_wall();
     for rays in [1, 16, 300] {
         for (answer, expected) in [(true, 1.0), (false, 0.0)] {
-            let mut rng = Xoshiro256PlusPlus::seed_from_u64(3);
-            let v = visible_fraction(
-                (&floor, 0),
-                (&wall, 1),
-                0.2,
-                RayBudget { rays, per_unit: 0 },
-                1e-12,
-                &mut rng,
-                &mut |_, _, _, _| answer,
-            );
-            assert_eq!(v, expected, "{rays} rays");
+            assert_eq!(floor_to_wall(0.2, rays, 3, |_| answer).0, expected, "{rays} rays");
         }
     }
 }

@@ -93,6 +93,8 @@ impl BackendSpec {
                     shadows: p.real("shadows", defaults.shadows, |s| s > 0.0 && s <= 1.0, "a fraction in (0, 1]")?,
                     rays: p.count("rays", defaults.rays, 1, 4096)?,
                     budget: p.count("budget", defaults.budget, 0, 1 << 24)?,
+                    order: p.count("order", defaults.order, 1, 32)?,
+                    tolerance: p.real("tol", defaults.tolerance, |t| t > 0.0 && t <= 1.0, "a tolerance in (0, 1]")?,
                     seed: p.seed("seed", 0)?,
                     oracle: match p.given().find(|(k, _)| *k == "oracle").map(|(_, v)| v) {
                         None | Some("flux") => Oracle::Flux,
@@ -137,11 +139,13 @@ impl BackendSpec {
             BackendSpec::MonteCarlo(p) => format!("montecarlo:rays={}:seed={}", p.rays, p.seed),
             BackendSpec::Hierarchical(p) => {
                 format!(
-                    "hierarchical:eps={:e}:shadows={}:rays={}:budget={}:seed={}:oracle={}:floor={}:passes={}:closure={}",
+                    "hierarchical:eps={:e}:shadows={}:rays={}:budget={}:order={}:tol={:e}:seed={}:oracle={}:floor={}:passes={}:closure={}",
                     p.eps,
                     p.shadows,
                     p.rays,
                     p.budget,
+                    p.order,
+                    p.tolerance,
                     p.seed,
                     match p.oracle {
                         Oracle::Flux => "flux",

@@ -118,6 +118,11 @@ pub struct HierarchicalParams {
     /// pair's unoccluded form factor), lower than that backend's own default: it trades the
     /// near pairs' visibility noise for build time (measured in `docs/hierarchical.md`).
     pub budget: usize,
+    /// The near pairs' largest Gauss–Legendre order: the analytic backend's `order`.
+    pub order: usize,
+    /// The relative quadrature error the near pairs' rule aims at: the analytic backend's
+    /// `tol`.
+    pub tolerance: Real,
     /// The seed of the rays (and of the near links' analytic entries).
     pub seed: u64,
     /// What a link's error is weighed by: the flux it carries (the default) or its area.
@@ -141,6 +146,8 @@ impl Default for HierarchicalParams {
             shadows: 0.05,
             rays: 14,
             budget: 512,
+            order: 8,
+            tolerance: 1e-3,
             seed: 0,
             oracle: Oracle::Flux,
             floor: 0.1,
@@ -171,6 +178,16 @@ pub const HIERARCHICAL_PARAMS: &[ParamDoc] = &[
         key: "budget",
         default: "512",
         doc: "the near pairs' shadow rays per unit of unoccluded form factor (the analytic backend's budget)",
+    },
+    ParamDoc {
+        key: "order",
+        default: "8",
+        doc: "the near pairs' largest Gauss-Legendre order, 1 to 32 (the analytic backend's order)",
+    },
+    ParamDoc {
+        key: "tol",
+        default: "1e-3",
+        doc: "the relative quadrature error the near pairs' rule aims at, in (0, 1] (the analytic backend's tol)",
     },
     ParamDoc { key: "seed", default: "0", doc: "seed of the rays" },
     ParamDoc {
@@ -288,7 +305,13 @@ impl HierarchicalColumns {
     ) -> HierarchicalColumns {
         let start = Instant::now();
         let tree = ClusterTree::new(scene);
-        let near_params = AnalyticParams { seed: params.seed, budget: params.budget, ..AnalyticParams::default() };
+        let near_params = AnalyticParams {
+            order: params.order,
+            tolerance: params.tolerance,
+            seed: params.seed,
+            budget: params.budget,
+            ..AnalyticParams::default()
+        };
         let analytic = AnalyticColumns::new(scene, visibility, analysis, near_params);
         let mut cumulative = Vec::with_capacity(scene.len() + 1);
         cumulative.push(0.0);

@@ -21,8 +21,8 @@
 //!   `α, β > 0`, its error estimate adding the first-order terms (at most `4ρ_c`) and held to a
 //!   quarter of `eps` (`ZEROTH_SHARE`);
 //! - **near**: both are single patches and the link is not far: the analytic backend's entry
-//!   ([`AnalyticColumns::pair`], with the operator's `budget` of shadow rays), stored as
-//!   `A_i F_ij`. A far link between two single patches is stored the same way, as the entry
+//!   ([`AnalyticColumns::pair`], with the operator's `budget` of shadow rays and its `order`
+//!   and `tol` of quadrature), stored as `A_i F_ij`. A far link between two single patches is stored the same way, as the entry
 //!   it gives (`A_i A_j g κ_ij`), so products and columns read one number for it instead of
 //!   its kernel's expansion;
 //! - otherwise **split**: the larger node (by radius) that can be split is replaced by its

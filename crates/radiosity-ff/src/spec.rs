@@ -61,8 +61,8 @@ impl BackendSpec {
                 let p = KeyValueParams::parse(&owner, items.iter().copied(), ANALYTIC_PARAMS)?;
                 let defaults = AnalyticParams::default();
                 BackendSpec::Analytic(AnalyticParams {
-                    order: p.count("order", defaults.order, 1, 32)?,
-                    tolerance: p.real("tol", defaults.tolerance, |t| t > 0.0 && t <= 1.0, "a tolerance in (0, 1]")?,
+                    order: quadrature_order(&p, defaults.order)?,
+                    tolerance: quadrature_tolerance(&p, defaults.tolerance)?,
                     rays: p.count("rays", defaults.rays, 1, 1 << 20)?,
                     budget: p.count("budget", defaults.budget, 0, 1 << 24)?,
                     seed: p.seed("seed", 0)?,
@@ -93,8 +93,8 @@ impl BackendSpec {
                     shadows: p.real("shadows", defaults.shadows, |s| s > 0.0 && s <= 1.0, "a fraction in (0, 1]")?,
                     rays: p.count("rays", defaults.rays, 1, 4096)?,
                     budget: p.count("budget", defaults.budget, 0, 1 << 24)?,
-                    order: p.count("order", defaults.order, 1, 32)?,
-                    tolerance: p.real("tol", defaults.tolerance, |t| t > 0.0 && t <= 1.0, "a tolerance in (0, 1]")?,
+                    order: quadrature_order(&p, defaults.order)?,
+                    tolerance: quadrature_tolerance(&p, defaults.tolerance)?,
                     seed: p.seed("seed", 0)?,
                     oracle: match p.given().find(|(k, _)| *k == "oracle").map(|(_, v)| v) {
                         None | Some("flux") => Oracle::Flux,
@@ -163,4 +163,16 @@ impl BackendSpec {
             }
         }
     }
+}
+
+/// A quadrature's largest Gauss–Legendre order (`order`, 1 to 32): the analytic backend's, and
+/// the hierarchical operator's near pairs'.
+fn quadrature_order(p: &KeyValueParams, default: usize) -> Result<usize, FfError> {
+    Ok(p.count("order", default, 1, 32)?)
+}
+
+/// A quadrature's relative error target (`tol`, in (0, 1]): the analytic backend's, and the
+/// hierarchical operator's near pairs'.
+fn quadrature_tolerance(p: &KeyValueParams, default: f64) -> Result<f64, FfError> {
+    Ok(p.real("tol", default, |t| t > 0.0 && t <= 1.0, "a tolerance in (0, 1]")?)
 }

@@ -112,14 +112,7 @@ impl ClusterTree {
             let (lo, hi) = patches.iter().fold((Vec3::splat(Real::INFINITY), Vec3::splat(-Real::INFINITY)), |b, &i| {
                 (b.0.min(centroids[i as usize]), b.1.max(centroids[i as usize]))
             });
-            let side = hi - lo;
-            let axis = if side.x >= side.y && side.x >= side.z {
-                0
-            } else if side.y >= side.z {
-                1
-            } else {
-                2
-            };
+            let axis = largest_axis(hi - lo);
             let mid = patches.len() / 2;
             patches.select_nth_unstable_by(mid, |&a, &b| {
                 centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis]).then(a.cmp(&b))
@@ -149,13 +142,7 @@ const BIN_EDGE: Real = 0.363_970_234_266_202_4;
 fn class(scene: &Scene, i: u32) -> u8 {
     let n = scene.patches()[i as usize].normal();
     let a = n.abs();
-    let axis: usize = if a.x >= a.y && a.x >= a.z {
-        0
-    } else if a.y >= a.z {
-        1
-    } else {
-        2
-    };
+    let axis = largest_axis(a);
     let face = 2 * axis as u8 + u8::from(n[axis] < 0.0);
     let bin = |c: Real| {
         let t = c / a[axis];
@@ -168,6 +155,17 @@ fn class(scene: &Scene, i: u32) -> u8 {
         }
     };
     9 * face + 3 * bin(n[(axis + 1) % 3]) + bin(n[(axis + 2) % 3])
+}
+
+/// The index of `v`'s largest component, the first of equal ones.
+fn largest_axis(v: Vec3) -> usize {
+    if v.x >= v.y && v.x >= v.z {
+        0
+    } else if v.y >= v.z {
+        1
+    } else {
+        2
+    }
 }
 
 /// True when every patch of `patches` has the class of the first.

@@ -145,7 +145,7 @@ fn compare(args: &Args, prepared: &PreparedScene, spec: &BackendSpec, reference:
         let f = h.figures();
         out += &format!(
             "hierarchy    {} nodes, {} far links ({} of them to zeroth order), {} near links ({} of them far pairs of \
-             patches), {} shadow rays ({} links occluded), {}; {} rows capped at 1 by closure (lowest weight \
+             patches), {} shadow rays ({} links occluded, {} seen whole through clear shafts), {}; {} rows capped at 1 by closure (lowest weight \
              {:.3}), {} above 1 by their near links alone\n",
             f.nodes,
             f.far_links,
@@ -154,6 +154,7 @@ fn compare(args: &Args, prepared: &PreparedScene, spec: &BackendSpec, reference:
             f.far_pairs,
             f.rays,
             f.occluded,
+            f.clear_shafts,
             human_bytes(f.bytes),
             f.capped,
             f.lowest_weight,

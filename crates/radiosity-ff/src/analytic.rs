@@ -232,6 +232,18 @@ impl<'a> AnalyticColumns<'a> {
         self.pair_known(i, j, None).0
     }
 
+    /// [`AnalyticColumns::pair`], asking `clear` first, with the shadow rays the pair would
+    /// trace, whether the pair is known to see itself whole (nothing lies between the two
+    /// patches): then no ray is traced, and the entry is the one all-clear rays give.
+    pub fn pair_unless_clear(&self, i: usize, j: usize, clear: impl FnOnce(usize) -> bool) -> Real {
+        let Some(Roles { s, l, larger, unoccluded }) = self.roles(i, j) else { return 0.0 };
+        let Some(vis) = self.visibility else { return unoccluded };
+        if clear(RayBudget { rays: self.params.rays, per_unit: self.budget }.rays(larger)) {
+            return unoccluded;
+        }
+        unoccluded * self.visible_fraction(s, l, larger, &mut |p, from, q, to| vis.unoccluded_between(p, from, q, to))
+    }
+
     /// `F_ij` before clamping, with `V_ij = known` when it is given, and the visible fraction
     /// the entry used (`None` when the pair needed none).
     fn pair_known(&self, i: usize, j: usize, known: Option<Real>) -> (Real, Option<Real>) {

@@ -104,6 +104,7 @@ impl BackendSpec {
                     floor: p.real("floor", defaults.floor, |f| f > 0.0 && f <= 1.0, "a weight in (0, 1]")?,
                     passes: p.count("passes", defaults.passes, 1, 4)?,
                     closure: p.flag("closure", defaults.closure)?,
+                    shafts: p.flag("shafts", defaults.shafts)?,
                 })
             }
             "matrix" => {

@@ -28,10 +28,11 @@
 //! passed over.
 //!
 //! The search runs over a tree of its own ([`ShaftTree`]), split by place alone: the cluster
-//! tree splits by orientation first, so its upper nodes each span the scene, and a search
-//! opened about a hundred of them on `office`. Candidates found for a link are handed to the
-//! links it is split into: their shafts lie within its own (their boxes lie within its boxes,
-//! and their planes are its planes or cut further), so they search what their parent left.
+//! tree splits by orientation first, so its upper nodes each span the scene and a search must
+//! open them all (measured in `docs/hierarchical.md`). Candidates found for a link are handed
+//! to the links it is split into: their shafts lie within its own (their boxes lie within its
+//! boxes, and their planes are its planes or cut further), so they search what their parent
+//! left.
 
 use radiosity_core::{Real, Scene, Vec3};
 

@@ -227,6 +227,12 @@ impl<'a> AnalyticColumns<'a> {
         self.clamped.count()
     }
 
+    /// The rays a pair gets: at least `rays`, and `budget` (times the scene's stiffness
+    /// factor) per unit of its larger unoccluded form factor.
+    fn ray_budget_of_pairs(&self) -> RayBudget {
+        RayBudget { rays: self.params.rays, per_unit: self.budget }
+    }
+
     /// `F_ij` before clamping, computed afresh (no record is read or written).
     pub fn pair(&self, i: usize, j: usize) -> Real {
         self.pair_known(i, j, None).0
@@ -236,21 +242,20 @@ impl<'a> AnalyticColumns<'a> {
     /// trace, whether the pair is known to see itself whole (nothing lies between the two
     /// patches): then no ray is traced, and the entry is the one all-clear rays give.
     pub fn pair_unless_clear(&self, i: usize, j: usize, clear: impl FnOnce(usize) -> bool) -> Real {
-        let Some(Roles { s, l, larger, unoccluded }) = self.roles(i, j) else { return 0.0 };
-        let Some(vis) = self.visibility else { return unoccluded };
-        if clear(RayBudget { rays: self.params.rays, per_unit: self.budget }.rays(larger)) {
-            return unoccluded;
-        }
-        unoccluded * self.visible_fraction(s, l, larger, &mut |p, from, q, to| vis.unoccluded_between(p, from, q, to))
+        let Some(vis) = self.visibility else { return self.pair(i, j) };
+        let known = |rays: usize| clear(rays).then_some(1.0);
+        self.pair_traced(i, j, known, &mut |p, from, q, to| vis.unoccluded_between(p, from, q, to)).0
     }
 
     /// `F_ij` before clamping, with `V_ij = known` when it is given, and the visible fraction
     /// the entry used (`None` when the pair needed none).
     fn pair_known(&self, i: usize, j: usize, known: Option<Real>) -> (Real, Option<Real>) {
         match self.visibility {
-            Some(vis) => self.pair_traced(i, j, known, &mut |p, from, q, to| vis.unoccluded_between(p, from, q, to)),
+            Some(vis) => {
+                self.pair_traced(i, j, |_| known, &mut |p, from, q, to| vis.unoccluded_between(p, from, q, to))
+            }
             // Never called: nothing is traced without visibility.
-            None => self.pair_traced(i, j, None, &mut |_, _, _, _| true),
+            None => self.pair_traced(i, j, |_| None, &mut |_, _, _, _| true),
         }
     }
 
@@ -317,7 +322,7 @@ impl<'a> AnalyticColumns<'a> {
             return;
         }
         for i in 0..self.scene.len() {
-            self.pair_traced(i, j, None, &mut |p, from, q, to| {
+            self.pair_traced(i, j, |_| None, &mut |p, from, q, to| {
                 out.push(ShadowSegment { p, from, q, to });
                 true
             });
@@ -327,18 +332,20 @@ impl<'a> AnalyticColumns<'a> {
     /// `F_ij` before clamping and the visible fraction it used (`None` when the pair needed
     /// none), with `trace(p, from, q, to)` answering whether the segment from `p` on patch
     /// `from` to `q` on patch `to` is unoccluded; it is called only when shadow rays are
-    /// traced and `known` does not give the visible fraction.
+    /// traced and `known`, asked with the rays the pair would trace, does not give the visible
+    /// fraction.
     fn pair_traced(
         &self,
         i: usize,
         j: usize,
-        known: Option<Real>,
+        known: impl FnOnce(usize) -> Option<Real>,
         trace: &mut impl FnMut(Vec3, usize, Vec3, usize) -> bool,
     ) -> (Real, Option<Real>) {
         let Some(Roles { s, l, larger, unoccluded }) = self.roles(i, j) else { return (0.0, None) };
         match self.visibility {
             Some(_) => {
-                let v = known.unwrap_or_else(|| self.visible_fraction(s, l, larger, trace));
+                let v = known(self.ray_budget_of_pairs().rays(larger))
+                    .unwrap_or_else(|| self.visible_fraction(s, l, larger, trace));
                 (unoccluded * v, Some(v))
             }
             None => (unoccluded, None),
@@ -378,7 +385,7 @@ impl<'a> AnalyticColumns<'a> {
         let Some(vis) = self.visibility else { return (self.pair(i, j), 0) };
         let mut rays = 0;
         let value = self
-            .pair_traced(i, j, None, &mut |p, from, q, to| {
+            .pair_traced(i, j, |_| None, &mut |p, from, q, to| {
                 rays += 1;
                 vis.unoccluded_between(p, from, q, to)
             })
@@ -393,8 +400,7 @@ impl<'a> AnalyticColumns<'a> {
         self.visibility?;
         let Roles { s, l, larger, .. } = self.roles(i, j)?;
         let patches = self.scene.patches();
-        let budget = RayBudget { rays: self.params.rays, per_unit: self.budget };
-        pair_visibility::sampling_path(&patches[s], &patches[l], larger, budget, self.tolerance)
+        pair_visibility::sampling_path(&patches[s], &patches[l], larger, self.ray_budget_of_pairs(), self.tolerance)
     }
 
     /// `(1/A_i) ∫_{A_i} F(dA_x → P_j) dA_x`.
@@ -547,7 +553,7 @@ impl<'a> AnalyticColumns<'a> {
             (&patches[s], s),
             (&patches[l], l),
             larger,
-            RayBudget { rays: self.params.rays, per_unit: self.budget },
+            self.ray_budget_of_pairs(),
             self.tolerance,
             &mut rng,
             trace,

@@ -247,8 +247,8 @@ pub struct HierarchyFigures {
     pub rays: u64,
     /// Links dropped because every ray was blocked.
     pub occluded: u64,
-    /// Far links and near pairs whose shafts held no patch: seen whole without a ray.
-    #[serde(default)]
+    /// Far links and near pairs whose shafts held no patch: seen whole without their rays
+    /// (`shafts=true`).
     pub clear_shafts: u64,
     /// Seconds to build the tree and the links.
     pub seconds: f64,

@@ -581,8 +581,7 @@ impl Refiner<'_> {
         let cut = |from: &super::tree::Node, to: &super::tree::Node| {
             (lowest_along(from.axis, to.lo, to.hi) >= from.offsets.1).then_some((from.axis, from.offsets.0))
         };
-        let cuts: Vec<(Vec3, Real)> = [cut(na, nb), cut(nb, na)].into_iter().flatten().collect();
-        let shaft = Shaft::new((na.lo, na.hi), (nb.lo, nb.hi), &cuts);
+        let shaft = Shaft::new((na.lo, na.hi), (nb.lo, nb.hi), [cut(na, nb), cut(nb, na)]);
         let within = |node: &super::tree::Node, at: u32| (node.first..node.first + node.count).contains(&at);
         let own = |p: usize| {
             let at = self.tree.nodes[self.tree.leaf[p] as usize].first;

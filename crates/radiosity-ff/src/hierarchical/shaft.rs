@@ -41,6 +41,10 @@ use radiosity_core::{Real, Scene, Vec3};
 /// the sum of two barycentric margins and a patch's longest edge against its box's diagonal).
 const WIDENING: Real = 4e-12;
 
+/// The most planes a shaft has: two ends' planes and four lines in each of three coordinate
+/// planes.
+const MAX_PLANES: usize = 14;
+
 /// Patches in a leaf of a [`ShaftTree`].
 const LEAF_SIZE: usize = 4;
 
@@ -49,18 +53,25 @@ const LEAF_SIZE: usize = 4;
 pub(crate) struct Shaft {
     lo: Vec3,
     hi: Vec3,
-    /// Planes `n · p ≤ offset` holding every segment of the link (`n` unit).
-    planes: Vec<(Vec3, Real)>,
+    /// Planes `n · p ≤ offset` holding every segment of the link (`n` unit): the first
+    /// `count` of them.
+    planes: [(Vec3, Real); MAX_PLANES],
+    count: usize,
     /// The 16 corners of the two boxes.
     corners: [Vec3; 16],
 }
 
 impl Shaft {
     /// The shaft between the boxes `a` and `b` (each lower and upper corner), cut by the planes
-    /// `cuts` (`n · p ≥ offset` for every point of every segment, as an end's plane gives).
-    pub fn new(a: (Vec3, Vec3), b: (Vec3, Vec3), cuts: &[(Vec3, Real)]) -> Shaft {
-        let mut planes = Vec::with_capacity(12 + cuts.len());
-        planes.extend(cuts.iter().map(|&(n, offset)| (-n, -offset)));
+    /// `cuts` (`n · p ≥ offset` for every point of every segment, as an end's plane gives),
+    /// where given.
+    pub fn new(a: (Vec3, Vec3), b: (Vec3, Vec3), cuts: [Option<(Vec3, Real)>; 2]) -> Shaft {
+        let mut planes = [(Vec3::ZERO, 0.0); MAX_PLANES];
+        let mut count = 0;
+        for (n, offset) in cuts.into_iter().flatten() {
+            planes[count] = (-n, -offset);
+            count += 1;
+        }
         for (u, v) in [(0, 1), (1, 2), (2, 0)] {
             for (su, sv) in [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)] {
                 let corner = |(lo, hi): (Vec3, Vec3)| {
@@ -86,7 +97,8 @@ impl Shaft {
                 n[v] = nv / length;
                 // Both corners are on the line up to rounding: the larger offset holds both.
                 let offset = (n[u] * ca.0 + n[v] * ca.1).max(n[u] * cb.0 + n[v] * cb.1);
-                planes.push((n, offset));
+                planes[count] = (n, offset);
+                count += 1;
             }
         }
         let mut corners = [Vec3::ZERO; 16];
@@ -98,7 +110,12 @@ impl Shaft {
                 if k & 4 == 0 { lo.z } else { hi.z },
             );
         }
-        Shaft { lo: a.0.min(b.0), hi: a.1.max(b.1), planes, corners }
+        Shaft { lo: a.0.min(b.0), hi: a.1.max(b.1), planes, count, corners }
+    }
+
+    /// The planes bounding the shaft besides its box.
+    fn planes(&self) -> &[(Vec3, Real)] {
+        &self.planes[..self.count]
     }
 
     /// True when the box `lo`–`hi` of patches, each widened within its plane by at most `w`
@@ -107,7 +124,7 @@ impl Shaft {
         if (0..3).any(|k| lo[k] - w[k] >= self.hi[k] || hi[k] + w[k] <= self.lo[k]) {
             return true;
         }
-        self.planes.iter().any(|&(n, offset)| lowest_along(n, lo, hi) - n.abs().dot(w) >= offset)
+        self.planes().iter().any(|&(n, offset)| lowest_along(n, lo, hi) - n.abs().dot(w) >= offset)
     }
 
     /// True when the patch with vertices `vertices` and normal `normal`, widened by `margin`
@@ -122,7 +139,7 @@ impl Shaft {
                 return true;
             }
         }
-        if self.planes.iter().any(|&(n, offset)| {
+        if self.planes().iter().any(|&(n, offset)| {
             vertices.iter().map(|v| n.dot(*v)).fold(Real::INFINITY, Real::min) - widened(n) >= offset
         }) {
             return true;
@@ -327,7 +344,7 @@ mod tests {
         // Boxes at opposite corners of a square: the box beside the diagonal lies within the
         // common box but outside the hull, and only the corner planes exclude it.
         let (a, b) = ((Vec3::ZERO, Vec3::ONE), (Vec3::new(5.0, 5.0, 0.0), Vec3::new(6.0, 6.0, 1.0)));
-        let shaft = Shaft::new(a, b, &[]);
+        let shaft = Shaft::new(a, b, [None, None]);
         let beside = (Vec3::new(0.0, 5.0, 0.0), Vec3::new(1.0, 6.0, 1.0));
         assert!(shaft.excludes_box(beside.0, beside.1, Vec3::ZERO));
         let between = (Vec3::new(2.5, 2.5, 0.25), Vec3::new(3.5, 3.5, 0.75));
@@ -340,9 +357,9 @@ mod tests {
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(7);
         for _ in 0..1000 {
             let (a, b) = (random_box(&mut rng, 4.0), random_box(&mut rng, 4.0));
-            let shaft = Shaft::new(a, b, &[]);
+            let shaft = Shaft::new(a, b, [None, None]);
             for c in shaft.corners {
-                for &(n, offset) in &shaft.planes {
+                for &(n, offset) in shaft.planes() {
                     assert!(n.dot(c) <= offset + 1e-12, "a corner of a box outside its shaft");
                 }
             }
@@ -358,7 +375,7 @@ mod tests {
         let (mut outside, mut inside) = (0, 0);
         for _ in 0..200 {
             let (a, b) = (random_box(&mut rng, 3.0), random_box(&mut rng, 3.0));
-            let shaft = Shaft::new(a, b, &[]);
+            let shaft = Shaft::new(a, b, [None, None]);
             let segments: Vec<(Vec3, Vec3)> =
                 (0..400).map(|_| (point_in(&mut rng, a), point_in(&mut rng, b))).collect();
             for _ in 0..20 {

@@ -509,8 +509,10 @@ impl Refiner<'_> {
 
     /// What the rays of the link between `a` and `b` tell (module doc): a small link keeps what
     /// its probe saw, a larger one is split as soon as its rays disagree and traces every ray
-    /// otherwise, counting the segments `traced` for the links it was split from. When it is
-    /// split, `traced` holds every segment traced between `a` and `b`.
+    /// otherwise, counting the segments `traced` for the links it was split from; when its
+    /// probe is all clear and `shaft_clear` says its shaft is, it takes the rest as clear
+    /// without tracing them. When it is split, `traced` holds every segment traced between `a`
+    /// and `b`.
     fn visible_fraction(
         &self,
         a: u32,

@@ -34,6 +34,7 @@
 //! boxes, and their planes are its planes or cut further), so they search what their parent
 //! left.
 
+use super::tree::split_at_median;
 use radiosity_core::{Real, Scene, Vec3};
 
 /// How much the shadow test widens a triangle within its plane, relative to its edges
@@ -201,39 +202,27 @@ impl ShaftTree {
         let mut patches: Vec<u32> = (0..scene.len() as u32).collect();
         let mut tree = ShaftTree { nodes: Vec::with_capacity(scene.len() / 2 + 1), patches: Vec::new() };
         tree.nodes.push(ShaftTree::bounds(scene, &patches, 0));
-        tree.split(scene, &mut patches, 0, 0);
+        let centroids: Vec<Vec3> = scene.patches().iter().map(|p| p.centroid()).collect();
+        tree.split(scene, &centroids, &mut patches, 0, 0);
         tree.patches = patches;
         tree
     }
 
     /// Splits node `index`, over `patches` (which start at `first` in leaf order).
-    fn split(&mut self, scene: &Scene, patches: &mut [u32], first: usize, index: usize) {
+    fn split(&mut self, scene: &Scene, centroids: &[Vec3], patches: &mut [u32], first: usize, index: usize) {
         if patches.len() <= LEAF_SIZE {
             self.nodes[index].start = first as u32;
             self.nodes[index].count = patches.len() as u32;
             return;
         }
-        let centroid = |i: u32| scene.patches()[i as usize].centroid();
-        let (lo, hi) = patches.iter().fold((Vec3::splat(Real::INFINITY), Vec3::splat(-Real::INFINITY)), |b, &i| {
-            (b.0.min(centroid(i)), b.1.max(centroid(i)))
-        });
-        let side = hi - lo;
-        let axis = if side.x >= side.y && side.x >= side.z {
-            0
-        } else if side.y >= side.z {
-            1
-        } else {
-            2
-        };
-        let mid = patches.len() / 2;
-        patches.select_nth_unstable_by(mid, |&a, &b| centroid(a)[axis].total_cmp(&centroid(b)[axis]).then(a.cmp(&b)));
+        let mid = split_at_median(patches, centroids);
         let (left, right) = patches.split_at_mut(mid);
         let child = self.nodes.len();
         self.nodes[index].start = child as u32;
         self.nodes.push(ShaftTree::bounds(scene, left, first));
         self.nodes.push(ShaftTree::bounds(scene, right, first + mid));
-        self.split(scene, left, first, child);
-        self.split(scene, right, first + mid, child + 1);
+        self.split(scene, centroids, left, first, child);
+        self.split(scene, centroids, right, first + mid, child + 1);
     }
 
     /// The box and widening of `patches`, as a node whose children are not known yet.

@@ -109,14 +109,7 @@ impl ClusterTree {
             let b = self.split(scene, centroids, right, first + mid);
             self.nodes[index as usize].children = Some([a, b]);
         } else if patches.len() > 1 {
-            let (lo, hi) = patches.iter().fold((Vec3::splat(Real::INFINITY), Vec3::splat(-Real::INFINITY)), |b, &i| {
-                (b.0.min(centroids[i as usize]), b.1.max(centroids[i as usize]))
-            });
-            let axis = largest_axis(hi - lo);
-            let mid = patches.len() / 2;
-            patches.select_nth_unstable_by(mid, |&a, &b| {
-                centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis]).then(a.cmp(&b))
-            });
+            let mid = split_at_median(patches, centroids);
             let (left, right) = patches.split_at_mut(mid);
             let a = self.split(scene, centroids, left, first);
             let b = self.split(scene, centroids, right, first + mid);
@@ -155,6 +148,21 @@ fn class(scene: &Scene, i: u32) -> u8 {
         }
     };
     9 * face + 3 * bin(n[(axis + 1) % 3]) + bin(n[(axis + 2) % 3])
+}
+
+/// Orders `patches` (at least two) about their median centroid along the longest side of
+/// their centroids' box, ties broken by index, and returns where the upper half starts: the
+/// same split whatever the order they came in.
+pub(crate) fn split_at_median(patches: &mut [u32], centroids: &[Vec3]) -> usize {
+    let (lo, hi) = patches.iter().fold((Vec3::splat(Real::INFINITY), Vec3::splat(-Real::INFINITY)), |b, &i| {
+        (b.0.min(centroids[i as usize]), b.1.max(centroids[i as usize]))
+    });
+    let axis = largest_axis(hi - lo);
+    let mid = patches.len() / 2;
+    patches.select_nth_unstable_by(mid, |&a, &b| {
+        centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis]).then(a.cmp(&b))
+    });
+    mid
 }
 
 /// The index of `v`'s largest component, the first of equal ones.

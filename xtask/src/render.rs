@@ -14,6 +14,7 @@ use crate::experiment::{SolveArgs, check_output_file, prepare, solved_rgb};
 use anyhow::{Result, bail};
 use radiosity_core::Real;
 use radiosity_eval::{Camera, MAX_SIDE, RenderParams, render};
+use radiosity_geom::SceneSpec;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -53,10 +54,11 @@ pub fn run(args: &Args) -> Result<()> {
     }
     let camera = args.camera.as_deref().map(str::parse::<Camera>).transpose()?;
 
+    let scene_spec = SceneSpec::parse(&args.run.scene)?;
     let prepared = prepare(&args.run.scene)?;
     let scene = &prepared.loaded.scene;
     let aspect = Real::from(args.width) / Real::from(args.height);
-    let camera = camera.unwrap_or_else(|| Camera::default_for(&args.run.scene, scene, aspect));
+    let camera = camera.unwrap_or_else(|| Camera::default_for(&scene_spec, scene, aspect));
     let (rgb, _) = solved_rgb(&args.run, &prepared, &spec, solver, &rules, kind)?;
 
     let render_start = Instant::now();

@@ -17,6 +17,7 @@ use radiosity_eval::round_significant;
 use radiosity_eval::{DiscreteMean, ObjectValidation};
 use radiosity_eval::{PathTraceParams, ValidateParams, Validation, validate};
 use radiosity_ff::BackendSpec;
+use radiosity_geom::SceneSpec;
 
 /// Arguments of `validate`.
 #[derive(Debug, clap::Args)]
@@ -54,7 +55,7 @@ pub fn run(args: &Args) -> Result<()> {
         .with_max_patches(args.max_patches)
         .with_backend(backend)
         .with_cache(Some(cache()));
-    let validation = validate(&args.scene, &params, &Bars::new())?;
+    let validation = validate(&SceneSpec::parse(&args.scene)?, &params, &Bars::new())?;
     if args.json {
         println!("{}", serde_json::to_string(&validation)?);
     } else {

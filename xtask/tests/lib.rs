@@ -37,6 +37,17 @@ fn xtask(args: &[&str]) -> assert_cmd::assert::Assert {
         .assert()
 }
 
+/// As [`xtask`], with the environment variable `key` set to `value`.
+fn xtask_in_env(args: &[&str], key: &str, value: &str) -> assert_cmd::assert::Assert {
+    Command::cargo_bin("xtask")
+        .unwrap()
+        .args(args)
+        .env("RUST_BACKTRACE", "1")
+        .env("RADIOSITY_CACHE_DIR", cache_dir())
+        .env(key, value)
+        .assert()
+}
+
 fn stdout_json(args: &[&str]) -> Value {
     let out = xtask(args).success().get_output().stdout.clone();
     serde_json::from_slice(&out).unwrap()
@@ -184,19 +195,19 @@ fn bad_scene_arguments_fail_cleanly() {
     assert!(e.contains("no/such/file.gltf"), "{e}");
     let e = failure(&["scenes", "--explain", "no/such/file.mgf"]);
     assert!(e.contains("no/such/file.mgf"), "{e}");
+    // A relative path found nowhere names the scenes folder it was also looked for in.
+    let out = xtask_in_env(&["scenes", "--explain", "mgf/no-such.mgf"], "RADIOSITY_SCENES", "/no/scenes/here")
+        .failure()
+        .code(1)
+        .get_output()
+        .stderr
+        .clone();
+    let e = String::from_utf8(out).unwrap();
+    assert!(e.contains("mgf/no-such.mgf") && e.contains("/no/scenes/here (from RADIOSITY_SCENES)"), "{e}");
 }
 
 #[test]
-fn mgf_scenes_load_and_bad_mgf_fails_cleanly() {
-    // The classic scenes, with RenderPark's patch counts at division 4 beside ours: cube and
-    // corridor agree to a patch; the rest differ as the MGF loader's tests explain.
-    let shared = format!("{}/../../shared/scenes/mgf", env!("CARGO_MANIFEST_DIR"));
-    for (file, renderpark, emitters) in [("cube.mgf", 66.0, 2), ("corridor.mgf", 488.0, 57)] {
-        let r = stdout_json(&["scenes", "--explain", &format!("{shared}/{file}"), "--json"]);
-        let patches = r["patches"].as_f64().unwrap();
-        assert!((patches - renderpark).abs() <= 1.0, "{file}: {patches} patches");
-        assert_eq!(r["emitters"], emitters, "{file}");
-    }
+fn bad_mgf_fails_cleanly() {
     for (name, words) in [
         ("mgf/not_a_name.mgf", "whose first word is not an entity name"),
         ("mgf/undefined_vertex.mgf", "undefined vertex 'v12'"),
@@ -248,14 +259,7 @@ fn bad_gltf_files_fail_cleanly() {
 }
 
 #[test]
-fn real_cornell_export_loads_upright() {
-    let path = format!("{}/../../shared/scenes/cornell-box-toy-ray-tracer.gltf", env!("CARGO_MANIFEST_DIR"));
-    let r = stdout_json(&["scenes", "--explain", &path, "--json"]);
-    assert_eq!(r["patches"], 32);
-    assert_eq!(r["emitters"], 2);
-    // Upright: y runs from the floor at 0 to the ceiling at 1.99.
-    assert!((r["bounds"][0][1].as_f64().unwrap()).abs() < 1e-6);
-    assert!((r["bounds"][1][1].as_f64().unwrap() - 1.99).abs() < 1e-6);
+fn a_warning_is_one_line_and_degenerate_triangles_warn() {
     let degenerate = stdout_json(&["scenes", "--explain", &fixture("degenerate.gltf"), "--json"]);
     assert_eq!(degenerate["warnings"].as_array().unwrap().len(), 1);
 }

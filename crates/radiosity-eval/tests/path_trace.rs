@@ -9,7 +9,7 @@ use radiosity_eval::Refinement;
 use radiosity_eval::{
     NoProgress, PathTraceError, PathTraceParams, PathTraced, ValidateParams, Validation, path_trace, validate,
 };
-use radiosity_geom::{PreparedScene, Visibility};
+use radiosity_geom::{PreparedScene, SceneSpec, Visibility};
 
 /// Path-traces a built-in scene as loaded.
 fn trace(arg: &str, params: &PathTraceParams) -> PathTraced {
@@ -135,16 +135,18 @@ fn bad_input_is_refused_with_a_reason() {
     let e = path_trace(&dark, &Visibility::new(&dark), &PathTraceParams::default(), &NoProgress).unwrap_err();
     assert_eq!(e, PathTraceError::NoEmitters("furnace:res=1:emission=0".into()));
     assert!(e.to_string().contains("emits no light"), "{e}");
-    let e = validate("furnace:res=1:emission=0", &ValidateParams::default(), &NoProgress).unwrap_err();
+    let e = validate(&SceneSpec::parse("furnace:res=1:emission=0").unwrap(), &ValidateParams::default(), &NoProgress)
+        .unwrap_err();
     assert!(e.to_string().contains("emits no light"), "{e}");
 }
 
 #[test]
 fn refinement_varies_the_mesh_parameter_of_each_scene() {
+    let spec = |scene: &str| SceneSpec::parse(scene).unwrap();
     let check = |scene: &str, steps: [&str; 2]| {
-        let r = Refinement::for_scene(scene).unwrap();
-        assert_eq!([1, 2].map(|k| r.refined(scene, k).unwrap()), steps, "{scene}");
-        assert_eq!(r.refined(scene, 0).unwrap(), scene);
+        let r = Refinement::for_scene(&spec(scene)).unwrap();
+        assert_eq!([1, 2].map(|k| r.refined(&spec(scene), k).unwrap().to_string()), steps, "{scene}");
+        assert_eq!(r.refined(&spec(scene), 0).unwrap().to_string(), scene);
     };
     check("cornell", ["cornell:res=16", "cornell:res=32"]);
     check("cornell:front=true:res=3", ["cornell:front=true:res=6", "cornell:front=true:res=12"]);
@@ -153,9 +155,9 @@ fn refinement_varies_the_mesh_parameter_of_each_scene() {
     check("office:size=0.4", ["office:size=0.2", "office:size=0.1"]);
     check("labyrinth", ["labyrinth:size=0.5", "labyrinth:size=0.25"]);
     check("room.glb:size=0.1", ["room.glb:size=0.05", "room.glb:size=0.025"]);
-    assert_eq!(Refinement::for_scene("cornell").unwrap().describe(), "res doubled");
+    assert_eq!(Refinement::for_scene(&spec("cornell")).unwrap().describe(), "res doubled");
     for scene in ["multi-cubes", "room.glb", "room.mgf:size=0"] {
-        let why = Refinement::for_scene(scene).unwrap_err();
+        let why = Refinement::for_scene(&spec(scene)).unwrap_err();
         assert!(why.contains("cannot be refined") || why.contains("solved at the given resolution"), "{why}");
     }
 }
@@ -164,7 +166,7 @@ fn refinement_varies_the_mesh_parameter_of_each_scene() {
 fn discrete_means_approach_the_path_traced_means_as_the_cornell_box_is_refined() {
     let params =
         ValidateParams::default().with_refinements(1).with_path_trace(PathTraceParams::default().with_samples(40_000));
-    let v = validate("cornell:res=2", &params, &NoProgress).unwrap();
+    let v = validate(&SceneSpec::parse("cornell:res=2").unwrap(), &params, &NoProgress).unwrap();
     assert_eq!(v.varied.as_deref(), Some("res doubled"));
     let [coarse, fine] = &v.resolutions[..] else { panic!("{:?}", v.resolutions) };
     assert_eq!((coarse.scene.as_str(), fine.scene.as_str()), ("cornell:res=2", "cornell:res=4"));
@@ -192,7 +194,7 @@ fn a_validation_serialises_to_the_promised_shape_and_stops_refining_at_the_patch
     // furnace:res=1 has 6 patches, res=2 24 and res=4 96.
     let params =
         ValidateParams::default().with_max_patches(30).with_path_trace(PathTraceParams::default().with_samples(200));
-    let v: Validation = validate("furnace:res=1", &params, &NoProgress).unwrap();
+    let v: Validation = validate(&SceneSpec::parse("furnace:res=1").unwrap(), &params, &NoProgress).unwrap();
     assert_eq!(v.resolutions.iter().map(|r| r.patches).collect::<Vec<_>>(), [6, 24]);
     let note = v.note.as_deref().unwrap();
     assert!(note.contains("furnace:res=4") && note.contains("96 patches"), "{note}");

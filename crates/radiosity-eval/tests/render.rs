@@ -5,6 +5,7 @@
 use radiosity_core::{MaterialId, ObjectId, Patch, Real, Vec3};
 use radiosity_eval::EvalError;
 use radiosity_eval::{Camera, DEFAULT_FOV, Image, MAX_SIDE, RenderParams, corner_weights, render, srgb_byte};
+use radiosity_geom::SceneSpec;
 use radiosity_geom::Visibility;
 
 fn reproduce(patch: &Patch, s: Real, t: Real) {
@@ -85,7 +86,7 @@ fn cornell() -> (radiosity_core::Scene, Visibility, Vec<[Real; 3]>) {
 #[test]
 fn the_default_cornell_camera_shows_the_red_wall_left_and_the_green_wall_right() {
     let (scene, visibility, rgb) = cornell();
-    let camera = Camera::default_for("cornell:res=2", &scene, 4.0 / 3.0);
+    let camera = Camera::default_for(&SceneSpec::parse("cornell:res=2").unwrap(), &scene, 4.0 / 3.0);
     let params = RenderParams { width: 96, height: 72, ..RenderParams::new(camera) };
     let image = render(&scene, &visibility, &rgb, &params).unwrap();
     assert_eq!((image.width, image.height, image.pixels.len()), (96, 72, 96 * 72 * 3));
@@ -107,7 +108,7 @@ fn the_default_cornell_camera_shows_the_red_wall_left_and_the_green_wall_right()
 #[test]
 fn png_bytes_decode_to_the_image() {
     let (scene, visibility, rgb) = cornell();
-    let camera = Camera::default_for("cornell:res=2", &scene, 1.0);
+    let camera = Camera::default_for(&SceneSpec::parse("cornell:res=2").unwrap(), &scene, 1.0);
     let image = render(&scene, &visibility, &rgb, &RenderParams { width: 40, height: 40, ..RenderParams::new(camera) })
         .unwrap();
     let mut png = Vec::new();
@@ -123,7 +124,7 @@ fn png_bytes_decode_to_the_image() {
 #[test]
 fn bad_input_is_refused_before_rendering() {
     let (scene, visibility, rgb) = cornell();
-    let camera = Camera::default_for("cornell:res=2", &scene, 1.0);
+    let camera = Camera::default_for(&SceneSpec::parse("cornell:res=2").unwrap(), &scene, 1.0);
     for (width, height) in [(0, 10), (10, 0), (MAX_SIDE + 1, 10)] {
         let e = render(&scene, &visibility, &rgb, &RenderParams { width, height, ..RenderParams::new(camera) })
             .unwrap_err();

@@ -57,6 +57,15 @@ pub enum GeomError {
         /// The item as written.
         item: String,
     },
+    /// A relative scene path found neither from the current directory nor in the folder of
+    /// third-party scenes.
+    #[error("scene file {path} not found, neither from the current directory nor in the scenes folder {folder}")]
+    SceneFileNotFound {
+        /// The path as written.
+        path: PathBuf,
+        /// The folder looked in, and why that one ([`crate::third_party::ScenesFolder::describe`]).
+        folder: String,
+    },
     /// A file that cannot be read.
     #[error("cannot read {path}: {message}")]
     Io {

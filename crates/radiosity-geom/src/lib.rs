@@ -29,6 +29,7 @@ pub mod prepared;
 pub mod scenes;
 pub mod spatial_order;
 pub mod spec;
+pub mod third_party;
 pub mod visibility;
 
 pub use analysis::{Closure, Decision, SceneAnalysis};
@@ -40,11 +41,11 @@ pub use prepared::{DecisionReport, GeometryReport, PreparedScene, SceneReport, S
 pub use scenes::camera::CameraPreset;
 pub use scenes::{BuiltinScene, builtin_scenes};
 pub use spatial_order::spatial_order;
-pub use spec::{KeyValueParams, ParamDoc};
+pub use spec::{KeyValueParams, ParamDoc, SceneSource, SceneSpec};
+pub use third_party::ScenesFolder;
 pub use visibility::{RayHit, Visibility};
 
 use radiosity_core::Scene;
-use spec::{FileFormat, split_file_argument};
 
 /// A scene with the warnings met while building or loading it (dropped triangles, ignored
 /// attributes). Warnings are facts a user should see, not errors.
@@ -57,25 +58,7 @@ pub struct LoadedScene {
 }
 
 /// Loads a scene from a command-line argument: a built-in name or a file path, each with
-/// optional `:key=value` parameters.
+/// optional `:key=value` parameters ([`SceneSpec::parse`], then [`SceneSpec::load`]).
 pub fn load_scene(arg: &str) -> Result<LoadedScene, GeomError> {
-    if let Some((path, format, params)) = split_file_argument(arg) {
-        let docs = match format {
-            FileFormat::Gltf => gltf_input::PARAMS,
-            FileFormat::Mgf => mgf::PARAMS,
-        };
-        let params = KeyValueParams::parse(&format!("scene '{}'", path.display()), params, docs)?;
-        return match format {
-            FileFormat::Gltf => gltf_input::load(&path, &params),
-            FileFormat::Mgf => mgf::load(&path, &params),
-        };
-    }
-    let mut parts = arg.split(':');
-    let name = parts.next().unwrap_or_default();
-    let Some(builtin) = builtin_scenes().iter().find(|s| s.name == name) else {
-        let valid = builtin_scenes().iter().map(|s| s.name).collect::<Vec<_>>().join(", ");
-        return Err(GeomError::UnknownScene { name: arg.to_string(), valid });
-    };
-    let params = KeyValueParams::parse(&format!("scene '{name}'"), parts.filter(|s| !s.is_empty()), builtin.params)?;
-    builtin.build(arg, &params)
+    SceneSpec::parse(arg)?.load()
 }

@@ -1,7 +1,7 @@
 //! Tests: glTF input. Hand-made fixtures in `test_data/` check the mapping (transforms,
 //! winding, materials, primitive modes, subdivision) against coordinates worked out by hand,
-//! and one fixture per bad input checks the error says what is wrong; the real Cornell box
-//! export in `shared/scenes/` checks a file written by someone else loads upright.
+//! and one fixture per bad input checks the error says what is wrong. The real Cornell box
+//! export, a file written by someone else, is tested in `third_party_scenes.rs`.
 
 use radiosity_core::{Patch, PatchShape, Real, Spectrum, Vec3};
 use radiosity_geom::gltf_input::{self, PARAMS};
@@ -9,15 +9,6 @@ use radiosity_geom::{GeomError, KeyValueParams, LoadedScene};
 use std::path::Path;
 
 use crate::{fixture, load, load_err};
-
-const CORNELL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/scenes/cornell-box-toy-ray-tracer.gltf");
-
-/// Triangles in the Cornell export: its 8 primitives are indexed triangle lists whose index
-/// accessors have counts 6 (accessor 2, shared by floor, ceiling, back, right and left walls
-/// and the light: 6 primitives), 30 (accessor 13, short box) and 30 (accessor 16, tall box),
-/// so 6 × 6/3 + 30/3 + 30/3 = 32; none is degenerate (checked with a Python script that
-/// decodes the embedded buffer).
-const CORNELL_TRIANGLES: usize = 32;
 
 fn close(a: Vec3, b: Vec3, tol: Real) -> bool {
     (a - b).length() <= tol
@@ -389,62 +380,6 @@ fn scenes_without_usable_triangles_are_empty_file_errors() {
         let (e, message) = load_err(&fixture(name));
         assert!(matches!(e, GeomError::EmptyFile { .. }), "{name}: {message}");
         assert!(message.contains(name) && message.contains(why), "{message}");
-    }
-}
-
-#[test]
-fn cornell_export_loads_upright_with_its_light_on_the_ceiling() {
-    let loaded = load(CORNELL);
-    let scene = &loaded.scene;
-    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
-    assert_eq!(scene.len(), CORNELL_TRIANGLES);
-    assert_eq!(scene.materials().len(), 8);
-    // The mesh is Z-up with the floor at z = 0 and the ceiling at z = -1.99 (accessor 0 and 3
-    // min/max); the node's +90° turn about x maps z to y, so y runs from 0 to 1.99 and the
-    // other extents stay about 2.
-    let (lo, hi) = scene.bounds();
-    assert!(lo.y.abs() < 1e-6 && (hi.y - 1.99).abs() < 1e-6, "y from {} to {}", lo.y, hi.y);
-    assert!(hi.x - lo.x > 1.9 && hi.z - lo.z > 1.9, "{lo:?} {hi:?}");
-    let by_material = |name: &str| -> Vec<&Patch> {
-        (0..scene.len()).filter(|&i| scene.material_of(i).name == name).map(|i| &scene.patches()[i]).collect()
-    };
-    for floor in by_material("floor") {
-        assert!(floor.vertices().iter().all(|q| (q.y - lo.y).abs() < 1e-6));
-        assert!(floor.normal().y > 0.999, "floor normal {:?}", floor.normal());
-    }
-    for ceiling in by_material("ceiling") {
-        assert!(ceiling.vertices().iter().all(|q| (q.y - hi.y).abs() < 1e-6));
-        assert!(ceiling.normal().y < -0.999, "ceiling normal {:?}", ceiling.normal());
-    }
-    let emitters = scene.emitters();
-    assert_eq!(emitters.len(), 2);
-    for i in emitters {
-        let p = &scene.patches()[i];
-        assert_eq!(scene.material_of(i).name, "light");
-        assert!(p.normal().y < -0.999, "light normal {:?}", p.normal());
-        assert!(hi.y - p.centroid().y < 0.02, "light at y = {}", p.centroid().y);
-    }
-    // The tall box is the near-black "mirror" variant.
-    let tall = scene.materials().iter().find(|m| m.name == "tallBox").unwrap();
-    assert!(tall.reflectivity.max() < 0.011);
-}
-
-#[test]
-fn cornell_export_refines_with_size_and_keeps_its_area() {
-    let coarse = load(CORNELL).scene;
-    let fine = load(&format!("{CORNELL}:size=0.1")).scene;
-    assert!(fine.len() > 4 * coarse.len(), "{} patches from {}", fine.len(), coarse.len());
-    // 25.4677842428 is the total area of the 32 triangles, computed with a Python script from
-    // the decoded buffer.
-    for total in [coarse.total_area(), fine.total_area()] {
-        assert!((total - 25.4677842428).abs() < 1e-9 * 25.47, "total area {total}");
-    }
-    assert!((fine.total_area() - coarse.total_area()).abs() <= 1e-9 * coarse.total_area());
-    // The light is the rectangle x in [-0.24, 0.23], y in [-0.22, 0.16] of accessor 17's
-    // min/max, before the turn.
-    for scene in [&coarse, &fine] {
-        let light: Real = scene.emitters().iter().map(|&i| scene.patches()[i].area()).sum();
-        assert!((light - 0.47 * 0.38).abs() < 1e-6, "light area {light}");
     }
 }
 

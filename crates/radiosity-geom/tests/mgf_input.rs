@@ -1,7 +1,7 @@
 //! Tests: MGF input. Hand-made fixtures in `test_data/mgf/` check each entity kind, transforms,
 //! includes, triangulation and colours against values worked out by hand, and one fixture per
-//! bad input checks that the error names the file and line; the five real scenes in
-//! `shared/scenes/mgf/` check files written by others load.
+//! bad input checks that the error names the file and line. The five real scenes, files
+//! written by others, are tested in `third_party_scenes.rs`.
 
 use radiosity_core::{Real, Scene, Vec3};
 use radiosity_geom::GeomError;
@@ -9,8 +9,6 @@ use radiosity_geom::mgf::colour::Colour;
 use std::collections::BTreeMap;
 
 use crate::{fixture, load, load_err};
-
-const SCENES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/scenes/mgf");
 
 /// A fixture in `test_data/mgf/`.
 fn mgf(name: &str) -> String {
@@ -235,35 +233,6 @@ fn colour_conversion() {
     let white = Colour::default();
     let (x, _) = Colour::mix(&[(1.0, red), (1.0, white)]).unwrap().xy();
     assert!(x > 1.0 / 3.0 && x < 0.64, "{x}");
-}
-
-/// The real scenes. Patch counts are ours at the default `div=4`, measured once; RenderPark's
-/// counts (cube 66, examp1 294, corridor 488, classroom 5,250, office 12,607) differ where
-/// faces are split differently: RenderPark keeps warped quads as one patch (576 quads of the
-/// classroom are 0.1–1% out of plane, so we split each into two triangles: 5,250 + 576), and
-/// splits faces with more than four vertices its own way (examp1's four 15-vertex end caps;
-/// office's non-convex faces). Emitter counts and reflectivities are from the same run.
-#[test]
-fn real_scenes_load() {
-    let cases = [
-        ("cube.mgf", 66, 2),
-        ("examp1.mgf", 246, 32),
-        ("corridor.mgf", 488, 57),
-        ("office3/office.mgf", 12626, 130),
-        ("salon/classroom.mgf", 5826, 24),
-    ];
-    for (file, patches, emitters) in cases {
-        let loaded = load(&format!("{SCENES}/{file}"));
-        let scene = &loaded.scene;
-        let tolerance = patches / 100;
-        assert!(
-            scene.len().abs_diff(patches) <= tolerance,
-            "{file}: {} patches, expected {patches} ± {tolerance}",
-            scene.len()
-        );
-        assert_eq!(scene.emitters().len(), emitters, "{file}");
-        assert!(scene.mean_reflectivity() > 0.2 && scene.mean_reflectivity() < 0.7, "{file}");
-    }
 }
 
 #[test]

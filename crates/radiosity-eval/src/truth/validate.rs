@@ -43,8 +43,7 @@ use crate::reference::cache::Cache;
 use crate::truth::path_trace::{ObjectEstimate, PathTraceError, PathTraceParams, path_trace};
 use radiosity_core::{Channels, Real, Scene};
 use radiosity_ff::{AnalyticParams, BackendSpec};
-use radiosity_geom::spec::split_file_argument;
-use radiosity_geom::{GeomError, LoadedScene, Visibility, builtin_scenes, load_scene};
+use radiosity_geom::{GeomError, LoadedScene, SceneSpec, Visibility};
 use serde::Serialize;
 use std::time::Instant;
 use thiserror::Error;
@@ -154,21 +153,19 @@ const REFINED_BY: &[(&str, &str, bool)] = &[
 ];
 
 impl Refinement {
-    /// How `scene` (a scene argument) is refined, or why it cannot be.
-    pub fn for_scene(scene: &str) -> Result<Refinement, String> {
-        if let Some((path, _, params)) = split_file_argument(scene) {
-            let size = params.iter().find_map(|p| p.strip_prefix("size=")).and_then(|v| v.trim().parse::<Real>().ok());
+    /// How `scene` is refined, or why it cannot be.
+    pub fn for_scene(scene: &SceneSpec) -> Result<Refinement, String> {
+        let Some(builtin) = scene.builtin() else {
+            let size = scene.params().get("size").and_then(|v| v.trim().parse::<Real>().ok());
             return match size {
                 Some(base) if base > 0.0 && base.is_finite() => Ok(Refinement::Halve { key: "size", base }),
                 _ => Err(format!(
                     "{} is meshed one patch per face (size=0), which cannot be refined; give it size=… to refine it",
-                    path.display()
+                    scene.head()
                 )),
             };
-        }
-        let mut parts = scene.split(':');
-        let name = parts.next().unwrap_or_default();
-        let given: Vec<&str> = parts.filter(|s| !s.is_empty()).collect();
+        };
+        let name = builtin.name;
         let Some(&(_, key, double)) = REFINED_BY.iter().find(|(n, _, _)| *n == name) else {
             return Err(match name {
                 "multi-cubes" => "multi-cubes has no parameter that refines its mesh alone (divisions also moves the \
@@ -177,15 +174,8 @@ impl Refinement {
                 _ => format!("{name} has no parameter that refines its mesh alone, so it is solved as given only"),
             });
         };
-        let default = builtin_scenes()
-            .iter()
-            .find(|s| s.name == name)
-            .and_then(|s| s.params.iter().find(|d| d.key == key))
-            .map(|d| d.default)
-            .unwrap_or_default();
-        let value =
-            given.iter().rev().find_map(|p| p.split_once('=').filter(|(k, _)| k.trim() == key)).map(|(_, v)| v.trim());
-        let value = value.unwrap_or(default);
+        let default = builtin.params.iter().find(|d| d.key == key).map(|d| d.default).unwrap_or_default();
+        let value = scene.params().get(key).unwrap_or(default);
         let bad = || format!("{key}={value} of {name} is not a valid {key}, so the scene cannot be refined");
         Ok(if double {
             Refinement::Double { key, base: value.parse().map_err(|_| bad())? }
@@ -211,39 +201,15 @@ impl Refinement {
 
     /// `scene` refined `step` times (`step = 0` is `scene` itself), or `None` when the value
     /// overflows.
-    pub fn refined(&self, scene: &str, step: u32) -> Option<String> {
+    pub fn refined(&self, scene: &SceneSpec, step: u32) -> Option<SceneSpec> {
         if step == 0 {
-            return Some(scene.to_string());
+            return Some(scene.clone());
         }
         let value = match self {
             Refinement::Double { base, .. } => base.checked_mul(2usize.checked_pow(step)?)?.to_string(),
             Refinement::Halve { base, .. } => (base / Real::from(2u32).powi(step as i32)).to_string(),
         };
-        let key = self.key();
-        let (head, params): (String, Vec<&str>) = match split_file_argument(scene) {
-            Some((path, _, params)) => (path.display().to_string(), params),
-            None => {
-                let mut parts = scene.split(':');
-                (parts.next().unwrap_or_default().to_string(), parts.filter(|s| !s.is_empty()).collect())
-            }
-        };
-        let mut items: Vec<String> = Vec::with_capacity(params.len() + 1);
-        let mut replaced = false;
-        for p in params {
-            match p.split_once('=') {
-                Some((k, _)) if k.trim() == key => {
-                    if !replaced {
-                        items.push(format!("{key}={value}"));
-                        replaced = true;
-                    }
-                }
-                _ => items.push(p.to_string()),
-            }
-        }
-        if !replaced {
-            items.push(format!("{key}={value}"));
-        }
-        Some(std::iter::once(head).chain(items).collect::<Vec<_>>().join(":"))
+        scene.with_param(self.key(), &value).ok()
     }
 }
 
@@ -340,10 +306,14 @@ pub struct Validation {
 
 /// Sets every object's path-traced mean radiosity beside the discrete reference solution of
 /// `scene` at its given resolution and at up to [`ValidateParams::refinements`] finer ones.
-pub fn validate(scene: &str, params: &ValidateParams, progress: &dyn Progress) -> Result<Validation, ValidateError> {
+pub fn validate(
+    scene: &SceneSpec,
+    params: &ValidateParams,
+    progress: &dyn Progress,
+) -> Result<Validation, ValidateError> {
     // Before any geometry: a bad sample count should not wait for the references.
     params.path_trace.check()?;
-    let base = load_scene(scene)?;
+    let base = scene.load()?;
     for w in &base.warnings {
         progress.warn(w);
     }
@@ -358,7 +328,7 @@ pub fn validate(scene: &str, params: &ValidateParams, progress: &dyn Progress) -
                     note = Some(format!("{} cannot be refined further", refinement.key()));
                     break;
                 };
-                let loaded = match load_scene(&arg) {
+                let loaded = match arg.load() {
                     Ok(loaded) => loaded,
                     Err(e) => {
                         note = Some(format!("stopped refining before {arg}: {e}"));
@@ -373,7 +343,7 @@ pub fn validate(scene: &str, params: &ValidateParams, progress: &dyn Progress) -
                     ));
                     break;
                 }
-                refined.push((arg, loaded));
+                refined.push((arg.to_string(), loaded));
             }
             (Some(refinement.describe()), note)
         }

@@ -44,10 +44,11 @@
 //! ```no_run
 //! use radiosity_eval::{Camera, RenderParams, render};
 //!
-//! let scene = radiosity_geom::load_scene("cornell:res=4").unwrap().scene;
+//! let spec = radiosity_geom::SceneSpec::parse("cornell:res=4").unwrap();
+//! let scene = spec.load().unwrap().scene;
 //! let visibility = radiosity_geom::Visibility::new(&scene);
 //! let rgb: Vec<[f64; 3]> = (0..scene.len()).map(|i| scene.emission(i).0).collect();
-//! let camera = Camera::default_for("cornell:res=4", &scene, 4.0 / 3.0);
+//! let camera = Camera::default_for(&spec, &scene, 4.0 / 3.0);
 //! let image = render(&scene, &visibility, &rgb, &RenderParams::new(camera)).unwrap();
 //! image.save("cornell.png".as_ref()).unwrap();
 //! ```
@@ -55,8 +56,7 @@
 use crate::error::EvalError;
 use crate::view::shading::vertex_radiosity;
 use radiosity_core::{Patch, PatchShape, Real, Scene, Vec3};
-use radiosity_geom::spec::split_file_argument;
-use radiosity_geom::{CameraPreset, Visibility, builtin_scenes};
+use radiosity_geom::{CameraPreset, SceneSpec, Visibility};
 use rayon::prelude::*;
 use std::io::Write;
 use std::path::Path;
@@ -127,13 +127,12 @@ impl Camera {
         self.fov
     }
 
-    /// The default camera for scene argument `arg` (a built-in scene with its parameters, or
+    /// The default camera for the scene `spec` names (a built-in scene with its parameters, or
     /// a file), loaded as `scene`, for an image of aspect ratio `aspect` (width over height):
     /// the built-in scene's camera preset ([`radiosity_geom::BuiltinScene::camera`]), or for
     /// any other scene a view from its +z side that fits its bounding sphere.
-    pub fn default_for(arg: &str, scene: &Scene, aspect: Real) -> Camera {
-        let builtin = if split_file_argument(arg).is_some() { "" } else { arg.split(':').next().unwrap_or_default() };
-        let preset = builtin_scenes().iter().find(|s| s.name == builtin).and_then(|s| s.camera(scene));
+    pub fn default_for(spec: &SceneSpec, scene: &Scene, aspect: Real) -> Camera {
+        let preset = spec.builtin().and_then(|s| s.camera(scene));
         if let Some(CameraPreset { eye, target, fov }) = preset {
             return Camera { eye, target, fov };
         }

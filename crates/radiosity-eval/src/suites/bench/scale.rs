@@ -2,7 +2,7 @@
 //! matrix anywhere (`--reference none`).
 //!
 //! For `office` at `size` 0.186, 0.093 and 0.05 (10 990, 33 179 and 95 832 patches) and the
-//! largest real scene of `../shared/scenes` cut finer (`office.mgf` at `size=0.007`, 114 042
+//! largest third-party scene (the scenes folder, [`radiosity_geom::third_party`]) cut finer (`office.mgf` at `size=0.007`, 114 042
 //! patches), [`scale_run`] runs one method for a given solver time (`cargo xtask bench --only
 //! scale` runs each case in a process of its own, so that its peak memory is its own): from scene load, its setup (load, BVH, analysis, backend),
 //! seconds per column and columns per second, its peak resident memory (`VmHWM`), the
@@ -39,7 +39,7 @@ pub const SCENES: [&str; 4] = [
     "office:size=0.186",
     "office:size=0.093",
     "office:size=0.05",
-    "../shared/scenes/mgf/office3/office.mgf:size=0.007",
+    "mgf/office3/office.mgf:size=0.007",
 ];
 
 /// The certified bounds timed.

@@ -15,7 +15,7 @@
 //!
 //! evaluated at the pixel centre. The row entry is `F_ji = Σ ΔF` over the pixels through
 //! which `x_j` sees the front of patch `i`, and the column entry `F_ij = F_ji A_j / A_i`
-//! (reciprocity, DESIGN §3). A small receiver close to a much larger shooter can come out
+//! (reciprocity, docs/design.md §3.3). A small receiver close to a much larger shooter can come out
 //! with `F_ij > 1` (the centroid sees it large, and `A_j / A_i` magnifies that): the guard
 //! clamps such entries and counts them ([`crate::guard`]).
 //!

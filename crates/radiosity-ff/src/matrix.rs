@@ -13,7 +13,7 @@
 //! [`StoredMatrix::assemble_reciprocal`] computes each unordered pair once, from a source that
 //! can give single entries (the analytic backend's [`AnalyticColumns::pair`]): for the pair
 //! `{i, j}` it computes the entry whose **receiver is the smaller patch**, say `F_ij` with
-//! `A_i ≤ A_j`, and derives `F_ji = A_i F_ij / A_j` (DESIGN §3). That halves the work of
+//! `A_i ≤ A_j`, and derives `F_ji = A_i F_ij / A_j` (docs/design.md §3.3). That halves the work of
 //! [`StoredMatrix::assemble`], which computes every column and so every pair twice.
 //!
 //! What it changes numerically, for the analytic backend: visibility is the same either way

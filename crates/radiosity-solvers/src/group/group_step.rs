@@ -2,7 +2,7 @@
 //! group's own interactions exactly, then shoot the result to every patch; or, when the group
 //! system cannot be trusted, shoot the group's patches one after another.
 //!
-//! ## Rule (DESIGN §4)
+//! ## Rule (docs/design.md §4.6)
 //!
 //! For a group `r` of `m` patches with their columns, and per channel:
 //!

@@ -48,10 +48,10 @@
 //! `assembly` and `e2e`). The report states the machine's core count and ends with the
 //! performance targets beside the measurement.
 //!
-//! Reproduce with `cargo xtask bench --out bench.md` on a quiet machine (13 minutes on
-//! 2 cores; sections can be run alone with `--only columns,lu`). `--quick` shrinks everything
-//! (a 171-patch Cornell box, a dozen columns, small backends, one end-to-end run) into a
-//! smoke test of a few seconds whose figures mean nothing.
+//! Reproduce with `cargo xtask bench --out bench.md` on a quiet machine (docs/bench-office.md's
+//! stamp says how long a full run took; sections can be run alone with `--only columns,lu`).
+//! `--quick` shrinks everything (a 171-patch Cornell box, a dozen columns, small backends, one
+//! end-to-end run) into a smoke test of a few seconds whose figures mean nothing.
 
 mod children;
 

@@ -1,6 +1,6 @@
 //! `cargo xtask export --scene SCENE --solver SOLVER --out SOLVED.glb [--ff BACKEND]
 //! [--until RULES] [--reference KIND]`: writes the solved scene as binary glTF 2.0, its
-//! radiosity as vertex colours, for any glTF viewer (DESIGN §7); no reference is computed
+//! radiosity as vertex colours, for any glTF viewer (docs/cli.md); no reference is computed
 //! unless `--solver reference`, an `rms=` rule or `--reference` asks for one.
 //!
 //! The file is [`radiosity_eval::export_glb`]'s: one primitive per material, unlit white

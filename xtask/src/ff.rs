@@ -1,6 +1,6 @@
 //! `cargo xtask ff --scene SCENE [--ff BACKEND] [--json] [--force]`: assembles the full
 //! form-factor matrix of a scene with one backend and reports its closure and reciprocity, or
-//! prints it as JSON (DESIGN §7).
+//! prints it as JSON (docs/cli.md, `ff`).
 //!
 //! Assembling costs `n` column computations and `n²` entries of memory, so scenes of more than
 //! [`MAX_PATCHES`] patches are refused unless `--force` is given.
@@ -269,7 +269,7 @@ struct PatchJson {
     centroid: [f64; 3],
 }
 
-/// The JSON output (DESIGN §7, plus a few keys saying how the matrix was obtained).
+/// The JSON output (docs/cli.md, `ff`: with a few keys saying how the matrix was obtained).
 #[derive(Serialize)]
 struct FfJson<'a> {
     scene: &'a str,

@@ -1,4 +1,4 @@
-//! `cargo xtask`: the command line that drives radiosity experiments (DESIGN §7).
+//! `cargo xtask`: the command line that drives radiosity experiments (docs/cli.md).
 //!
 //! Each subcommand lives in its own module. Errors reach the user as one sentence on stderr
 //! with a non-zero exit code; nothing here panics on bad input.

@@ -1,6 +1,6 @@
 //! `cargo xtask solve --scene SCENE --solver SOLVER [--ff BACKEND] [--until RULES]
 //! [--reference KIND] [--json | --out FILE]`: runs one solver and reports its error against
-//! the reference solution of the same discrete system, and its certified bound (DESIGN §7).
+//! the reference solution of the same discrete system, and its certified bound (docs/cli.md).
 //!
 //! Every argument is parsed before any geometry is built, so a typo fails at once. The
 //! reference comes from the cache when it is there (then F is not assembled and the residual

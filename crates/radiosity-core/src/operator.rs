@@ -4,9 +4,9 @@
 //! ## Rule
 //!
 //! Vectors are patch-major with the system's channels (`x[i * k + c]`), the layout of
-//! [`LinearSystem`]. Per channel the system is `A B = E` with `A = I − diag(ρ) F` (DESIGN
-//! §3); over all channels `A` is block diagonal, so one operator of dimension `n·k` serves
-//! every channel at once, and one column of `F` serves every channel of a product.
+//! [`LinearSystem`]. Per channel the system is `A B = E` with `A = I − diag(ρ) F`
+//! (docs/design.md §3.1); over all channels `A` is block diagonal, so one operator of dimension
+//! `n·k` serves every channel at once, and one column of `F` serves every channel of a product.
 //!
 //! `F·x` is what a source multiplies itself when it can do so cheaper than `n` columns
 //! ([`ColumnSource::multiply`]: one pass over a stored matrix's entries); otherwise it is the

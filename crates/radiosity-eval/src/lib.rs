@@ -1,7 +1,7 @@
 //! Reference solutions, error metrics and convergence tables for radiosity solvers.
 //!
 //! Solvers are compared on one thing: how close they get to the exact solution `B*` of the
-//! **same** discrete system `(I − diag(ρ) F) B = E` (DESIGN §3 and §5), for the work they
+//! **same** discrete system `(I − diag(ρ) F) B = E` (docs/design.md §3 and §6), for the work they
 //! did. The crate is in rooms by job; every module is private and this page is the whole
 //! public API:
 //!

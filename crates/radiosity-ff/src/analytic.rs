@@ -18,14 +18,10 @@
 //! closed forms. Points behind `P_j`'s plane see its back and contribute
 //! nothing; pairs entirely behind each other's planes are skipped before any work.
 //!
-//! Accuracy, measured on Howell's closed forms (opposed and perpendicular rectangles, square
-//! and not, meshed 1 to 8 per side; see the tests):
-//!
-//! | setting | worst relative error |
-//! |---|---|
-//! | defaults, `order=8:tol=1e-3` | 2.5e-4 (a 1 × 2 floor against a 0.5-high wall it touches) |
-//! | `order=16:tol=1e-6` | below 1e-4 (1.8e-5 on that case) |
-//! | `order=32:tol=1e-9` | below 1e-6 (3.8e-7 on that case) |
+//! Accuracy is tested against Howell's closed forms (opposed and perpendicular rectangles,
+//! square and not, meshed 1 to 8 per side), the defaults held to 1e-3 relative. The errors
+//! measured per setting are in docs/form-factors.md ("Accuracy of the analytic and hemicube
+//! backends").
 //!
 //! ## Reciprocity
 //!

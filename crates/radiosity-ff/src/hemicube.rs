@@ -15,7 +15,7 @@
 //!
 //! evaluated at the pixel centre. The row entry is `F_ji = Σ ΔF` over the pixels through
 //! which `x_j` sees the front of patch `i`, and the column entry `F_ij = F_ji A_j / A_i`
-//! (reciprocity, DESIGN §3). A small receiver close to a much larger shooter can come out
+//! (reciprocity, docs/design.md §3.3). A small receiver close to a much larger shooter can come out
 //! with `F_ij > 1` (the centroid sees it large, and `A_j / A_i` magnifies that): the guard
 //! clamps such entries and counts them ([`crate::guard`]).
 //!
@@ -54,15 +54,13 @@
 //! tests measure both against Howell's closed forms and against the exact point-to-patch
 //! form factor.
 //!
-//! Measured at resolution 128, on unit squares with one patch each: against the exact form
-//! factor from the centroid (Lambert's formula), `6.5e-5` (opposed) and `2.0e-5` (sharing an
-//! edge); against Howell's area-to-area values, `+19.8%` and `-5.0%`, all of it the centroid
-//! assumption. Meshing each square `m × m` brings the aggregate to `+4.0% / -1.1%` (`m = 2`),
-//! `+0.95% / -0.19%` (`m = 4`) and `+0.23% / -0.08%` (`m = 8`). For two perpendicular
-//! patches sharing an edge the centroid error is scale-free, so it stays with every such
-//! pair however fine the mesh: the rows of an assembled matrix (what every shooter's
-//! centroid sees of one patch) are off by a few percent along the edges of a closed box,
-//! although each hemicube's own row sums to 1.
+//! The centroid assumption dominates: against the exact form factor from the centroid the
+//! pixels are close, against Howell's area-to-area values a single patch is far off, and
+//! meshing shrinks the aggregate (docs/form-factors.md, "Accuracy of the analytic and
+//! hemicube backends"). For two perpendicular patches sharing an edge the centroid error is
+//! scale-free, so it stays with every such pair however fine the mesh: the rows of an
+//! assembled matrix (what every shooter's centroid sees of one patch) are off by a few percent
+//! along the edges of a closed box, although each hemicube's own row sums to 1.
 //!
 //! ## Rotation and determinism
 //!

@@ -1,6 +1,6 @@
 //! Form factors: kernels and backends that implement [`radiosity_core::ColumnSource`].
 //!
-//! This is the only crate that turns geometry into form factors. Four backends, chosen by a
+//! This is the only crate that turns geometry into form factors. Five backends, chosen by a
 //! [`BackendSpec`] parsed from `NAME[:key=value…]`:
 //!
 //! - `analytic` ([`analytic`]): Lambert's point-to-polygon formula integrated over the
@@ -8,6 +8,9 @@
 //!   kernel weighs them ([`pair_visibility`]) when something can occlude;
 //! - `hemicube` ([`hemicube`]): a ray-cast hemicube at the shooter, giving its row;
 //! - `montecarlo` ([`montecarlo`]): cosine-weighted rays from the shooter, giving its row;
+//! - `hierarchical` ([`hierarchical`]): links between clusters of a tree over the patches, so
+//!   that a product `F x` costs `O(links + n)` and a column `O(n)`; exactly reciprocal,
+//!   non-negative, its rows held to at most 1 (docs/design.md §5);
 //! - `matrix` ([`matrix`]): the full matrix of another backend, assembled once and stored.
 //!
 //! Every backend clamps its entries into `[0, 1]` and counts what it clamped ([`guard`]).
@@ -55,10 +58,7 @@ pub use analytic::AnalyticColumns;
 /// The revision of the backends' entries: raised whenever a backend computes different
 /// entries for the same canonical argument (a change of rule, not of parameters), so that
 /// caches keyed by the canonical argument ([`BackendSpec::canonical`]) and this revision are
-/// not read across it. 2: the analytic backend quarters a pair's panels a level at a time,
-/// not depth first. 3: a pair whose visibility probe agrees is estimated from at least a
-/// sixteenth of its rays (`pair_visibility`, "Probes"). 4: the hierarchical operator's tree
-/// is split between 54 orientation classes, not 6.
+/// not read across it. What each revision changed: docs/form-factors.md, "Entries revisions".
 pub const ENTRIES_REVISION: u32 = 4;
 pub use backend::{Backend, FormFactorInput};
 pub use error::FfError;

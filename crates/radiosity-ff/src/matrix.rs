@@ -13,7 +13,7 @@
 //! [`StoredMatrix::assemble_reciprocal`] computes each unordered pair once, from a source that
 //! can give single entries (the analytic backend's [`AnalyticColumns::pair`]): for the pair
 //! `{i, j}` it computes the entry whose **receiver is the smaller patch**, say `F_ij` with
-//! `A_i ≤ A_j`, and derives `F_ji = A_i F_ij / A_j` (DESIGN §3). That halves the work of
+//! `A_i ≤ A_j`, and derives `F_ji = A_i F_ij / A_j` (docs/design.md §3.3). That halves the work of
 //! [`StoredMatrix::assemble`], which computes every column and so every pair twice.
 //!
 //! What it changes numerically, for the analytic backend: visibility is the same either way
@@ -22,14 +22,12 @@
 //! smaller receiver `i`, which is the more accurate of the two (the error of the rule grows
 //! with the receiver's size relative to its distance; a distant pair uses the receiver's
 //! centroid). Reciprocity becomes exact up to the `f32` rounding of the entries, where column
-//! assembly leaves the quadrature error (at the defaults, up to 1.4e-2 relative on one pair
-//! of `multi-cubes`, a receiver straddling the shooter's plane). The entries of the larger
+//! assembly leaves the quadrature error (largest for a receiver straddling the shooter's
+//! plane). The entries of the larger
 //! patch of each pair, and so the row sums of large patches, move by that quadrature
 //! error. Entries are clamped into `[0, 1]` like every backend's (the computed one first, so
-//! the derived one, never larger, stays reciprocal). Measured on `multi-cubes`, analytic
-//! defaults (`cargo xtask bench --scene multi-cubes --only assembly`): the largest
-//! reciprocity error goes from 1.4e-2 to 0, the row sums move by 4.4e-5 at most (3.8e-6 on
-//! average), the non-zeros are the same, and assembly is 2.2× faster.
+//! the derived one, never larger, stays reciprocal). What that changes on `multi-cubes`, and
+//! what it saves: docs/form-factors.md, "Stored matrices".
 //!
 //! Memory: the pairs are kept compressed (`12` bytes per pair with a non-zero entry) until
 //! every one is computed, then written into the smaller storage, each pair's list dropped
@@ -46,9 +44,10 @@
 //!   slice), `8·nnz + 4(n+1)` bytes. It is used only while `nnz` fits in `u32`.
 //!
 //! Closed empty rooms are about half non-zero, so either can win; furnished, occluded or open
-//! scenes are sparser (`office`: 28.8%, `multi-cubes`: 13.5%). Assembly keeps the columns computed so far in compressed blocks; as soon as `nnz`
-//! shows that sparse storage can no longer be the smaller (`nnz` only grows), it scatters them
-//! into a dense array, dropping each block as it goes, and writes later columns there. The
+//! scenes are sparser (docs/form-factors.md, "Stored matrices"). Assembly keeps the columns
+//! computed so far in compressed blocks; as soon as `nnz` shows that sparse storage can no
+//! longer be the smaller (`nnz` only grows), it scatters them into a dense array, dropping
+//! each block as it goes, and writes later columns there. The
 //! dense array is allocated zeroed, so its pages are committed as they are written. The
 //! matrix is therefore never held twice at full size: memory peaks near the larger of the two
 //! sizes, not at their sum. (At `n ≈ 11k` the dense form is 0.48 GB.)
@@ -62,31 +61,14 @@
 //! rebalanced closed-scene matrix sums to 1 but is only as reciprocal as the spread of the row
 //! sums it corrected. Both steps are reported by [`RebalanceReport`].
 //!
-//! Measured (release, two threads, `cargo xtask ff --scene S --ff matrix:of=B:rebalance=true`;
-//! hemicube `res=128`, montecarlo `rays=10000` unless
-//! said; both scenes are closed). Row sums are min / mean / max; "changed" is `|F' − F| / F`
-//! over entries that were non-zero (largest, mean) and the zeros that symmetrising filled in:
-//!
-//! | scene | backend | assembled: row sums, reciprocity | symmetrised: row sums, reciprocity | changed | row factors | reciprocity after |
-//! |---|---|---|---|---|---|---|
-//! | `furnace:block=true` (120) | hemicube | 0.966 / 1.002 / 1.036, 1 | 0.983 / 1.001 / 1.018, 9e-8 | 50%, 6.3%, 432 | 0.982 – 1.017 | 0.034 |
-//! | | montecarlo | 0.977 / 1.000 / 1.026, 1 | 0.989 / 1.000 / 1.013, 9e-8 | 700%, 9.7%, 52 | 0.987 – 1.012 | 0.024 |
-//! | `multi-cubes` (480) | hemicube | 0.619 / 0.876 / 1.108, 1 | 0.742 / 0.908 / 1.054, 0 | 1149%, 31%, 17172 | 0.949 – 1.348 | 0.30 |
-//! | | montecarlo | 0.959 / 1.000 / 1.047, 1 | 0.980 / 1.000 / 1.023, 0 | 950%, 22%, 4057 | 0.977 – 1.021 | 0.035 |
-//!
-//! What this says:
-//!
-//! - The analytic backend is exactly reciprocal (each pair is integrated once), so
-//!   symmetrising changes nothing, and its rows are as close to 1 as its visibility estimate
-//!   makes them (docs/form-factors.md); rescaling them would move whole rows, which is not
-//!   more accurate: a larger `budget` is.
-//! - Hemicube and Monte Carlo estimate each row on its own, so an entry can be zero one way
-//!   and not the other (reciprocity error 1). Symmetrising averages the two estimates of each
-//!   pair, which roughly halves their row-sum spread; this is where rebalancing earns its keep.
-//! - Rescaling rows then breaks reciprocity again, by about the spread of the row factors.
-//!
-//! What the stored matrices of the built-in scenes take and cost is measured in
-//! `docs/form-factors.md` and `docs/bench-office.md`.
+//! The analytic backend is exactly reciprocal (each pair is integrated once), so symmetrising
+//! changes nothing, and its rows are as close to 1 as its visibility estimate makes them;
+//! rescaling them would move whole rows, which is not more accurate: a larger `budget` is.
+//! Hemicube and Monte Carlo estimate each row on its own, so an entry can be zero one way and
+//! not the other; symmetrising averages the two estimates of each pair, and that is where
+//! rebalancing earns its keep. What it changed on two closed scenes, and what the stored
+//! matrices of the built-in scenes take and cost: docs/form-factors.md ("Stored matrices") and
+//! docs/bench-office.md.
 //!
 //! ## Files
 //!

@@ -10,8 +10,8 @@
 //!
 //! `F̂_ji = h_i / N`,  and the column entry  `F̂_ij = F̂_ji A_j / A_i`
 //!
-//! (reciprocity, DESIGN §3); when `A_j > A_i` noise alone can push `F̂_ij` above 1, and the
-//! guard clamps and counts it ([`crate::guard`]). Because `F_ji = (1/A_j) ∫_{A_j} ∫ [ray (x, ω) first hits the
+//! (reciprocity, docs/design.md §3.3); when `A_j > A_i` noise alone can push `F̂_ij` above 1,
+//! and the guard clamps and counts it ([`crate::guard`]). Because `F_ji = (1/A_j) ∫_{A_j} ∫ [ray (x, ω) first hits the
 //! front of i] cos θ / π dω dA`, the hit indicator has mean `F_ji` under this sampling and
 //! `F̂_ji` is unbiased (Bekaert 1999, ch. 4). Rays arriving on a patch's back carry light into
 //! the inside of an object or behind a one-sided surface: they reach no receiver and count

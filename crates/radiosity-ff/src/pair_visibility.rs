@@ -19,9 +19,10 @@
 //! ## Stiff scenes
 //!
 //! An error `δ` in the area-weighted mean row sum (its noise falls like `1/√budget`) moves a closed
-//! scene's solution by about `δ ρ̄ / (1 − ρ̄)` (DESIGN §5). So where the most reflective channel's
-//! area-weighted mean `ρ̄` exceeds 0.8, the budget is multiplied by `((1 − 0.8) / (1 − ρ̄))²`,
-//! rounded up, at most 64 ([`stiffness_factor`]): as noisy as at `ρ̄ = 0.8` up to `ρ̄ = 0.975`.
+//! scene's solution by about `δ ρ̄ / (1 − ρ̄)` (docs/design.md §3.2). So where the most
+//! reflective channel's area-weighted mean `ρ̄` exceeds 0.8, the budget is multiplied by
+//! `((1 − 0.8) / (1 − ρ̄))²`, rounded up, at most 64 ([`stiffness_factor`]): as noisy as at
+//! `ρ̄ = 0.8` up to `ρ̄ = 0.975`.
 //!
 //! ## Which patch is which
 //!

@@ -22,11 +22,11 @@
 //!
 //! `error(q, r) ≈ 0.33 · 0.08^{q−1} · r^{−2q}`, `r = d / h`.
 //!
-//! [`order_for`] picks the smallest order whose predicted error is below a tolerance. A
-//! smoothing substitution that clusters points away from the edges (`u = 3ξ² − 2ξ³`) was
-//! measured as well, and was worse everywhere, even for patches touching along an edge (where
-//! the integrand's derivative has a logarithmic singularity): at order 3 on perpendicular unit
-//! squares sharing an edge, plain 2.4e-5 against smoothed 8.0e-3.
+//! [`order_for`] picks the smallest order whose predicted error is below a tolerance. Plain
+//! Gauss–Legendre is used throughout: a smoothing substitution that clusters points away from
+//! the edges (`u = 3ξ² − 2ξ³`) measured worse everywhere, even for patches touching along an
+//! edge, where the integrand's derivative has a logarithmic singularity (docs/form-factors.md,
+//! "Accuracy of the analytic and hemicube backends").
 
 use radiosity_core::{Patch, PatchShape, Real, Vec3};
 

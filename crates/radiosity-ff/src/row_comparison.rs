@@ -3,8 +3,8 @@
 //!
 //! For each row `i` it gives both row sums and `‖F̃_i − F_i‖₁ / ‖F_i‖₁`, the relative L1
 //! distance: `|(F̃ x)_i − (F x)_i| ≤ ‖F̃_i − F_i‖₁ · max|x|` for that row. Over the rows
-//! compared it is a sampled estimate of the operator's error, not a certified bound (DESIGN
-//! §5): the rows not compared are not known.
+//! compared it is a sampled estimate of the operator's error, not a certified bound
+//! (docs/design.md §5): the rows not compared are not known.
 
 use radiosity_core::{ColumnSource, Real};
 use rand::SeedableRng;

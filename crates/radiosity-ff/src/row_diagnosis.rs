@@ -1,8 +1,8 @@
 //! Why a row of `F` misses its sum: the worst rows of a stored matrix, each with the cause the
 //! scene's geometry points to.
 //!
-//! A row of a closed scene should sum to 1 and no row should exceed 1 (DESIGN §5). When one
-//! does not, the usual causes are in the geometry, which [`radiosity_geom::hidden`] has probed:
+//! A row of a closed scene should sum to 1 and no row should exceed 1 (docs/design.md §3.2). When
+//! one does not, the usual causes are in the geometry, which [`radiosity_geom::hidden`] has probed:
 //!
 //! - **touching**: the patch lies against another surface over part of its area, where the
 //!   kernel is singular and shadow rays graze;

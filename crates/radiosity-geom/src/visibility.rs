@@ -4,8 +4,9 @@
 //! ## How
 //!
 //! Every patch is split into its fan triangles and put into an obvhs compressed wide BVH
-//! built with `BvhBuildParams::very_slow_build()`; on a closed room that traced about 8×
-//! faster than `medium_build`, and CWBVH about 2× faster than BVH2 (DESIGN §9). Occlusion
+//! built with `BvhBuildParams::very_slow_build()`, the slowest build for the fastest traversal
+//! (obvhs's compressed wide BVH rather than its BVH2; the bench's `columns` section measures
+//! the rays traced, docs/bench-office.md). Occlusion
 //! queries use `ray_traverse_miss`, which stops at the first hit (`ray_traverse_anyhit` would
 //! call back on every hit).
 //!

@@ -157,8 +157,8 @@ pub const GROUP_SOLVERS: [&str; 10] = [
 pub const BEYOND_PAPER_SOLVERS: [&str; 3] =
     ["xu-g30-m480:f=10:groups=interaction", "xu-g30-m480:f=10:inner=gs", "xu-g30-m480:f=10:adaptive=0.1"];
 
-/// The Krylov solvers, by canonical name (DESIGN §7's comparators): run by the scene-level
-/// tests and the stress suite.
+/// The Krylov solvers, by canonical name (the comparators of docs/design.md §4.8): run by the
+/// scene-level tests and the stress suite.
 pub const KRYLOV_SOLVERS: [&str; 3] = ["cg", "gmres-30", "bicgstab"];
 
 /// The solver a command-line name designates, from the built-in families

@@ -1,4 +1,4 @@
-//! Solvers by name: the families of command-line names (DESIGN §7), each a typed parameter
+//! Solvers by name: the families of command-line names (docs/cli.md), each a typed parameter
 //! struct, and the [`SolverRegistry`] that builds a solver from a name.
 //!
 //! ## Rule

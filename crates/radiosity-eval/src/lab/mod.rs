@@ -34,7 +34,7 @@
 //! **The bound's hypothesis.** With a stored matrix the contraction `κ_c` is measured on it;
 //! over a source that multiplies natively and states its reciprocity (the hierarchical
 //! operator), it is bounded by two products ([`Contraction::from_products`]); otherwise it is
-//! DESIGN §5's hypothesis, rows of F summing to at most 1 and F reciprocal, so
+//! the hypothesis of docs/design.md §6.3, rows of F summing to at most 1 and F reciprocal, so
 //! `κ_c ≤ ρ_max,c` ([`Contraction::assumed`]). The analytic backend is exactly reciprocal and
 //! its rows sum to 1 within its stated accuracy.
 //!

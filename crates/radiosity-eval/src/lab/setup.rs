@@ -376,7 +376,8 @@ impl<'p> Lab<'p> {
     }
 
     /// The contraction every certified bound of this lab rests on: measured on the stored
-    /// matrix when there is one, DESIGN §5's hypothesis otherwise ([`Contraction::assumed`]).
+    /// matrix when there is one, the hypothesis of docs/design.md §6.3 otherwise
+    /// ([`Contraction::assumed`]).
     pub fn contraction(&self) -> &Contraction {
         &self.contraction
     }

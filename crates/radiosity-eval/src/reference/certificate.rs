@@ -10,25 +10,26 @@
 //! `‖diag(ρ) F x‖_A ≤ κ_c ‖x‖_A` with `κ_c = max_j Σ_i A_i ρ_ic F_ij / A_j`, and when
 //! `κ_c < 1` the Neumann series gives `‖B − B*‖_A ≤ ‖r‖_A / (1 − κ_c)`.
 //!
-//! DESIGN §5 states the bound as `Σ A_i |r_i| / (1 − ρ_max)` "when rows sum to at most 1".
+//! The bound is often stated as `Σ A_i |r_i| / (1 − ρ_max)` "when rows sum to at most 1".
 //! That hypothesis alone is not quite enough: the step `κ_c ≤ ρ_max` also uses reciprocity
 //! (`Σ_i A_i F_ij = A_j Σ_i F_ji ≤ A_j`), which numerical backends satisfy only
 //! approximately. So this module measures `κ_c` from the columns themselves and uses
 //! `q_c = max(ρ_max,c, κ_c)`:
 //!
-//! - when rows sum to at most 1 and reciprocity holds, `κ_c ≤ ρ_max,c` and the bound is the
-//!   design's, taken per channel (never larger than with one `ρ_max` for all channels);
+//! - when rows sum to at most 1 and reciprocity holds, `κ_c ≤ ρ_max,c` and the bound is that
+//!   familiar one, taken per channel (never larger than with one `ρ_max` for all channels);
 //! - when they do not, the bound is still proven as long as `q_c < 1`;
 //! - when some `q_c ≥ 1` there is no bound: [`ErrorBound::certified`] is false and
 //!   [`ErrorBound::bound`] is infinite.
 //!
-//! `κ_c` alone gives the sharper, equally proven [`ErrorBound::sharp`]. The design's form is
-//! kept as the headline figure because it is the one stated (and computed elsewhere); on a
-//! random enclosure with `ρ` spread over `[0, 0.95]` it overestimated a Jacobi iterate's
-//! error 14 times where the sharp bound did 1.4–1.5 times (see the test
-//! `the_certified_bound_bounds_the_true_error`). In a closed scene with uniform `ρ` both
-//! are attained: all the error decays at the rate `ρ`. The maximum row sum is reported in any case
-//!   ([`Contraction::max_row_sum`]), since the design's hypothesis is stated on it.
+//! `κ_c` alone gives the sharper, equally proven [`ErrorBound::sharp`]. The familiar form is
+//! kept as the headline figure because it is the one usually stated and computed elsewhere
+//! (docs/design.md §6.3 gives both); on a random enclosure with `ρ` spread over `[0, 0.95]`
+//! it overestimated a Jacobi iterate's error 14 times where the sharp bound did 1.4–1.5 times
+//! (see the test `the_certified_bound_bounds_the_true_error`). In a closed scene with uniform
+//! `ρ` both are attained: all the error decays at the rate `ρ`. The maximum row sum is
+//! reported in any case ([`Contraction::max_row_sum`]), since the usual hypothesis is stated on
+//! it.
 
 use crate::error::EvalError;
 use crate::reference::matrix::{FormFactors, Pass, check_sizes, kappa_matrix, pass_columns};
@@ -48,8 +49,8 @@ pub struct Contraction {
     /// area-weighted L1 norm.
     pub kappa: Vec<Real>,
     /// Whether `max_row_sum` and `kappa` were measured on the matrix; when not
-    /// ([`Contraction::assumed`]), they are DESIGN §5's hypothesis, and every bound built on
-    /// them holds under it.
+    /// ([`Contraction::assumed`]), they are the hypothesis of
+    /// docs/design.md §6.3, and every bound built on them holds under it.
     pub measured: bool,
 }
 
@@ -58,8 +59,8 @@ impl Contraction {
         Contraction { max_row_sum, rho_max: rho_max(system), kappa, measured: true }
     }
 
-    /// The contraction DESIGN §5's hypothesis gives without looking at `F`: rows sum to at
-    /// most 1 and `F` is reciprocal (`A_i F_ij = A_j F_ji`), so that
+    /// The contraction the hypothesis of docs/design.md §6.3 gives without looking at `F`:
+    /// rows sum to at most 1 and `F` is reciprocal (`A_i F_ij = A_j F_ji`), so that
     /// `κ_c = max_j Σ_i ρ_ic F_ji ≤ ρ_max,c`. What runs without a stored matrix bound their
     /// error with; the analytic backend is exactly reciprocal and its rows sum to 1 within its
     /// stated accuracy (`cargo xtask ff` measures both).
@@ -121,8 +122,8 @@ impl Contraction {
         self.max_factor() < 1.0
     }
 
-    /// True when every row of `F` sums to at most 1, the hypothesis stated in DESIGN §5
-    /// (with reciprocity it implies `κ_c ≤ ρ_max,c`).
+    /// True when every row of `F` sums to at most 1, the hypothesis stated in
+    /// docs/design.md §6.3 (with reciprocity it implies `κ_c ≤ ρ_max,c`).
     pub fn rows_at_most_one(&self) -> bool {
         self.max_row_sum <= 1.0
     }
@@ -267,18 +268,18 @@ pub(crate) fn from_columns_dyn(system: &LinearSystem, f: &dyn ColumnSource, b: &
 
 /// The certified bound on the error of a displayed radiosity from what its solver knows
 /// without extra columns ([`ResidualBound`]), and a contraction: measured on a stored matrix,
-/// or DESIGN §5's hypothesis ([`Contraction::assumed`]).
+/// or the hypothesis of docs/design.md §6.3 ([`Contraction::assumed`]).
 ///
 /// Per channel `‖r_c‖_A ≤ κ_c ‖d_c‖_A + ‖e_c‖_A` ([`ResidualBound::residual_norm`]), and
 /// `Σ_c ‖B_c − B*_c‖_A ≤ Σ_c ‖r_c‖_A / (1 − κ_c)`, since `‖(I − ρ_c F)⁻¹‖_A ≤ 1 / (1 − κ_c)`
 /// when `κ_c = ‖ρ_c F‖_A < 1` (the `sharp` form of [`Residual::bound`]; with
-/// [`Contraction::assumed`], `κ_c = ρ_max,c` and this is DESIGN §5's certificate). The
-/// relative figure needs no reference: `‖B*‖_A ≥ ‖B‖_A − ‖B − B*‖_A` and `B* ≥ E`
-/// elementwise, and when the solver knows its residual is non-negative
-/// ([`ResidualBound::nonnegative`]) `B* ≥ B`, so `‖B*‖_A ≥ Σ A B`; the bound is divided by
-/// the largest of the three. It is therefore the same number with or without a reference,
-/// and a run with `--reference none` reports what one with a reference does (but for the
-/// contraction, measured on a stored matrix).
+/// [`Contraction::assumed`], `κ_c = ρ_max,c` and this is the certificate of
+/// docs/design.md §6.3). The relative figure needs no reference:
+/// `‖B*‖_A ≥ ‖B‖_A − ‖B − B*‖_A` and `B* ≥ E` elementwise, and when the solver knows its
+/// residual is non-negative ([`ResidualBound::nonnegative`]) `B* ≥ B`, so `‖B*‖_A ≥ Σ A B`;
+/// the bound is divided by the largest of the three. It is therefore the same number with or
+/// without a reference, and a run with `--reference none` reports what one with a reference does
+/// (but for the contraction, measured on a stored matrix).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct SolverBound {

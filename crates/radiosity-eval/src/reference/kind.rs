@@ -1,5 +1,5 @@
-//! Which reference a lab measures against (`auto`, `matrix`, `shooting` or `none`, DESIGN
-//! §5), and the memory budget `auto` decides by.
+//! Which reference a lab measures against (`auto`, `matrix`, `shooting` or `none`,
+//! docs/design.md §6.2), and the memory budget `auto` decides by.
 //!
 //! - `matrix`: the backend's full matrix stored in `f32` (dense or sparse, whichever is
 //!   smaller; the analytic backend computes each pair once and takes the other entry by

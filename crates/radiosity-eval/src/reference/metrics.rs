@@ -20,7 +20,7 @@
 //! its vectors, and they are measured afterwards.
 //!
 //! **Which vector.** In shooting methods the residual of the shot radiosity `x` is exactly the
-//! unshot `ΔB`, while the residual of the displayed `B = x + ΔB` is `ρ F ΔB` (DESIGN §5).
+//! unshot `ΔB`, while the residual of the displayed `B = x + ΔB` is `ρ F ΔB` (docs/design.md §6.1).
 //! These functions know nothing of that: they measure whatever vector they are handed, so a
 //! caller says which vector a figure is about and bounds the error of the vector it reports.
 //!

@@ -1,11 +1,11 @@
 //! The `shooting` reference: a long run of a shooting solver over the backend's own columns,
-//! to a certified relative bound, with no matrix at all (DESIGN §5).
+//! to a certified relative bound, with no matrix at all (docs/design.md §6.2).
 //!
 //! For scenes whose form-factor matrix does not fit in memory, the reference is obtained
 //! the way solvers work: shooting columns, `O(n)` memory beside the solver's own column
 //! memory. Shooting keeps the unshot `ΔB` as the residual of the shot radiosity, so the
-//! residual of the displayed `B` is `ρ F ΔB` and, under DESIGN §5's hypothesis (rows of `F`
-//! sum to at most 1 and `F` is reciprocal, so `κ_c ≤ ρ_max,c`: [`Contraction::assumed`]),
+//! residual of the displayed `B` is `ρ F ΔB` and, under the hypothesis of docs/design.md §6.3 (rows
+//! of `F` sum to at most 1 and `F` is reciprocal, so `κ_c ≤ ρ_max,c`: [`Contraction::assumed`]),
 //!
 //! `Σ_c ‖B_c − B*_c‖_A ≤ Σ_c ρ_max,c ‖ΔB_c‖_A / (1 − ρ_max,c)`
 //!
@@ -26,7 +26,7 @@
 //! columns and carries all `n`), the run is `gmres-30` by default
 //! ([`ShootingParams::products_solver`]), whose residual is computed exactly by products, and
 //! the contraction is bounded by two products ([`Contraction::from_products`]) instead of
-//! assumed: the certificate is then proven without DESIGN §5's hypothesis.
+//! assumed: the certificate is then proven without that hypothesis.
 
 use crate::error::EvalError;
 use crate::progress::Progress;

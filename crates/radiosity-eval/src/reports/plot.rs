@@ -28,8 +28,8 @@
 //! starts: x runs from the smallest to the largest x plotted, and y, on a log scale, from the
 //! smallest to the largest e_rms, widened by 3% of its span in decades so that the extreme
 //! points do not lie on the frame. The y axis says what e_rms is, the area-weighted relative
-//! RMS error of DESIGN §5 ([`Y_LABEL`]), or just `e_rms (log scale)` ([`Y_LABEL_SHORT`]) on a
-//! plot too short for the long label.
+//! RMS error of docs/design.md §6.1 ([`Y_LABEL`]), or just `e_rms (log scale)` ([`Y_LABEL_SHORT`])
+//! on a plot too short for the long label.
 //!
 //! Drawn with plotters; text uses the DejaVu Sans font embedded in the binary (the `dejavu`
 //! crate), so the PNG looks the same on a machine without fonts. Both formats go to any

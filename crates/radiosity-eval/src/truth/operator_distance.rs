@@ -1,7 +1,7 @@
 //! A fast form-factor operator measured against a trusted one (issue 33's item 3): how far
 //! the operator `F̃` is from the truth `F` in what a solution sees, not only entry by entry.
 //!
-//! Three figures, each named by what it rests on (DESIGN §5):
+//! Three figures, each named by what it rests on (docs/design.md §6):
 //!
 //! - **sampled rows**: row sums and the relative L1 distance `‖F̃_i − F_i‖₁ / ‖F_i‖₁` on rows
 //!   drawn with a seed ([`radiosity_ff::row_comparison`]): a sampled estimate;

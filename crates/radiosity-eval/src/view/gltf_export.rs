@@ -1,6 +1,6 @@
 //! Binary glTF 2.0 of a solved scene: its patches with their radiosity as vertex colours, for
 //! any glTF viewer, and with their materials, so that the file loads back as the same
-//! radiosity system (DESIGN §6 and §7).
+//! radiosity system (docs/design.md §7, docs/cli.md `export`).
 //!
 //! What is written, and why:
 //!

@@ -2,8 +2,8 @@
 //! what they receive they reflect (Hanrahan, Salzman & Aupperle's BF refinement).
 //!
 //! A link's error changes a receiver's radiosity by `ρ_i δF_ij B_j`, and `e_rms` measures
-//! radiosity relative to its area-weighted RMS `B_ref` (DESIGN §5), so the oracle bounds, for
-//! each end as receiver, `ρ_max · Φ / (π r²)` with `Φ = Σ A_j B_j / B_ref` the other end's flux
+//! radiosity relative to its area-weighted RMS `B_ref` (docs/design.md §6.1), so the oracle bounds,
+//! for each end as receiver, `ρ_max · Φ / (π r²)` with `Φ = Σ A_j B_j / B_ref` the other end's flux
 //! in units of `B_ref`: a link between dim or black patches may stay coarse, links from the
 //! lights are refined further than the geometric oracle would. With `B = B_ref` and `ρ = 1`
 //! everywhere this is the geometric bound `max(A_A, A_B) / (π r²)`.

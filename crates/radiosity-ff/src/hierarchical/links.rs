@@ -44,19 +44,17 @@
 //! the link, so a partly visible link misplaces light between its lit and shadowed pairs (a
 //! light leak): `shadows` bounds how much of a row one link may misplace that way. A small
 //! link's fraction is noisy, but the noise is unbiased and averages over the hundreds of links
-//! of a row: tracing all `rays` for small partly visible links (half the rays on `office`)
-//! left its exact solution where it was (measured in `docs/hierarchical.md`). Fewer rays for
-//! larger links, in proportion to their transfer, measured worse: a leak through a link taken as
-//! clear by mistake is systematic.
+//! of a row, so a small link does not trace all `rays`. A larger link does, whatever its
+//! transfer: a leak through a link taken as clear by mistake is systematic. (Both choices
+//! were measured: docs/hierarchical.md.)
 //!
 //! **Shafts** (`shafts=true`, off by default). A larger link between two patches or flat
 //! clusters whose probe is all clear, and a near pair that would trace at least
 //! `SEARCH_FROM` rays, first searches its shaft for patches ([`super::shaft`]); when there is
 //! none, every segment its remaining rays could draw is clear, and it takes the tally they
 //! would give without tracing them. The operator is the same link for link and bit for bit
-//! (tested). On the scenes here the search costs more than the rays it saves: rays are cheap
-//! and a link traces few of them, and most shafts hold a patch (measured in
-//! `docs/hierarchical.md`).
+//! (tested). It is off by default because the search has cost more than the rays it saves
+//! (docs/hierarchical.md, "Shafts").
 //!
 //! The error estimate of a far link (to first order) bounds what it adds to the radiosity of
 //! one receiver, relative to the RMS radiosity: the [brightness](super::brightness) bound

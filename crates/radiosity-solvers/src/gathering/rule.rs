@@ -10,9 +10,8 @@
 //! ([`radiosity_core::ColumnSource::fill_row`]). Hemicube and Monte Carlo columns are not
 //! reciprocal, and their rows are taken from column `i` by reciprocity: gathering then solves
 //! a slightly different system from the one shooting solves, by as much as the backend's
-//! reciprocity error (`cargo xtask ff` reports it). Measured before analytic rows were exact:
-//! Gauss–Seidel on `furnace:res=2` with rows by reciprocity converged to its own residual
-//! 3e-14 but stayed 3.7e-6 (e_rms) from the reference.
+//! reciprocity error (`cargo xtask ff` reports it; docs/solvers.md shows what that did before
+//! analytic rows were exact).
 
 use crate::error::SolverError;
 use crate::run::problem::Problem;

@@ -1,7 +1,7 @@
 //! `group-jacobi-gM` and `group-gs-gM`: group (block) Jacobi and group Gauss–Seidel gathering
 //! over a fixed partition of the patches into groups of `m`.
 //!
-//! ## Rule (DESIGN §4, paper eqs. 3–4)
+//! ## Rule (docs/design.md §4.5, paper eqs. 3–4)
 //!
 //! The patches are cut once into groups of `m` consecutive patches of an order (the last group
 //! may be smaller). For group `r`, and per channel, the step solves

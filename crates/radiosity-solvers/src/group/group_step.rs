@@ -2,7 +2,7 @@
 //! group's own interactions exactly, then shoot the result to every patch; or, when the group
 //! system cannot be trusted, shoot the group's patches one after another.
 //!
-//! ## Rule (DESIGN §4)
+//! ## Rule (docs/design.md §4.6)
 //!
 //! For a group `r` of `m` patches with their columns, and per channel:
 //!
@@ -85,9 +85,8 @@
 //! at most 1e-13 `Σ_a |y_a|` (a small change between iterates is only the signal to check; it
 //! proves nothing). Its `y` is not exact, so the group keeps that residual `s − Φ_rr y − ΔB⁺`
 //! as unshot (round-off small), and the unshot radiosity stays exactly the residual of the
-//! shot radiosity. Convergence slows as `q → 1`: on a closed furnace of 30 patches a group
-//! step needed 1297 sweeps at `ρ = 0.99` and would need about 11 900 at `ρ = 0.999`, beyond
-//! [`MAX_INNER_SWEEPS`], so that group falls back.
+//! shot radiosity. Convergence slows as `q → 1`, and a group whose sweeps reach
+//! [`MAX_INNER_SWEEPS`] falls back (docs/solvers.md gives the sweeps a closed furnace took).
 //!
 //! LU is the default: the `group_solve` bench (`cargo bench -p radiosity-solvers --bench
 //! group_solve`, figures in `docs/solvers.md`) found no size up to m = 400 where the inner

@@ -5,8 +5,8 @@
 //!
 //! ## The operator
 //!
-//! Per channel the system is `A B = E` with `A = I − diag(ρ) F` (DESIGN §3). A Krylov solver
-//! applies `A` to a vector `x` once a step. A source that multiplies a vector itself (a
+//! Per channel the system is `A B = E` with `A = I − diag(ρ) F` (docs/design.md §3.1). A Krylov
+//! solver applies `A` to a vector `x` once a step. A source that multiplies a vector itself (a
 //! stored matrix, the hierarchical operator) does so in one product. Otherwise
 //! `F x = Σ_j F_{·j} x_j` is a sum of columns, and a
 //! column serves every channel at once, so a step costs one column for each patch `j` where

@@ -3,8 +3,8 @@
 //!
 //! Solvers never call a `ColumnSource` directly. They ask the [`Problem`] for a column or a
 //! row; the problem counts the columns computed and the seconds spent in them, which is the
-//! unit of cost of every method (DESIGN §3). A row costs one column too: the source gives it
-//! when it can ([`radiosity_core::ColumnSource::fill_row`]), and otherwise it follows from the
+//! unit of cost of every method (docs/design.md §3.3). A row costs one column too: the source gives
+//! it when it can ([`radiosity_core::ColumnSource::fill_row`]), and otherwise it follows from the
 //! same column by reciprocity, `F_ji = F_ij A_i / A_j`.
 //!
 //! A product `F x` of a whole vector ([`Problem::multiply`]) is the source's own when it has

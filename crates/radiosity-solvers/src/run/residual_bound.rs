@@ -3,10 +3,10 @@
 //!
 //! ## Rule
 //!
-//! The bound is always about the **displayed** radiosity `B = state.radiosity` (DESIGN §5), per
-//! channel `c`, with residual `r = E + ρ F B − B` and the area-weighted L1 norm
-//! `‖x‖_A = Σ_i A_i |x_i|`. A solver that knows one gives two non-negative vectors `d` and `e`
-//! (by their norms) with, elementwise,
+//! The bound is always about the **displayed** radiosity `B = state.radiosity`
+//! (docs/design.md §6.1), per channel `c`, with residual `r = E + ρ F B − B` and the
+//! area-weighted L1 norm `‖x‖_A = Σ_i A_i |x_i|`. A solver that knows one gives two
+//! non-negative vectors `d` and `e` (by their norms) with, elementwise,
 //!
 //! `|r_ic| ≤ ρ_ic Σ_j F_ij |d_jc| + |e_ic|`,
 //!
@@ -18,7 +18,8 @@
 //! [`ResidualBound::residual_norm`] is the bound. The solver never needs `κ_c`; the caller
 //! knows it or bounds it: with exact reciprocity `A_i F_ij = A_j F_ji`,
 //! `κ_c = max_j Σ_i ρ_ic F_ji ≤ (max_i ρ_ic) · (max_j Σ_i F_ji)`, at most `max_i ρ_ic` when
-//! the rows sum to at most 1. With DESIGN §5's certificate, `Σ A |B − B*| ≤ ‖r‖_A / (1 − ρ_max)`.
+//! the rows sum to at most 1. With the certificate of docs/design.md §6.3,
+//! `Σ A |B − B*| ≤ ‖r‖_A / (1 − ρ_max)`.
 //!
 //! ## Derivations, by family
 //!

@@ -2,8 +2,8 @@
 //!
 //! `radiosity` is the displayed radiosity `B` and `unshot` the unshot radiosity `ΔB`, both
 //! patch-major (`[i * channels + c]`); for shooting methods the shot radiosity is
-//! `x = B − ΔB`, and the residual of `x` is exactly `ΔB` (DESIGN §5). Gathering methods keep
-//! `unshot` as the last change of each patch.
+//! `x = B − ΔB`, and the residual of `x` is exactly `ΔB` (docs/design.md §4.1). Gathering methods
+//! keep `unshot` as the last change of each patch.
 //!
 //! The state is what every solver has: the iterate and its cost. Figures that only some
 //! solvers have (group steps, condition numbers, fallbacks) are in their

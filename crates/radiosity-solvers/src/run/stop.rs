@@ -1,4 +1,4 @@
-//! Stop rules (DESIGN §7) and why a run ended.
+//! Stop rules (docs/cli.md, "Stop rules") and why a run ended.
 //!
 //! Rules are a comma list, and the first that holds stops the run: `columns=N`, `columns=2n`
 //! (a multiple of the patch count), `steps=N` (also `steps=3n`), `rms=1e-3`, `residual=1e-4`,

@@ -24,7 +24,7 @@
 //! [`STEP_CAP`]`·n` steps. Then:
 //!
 //! - **converged** means the *certified* bound on the final radiosity's relative L1 error,
-//!   `Σ A|r| / (1 − q)` over `Σ A|B|` (DESIGN §5, [`crate::evaluate`]), is at most
+//!   `Σ A|r| / (1 − q)` over `Σ A|B|` (docs/design.md §6.3, [`crate::evaluate`]), is at most
 //!   [`CONVERGED`]; no claim rests on the change between iterates or on the solver's own
 //!   estimate. Where `q ≥ 1` (ρ times some row sum of F reaches 1) nothing is certifiable;
 //! - the **exact answer** is the furnace identity `E / (1 − ρ)` where the scene is closed and

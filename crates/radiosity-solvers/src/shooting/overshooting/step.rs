@@ -21,8 +21,8 @@
 //! ## Selection, and why it uses the overshoot
 //!
 //! Once a patch has shot, its unshot radiosity is `−ΔB⁺`, possibly large. Choosing by
-//! `A_j |ΔB_j|` would pick it again and again, and each time it would shoot `≈ 0` (DESIGN §4
-//! records a prototype of `xu` freezing at e_rms 1.6e-2 that way). So selection uses
+//! `A_j |ΔB_j|` would pick it again and again, and each time it would shoot `≈ 0`: the run
+//! freezes (docs/design.md §4.4). So selection uses
 //! `|ΔB_j + ΔB⁺_j|`, with the overshoot the shot will use. The ambient and relaxation terms
 //! are known for every patch. The row term is known only for the shooter, whose column is
 //! fetched for the shot (its row follows by reciprocity, `F_jk = F_kj A_k / A_j`); for the

@@ -225,8 +225,8 @@ impl Observer for ResidualRecorder<'_> {
 }
 
 /// Every shooting solver's residual keeps falling: measured every n steps, it is below its
-/// previous value until it reaches round-off. DESIGN §4 records overshooting variants that
-/// froze (a patch chosen again and again to shoot nothing) or cycled; either would show here
+/// previous value until it reaches round-off. docs/design.md §4.4 records overshooting variants
+/// that froze (a patch chosen again and again to shoot nothing) or cycled; either would show here
 /// as a window without progress. (Over a shorter window, `relax-1.5` may rise for a while in
 /// the furnace: over-relaxation does not make the residual norm monotone, only smaller in
 /// the end.)

@@ -5,8 +5,9 @@
 //! in the same debug build as every other test, so no second build of the workspace. The
 //! module is staged with the package's Python sources in `target/python-package`, and numpy,
 //! scipy and pytest are installed into a virtual environment, `target/python-venv` (never
-//! into the system's Python), from `tests/python/requirements.txt`. It needs Python 3.9 or
-//! later with its `venv` module (`$PYTHON`, else `python3`).
+//! into the system's Python), from `tests/python/requirements.txt`; the suite runs on every
+//! core (pytest-xdist). It needs Python 3.9 or later with its `venv` module (`$PYTHON`, else
+//! `python3`).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -74,7 +75,9 @@ fn the_python_package_passes_its_pytest_suite() {
     stage_package(crate_dir, &stage, &module);
     run(
         Command::new(&python)
-            .args(["-m", "pytest", "-q", "-p", "no:cacheprovider"])
+            // Spread over the cores (pytest-xdist): `cargo test` runs this binary alone, and its
+            // one test would otherwise keep one core busy and leave the others idle.
+            .args(["-m", "pytest", "-q", "-p", "no:cacheprovider", "-n", "auto"])
             .arg(crate_dir.join("tests/python"))
             .env("PYTHONPATH", &stage),
         "pass the pytest suite of the Python package",

@@ -1,27 +1,31 @@
 //! Form factors: kernels and backends that implement [`radiosity_core::ColumnSource`].
 //!
-//! This is the only crate that turns geometry into form factors. Four backends, chosen by a
-//! [`BackendSpec`] parsed from `NAME[:key=value…]`:
+//! This is the only crate that turns geometry into form factors. Backends are chosen by a
+//! [`BackendSpec`] that a [`BackendRegistry`] parses from `NAME[:key=value…]` ([`registry`]);
+//! a built backend is a [`FormFactorBackend`], asked what it can do ([`backend`]). The
+//! built-ins:
 //!
 //! - `analytic` ([`analytic`]): Lambert's point-to-polygon formula integrated over the
 //!   receiver, times each pair's visible fraction, estimated with shadow rays drawn as the
 //!   kernel weighs them ([`pair_visibility`]) when something can occlude;
 //! - `hemicube` ([`hemicube`]): a ray-cast hemicube at the shooter, giving its row;
 //! - `montecarlo` ([`montecarlo`]): cosine-weighted rays from the shooter, giving its row;
+//! - `hierarchical` ([`hierarchical`]): links between clusters of a tree over the patches,
+//!   refined to an error threshold;
 //! - `matrix` ([`matrix`]): the full matrix of another backend, assembled once and stored.
 //!
 //! Every backend clamps its entries into `[0, 1]` and counts what it clamped ([`guard`]).
 //!
 //! ```
 //! use radiosity_core::ColumnSource;
-//! use radiosity_ff::{Backend, BackendSpec, FormFactorInput};
+//! use radiosity_ff::{BackendSpec, FormFactorInput};
 //! use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
 //!
 //! let scene = load_scene("furnace:res=2").unwrap().scene;
 //! let visibility = Visibility::new(&scene);
 //! let analysis = SceneAnalysis::new(&scene, &visibility);
 //! let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
-//! let backend = Backend::columns(&BackendSpec::parse("analytic").unwrap(), input);
+//! let backend = BackendSpec::parse("analytic").unwrap().build(input).unwrap();
 //! let mut column = vec![0.0; backend.patch_count()];
 //! backend.fill_column(0, &mut column);
 //! // Every patch of the closed box sees the whole box: Σ_j F_0j = 1, and by reciprocity
@@ -42,6 +46,7 @@ pub mod montecarlo;
 pub mod pair_visibility;
 pub mod quadrature;
 pub mod rays;
+pub mod registry;
 pub mod row_comparison;
 pub mod row_diagnosis;
 pub mod sobol;
@@ -60,12 +65,13 @@ pub use analytic::AnalyticColumns;
 /// sixteenth of its rays (`pair_visibility`, "Probes"). 4: the hierarchical operator's tree
 /// is split between 54 orientation classes, not 6.
 pub const ENTRIES_REVISION: u32 = 4;
-pub use backend::{Backend, FormFactorInput};
+pub use backend::{BackendFigures, FormFactorBackend, FormFactorInput, PairEntries};
 pub use error::FfError;
 pub use hemicube::HemicubeColumns;
 pub use hierarchical::{BuildProgress, HierarchicalColumns, HierarchyFigures, Oracle};
 pub use matrix::StoredMatrix;
 pub use montecarlo::{MonteCarloColumns, RayTally};
 pub use rays::{HitRay, ShadowSegment, TracedRays};
-pub use spec::{AnalyticParams, BackendSpec, HemicubeParams, HierarchicalParams, MonteCarloParams};
+pub use registry::{BackendArgument, BackendParams, BackendRegistry, BuildObserver, Unobserved};
+pub use spec::{AnalyticParams, BackendSpec, HemicubeParams, HierarchicalParams, MatrixParams, MonteCarloParams};
 pub use traced::ColumnRays;

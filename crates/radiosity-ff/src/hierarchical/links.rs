@@ -67,9 +67,9 @@
 //! "A unified hierarchical algorithm for global illumination with scattering volumes and object
 //! clusters", IEEE TVCG 1(3)).
 
-use super::BuildProgress;
 use super::brightness::Brightness;
-use super::kernel_factor;
+use super::build::BuildProgress;
+use super::product::kernel_factor;
 use super::shaft::{ROOT, Search, Shaft, ShaftTree, lowest_along};
 use super::tree::ClusterTree;
 use crate::analytic::AnalyticColumns;

@@ -469,7 +469,7 @@ impl StoredMatrix {
     }
 
     /// Assembles the matrix of `source` (areas `area`), a stage of `observer`: each unordered
-    /// pair once when it gives single entries ([`FormFactorBackend::pair`],
+    /// pair once when it gives single entries ([`FormFactorBackend::pairs`],
     /// [`Self::assemble_reciprocal`]), column by column otherwise ([`Self::assemble`]). Returns
     /// the matrix and the entries clamped into `[0, 1]` (the source's own count for columns).
     pub fn assemble_backend(

@@ -28,11 +28,14 @@
 //! - Damerau 1964, "A technique for computer detection and correction of spelling errors",
 //!   Communications of the ACM 7(3).
 
+use crate::analytic::AnalyticParams;
 use crate::backend::{FormFactorBackend, FormFactorInput};
 use crate::error::FfError;
+use crate::hemicube::HemicubeParams;
+use crate::hierarchical::HierarchicalParams;
+use crate::montecarlo::MonteCarloParams;
 use crate::spec::{BackendSpec, MatrixParams};
 use crate::traced::ColumnRays;
-use crate::{AnalyticParams, HemicubeParams, HierarchicalParams, MonteCarloParams};
 use radiosity_geom::{KeyValueParams, ParamDoc};
 use std::any::Any;
 use std::fmt;
@@ -72,7 +75,7 @@ pub trait BackendArgument: Any + fmt::Debug + Send + Sync {
     ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError>;
 
     /// Whether the source gives single entries reciprocal by construction
-    /// ([`FormFactorBackend::pair`]), so that its matrix is assembled each pair once: known
+    /// ([`FormFactorBackend::pairs`]), so that its matrix is assembled each pair once: known
     /// before building, since it names the assembly in cache keys. False by default.
     fn pairs_once(&self) -> bool {
         false
@@ -84,14 +87,14 @@ pub trait BackendArgument: Any + fmt::Debug + Send + Sync {
         None
     }
 
-    /// The cache kind under which a built source is kept ([`FormFactorBackend::to_bytes`]) and
+    /// The cache kind under which a built source is kept ([`FormFactorBackend::persist`]) and
     /// read back ([`Self::load`]), for a backend whose build is worth keeping. `None` by
     /// default.
     fn cache_kind(&self) -> Option<&'static str> {
         None
     }
 
-    /// The source written by [`FormFactorBackend::to_bytes`] under `key`, read back for
+    /// The source written by [`FormFactorBackend::persist`] under `key`, read back for
     /// `input`'s scene. Refused by default.
     fn load<'a>(
         &self,

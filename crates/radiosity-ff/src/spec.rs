@@ -11,16 +11,19 @@
 //! (with [`crate::ENTRIES_REVISION`]) and labels results. `analytic`'s `cache`, which changes
 //! no entry, is left out.
 
+use crate::analytic::AnalyticColumns;
 pub use crate::analytic::{ANALYTIC_PARAMS, AnalyticParams};
 use crate::backend::{FormFactorBackend, FormFactorInput};
 use crate::error::FfError;
+use crate::hemicube::HemicubeColumns;
 pub use crate::hemicube::{HEMICUBE_PARAMS, HemicubeParams};
+use crate::hierarchical::{BuildProgress, HierarchicalColumns};
 pub use crate::hierarchical::{HIERARCHICAL_PARAMS, HierarchicalParams, Oracle};
 use crate::matrix::StoredMatrix;
+use crate::montecarlo::MonteCarloColumns;
 pub use crate::montecarlo::{MONTECARLO_PARAMS, MonteCarloParams};
 use crate::registry::{BackendArgument, BackendParams, BackendRegistry, BuildObserver, Unobserved, owner};
 use crate::traced::ColumnRays;
-use crate::{AnalyticColumns, HemicubeColumns, HierarchicalColumns, MonteCarloColumns};
 use radiosity_core::Real;
 use radiosity_geom::{KeyValueParams, ParamDoc};
 use std::any::Any;
@@ -260,7 +263,7 @@ impl BackendArgument for HierarchicalParams {
         // The count is of thousandths of the pairs of patches settled: links high in the tree
         // settle many at once, so it runs fast at first and slows down.
         observer.begin("building the hierarchical operator", 1000, "‰ pairs settled");
-        let observe = |p: crate::BuildProgress| {
+        let observe = |p: BuildProgress| {
             observer.advance((p.settled * 1000.0) as u64, &format!("{} links", p.links));
         };
         let built = HierarchicalColumns::new_observed(input.scene, input.visibility, input.analysis, *self, &observe);

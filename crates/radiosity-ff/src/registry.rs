@@ -288,3 +288,95 @@ pub fn builtin() -> &'static BackendRegistry {
     static BUILTIN: OnceLock<BackendRegistry> = OnceLock::new();
     BUILTIN.get_or_init(BackendRegistry::builtin)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use radiosity_core::{ColumnSource, Real};
+    use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
+
+    /// `F_ij = c` off the diagonal: a backend of one's own, registered with a closure.
+    #[derive(Debug)]
+    struct Uniform(Real);
+
+    struct UniformColumns(usize, Real);
+
+    impl ColumnSource for UniformColumns {
+        fn patch_count(&self) -> usize {
+            self.0
+        }
+
+        fn fill_column(&self, j: usize, column: &mut [Real]) {
+            column.iter_mut().enumerate().for_each(|(i, f)| *f = if i == j { 0.0 } else { self.1 });
+        }
+    }
+
+    impl FormFactorBackend for UniformColumns {}
+
+    impl BackendArgument for Uniform {
+        fn canonical(&self) -> String {
+            format!("uniform:c={}", self.0)
+        }
+
+        fn build<'a>(
+            &self,
+            input: FormFactorInput<'a>,
+            _: &dyn BuildObserver,
+        ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
+            Ok(Box::new(UniformColumns(input.scene.len(), self.0)))
+        }
+    }
+
+    const UNIFORM_PARAMS: &[ParamDoc] = &[ParamDoc { key: "c", default: "0.1", doc: "every entry" }];
+
+    fn with_uniform() -> BackendRegistry {
+        let mut registry = BackendRegistry::builtin();
+        registry.register_fn("uniform", "every entry c", UNIFORM_PARAMS, |items, _| {
+            let p = KeyValueParams::parse(&owner("uniform"), items.iter().copied(), UNIFORM_PARAMS)?;
+            Ok(Arc::new(Uniform(p.real("c", 0.1, |c| (0.0..=1.0).contains(&c), "an entry in [0, 1]")?)))
+        });
+        registry
+    }
+
+    #[test]
+    fn the_built_ins_are_listed_in_order_and_typos_get_the_nearest_name() {
+        let registry = BackendRegistry::builtin();
+        assert_eq!(registry.names(), "analytic, hemicube, montecarlo, hierarchical, matrix");
+        assert_eq!(registry.suggest("hemicub").as_deref(), Some("hemicube"));
+        assert_eq!(registry.suggest("radiance"), None);
+        let e = registry.parse("analytc:order=2").unwrap_err().to_string();
+        assert!(e.contains("unknown form-factor backend 'analytc' (did you mean 'analytic'?)"), "{e}");
+        let help = registry.help();
+        for entry in registry.entries() {
+            assert!(help.contains(entry.name()), "{help}");
+            entry.params().iter().for_each(|p| assert!(help.contains(&format!("{}={}", p.key, p.default)), "{help}"));
+        }
+        assert!(BackendRegistry::empty().parse("analytic").is_err());
+    }
+
+    #[test]
+    fn a_registered_backend_parses_builds_and_is_stored_as_a_matrix() {
+        let registry = with_uniform();
+        let spec = registry.parse("uniform:c=0.25").unwrap();
+        assert_eq!((spec.name(), spec.canonical().as_str()), ("uniform", "uniform:c=0.25"));
+        let e = registry.parse("uniform:c=2").unwrap_err().to_string();
+        assert!(e.contains("form-factor backend 'uniform'") && e.contains("c=2"), "{e}");
+        assert!(BackendRegistry::builtin().parse("uniform").is_err());
+
+        let scene = load_scene("furnace:res=2").unwrap().scene;
+        let visibility = Visibility::new(&scene);
+        let analysis = SceneAnalysis::new(&scene, &visibility);
+        let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
+        let stored = registry.parse("matrix:of=uniform:c=0.25").unwrap();
+        assert_eq!(stored.canonical(), "matrix:of=uniform:rebalance=false:c=0.25");
+        assert!(!stored.pairs_once(), "a column backend is assembled column by column");
+        let built = stored.build(input).unwrap();
+        let matrix = built.stored().expect("a stored matrix");
+        let n = scene.len();
+        for (i, j) in [(0, 1), (1, 0), (3, 3), (n - 1, 0)] {
+            assert_eq!(matrix.get(i, j), if i == j { 0.0 } else { 0.25 }, "({i}, {j})");
+        }
+        let e = registry.parse("matrix:of=matrix").unwrap_err().to_string();
+        assert!(e.contains("of=matrix") && e.contains("assembled from a column backend"), "{e}");
+    }
+}

@@ -83,7 +83,7 @@ pub fn backend_help() -> String {
     format!(
         "The form-factor backend, NAME[:key=value…] (for example `matrix:of=hemicube:res=64:rebalance=true`). \
          Every backend, with its parameters and their defaults:\n{}",
-        BackendRegistry::builtin().help()
+        BackendRegistry::builtin().help().trim_end()
     )
 }
 

@@ -10,7 +10,7 @@
 //! ([`BackendRegistry::register_fn`], which also gets the registry, so that a backend naming
 //! another, as `matrix`'s `of`, reads it through the same names). A parser gives a
 //! [`BackendArgument`]: what the parameters are, their canonical argument, and how to build the
-//! source ([`FormFactorBackend`](crate::FormFactorBackend)) from the scene.
+//! source ([`FormFactorBackend`]) from the scene.
 //!
 //! [`BackendRegistry::parse`] looks the name up; the first entry of that name decides (a
 //! later entry of the same name is never reached: start from [`BackendRegistry::empty`] to

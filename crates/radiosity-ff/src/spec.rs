@@ -111,6 +111,8 @@ impl BackendSpec {
     }
 }
 
+/// Equal when the names and the canonical arguments are: the two give the same entries
+/// (`analytic:cache=0` equals `analytic`).
 impl PartialEq for BackendSpec {
     fn eq(&self, other: &BackendSpec) -> bool {
         self.name == other.name && self.canonical() == other.canonical()

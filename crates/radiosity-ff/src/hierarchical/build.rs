@@ -11,7 +11,7 @@
 use super::HierarchicalColumns;
 use super::adjacency::{Adjacency, Lists};
 use super::brightness::Brightness;
-use super::links::{self, Links, Refiner, Watch};
+use super::links::{self, BuildProgress, Links, Refiner, Watch};
 use super::params::HierarchicalParams;
 use super::shaft::ShaftTree;
 use super::tree::{self, ClusterTree};
@@ -59,17 +59,6 @@ pub struct HierarchyFigures {
     /// Whether the links were read from disk ([`HierarchicalColumns::from_bytes`]) rather than
     /// built: the figures above are then the build's.
     pub loaded: bool,
-}
-
-/// How far a build has come ([`HierarchicalColumns::new_observed`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BuildProgress {
-    /// The share of the pairs of patches settled: covered by a link, or dropped as unseen. It
-    /// ends at 1; it is not a share of the time, since links high in the tree settle many
-    /// pairs at once.
-    pub settled: Real,
-    /// Links made so far.
-    pub links: u64,
 }
 
 impl HierarchicalColumns {

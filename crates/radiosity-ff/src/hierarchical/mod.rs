@@ -58,7 +58,8 @@ mod tree;
 
 use adjacency::Adjacency;
 pub use brightness::Oracle;
-pub use build::{BuildProgress, HierarchyFigures};
+pub use build::HierarchyFigures;
+pub use links::BuildProgress;
 pub use params::{HIERARCHICAL_PARAMS, HierarchicalParams};
 use radiosity_core::{Real, Vec3};
 use tree::ClusterTree;

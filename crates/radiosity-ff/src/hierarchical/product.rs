@@ -11,7 +11,7 @@
 //! columns hold.
 
 use super::HierarchicalColumns;
-use super::links::Span;
+use super::links::{Span, kernel_factor};
 use radiosity_core::{ColumnSource, Real, Vec3};
 use rayon::prelude::*;
 
@@ -57,23 +57,6 @@ impl HierarchicalColumns {
             line[q] = w[p] * w[q] * (transfer / if row { self.areas[p] } else { self.areas[q] });
         }
     }
-}
-
-/// The kernel of a far link to first order about the centres, without its `1 / (π r²)`:
-/// for `x` on `a`'s side (normal `n`, offset `a` from `a`'s centre) and `y` on `b`'s (normal
-/// `m`, offset `b`), with `e` the link's direction, `P = I − e eᵀ`, `Δ = b − a`, `α = n · e`,
-/// `β = −m · e`:
-/// `κ = αβ (1 − 2 e · Δ / r) + (β n · PΔ − α m · PΔ) / r`. It is symmetric in the two ends (swap
-/// them and `e`), and non-negative wherever the link was made.
-pub(super) fn kernel_factor(span: &Span, (n, a): (Vec3, Vec3), (m, b): (Vec3, Vec3)) -> Real {
-    let e = span.d;
-    if !span.first {
-        return n.dot(e) * -m.dot(e);
-    }
-    let delta = b - a;
-    let p_delta = delta - e * e.dot(delta);
-    let (alpha, beta) = (n.dot(e), -m.dot(e));
-    alpha * beta * (1.0 - 2.0 * e.dot(delta) / span.r) + (beta * n.dot(p_delta) - alpha * m.dot(p_delta)) / span.r
 }
 
 impl ColumnSource for HierarchicalColumns {

@@ -24,7 +24,7 @@ pub struct SolveArgs {
     #[arg(long, value_name = "SOLVER", long_help = solver_help())]
     pub solver: String,
     /// The form-factor backend, with `:key=value` parameters.
-    #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic")]
+    #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic", long_help = crate::ff::backend_help())]
     pub ff: String,
     /// Stop rules, the first to hold stops the run: columns=N, columns=2n, steps=N, rms=1e-3,
     /// residual=1e-4, time=30s.

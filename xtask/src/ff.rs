@@ -34,7 +34,7 @@ use radiosity_eval::{
 use radiosity_ff::guard::MatrixFigures;
 use radiosity_ff::row_comparison::{compare_rows, sampled_rows};
 use radiosity_ff::row_diagnosis::{RowDiagnosis, worst_rows};
-use radiosity_ff::{Backend, BackendSpec, StoredMatrix};
+use radiosity_ff::{BackendRegistry, BackendSpec, StoredMatrix};
 use radiosity_geom::{Closure, PreparedScene};
 use serde::Serialize;
 use serde::ser::{SerializeSeq, Serializer};
@@ -53,9 +53,9 @@ pub struct Args {
     /// The scene: a built-in name with `:key=value` parameters, or a .gltf, .glb or .mgf path.
     #[arg(long, value_name = "SCENE")]
     scene: String,
-    /// The backend: analytic, hemicube, montecarlo, hierarchical or matrix, with `:key=value` parameters
-    /// (for example `matrix:of=hemicube:res=64:rebalance=true`).
-    #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic")]
+    /// The backend, with `:key=value` parameters (for example
+    /// `matrix:of=hemicube:res=64:rebalance=true`).
+    #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic", long_help = backend_help())]
     ff: String,
     /// Print the patches, the matrix (rows), its row sums and reciprocity error as JSON.
     #[arg(long)]
@@ -76,6 +76,15 @@ pub struct Args {
     /// `scipy.sparse.load_npz` reads it, with `area`, `emission` and `reflectivity`).
     #[arg(long, value_name = "FILE", conflicts_with = "against")]
     out: Option<PathBuf>,
+}
+
+/// The `--ff` help: every backend the registry parses, with its parameters.
+pub fn backend_help() -> String {
+    format!(
+        "The form-factor backend, NAME[:key=value…] (for example `matrix:of=hemicube:res=64:rebalance=true`). \
+         Every backend, with its parameters and their defaults:\n{}",
+        BackendRegistry::builtin().help().trim_end()
+    )
 }
 
 /// Runs `ff`.
@@ -130,36 +139,17 @@ fn compare(args: &Args, prepared: &PreparedScene, spec: &BackendSpec, reference:
     let backend = radiosity_eval::backend(prepared, spec, Some(&cache()), &Bars::new())?;
     let built = start.elapsed().as_secs_f64();
     let truth = radiosity_eval::backend(prepared, reference, Some(&cache()), &Bars::new())?;
-    let how = match &backend {
-        Backend::Hierarchical(h) if h.figures().loaded => {
-            format!("read from the cache in {built:.3} s (built in {:.3} s)", h.figures().seconds)
-        }
-        Backend::Hierarchical(h) => {
-            let seconds = h.figures().seconds;
-            format!("built in {seconds:.3} s, written to the cache in {:.3} s more", built - seconds)
+    let figures = backend.figures();
+    let how = match &figures {
+        Some(f) if f.loaded => format!("read from the cache in {built:.3} s (built in {:.3} s)", f.seconds),
+        Some(f) if spec.argument().cache_kind().is_some() => {
+            format!("built in {:.3} s, written to the cache in {:.3} s more", f.seconds, built - f.seconds)
         }
         _ => format!("built in {built:.3} s"),
     };
     let mut out = format!("scene        {}: {n} patches\nbackend      {} {how}\n", args.scene, spec.canonical());
-    if let Backend::Hierarchical(h) = &backend {
-        let f = h.figures();
-        out += &format!(
-            "hierarchy    {} nodes, {} far links ({} of them to zeroth order), {} near links ({} of them far pairs of \
-             patches), {} shadow rays ({} links occluded, {} seen whole through clear shafts), {}; {} rows capped at 1 by closure (lowest weight \
-             {:.3}), {} above 1 by their near links alone\n",
-            f.nodes,
-            f.far_links,
-            f.zeroth_links,
-            f.near_links,
-            f.far_pairs,
-            f.rays,
-            f.occluded,
-            f.clear_shafts,
-            human_bytes(f.bytes),
-            f.capped,
-            f.lowest_weight,
-            f.near_above
-        );
+    if let Some(f) = &figures {
+        out += &format!("{:<12} {f}; {} held\n", spec.name(), human_bytes(f.bytes));
     }
     let x = vec![1.0; n];
     let mut y = vec![0.0; n];

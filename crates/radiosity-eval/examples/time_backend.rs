@@ -64,10 +64,10 @@ pub fn measure(scene: &str) -> Result<(Vec<Timing>, String), Box<dyn Error>> {
     let start = Instant::now();
     let built_in = radiosity_eval::fresh_backend(&prepared, &analytic, &NoProgress)?;
     let mut timings = vec![time(&prepared, "analytic", &built_in, &lab, start)?];
-    let source = Box::new(custom_backend::CentroidDisc::new(prepared.scene()));
+    let source = Box::new(custom_backend::CentroidDisc::new(prepared.scene(), 1.0));
     let lab = Lab::with_source(&prepared, "centroid-disc", source, false, LabOptions::default(), &NoProgress)?;
     let start = Instant::now();
-    let own = custom_backend::CentroidDisc::new(prepared.scene());
+    let own = custom_backend::CentroidDisc::new(prepared.scene(), 1.0);
     timings.push(time(&prepared, "centroid-disc", &own, &lab, start)?);
 
     let mut table = String::from("| backend | columns/s | xu to 1e-1 | to 1e-2 | to 1e-3 | columns |\n");
@@ -90,7 +90,7 @@ pub fn measure(scene: &str) -> Result<(Vec<Timing>, String), Box<dyn Error>> {
 }
 
 fn main() -> Result<(), Box<dyn Error>> {
-    let scene = custom_backend::argument("--scene").unwrap_or_else(|| "cornell".into());
+    let scene = custom_backend::argument("--scene", "cornell");
     print!("{}", measure(&scene)?.1);
     Ok(())
 }

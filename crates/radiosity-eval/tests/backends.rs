@@ -5,7 +5,7 @@
 use radiosity_core::{ColumnSource, Real};
 use radiosity_eval::NoProgress;
 use radiosity_eval::{assembly_of, obtain_matrix};
-use radiosity_ff::{Backend, BackendSpec, StoredMatrix};
+use radiosity_ff::{BackendSpec, StoredMatrix};
 use radiosity_geom::PreparedScene;
 
 /// The matrix `spec` names, assembled fresh on a pool of `threads` threads.
@@ -38,8 +38,7 @@ fn an_analytic_matrix_is_assembled_each_pair_once_reciprocal_and_thread_independ
 
     let area: Vec<Real> = prepared.scene().patches().iter().map(|p| p.area()).collect();
     let stored = columns(&one);
-    let BackendSpec::Matrix { of, .. } = &spec else { unreachable!() };
-    let direct = columns(&Backend::columns(of, (&prepared).into()));
+    let direct = columns(&spec.columns().build((&prepared).into()).unwrap());
     let n = area.len();
     let mut nonzero = 0;
     for j in 0..n {
@@ -66,8 +65,7 @@ fn a_hemicube_matrix_is_assembled_column_by_column() {
     let spec = BackendSpec::parse("matrix:of=hemicube:res=32").unwrap();
     assert_eq!(assembly_of(&spec), "column by column");
     let stored = columns(&assembled(&prepared, &spec, 2));
-    let BackendSpec::Matrix { of, .. } = &spec else { unreachable!() };
-    let direct = columns(&Backend::columns(of, (&prepared).into()));
+    let direct = columns(&spec.columns().build((&prepared).into()).unwrap());
     for (j, (s, d)) in stored.iter().zip(&direct).enumerate() {
         for (i, (a, b)) in s.iter().zip(d).enumerate() {
             assert_eq!(*a, *b as f32 as Real, "({i}, {j})");

@@ -62,12 +62,27 @@ fn custom_solver_is_compared_with_pr_and_xu() {
 #[test]
 fn custom_backend_runs_under_the_built_in_solvers() {
     let dir = scratch("backend");
-    let summary = custom_backend::compare("cornell:res=2", &dir).unwrap();
+    let summary = custom_backend::compare("cornell:res=2", "point-disc", &dir).unwrap();
     check_report(&dir, &["pr", "xu", "xu-g30-m480"]);
     assert!(summary.contains("xu-g30-m480"), "{summary}");
     let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
-    assert!(report.contains("form factors `centroid-disc`"), "{report}");
+    assert!(report.contains("form factors `point-disc:disc=1`"), "{report}");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_registered_backend_is_named_as_the_built_ins_are() {
+    let backends = custom_backend::backends();
+    // Stored as a matrix, its parameters passed through `of`.
+    let stored = backends.parse("matrix:of=point-disc:disc=2").unwrap();
+    assert_eq!(stored.canonical(), "matrix:of=point-disc:rebalance=false:disc=2");
+    assert_eq!(stored.stores().map(|(of, _)| of.name()), Some("point-disc"));
+    let e = backends.parse("point-disk").unwrap_err().to_string();
+    assert!(e.contains("did you mean 'point-disc'?") && e.contains("hierarchical, matrix, point-disc"), "{e}");
+    let e = backends.parse("point-disc:disc=0").unwrap_err().to_string();
+    assert!(e.contains("form-factor backend 'point-disc'") && e.contains("disc=0"), "{e}");
+    // The built-in registry does not know it.
+    assert!(BackendSpec::parse("point-disc").is_err());
 }
 
 #[test]

@@ -6,7 +6,7 @@ use radiosity_core::{Channels, LinearSystem, Real, Scene};
 use radiosity_eval::EvalError;
 use radiosity_eval::{ExportInfo, Glb, export_glb, exposure};
 use radiosity_eval::{ReferenceParams, ReferenceSolution};
-use radiosity_ff::{Backend, BackendSpec, FormFactorInput};
+use radiosity_ff::{BackendSpec, FormFactorInput};
 use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
 
 #[test]
@@ -28,12 +28,12 @@ fn solved(arg: &str) -> (Scene, Vec<[Real; 3]>) {
     let visibility = Visibility::new(&scene);
     let analysis = SceneAnalysis::new(&scene, &visibility);
     let spec = BackendSpec::parse("analytic").unwrap();
-    let backend =
-        Backend::columns(&spec, FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis });
+    let backend = spec.build(FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis }).unwrap();
     let system = LinearSystem::from_scene(&scene);
     let reference = ReferenceSolution::solve(&system, &backend, ReferenceParams::default()).unwrap();
     let channel = |c: usize| if system.channels() == Channels::Grey { 0 } else { c };
     let rgb = (0..scene.len()).map(|i| std::array::from_fn(|c| reference.get(i, channel(c)))).collect();
+    drop(backend);
     (scene, rgb)
 }
 
@@ -194,7 +194,7 @@ fn a_stiff_closed_box_with_a_block_read_from_gltf_gives_its_exact_answer() {
     assert!(prepared.analysis.occlusion.value && prepared.analysis.closure.value.is_closed());
     let input =
         FormFactorInput { scene: prepared.scene(), visibility: &prepared.visibility, analysis: &prepared.analysis };
-    let backend = Backend::columns(&BackendSpec::parse("analytic").unwrap(), input);
+    let backend = BackendSpec::parse("analytic").unwrap().build(input).unwrap();
     let system = LinearSystem::from_scene(prepared.scene());
     let reference = ReferenceSolution::solve(&system, &backend, ReferenceParams::default()).unwrap();
     for i in 0..system.len() {

@@ -286,7 +286,7 @@ fn the_cache_keeps_the_hierarchical_operator() {
         let mut solver = SolverRegistry::builtin().build("gmres-30").unwrap();
         let rules = StopRules::parse("residual=1e-8").unwrap();
         let outcome = lab.run(solver.as_mut(), &rules, &RecordPlan::errors_only(), &NoProgress).unwrap();
-        (lab.hierarchy().unwrap().loaded, outcome.state.radiosity.iter().map(|v| v.to_bits()).collect::<Vec<_>>())
+        (lab.backend_figures().unwrap().loaded, outcome.state.radiosity.iter().map(|v| v.to_bits()).collect::<Vec<_>>())
     };
     let (loaded, first) = run("hierarchical:eps=5e-2");
     assert!(!loaded, "built the first time");

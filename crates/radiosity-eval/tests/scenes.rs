@@ -9,7 +9,7 @@
 use radiosity_core::{LinearSystem, Real};
 use radiosity_eval::errors;
 use radiosity_eval::{ConvergenceTable, Evaluator, FormFactors, ReferenceParams, ReferenceSolution, TableRow};
-use radiosity_ff::{Backend, BackendSpec, FormFactorInput};
+use radiosity_ff::{BackendSpec, FormFactorInput};
 use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
 use radiosity_solvers::{
     BEYOND_PAPER_SOLVERS, Executor, GROUP_SOLVERS, KRYLOV_SOLVERS, Observer, ObserverMode, POINT_SOLVERS, Problem,
@@ -59,7 +59,7 @@ impl Fixture {
         let analysis = SceneAnalysis::new(&scene, &visibility);
         let spec = BackendSpec::parse("analytic").unwrap();
         let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
-        let backend = Backend::columns(&spec, input);
+        let backend = spec.build(input).unwrap();
         let params = ReferenceParams::default();
         let matrix = FormFactors::assemble(&backend, params.max_matrix_bytes).unwrap_or_else(|e| panic!("{arg}: {e}"));
         let system = LinearSystem::from_scene(&scene);

@@ -8,7 +8,7 @@
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_main};
 use radiosity_core::ColumnSource;
-use radiosity_ff::{AnalyticParams, Backend, BackendSpec, FormFactorInput};
+use radiosity_ff::{AnalyticParams, BackendSpec, FormFactorInput};
 use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
 use rayon::prelude::*;
 use std::time::Duration;
@@ -28,11 +28,13 @@ fn columns(c: &mut Criterion) {
     let specs = std::env::var("FF_BENCH_BACKENDS")
         .unwrap_or_else(|_| "analytic,analytic:tol=1,hemicube,montecarlo".to_string());
     for arg in specs.split(',') {
-        let spec = match BackendSpec::parse(arg).expect("valid backend") {
-            BackendSpec::Analytic(p) => BackendSpec::Analytic(AnalyticParams { cache_mib: 0, ..p }),
-            other => other,
+        let spec = BackendSpec::parse(arg).expect("valid backend");
+        // Columns timed as computed for the first time: no record of visible fractions.
+        let spec = match spec.params::<AnalyticParams>() {
+            Some(p) => BackendSpec::new(AnalyticParams { cache_mib: 0, ..*p }),
+            None => spec,
         };
-        let backend = Backend::columns(&spec, input);
+        let backend = spec.build(input).expect("the backend builds");
         group.bench_function(BenchmarkId::from_parameter(arg), |b| {
             b.iter(|| {
                 shooters.par_iter().for_each_init(

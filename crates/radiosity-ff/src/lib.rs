@@ -1,7 +1,9 @@
 //! Form factors: kernels and backends that implement [`radiosity_core::ColumnSource`].
 //!
-//! This is the only crate that turns geometry into form factors. Five backends, chosen by a
-//! [`BackendSpec`] parsed from `NAME[:key=value…]`:
+//! This is the only crate that turns geometry into form factors. Backends are chosen by a
+//! [`BackendSpec`] that a [`BackendRegistry`] parses from `NAME[:key=value…]` ([`registry`]);
+//! a built backend is a [`FormFactorBackend`], asked what it can do ([`backend`]). The
+//! built-ins:
 //!
 //! - `analytic` ([`analytic`]): Lambert's point-to-polygon formula integrated over the
 //!   receiver, times each pair's visible fraction, estimated with shadow rays drawn as the
@@ -17,14 +19,14 @@
 //!
 //! ```
 //! use radiosity_core::ColumnSource;
-//! use radiosity_ff::{Backend, BackendSpec, FormFactorInput};
+//! use radiosity_ff::{BackendSpec, FormFactorInput};
 //! use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
 //!
 //! let scene = load_scene("furnace:res=2").unwrap().scene;
 //! let visibility = Visibility::new(&scene);
 //! let analysis = SceneAnalysis::new(&scene, &visibility);
 //! let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
-//! let backend = Backend::columns(&BackendSpec::parse("analytic").unwrap(), input);
+//! let backend = BackendSpec::parse("analytic").unwrap().build(input).unwrap();
 //! let mut column = vec![0.0; backend.patch_count()];
 //! backend.fill_column(0, &mut column);
 //! // Every patch of the closed box sees the whole box: Σ_j F_0j = 1, and by reciprocity
@@ -45,6 +47,7 @@ pub mod montecarlo;
 pub mod pair_visibility;
 pub mod quadrature;
 pub mod rays;
+pub mod registry;
 pub mod row_comparison;
 pub mod row_diagnosis;
 pub mod sobol;
@@ -60,12 +63,13 @@ pub use analytic::AnalyticColumns;
 /// caches keyed by the canonical argument ([`BackendSpec::canonical`]) and this revision are
 /// not read across it. What each revision changed: docs/form-factors.md, "Entries revisions".
 pub const ENTRIES_REVISION: u32 = 4;
-pub use backend::{Backend, FormFactorInput};
+pub use backend::{BackendFigures, FormFactorBackend, FormFactorInput, PairEntries};
 pub use error::FfError;
 pub use hemicube::HemicubeColumns;
 pub use hierarchical::{BuildProgress, HierarchicalColumns, HierarchyFigures, Oracle};
 pub use matrix::StoredMatrix;
 pub use montecarlo::{MonteCarloColumns, RayTally};
 pub use rays::{HitRay, ShadowSegment, TracedRays};
-pub use spec::{AnalyticParams, BackendSpec, HemicubeParams, HierarchicalParams, MonteCarloParams};
+pub use registry::{BackendArgument, BackendParams, BackendRegistry, BuildObserver, Unobserved};
+pub use spec::{AnalyticParams, BackendSpec, HemicubeParams, HierarchicalParams, MatrixParams, MonteCarloParams};
 pub use traced::ColumnRays;

@@ -1,35 +1,327 @@
-//! Backend arguments: `analytic`, `hemicube`, `montecarlo`, `hierarchical` or `matrix`, each with its own
-//! `:key=value` parameters, parsed into typed, validated parameter sets.
+//! Backend arguments: the opaque [`BackendSpec`] a [`crate::BackendRegistry`] parses from
+//! `NAME[:key=value…]`, and the built-ins' typed, validated parameters.
 //!
-//! `matrix` stores the full matrix of another backend, named by `of` (default `analytic`);
-//! parameters it does not take itself go to that backend:
-//! `matrix:of=hemicube:res=64:rebalance=true`.
+//! The built-ins: `analytic`, `hemicube`, `montecarlo`, `hierarchical` ([`BackendParams`]
+//! each) and `matrix` ([`MatrixParams`]), which stores the full matrix of another backend named
+//! by `of` (default `analytic`), read through the same registry; parameters it does not take
+//! itself go to that backend: `matrix:of=hemicube:res=64:rebalance=true`.
+//!
+//! A canonical argument ([`BackendSpec::canonical`]) spells out every parameter that changes
+//! an entry, so that arguments giving the same entries give equal strings: it keys caches
+//! (with [`crate::ENTRIES_REVISION`]) and labels results. `analytic`'s `cache`, which changes
+//! no entry, is left out.
 
+use crate::analytic::AnalyticColumns;
 pub use crate::analytic::{ANALYTIC_PARAMS, AnalyticParams};
+use crate::backend::{FormFactorBackend, FormFactorInput};
 use crate::error::FfError;
+use crate::hemicube::HemicubeColumns;
 pub use crate::hemicube::{HEMICUBE_PARAMS, HemicubeParams};
+use crate::hierarchical::{BuildProgress, HierarchicalColumns};
 pub use crate::hierarchical::{HIERARCHICAL_PARAMS, HierarchicalParams, Oracle};
+use crate::matrix::StoredMatrix;
+use crate::montecarlo::MonteCarloColumns;
 pub use crate::montecarlo::{MONTECARLO_PARAMS, MonteCarloParams};
+use crate::registry::{BackendArgument, BackendParams, BackendRegistry, BuildObserver, Unobserved, owner};
+use crate::traced::ColumnRays;
+use radiosity_core::Real;
 use radiosity_geom::{KeyValueParams, ParamDoc};
+use std::any::Any;
+use std::fmt;
+use std::sync::Arc;
 
-/// A parsed backend argument.
+/// A parsed backend argument: its name, its canonical argument, and how to build its source.
+#[derive(Clone)]
+pub struct BackendSpec {
+    name: Arc<str>,
+    argument: Arc<dyn BackendArgument>,
+}
+
+impl BackendSpec {
+    /// Parses `NAME[:key=value…]` with the built-in backends
+    /// ([`crate::BackendRegistry::builtin`]).
+    pub fn parse(arg: &str) -> Result<BackendSpec, FfError> {
+        crate::registry::builtin().parse(arg)
+    }
+
+    /// The backend of typed parameters `params`.
+    pub fn new<P: BackendParams>(params: P) -> BackendSpec {
+        BackendSpec::from_argument(P::NAME, Arc::new(params))
+    }
+
+    /// The backend `name` with parameters `argument` (what a registry entry parsed).
+    pub fn from_argument(name: &str, argument: Arc<dyn BackendArgument>) -> BackendSpec {
+        BackendSpec { name: name.into(), argument }
+    }
+
+    /// The backend's name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The canonical argument (module doc).
+    pub fn canonical(&self) -> String {
+        self.argument.canonical()
+    }
+
+    /// The parameters, when they are a `P`.
+    pub fn params<P: Any>(&self) -> Option<&P> {
+        (self.argument.as_ref() as &dyn Any).downcast_ref()
+    }
+
+    /// The parameters, as the registry parsed them.
+    pub fn argument(&self) -> &dyn BackendArgument {
+        self.argument.as_ref()
+    }
+
+    /// Builds the source on `input` (a stored matrix is assembled, without a cache).
+    pub fn build<'a>(&self, input: FormFactorInput<'a>) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
+        self.argument.build(input, &Unobserved)
+    }
+
+    /// Builds the source on `input`, reporting its stages to `observer`.
+    pub fn build_observed<'a>(
+        &self,
+        input: FormFactorInput<'a>,
+        observer: &dyn BuildObserver,
+    ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
+        self.argument.build(input, observer)
+    }
+
+    /// For a stored matrix, the backend it stores and whether it is rebalanced
+    /// ([`BackendArgument::stores`]).
+    pub fn stores(&self) -> Option<(&BackendSpec, bool)> {
+        self.argument.stores()
+    }
+
+    /// The backend whose columns are computed: the one a stored matrix stores, or this one.
+    pub fn columns(&self) -> &BackendSpec {
+        self.stores().map_or(self, |(of, _)| of)
+    }
+
+    /// Whether the columns' backend gives single entries reciprocal by construction, so that a
+    /// matrix is assembled each pair once ([`BackendArgument::pairs_once`]).
+    pub fn pairs_once(&self) -> bool {
+        self.columns().argument.pairs_once()
+    }
+
+    /// The rays each column traces ([`BackendArgument::column_rays`]).
+    pub fn column_rays<'a>(&self, input: FormFactorInput<'a>) -> Option<ColumnRays<'a>> {
+        self.argument.column_rays(input)
+    }
+}
+
+/// Equal when the names and the canonical arguments are: the two give the same entries
+/// (`analytic:cache=0` equals `analytic`).
+impl PartialEq for BackendSpec {
+    fn eq(&self, other: &BackendSpec) -> bool {
+        self.name == other.name && self.canonical() == other.canonical()
+    }
+}
+
+impl fmt::Debug for BackendSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_tuple("BackendSpec").field(&self.canonical()).finish()
+    }
+}
+
+impl fmt::Display for BackendSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.canonical())
+    }
+}
+
+impl BackendArgument for AnalyticParams {
+    fn canonical(&self) -> String {
+        format!(
+            "analytic:order={}:tol={:e}:rays={}:budget={}:seed={}",
+            self.order, self.tolerance, self.rays, self.budget, self.seed
+        )
+    }
+
+    fn build<'a>(
+        &self,
+        input: FormFactorInput<'a>,
+        _: &dyn BuildObserver,
+    ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
+        Ok(Box::new(AnalyticColumns::new(input.scene, input.visibility, input.analysis, *self)))
+    }
+
+    fn pairs_once(&self) -> bool {
+        true
+    }
+
+    fn column_rays<'a>(&self, input: FormFactorInput<'a>) -> Option<ColumnRays<'a>> {
+        Some(ColumnRays::analytic(AnalyticColumns::new(input.scene, input.visibility, input.analysis, *self)))
+    }
+}
+
+impl BackendParams for AnalyticParams {
+    const NAME: &'static str = "analytic";
+    const HELP: &'static str =
+        "Lambert's point-to-polygon formula integrated over the receiver, times the pair's visible fraction";
+    const PARAMS: &'static [ParamDoc] = ANALYTIC_PARAMS;
+
+    fn from_params(p: &KeyValueParams) -> Result<AnalyticParams, FfError> {
+        let defaults = AnalyticParams::default();
+        Ok(AnalyticParams {
+            order: quadrature_order(p, defaults.order)?,
+            tolerance: quadrature_tolerance(p, defaults.tolerance)?,
+            rays: p.count("rays", defaults.rays, 1, 1 << 20)?,
+            budget: p.count("budget", defaults.budget, 0, 1 << 24)?,
+            seed: p.seed("seed", 0)?,
+            cache_mib: p.count("cache", defaults.cache_mib, 0, 1 << 20)?,
+        })
+    }
+}
+
+impl BackendArgument for HemicubeParams {
+    fn canonical(&self) -> String {
+        format!("hemicube:res={}:seed={}", self.resolution, self.seed)
+    }
+
+    fn build<'a>(
+        &self,
+        input: FormFactorInput<'a>,
+        _: &dyn BuildObserver,
+    ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
+        Ok(Box::new(HemicubeColumns::new(input.scene, input.visibility, *self)))
+    }
+
+    fn column_rays<'a>(&self, input: FormFactorInput<'a>) -> Option<ColumnRays<'a>> {
+        Some(ColumnRays::hemicube(HemicubeColumns::new(input.scene, input.visibility, *self)))
+    }
+}
+
+impl BackendParams for HemicubeParams {
+    const NAME: &'static str = "hemicube";
+    const HELP: &'static str = "a ray-cast hemicube at the shooter, giving its row";
+    const PARAMS: &'static [ParamDoc] = HEMICUBE_PARAMS;
+
+    fn from_params(p: &KeyValueParams) -> Result<HemicubeParams, FfError> {
+        let resolution = p.count("res", 128, 2, crate::hemicube::MAX_RESOLUTION)?;
+        if resolution % 2 == 1 {
+            // The side faces are res × res/2 pixels.
+            return Err(p.reject("res", "an even number of pixels from 2 to 4096").into());
+        }
+        Ok(HemicubeParams { resolution, seed: p.seed("seed", 0)? })
+    }
+}
+
+impl BackendArgument for MonteCarloParams {
+    fn canonical(&self) -> String {
+        format!("montecarlo:rays={}:seed={}", self.rays, self.seed)
+    }
+
+    fn build<'a>(
+        &self,
+        input: FormFactorInput<'a>,
+        _: &dyn BuildObserver,
+    ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
+        Ok(Box::new(MonteCarloColumns::new(input.scene, input.visibility, *self)))
+    }
+
+    fn column_rays<'a>(&self, input: FormFactorInput<'a>) -> Option<ColumnRays<'a>> {
+        Some(ColumnRays::montecarlo(input.scene, *self))
+    }
+}
+
+impl BackendParams for MonteCarloParams {
+    const NAME: &'static str = "montecarlo";
+    const HELP: &'static str = "cosine-weighted rays from the shooter, giving its row";
+    const PARAMS: &'static [ParamDoc] = MONTECARLO_PARAMS;
+
+    fn from_params(p: &KeyValueParams) -> Result<MonteCarloParams, FfError> {
+        Ok(MonteCarloParams { rays: p.count("rays", 10_000, 1, 1_000_000_000)?, seed: p.seed("seed", 0)? })
+    }
+}
+
+impl BackendArgument for HierarchicalParams {
+    fn canonical(&self) -> String {
+        format!(
+            "hierarchical:eps={:e}:shadows={}:rays={}:budget={}:order={}:tol={:e}:seed={}:oracle={}:floor={}:passes={}:closure={}",
+            self.eps,
+            self.shadows,
+            self.rays,
+            self.budget,
+            self.order,
+            self.tolerance,
+            self.seed,
+            match self.oracle {
+                Oracle::Flux => "flux",
+                Oracle::Area => "area",
+            },
+            self.floor,
+            self.passes,
+            self.closure
+        )
+    }
+
+    fn build<'a>(
+        &self,
+        input: FormFactorInput<'a>,
+        observer: &dyn BuildObserver,
+    ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
+        // The count is of thousandths of the pairs of patches settled: links high in the tree
+        // settle many at once, so it runs fast at first and slows down.
+        observer.begin("building the hierarchical operator", 1000, "‰ pairs settled");
+        let observe = |p: BuildProgress| {
+            observer.advance((p.settled * 1000.0) as u64, &format!("{} links", p.links));
+        };
+        let built = HierarchicalColumns::new_observed(input.scene, input.visibility, input.analysis, *self, &observe);
+        observer.end();
+        Ok(Box::new(built))
+    }
+
+    fn cache_kind(&self) -> Option<&'static str> {
+        Some("hierarchical")
+    }
+
+    fn load<'a>(
+        &self,
+        bytes: &[u8],
+        key: &str,
+        input: FormFactorInput<'a>,
+    ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
+        Ok(Box::new(HierarchicalColumns::from_bytes(bytes, key, input.scene)?))
+    }
+}
+
+impl BackendParams for HierarchicalParams {
+    const NAME: &'static str = "hierarchical";
+    const HELP: &'static str = "links between clusters of a tree over the patches, refined to an error threshold";
+    const PARAMS: &'static [ParamDoc] = HIERARCHICAL_PARAMS;
+
+    fn from_params(p: &KeyValueParams) -> Result<HierarchicalParams, FfError> {
+        let defaults = HierarchicalParams::default();
+        Ok(HierarchicalParams {
+            eps: p.real("eps", defaults.eps, |e| e > 0.0 && e <= 1.0, "a threshold in (0, 1]")?,
+            shadows: p.real("shadows", defaults.shadows, |s| s > 0.0 && s <= 1.0, "a fraction in (0, 1]")?,
+            rays: p.count("rays", defaults.rays, 1, 4096)?,
+            budget: p.count("budget", defaults.budget, 0, 1 << 24)?,
+            order: quadrature_order(p, defaults.order)?,
+            tolerance: quadrature_tolerance(p, defaults.tolerance)?,
+            seed: p.seed("seed", 0)?,
+            oracle: match p.given().find(|(k, _)| *k == "oracle").map(|(_, v)| v) {
+                None | Some("flux") => Oracle::Flux,
+                Some("area") => Oracle::Area,
+                Some(_) => return Err(p.reject("oracle", "flux or area").into()),
+            },
+            floor: p.real("floor", defaults.floor, |f| f > 0.0 && f <= 1.0, "a weight in (0, 1]")?,
+            passes: p.count("passes", defaults.passes, 1, 4)?,
+            closure: p.flag("closure", defaults.closure)?,
+            shafts: p.flag("shafts", defaults.shafts)?,
+        })
+    }
+}
+
+/// Parameters of `matrix`: the full matrix of another backend, assembled once and stored.
 #[derive(Clone, Debug, PartialEq)]
-pub enum BackendSpec {
-    /// Lambert's point-to-polygon formula integrated over the receiver.
-    Analytic(AnalyticParams),
-    /// A ray-cast hemicube at the shooter.
-    Hemicube(HemicubeParams),
-    /// Cosine-weighted rays from the shooter.
-    MonteCarlo(MonteCarloParams),
-    /// Links between clusters of a tree over the patches, refined to an error threshold.
-    Hierarchical(HierarchicalParams),
-    /// The full matrix of another backend, assembled once.
-    Matrix {
-        /// The backend whose matrix is stored.
-        of: Box<BackendSpec>,
-        /// Symmetrise `A·F` and rescale rows to closure after assembly.
-        rebalance: bool,
-    },
+pub struct MatrixParams {
+    /// The backend whose matrix is stored.
+    pub of: BackendSpec,
+    /// Symmetrise `A·F` and rescale rows to closure after assembly.
+    pub rebalance: bool,
 }
 
 /// Parameters of `matrix` (others go to the backend named by `of`).
@@ -42,127 +334,56 @@ pub const MATRIX_PARAMS: &[ParamDoc] = &[
     },
 ];
 
-/// The backend names, in the order listed to users.
-pub const BACKENDS: &[&str] = &["analytic", "hemicube", "montecarlo", "hierarchical", "matrix"];
+impl MatrixParams {
+    /// The name on the command line.
+    pub const NAME: &'static str = "matrix";
+    /// What the backend does, in one line.
+    pub const HELP: &'static str = "the full matrix of another backend (of=NAME), assembled once and stored";
+    /// The keys it takes itself.
+    pub const PARAMS: &'static [ParamDoc] = MATRIX_PARAMS;
 
-impl BackendSpec {
-    /// Parses `NAME[:key=value…]`.
-    pub fn parse(arg: &str) -> Result<BackendSpec, FfError> {
-        let mut parts = arg.split(':').filter(|s| !s.is_empty());
-        let name = parts.next().unwrap_or_default();
-        let items: Vec<&str> = parts.collect();
-        Self::parse_named(name, &items)
-    }
-
-    fn parse_named(name: &str, items: &[&str]) -> Result<BackendSpec, FfError> {
-        let owner = format!("form-factor backend '{name}'");
-        Ok(match name {
-            "analytic" => {
-                let p = KeyValueParams::parse(&owner, items.iter().copied(), ANALYTIC_PARAMS)?;
-                let defaults = AnalyticParams::default();
-                BackendSpec::Analytic(AnalyticParams {
-                    order: quadrature_order(&p, defaults.order)?,
-                    tolerance: quadrature_tolerance(&p, defaults.tolerance)?,
-                    rays: p.count("rays", defaults.rays, 1, 1 << 20)?,
-                    budget: p.count("budget", defaults.budget, 0, 1 << 24)?,
-                    seed: p.seed("seed", 0)?,
-                    cache_mib: p.count("cache", defaults.cache_mib, 0, 1 << 20)?,
-                })
-            }
-            "hemicube" => {
-                let p = KeyValueParams::parse(&owner, items.iter().copied(), HEMICUBE_PARAMS)?;
-                let resolution = p.count("res", 128, 2, crate::hemicube::MAX_RESOLUTION)?;
-                if resolution % 2 == 1 {
-                    // The side faces are res × res/2 pixels.
-                    return Err(p.reject("res", "an even number of pixels from 2 to 4096").into());
-                }
-                BackendSpec::Hemicube(HemicubeParams { resolution, seed: p.seed("seed", 0)? })
-            }
-            "montecarlo" => {
-                let p = KeyValueParams::parse(&owner, items.iter().copied(), MONTECARLO_PARAMS)?;
-                BackendSpec::MonteCarlo(MonteCarloParams {
-                    rays: p.count("rays", 10_000, 1, 1_000_000_000)?,
-                    seed: p.seed("seed", 0)?,
-                })
-            }
-            "hierarchical" => {
-                let p = KeyValueParams::parse(&owner, items.iter().copied(), HIERARCHICAL_PARAMS)?;
-                let defaults = HierarchicalParams::default();
-                BackendSpec::Hierarchical(HierarchicalParams {
-                    eps: p.real("eps", defaults.eps, |e| e > 0.0 && e <= 1.0, "a threshold in (0, 1]")?,
-                    shadows: p.real("shadows", defaults.shadows, |s| s > 0.0 && s <= 1.0, "a fraction in (0, 1]")?,
-                    rays: p.count("rays", defaults.rays, 1, 4096)?,
-                    budget: p.count("budget", defaults.budget, 0, 1 << 24)?,
-                    order: quadrature_order(&p, defaults.order)?,
-                    tolerance: quadrature_tolerance(&p, defaults.tolerance)?,
-                    seed: p.seed("seed", 0)?,
-                    oracle: match p.given().find(|(k, _)| *k == "oracle").map(|(_, v)| v) {
-                        None | Some("flux") => Oracle::Flux,
-                        Some("area") => Oracle::Area,
-                        Some(_) => return Err(p.reject("oracle", "flux or area").into()),
-                    },
-                    floor: p.real("floor", defaults.floor, |f| f > 0.0 && f <= 1.0, "a weight in (0, 1]")?,
-                    passes: p.count("passes", defaults.passes, 1, 4)?,
-                    closure: p.flag("closure", defaults.closure)?,
-                    shafts: p.flag("shafts", defaults.shafts)?,
-                })
-            }
-            "matrix" => {
-                let (own, inner): (Vec<&str>, Vec<&str>) =
-                    items.iter().partition(|item| MATRIX_PARAMS.iter().any(|d| item.split('=').next() == Some(d.key)));
-                let p = KeyValueParams::parse(&owner, own.iter().copied(), MATRIX_PARAMS)?;
-                let of = own.iter().find_map(|i| i.strip_prefix("of=")).unwrap_or("analytic");
-                if of == "matrix" {
-                    let expected = "analytic, hemicube, montecarlo or hierarchical: a stored matrix is assembled from a column backend";
-                    return Err(p.reject("of", expected).into());
-                }
-                BackendSpec::Matrix {
-                    of: Box::new(Self::parse_named(of, &inner)?),
-                    rebalance: p.flag("rebalance", false)?,
-                }
-            }
-            _ => return Err(FfError::UnknownBackend { name: name.to_string(), valid: BACKENDS.join(", ") }),
-        })
-    }
-
-    /// The canonical argument, with every parameter that changes a value spelled out: specs
-    /// that give the same entries give equal strings, so it keys caches and labels results
-    /// (`analytic`'s `cache`, which changes no entry, is left out).
-    pub fn canonical(&self) -> String {
-        match self {
-            BackendSpec::Analytic(p) => {
-                format!(
-                    "analytic:order={}:tol={:e}:rays={}:budget={}:seed={}",
-                    p.order, p.tolerance, p.rays, p.budget, p.seed
-                )
-            }
-            BackendSpec::Hemicube(p) => format!("hemicube:res={}:seed={}", p.resolution, p.seed),
-            BackendSpec::MonteCarlo(p) => format!("montecarlo:rays={}:seed={}", p.rays, p.seed),
-            BackendSpec::Hierarchical(p) => {
-                format!(
-                    "hierarchical:eps={:e}:shadows={}:rays={}:budget={}:order={}:tol={:e}:seed={}:oracle={}:floor={}:passes={}:closure={}",
-                    p.eps,
-                    p.shadows,
-                    p.rays,
-                    p.budget,
-                    p.order,
-                    p.tolerance,
-                    p.seed,
-                    match p.oracle {
-                        Oracle::Flux => "flux",
-                        Oracle::Area => "area",
-                    },
-                    p.floor,
-                    p.passes,
-                    p.closure
-                )
-            }
-            BackendSpec::Matrix { of, rebalance } => {
-                let inner = of.canonical();
-                let (name, rest) = inner.split_once(':').unwrap_or((&inner, ""));
-                format!("matrix:of={name}:rebalance={rebalance}:{rest}")
-            }
+    /// Reads `of` and `rebalance` from `items`, and the backend `of` names, with the other
+    /// items, through `registry`. A stored matrix of a stored matrix is refused.
+    pub fn parse(items: &[&str], registry: &BackendRegistry) -> Result<MatrixParams, FfError> {
+        let (own, inner): (Vec<&str>, Vec<&str>) =
+            items.iter().partition(|item| MATRIX_PARAMS.iter().any(|d| item.split('=').next() == Some(d.key)));
+        let p = KeyValueParams::parse(&owner(Self::NAME), own.iter().copied(), MATRIX_PARAMS)?;
+        let of = own.iter().find_map(|i| i.strip_prefix("of=")).unwrap_or("analytic");
+        let of = registry.parse_named(of, &inner)?;
+        if of.stores().is_some() {
+            let expected =
+                format!("a backend other than '{}': a stored matrix is assembled from a column backend", of.name());
+            return Err(p.reject("of", &expected).into());
         }
+        Ok(MatrixParams { of, rebalance: p.flag("rebalance", false)? })
+    }
+}
+
+impl BackendArgument for MatrixParams {
+    fn canonical(&self) -> String {
+        let inner = self.of.canonical();
+        let (name, rest) = inner.split_once(':').unwrap_or((&inner, ""));
+        format!("matrix:of={name}:rebalance={}:{rest}", self.rebalance)
+    }
+
+    /// Assembles the matrix of `of` ([`StoredMatrix::assemble_backend`]) and rebalances it when
+    /// asked; the lab obtains it from its cache instead.
+    fn build<'a>(
+        &self,
+        input: FormFactorInput<'a>,
+        observer: &dyn BuildObserver,
+    ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
+        let source = self.of.build_observed(input, observer)?;
+        let area: Vec<Real> = input.scene.patches().iter().map(|p| p.area()).collect();
+        let (mut matrix, _) = StoredMatrix::assemble_backend(&area, source.as_ref(), observer)?;
+        if self.rebalance {
+            matrix.rebalance(&area, input.analysis.closure.value.is_closed())?;
+        }
+        Ok(Box::new(matrix))
+    }
+
+    fn stores(&self) -> Option<(&BackendSpec, bool)> {
+        Some((&self.of, self.rebalance))
     }
 }
 

@@ -34,18 +34,26 @@ enum Kind<'a> {
 }
 
 impl<'a> ColumnRays<'a> {
-    /// The rays of the backend `spec` names, on `input`; `None` for `matrix`, which traces
-    /// nothing once stored, and for `hierarchical`, whose rays are traced once, when it is built.
+    /// The rays of the backend `spec` names, on `input` ([`BackendSpec::column_rays`]): `None`
+    /// for `matrix`, which traces nothing once stored, and for `hierarchical`, whose rays are
+    /// traced once, when it is built.
     pub fn new(spec: &BackendSpec, input: FormFactorInput<'a>) -> Option<ColumnRays<'a>> {
-        let kind = match spec {
-            BackendSpec::Analytic(p) => {
-                Kind::Analytic(AnalyticColumns::new(input.scene, input.visibility, input.analysis, *p))
-            }
-            BackendSpec::Hemicube(p) => Kind::Hemicube(HemicubeColumns::new(input.scene, input.visibility, *p)),
-            BackendSpec::MonteCarlo(p) => Kind::MonteCarlo { scene: input.scene, params: *p },
-            BackendSpec::Matrix { .. } | BackendSpec::Hierarchical(_) => return None,
-        };
-        Some(ColumnRays { kind })
+        spec.column_rays(input)
+    }
+
+    /// The shadow-ray segments of the analytic backend.
+    pub fn analytic(columns: AnalyticColumns<'a>) -> ColumnRays<'a> {
+        ColumnRays { kind: Kind::Analytic(columns) }
+    }
+
+    /// The rays of the hemicube backend.
+    pub fn hemicube(columns: HemicubeColumns<'a>) -> ColumnRays<'a> {
+        ColumnRays { kind: Kind::Hemicube(columns) }
+    }
+
+    /// The rays of the Monte Carlo backend on `scene`.
+    pub fn montecarlo(scene: &'a Scene, params: MonteCarloParams) -> ColumnRays<'a> {
+        ColumnRays { kind: Kind::MonteCarlo { scene, params } }
     }
 
     /// An empty list of the kind this backend traces.
@@ -91,7 +99,7 @@ fn montecarlo_rays(scene: &Scene, params: MonteCarloParams, j: usize, out: &mut 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::MonteCarloColumns;
+    use crate::{AnalyticParams, HemicubeParams, MonteCarloColumns};
     use radiosity_core::Real;
     use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
 
@@ -114,10 +122,7 @@ mod tests {
             &scene,
             &visibility,
             &analysis,
-            match spec {
-                BackendSpec::Analytic(p) => p,
-                _ => unreachable!(),
-            },
+            *spec.params::<AnalyticParams>().expect("analytic parameters"),
         );
         let mut column = vec![0.0; scene.len()];
         for j in [0, 17, 240, 479] {
@@ -147,7 +152,7 @@ mod tests {
         let analysis = SceneAnalysis::new(&scene, &visibility);
         let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
         let spec = BackendSpec::parse("hemicube:res=16:seed=3").unwrap();
-        let BackendSpec::Hemicube(params) = spec else { unreachable!() };
+        let params = *spec.params::<HemicubeParams>().expect("hemicube parameters");
         let backend = HemicubeColumns::new(&scene, &visibility, params);
         let rays = ColumnRays::new(&spec, input).unwrap();
         let weights: Vec<Real> = backend.pixels().map(|(_, w)| w).collect();
@@ -179,7 +184,7 @@ mod tests {
         let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
         // More than one batch, of unequal sizes.
         let spec = BackendSpec::parse("montecarlo:rays=9001:seed=5").unwrap();
-        let BackendSpec::MonteCarlo(params) = spec else { unreachable!() };
+        let params = *spec.params::<MonteCarloParams>().expect("Monte Carlo parameters");
         let backend = MonteCarloColumns::new(&scene, &visibility, params);
         let rays = ColumnRays::new(&spec, input).unwrap();
         for j in [0, 7, scene.len() - 1] {

@@ -7,7 +7,7 @@
 
 use radiosity_core::{MaterialId, ObjectId, Patch, Real, Vec3};
 use radiosity_ff::pair_visibility::{RayBudget, visible_fraction};
-use radiosity_ff::{AnalyticColumns, BackendSpec};
+use radiosity_ff::{AnalyticColumns, AnalyticParams, BackendSpec};
 use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
 use rand::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -63,7 +63,7 @@ fn analytic_pairs_allocate_nothing_on_an_occluded_scene() {
     let vis = Visibility::new(&scene);
     let analysis = SceneAnalysis::new(&scene, &vis);
     assert!(analysis.occlusion.value);
-    let BackendSpec::Analytic(params) = BackendSpec::parse("analytic:budget=98304").unwrap() else { unreachable!() };
+    let params = *BackendSpec::parse("analytic:budget=98304").unwrap().params::<AnalyticParams>().expect("analytic");
     let f = AnalyticColumns::new(&scene, &vis, &analysis, params);
     let n = scene.len();
     let mut nonzero = 0;

@@ -11,10 +11,7 @@ use radiosity_geom::{SceneAnalysis, SceneBuilder, Visibility, load_scene};
 use std::f64::consts::PI;
 
 fn params(arg: &str) -> AnalyticParams {
-    match BackendSpec::parse(arg).unwrap() {
-        BackendSpec::Analytic(p) => p,
-        other => panic!("{other:?}"),
-    }
+    *BackendSpec::parse(arg).unwrap().params::<AnalyticParams>().expect("analytic parameters")
 }
 
 /// `F_{S1→S2}` with the analytic backend on a two-rectangle scene meshed `m × m`.

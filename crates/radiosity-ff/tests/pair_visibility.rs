@@ -11,7 +11,7 @@ use radiosity_core::{Material, MaterialId, ObjectId, Patch, Real, Scene, Spectru
 use radiosity_ff::ff_point_polygon::point_to_polygon;
 use radiosity_ff::pair_visibility::{RayBudget, visible_fraction};
 use radiosity_ff::quadrature::gauss_legendre;
-use radiosity_ff::{AnalyticColumns, BackendSpec};
+use radiosity_ff::{AnalyticColumns, AnalyticParams, BackendSpec};
 use radiosity_geom::{SceneAnalysis, SceneBuilder, Visibility};
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -230,10 +230,7 @@ fn a_wall_seeing_a_desk_top_through_a_slot() {
     // About 0.744 and 0.028.
     let standard_error = truth.iter().map(|&p| (p * (1.0 - p) / rays as Real).sqrt()).collect::<Vec<_>>();
     assert!((truth[1] - 0.028).abs() < 0.002, "{truth:?}");
-    let parse = |arg: &str| match BackendSpec::parse(arg).unwrap() {
-        BackendSpec::Analytic(params) => params,
-        other => panic!("{other:?}"),
-    };
+    let parse = |arg: &str| *BackendSpec::parse(arg).unwrap().params::<AnalyticParams>().expect("analytic");
     // The estimate's own spread is about 0.001 for the desk top; the quadrature's error for
     // the opposite wall about 1e-4.
     let allowed = |j: usize| 4.0 * standard_error[j] + 0.005;

@@ -34,7 +34,9 @@
 
 use radiosity_core::dense_lu::lu_solve;
 use radiosity_core::{ColumnSource, LinearSystem, Real, Scene};
-use radiosity_ff::{Backend, BackendSpec, FormFactorInput, MonteCarloColumns, MonteCarloParams};
+use radiosity_ff::{
+    AnalyticColumns, AnalyticParams, BackendSpec, FormFactorInput, MonteCarloColumns, MonteCarloParams,
+};
 use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
 
 /// The tolerance on form factors, relative to the largest entry (see the module doc).
@@ -54,10 +56,11 @@ fn compute(scene_arg: &str, ff_arg: &str) -> Computed {
     let analysis = SceneAnalysis::new(&scene, &visibility);
     assert!(analysis.occlusion.value, "{scene_arg}: the inner box should occlude");
     let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
-    let backend = Backend::columns(&BackendSpec::parse(ff_arg).unwrap(), input);
-    if let Backend::Analytic(a) = &backend {
-        assert!(a.traces_shadow_rays(), "{scene_arg}");
+    let spec = BackendSpec::parse(ff_arg).unwrap();
+    if let Some(&params) = spec.params::<AnalyticParams>() {
+        assert!(AnalyticColumns::new(&scene, &visibility, &analysis, params).traces_shadow_rays(), "{scene_arg}");
     }
+    let backend = spec.build(input).unwrap();
     let n = backend.patch_count();
     let mut f = vec![0.0; n * n];
     let mut column = vec![0.0; n];
@@ -67,6 +70,7 @@ fn compute(scene_arg: &str, ff_arg: &str) -> Computed {
             f[i * n + j] = v;
         }
     }
+    drop(backend);
     Computed { scene, f }
 }
 

@@ -13,19 +13,22 @@ use pyo3::prelude::*;
 use radiosity_core::{ColumnSource, LinearSystem, Real, operator};
 use radiosity_eval::exchange::{SparseColumns, write_files};
 use radiosity_eval::{CACHE_DIR_VAR, Cache, NoProgress, backend, obtain_matrix};
-use radiosity_ff::{Backend, BackendSpec};
+use radiosity_ff::{BackendSpec, FormFactorBackend};
 use radiosity_geom::PreparedScene;
 use radiosity_solvers::Problem;
 use rayon::prelude::*;
 use self_cell::self_cell;
 use std::sync::Arc;
 
+/// A built backend borrowing its scene.
+type BuiltBackend<'a> = Box<dyn FormFactorBackend + 'a>;
+
 self_cell!(
     /// A backend with the scene it borrows.
     struct SceneBackend {
         owner: Arc<PreparedScene>,
         #[not_covariant]
-        dependent: Backend,
+        dependent: BuiltBackend,
     }
 );
 
@@ -76,10 +79,10 @@ impl FormFactors {
         let parsed = BackendSpec::parse(spec).map_err(value_error)?;
         let cache = cache();
         let source = py
-            .detach(|| match parsed {
-                BackendSpec::Matrix { .. } => obtain_matrix(&prepared, &parsed, cache.as_ref(), &NoProgress)
+            .detach(|| match parsed.stores() {
+                Some(_) => obtain_matrix(&prepared, &parsed, cache.as_ref(), &NoProgress)
                     .map(|obtained| Source::Matrix(radiosity_eval::FormFactors::from_stored(obtained.matrix))),
-                _ => SceneBackend::try_new(prepared, |p| backend(p, &parsed, cache.as_ref(), &NoProgress))
+                None => SceneBackend::try_new(prepared, |p| backend(p, &parsed, cache.as_ref(), &NoProgress))
                     .map(Source::Columns),
             })
             .map_err(value_error)?;

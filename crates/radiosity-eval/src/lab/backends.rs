@@ -1,18 +1,20 @@
-//! The form-factor backend a [`BackendSpec`] names, built for a prepared scene: column
+//! The form-factor backend a [`BackendSpec`] names (whichever registry parsed it), built for a prepared scene: column
 //! backends directly, stored matrices (`matrix:of=…`) assembled (and rebalanced when asked)
 //! or loaded from the [`Cache`].
 //!
 //! A stored matrix is assembled by [`assemble_matrix`]: each unordered pair once, the other
-//! entry by reciprocity, when the backend can give single entries (the analytic backend,
-//! [`StoredMatrix::assemble_reciprocal`]); column by column otherwise (hemicube and Monte
+//! entry by reciprocity, when the backend can give single entries
+//! ([`FormFactorBackend::pairs`]: the analytic backend, [`StoredMatrix::assemble_reciprocal`]);
+//! column by column otherwise (hemicube and Monte
 //! Carlo columns are not reciprocal, so both entries of a pair must be computed). Both run on
 //! rayon's threads and give the same matrix whatever their number.
 //!
 //! A stored matrix's cache key is [`scene_key`] with the canonical backend argument and the
 //! way it was assembled, so a matrix is reused exactly when the geometry, every backend
-//! parameter and the assembly agree. The hierarchical operator's links are cached the same way
-//! (kind `hierarchical`, [`HierarchicalColumns::to_bytes`]), keyed by the scene and the
-//! canonical argument: a second run over the same scene reads them instead of building.
+//! parameter and the assembly agree. A backend that keeps its build
+//! ([`radiosity_ff::BackendArgument::cache_kind`]: the hierarchical operator's links, kind
+//! `hierarchical`) is cached the same way ([`FormFactorBackend::persist`]), keyed by the scene
+//! and the canonical argument: a second run over the same scene reads it instead of building.
 
 use crate::error::LabError;
 use crate::progress::Progress;
@@ -20,10 +22,9 @@ use crate::reference::cache::{Cache, Lookup, scene_key};
 use radiosity_core::{ColumnSource, Real};
 use radiosity_ff::guard::MatrixFigures;
 use radiosity_ff::matrix::RebalanceReport;
-use radiosity_ff::{Backend, BackendSpec, BuildProgress, HierarchicalColumns, StoredMatrix};
+use radiosity_ff::{BackendSpec, BuildObserver, FormFactorBackend, StoredMatrix};
 use radiosity_geom::PreparedScene;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 /// A stored matrix and where it came from.
@@ -53,73 +54,84 @@ pub struct CacheUse {
     pub write_error: Option<String>,
 }
 
-/// The backend `spec` names; a `matrix` comes from `cache` when it holds it (and is written
-/// to it otherwise), or is assembled fresh without a cache; so is the hierarchical operator's
-/// links, whose reading or building is shown as a stage of `progress`.
+/// A [`Progress`] that a backend reports its build to.
+#[derive(Clone, Copy)]
+pub struct Observed<'a>(pub &'a dyn Progress);
+
+impl BuildObserver for Observed<'_> {
+    fn begin(&self, stage: &str, total: u64, unit: &str) {
+        self.0.begin(stage, total, unit)
+    }
+
+    fn advance(&self, done: u64, note: &str) {
+        self.0.advance(done, note)
+    }
+
+    fn end(&self) {
+        self.0.end()
+    }
+
+    fn warn(&self, message: &str) {
+        self.0.warn(message)
+    }
+}
+
+/// The backend `spec` names; a stored matrix comes from `cache` when it holds it (and is
+/// written to it otherwise), or is assembled fresh without a cache; so is a backend that keeps
+/// its build ([`radiosity_ff::BackendArgument::cache_kind`], the hierarchical operator's
+/// links), whose reading or building is shown as a stage of `progress`.
 pub fn backend<'p>(
     prepared: &'p PreparedScene,
     spec: &BackendSpec,
     cache: Option<&Cache>,
     progress: &dyn Progress,
-) -> Result<Backend<'p>, LabError> {
-    Ok(match spec {
-        BackendSpec::Matrix { .. } => Backend::Matrix(obtain_matrix(prepared, spec, cache, progress)?.matrix),
-        BackendSpec::Hierarchical(_) => {
-            Backend::Hierarchical(Box::new(obtain_hierarchical(prepared, spec, cache, progress)))
-        }
-        _ => Backend::columns(spec, prepared.into()),
-    })
+) -> Result<Box<dyn FormFactorBackend + 'p>, LabError> {
+    if spec.stores().is_some() {
+        return Ok(Box::new(obtain_matrix(prepared, spec, cache, progress)?.matrix));
+    }
+    match (spec.argument().cache_kind(), cache) {
+        (Some(kind), Some(cache)) => obtain_kept(prepared, spec, kind, cache, progress),
+        _ => Ok(spec.build_observed(prepared.into(), &Observed(progress))?),
+    }
 }
 
-/// The hierarchical operator `spec` names: read from `cache` when it holds it (a file that
-/// cannot be read is replaced, with a warning), built otherwise and written to it.
-fn obtain_hierarchical(
-    prepared: &PreparedScene,
+/// The backend `spec` names, whose build is kept under `kind`: read from `cache` when it holds
+/// it (a file that cannot be read is replaced, with a warning), built otherwise and written to
+/// it.
+fn obtain_kept<'p>(
+    prepared: &'p PreparedScene,
     spec: &BackendSpec,
-    cache: Option<&Cache>,
+    kind: &str,
+    cache: &Cache,
     progress: &dyn Progress,
-) -> HierarchicalColumns {
+) -> Result<Box<dyn FormFactorBackend + 'p>, LabError> {
     let key = format!("{}; backend {}", scene_key(prepared.scene()), spec.canonical());
-    if let Some(cache) = cache {
-        progress.begin("reading the hierarchical operator", 0, "");
-        let read = match cache.read("hierarchical", &key) {
-            Lookup::Hit(bytes) => match HierarchicalColumns::from_bytes(&bytes, &key, prepared.scene()) {
-                Ok(h) => Some(h),
-                Err(e) => {
-                    progress.warn(&format!("replacing cache file {}: {e}", cache.path("hierarchical", &key).display()));
-                    None
-                }
-            },
-            Lookup::Miss => None,
-            Lookup::Unreadable(why) => {
-                progress.warn(&why);
+    progress.begin(&format!("reading the {} backend", spec.name()), 0, "");
+    let read = match cache.read(kind, &key) {
+        Lookup::Hit(bytes) => match spec.argument().load(&bytes, &key, prepared.into()) {
+            Ok(built) => Some(built),
+            Err(e) => {
+                progress.warn(&format!("replacing cache file {}: {e}", cache.path(kind, &key).display()));
                 None
             }
-        };
-        progress.end();
-        if let Some(h) = read {
-            return h;
+        },
+        Lookup::Miss => None,
+        Lookup::Unreadable(why) => {
+            progress.warn(&why);
+            None
         }
-    }
-    let BackendSpec::Hierarchical(params) = spec else { unreachable!("called with a hierarchical spec") };
-    // The bar counts thousandths of the pairs of patches settled: links high in the tree
-    // settle many at once, so it runs fast at first and slows down.
-    progress.begin("building the hierarchical operator", 1000, "‰ pairs settled");
-    let observe = |p: BuildProgress| progress.advance((p.settled * 1000.0) as u64, &format!("{} links", p.links));
-    let built = HierarchicalColumns::new_observed(
-        prepared.scene(),
-        &prepared.visibility,
-        &prepared.analysis,
-        *params,
-        &observe,
-    );
+    };
     progress.end();
-    if let Some(cache) = cache {
-        if let Err(e) = cache.write("hierarchical", &key, &built.to_bytes(&key)) {
-            progress.warn(&format!("the hierarchical operator was not cached: {e}"));
+    if let Some(built) = read {
+        return Ok(built);
+    }
+    let built = spec.build_observed(prepared.into(), &Observed(progress))?;
+    if let Some(bytes) = built.persist(&key) {
+        if let Err(e) = cache.write(kind, &key, &bytes) {
+            progress.warn(&format!("the {} backend was not cached: {e}", spec.name()));
         }
     }
-    built
+    Ok(built)
 }
 
 /// The full matrix of `spec` (for `matrix:of=…`, of the backend it stores, rebalanced when it
@@ -130,13 +142,13 @@ pub fn obtain_matrix(
     cache: Option<&Cache>,
     progress: &dyn Progress,
 ) -> Result<ObtainedMatrix, LabError> {
-    let rebalance = matches!(spec, BackendSpec::Matrix { rebalance: true, .. });
+    let rebalance = spec.stores().is_some_and(|(_, rebalance)| rebalance);
     let assemble_now = |cache: Option<CacheUse>| -> Result<ObtainedMatrix, LabError> {
         let start = Instant::now();
         let (matrix, clamped, rebalanced) = assemble_stored(prepared, spec, rebalance, progress)?;
         Ok(ObtainedMatrix { matrix, seconds: start.elapsed().as_secs_f64(), clamped: Some(clamped), rebalanced, cache })
     };
-    let (BackendSpec::Matrix { .. }, Some(cache)) = (spec, cache) else { return assemble_now(None) };
+    let (Some(_), Some(cache)) = (spec.stores(), cache) else { return assemble_now(None) };
     let key = format!("{}; backend {}; {}", scene_key(prepared.scene()), spec.canonical(), assembly_of(spec));
     let start = Instant::now();
     match cache.read("ff", &key) {
@@ -176,15 +188,9 @@ pub fn assemble_stored(
     rebalance: bool,
     progress: &dyn Progress,
 ) -> Result<Assembled, LabError> {
-    let backend = Backend::columns(spec, prepared.into());
+    let backend = spec.columns().build_observed(prepared.into(), &Observed(progress))?;
     let area: Vec<Real> = prepared.scene().patches().iter().map(|p| p.area()).collect();
-    // Single entries, reciprocal by construction, only from the analytic backend.
-    let pair = match &backend {
-        Backend::Analytic(a) => Some(|i: usize, j: usize| a.pair(i, j)),
-        _ => None,
-    };
-    let pair = pair.as_ref().map(|f| f as &(dyn Fn(usize, usize) -> Real + Sync));
-    let (mut matrix, clamped) = assemble_matrix(&area, &backend, pair, progress)?;
+    let (mut matrix, clamped) = StoredMatrix::assemble_backend(&area, backend.as_ref(), &Observed(progress))?;
     let rebalanced = if rebalance {
         let before = matrix.figures(&area);
         let report = matrix.rebalance(&area, prepared.analysis.closure.value.is_closed())?;
@@ -192,17 +198,14 @@ pub fn assemble_stored(
     } else {
         None
     };
-    Ok((matrix, clamped.unwrap_or_else(|| backend.clamped()), rebalanced))
+    Ok((matrix, clamped, rebalanced))
 }
 
 /// How [`assemble_stored`] assembles the matrix of `spec`, as its cache key and reports name
-/// it: "each pair once" for the analytic backend, "column by column" otherwise.
+/// it: "each pair once" for a backend that gives single entries
+/// ([`BackendSpec::pairs_once`], the analytic backend), "column by column" otherwise.
 pub fn assembly_of(spec: &BackendSpec) -> &'static str {
-    let of = match spec {
-        BackendSpec::Matrix { of, .. } => of,
-        other => other,
-    };
-    if matches!(of, BackendSpec::Analytic(_)) { "each pair once" } else { "column by column" }
+    if spec.pairs_once() { "each pair once" } else { "column by column" }
 }
 
 /// Assembles the full matrix of `source` (areas `area`), reporting progress: with `pair`
@@ -218,39 +221,7 @@ pub fn assemble_matrix<S: ColumnSource + ?Sized>(
     pair: Option<&(dyn Fn(usize, usize) -> Real + Sync)>,
     progress: &dyn Progress,
 ) -> Result<(StoredMatrix, Option<u64>), LabError> {
-    assemble_matrix_dyn(area, &source, pair, progress)
-}
-
-fn assemble_matrix_dyn(
-    area: &[Real],
-    source: &dyn ColumnSource,
-    pair: Option<&(dyn Fn(usize, usize) -> Real + Sync)>,
-    progress: &dyn Progress,
-) -> Result<(StoredMatrix, Option<u64>), LabError> {
-    let n = source.patch_count() as u64;
-    let done = AtomicU64::new(0);
-    let assembled = match pair {
-        Some(pair) => {
-            progress.begin("assembling the matrix (each pair once)", n * (n + 1) / 2, "pairs");
-            let m = StoredMatrix::assemble_reciprocal(area, pair, &|k| {
-                let k = done.fetch_max(k as u64, Ordering::Relaxed).max(k as u64);
-                progress.advance(k, "");
-            });
-            progress.end();
-            let (m, clamped) = m?;
-            (m, Some(clamped))
-        }
-        None => {
-            progress.begin("assembling the matrix", n, "columns");
-            let m = StoredMatrix::assemble(source, &|_| {
-                let k = done.fetch_add(1, Ordering::Relaxed) + 1;
-                progress.advance(k, "");
-            });
-            progress.end();
-            (m, None)
-        }
-    };
-    Ok(assembled)
+    Ok(StoredMatrix::assemble_observed(area, &source, pair, &Observed(progress))?)
 }
 
 /// The backend `spec` names, with a `matrix` assembled now, never read from a cache: what
@@ -259,6 +230,6 @@ pub fn fresh_backend<'p>(
     prepared: &'p PreparedScene,
     spec: &BackendSpec,
     progress: &dyn Progress,
-) -> Result<Backend<'p>, LabError> {
+) -> Result<Box<dyn FormFactorBackend + 'p>, LabError> {
     backend(prepared, spec, None, progress)
 }

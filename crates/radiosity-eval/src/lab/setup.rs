@@ -3,7 +3,7 @@
 //! and the stored matrix when it is kept (module doc of [`crate::lab`]).
 
 use crate::error::LabError;
-use crate::lab::backends::{assemble_matrix, backend};
+use crate::lab::backends::{assemble_matrix, backend, obtain_matrix};
 use crate::lab::charged::ChargedColumns;
 use crate::lab::options::{ColumnCharge, ColumnCost, LabOptions};
 use crate::progress::Progress;
@@ -15,7 +15,7 @@ use crate::reference::metrics::Evaluator;
 use crate::reference::shooting::solve_by_shooting;
 use crate::reference::solution::ReferenceSolution;
 use radiosity_core::{ColumnSource, LinearSystem, Real};
-use radiosity_ff::{Backend, BackendSpec, HierarchyFigures};
+use radiosity_ff::{BackendFigures, BackendSpec, FormFactorBackend};
 use radiosity_geom::{PreparedScene, SceneReport};
 use std::sync::Arc;
 use std::time::Instant;
@@ -68,8 +68,9 @@ pub struct Lab<'p> {
     /// The source that serves and charges the columns, when columns are charged
     /// ([`ColumnCost::Charged`]).
     pub(super) charged: Option<Arc<ChargedColumns>>,
-    /// What building the hierarchical operator found and cost, when it is the backend.
-    pub(super) hierarchy: Option<HierarchyFigures>,
+    /// What building the backend found and cost, when it says
+    /// ([`radiosity_ff::FormFactorBackend::figures`]).
+    pub(super) figures: Option<BackendFigures>,
 }
 
 /// How the matrix of a lab's source is obtained, when a `matrix` reference needs it.
@@ -97,8 +98,10 @@ struct Setup {
 
 impl<'p> Lab<'p> {
     /// Builds the backend `spec` (a stored matrix from the options' cache when it is there),
-    /// and sets the lab up with it. A `matrix` reference of the analytic backend is assembled
-    /// by reciprocity (each pair once); of a stored matrix, it is that matrix.
+    /// and sets the lab up with it. `spec` may come from any [`radiosity_ff::BackendRegistry`]:
+    /// a backend of one's own runs here as a built-in does. A `matrix` reference of a backend
+    /// that gives single entries (the analytic one) is assembled by reciprocity (each pair
+    /// once); of a stored matrix, it is that matrix.
     pub fn new(
         prepared: &'p PreparedScene,
         spec: &BackendSpec,
@@ -108,37 +111,28 @@ impl<'p> Lab<'p> {
         // Before the backend: a stored matrix would be assembled for nothing.
         require_emitters(prepared)?;
         let label = spec.canonical();
-        let backend = backend(prepared, spec, options.cache.as_ref(), progress)?;
-        let serves_rows = backend.serves_rows();
-        match backend {
-            Backend::Matrix(stored) => {
-                let matrix = Arc::new(FormFactors::from_stored(stored));
-                // The backend and the lab's matrix, held once.
-                let source = matrix.clone();
-                let setup = Lab::setup(prepared, &label, &source, Assembly::Stored(matrix), &options, progress)?;
-                // The backend is the matrix: its columns cost what they cost.
-                Ok(Lab::finish(prepared, &label, Box::new(source), serves_rows, setup, ColumnCost::Computed))
-            }
-            Backend::Analytic(analytic) => {
-                let source = F32Columns(Backend::Analytic(analytic));
-                let pair = |i: usize, j: usize| match &source.0 {
-                    Backend::Analytic(a) => a.pair(i, j),
-                    _ => unreachable!("built analytic above"),
-                };
-                let setup = Lab::setup(prepared, &label, &source, Assembly::Reciprocal(&pair), &options, progress)?;
-                Ok(Lab::finish(prepared, &label, Box::new(source), serves_rows, setup, options.columns))
-            }
-            other => {
-                let hierarchy = match &other {
-                    Backend::Hierarchical(h) => Some(h.figures()),
-                    _ => None,
-                };
-                let source = F32Columns(other);
-                let setup = Lab::setup(prepared, &label, &source, Assembly::Columns, &options, progress)?;
-                let lab = Lab::finish(prepared, &label, Box::new(source), serves_rows, setup, options.columns);
-                Ok(Lab { hierarchy, ..lab })
-            }
+        if spec.stores().is_some() {
+            let stored = obtain_matrix(prepared, spec, options.cache.as_ref(), progress)?.matrix;
+            let serves_rows = stored.serves_rows();
+            let matrix = Arc::new(FormFactors::from_stored(stored));
+            // The backend and the lab's matrix, held once.
+            let source = matrix.clone();
+            let setup = Lab::setup(prepared, &label, &source, Assembly::Stored(matrix), &options, progress)?;
+            // The backend is the matrix: its columns cost what they cost.
+            return Ok(Lab::finish(prepared, &label, Box::new(source), serves_rows, setup, ColumnCost::Computed));
         }
+        let built = backend(prepared, spec, options.cache.as_ref(), progress)?;
+        let (serves_rows, figures) = (built.serves_rows(), built.figures());
+        let source = F32Columns(built);
+        // A backend that gives single entries is assembled each pair once.
+        let pair = source.0.pairs().map(|entries| move |i: usize, j: usize| entries.pair(i, j));
+        let assembly = match &pair {
+            Some(pair) => Assembly::Reciprocal(pair),
+            None => Assembly::Columns,
+        };
+        let setup = Lab::setup(prepared, &label, &source, assembly, &options, progress)?;
+        let lab = Lab::finish(prepared, &label, Box::new(source), serves_rows, setup, options.columns);
+        Ok(Lab { figures, ..lab })
     }
 
     /// Sets a lab up with any column source, labelled `backend` in reports and in cache keys
@@ -203,7 +197,7 @@ impl<'p> Lab<'p> {
             contraction: setup.contraction,
             order: radiosity_geom::spatial_order(scene),
             charged,
-            hierarchy: None,
+            figures: None,
         }
     }
 
@@ -394,9 +388,10 @@ impl<'p> Lab<'p> {
         self.system.len()
     }
 
-    /// What building the hierarchical operator found and cost, when it is the lab's backend.
-    pub fn hierarchy(&self) -> Option<HierarchyFigures> {
-        self.hierarchy
+    /// What building the lab's backend found and cost, when it says (the hierarchical
+    /// operator's tree and links).
+    pub fn backend_figures(&self) -> Option<&BackendFigures> {
+        self.figures.as_ref()
     }
 }
 

@@ -71,7 +71,7 @@ impl Default for ValidateParams {
             path_trace: PathTraceParams::default(),
             refinements: 2,
             max_patches: 6000,
-            backend: BackendSpec::Analytic(AnalyticParams::default()),
+            backend: BackendSpec::new(AnalyticParams::default()),
             cache: None,
         }
     }

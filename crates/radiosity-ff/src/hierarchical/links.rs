@@ -65,9 +65,7 @@
 //! "A unified hierarchical algorithm for global illumination with scattering volumes and object
 //! clusters", IEEE TVCG 1(3)).
 
-use super::BuildProgress;
 use super::brightness::Brightness;
-use super::kernel_factor;
 use super::shaft::{ROOT, Search, Shaft, ShaftTree, lowest_along};
 use super::tree::ClusterTree;
 use crate::analytic::AnalyticColumns;
@@ -684,4 +682,32 @@ fn stride_of(total: usize) -> usize {
         a
     };
     [7, 5, 3, 11, 13].into_iter().find(|&m| gcd(m, total) == 1).unwrap_or(1)
+}
+
+/// How far a build has come ([`crate::HierarchicalColumns::new_observed`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BuildProgress {
+    /// The share of the pairs of patches settled: covered by a link, or dropped as unseen. It
+    /// ends at 1; it is not a share of the time, since links high in the tree settle many
+    /// pairs at once.
+    pub settled: Real,
+    /// Links made so far.
+    pub links: u64,
+}
+
+/// The kernel of a far link to first order about the centres, without its `1 / (π r²)`:
+/// for `x` on `a`'s side (normal `n`, offset `a` from `a`'s centre) and `y` on `b`'s (normal
+/// `m`, offset `b`), with `e` the link's direction, `P = I − e eᵀ`, `Δ = b − a`, `α = n · e`,
+/// `β = −m · e`:
+/// `κ = αβ (1 − 2 e · Δ / r) + (β n · PΔ − α m · PΔ) / r`. It is symmetric in the two ends (swap
+/// them and `e`), and non-negative wherever the link was made.
+pub(super) fn kernel_factor(span: &Span, (n, a): (Vec3, Vec3), (m, b): (Vec3, Vec3)) -> Real {
+    let e = span.d;
+    if !span.first {
+        return n.dot(e) * -m.dot(e);
+    }
+    let delta = b - a;
+    let p_delta = delta - e * e.dot(delta);
+    let (alpha, beta) = (n.dot(e), -m.dot(e));
+    alpha * beta * (1.0 - 2.0 * e.dot(delta) / span.r) + (beta * n.dot(p_delta) - alpha * m.dot(p_delta)) / span.r
 }

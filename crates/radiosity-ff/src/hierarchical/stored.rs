@@ -11,8 +11,10 @@
 //! `u32`, far values as two `u16`, near and pair values as `f64`) and the closure
 //! weights (`f64`), read back bit for bit.
 
+use super::HierarchicalColumns;
+use super::adjacency::{Adjacency, Lists};
+use super::build::HierarchyFigures;
 use super::tree::ClusterTree;
-use super::{Adjacency, HierarchicalColumns, HierarchyFigures, Lists};
 use crate::error::FfError;
 use crate::framing::{frame, unframe};
 use radiosity_core::{Real, Scene};

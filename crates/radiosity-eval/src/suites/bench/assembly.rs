@@ -10,7 +10,7 @@ use crate::suites::bench::report_text::{human_bytes, sig};
 use radiosity_core::Real;
 use radiosity_ff::guard::MatrixFigures;
 use radiosity_ff::matrix::Storage;
-use radiosity_ff::{AnalyticColumns, BackendSpec, StoredMatrix};
+use radiosity_ff::{AnalyticColumns, AnalyticParams, StoredMatrix};
 use radiosity_geom::PreparedScene;
 use std::fmt::Write as _;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -69,10 +69,7 @@ pub fn measure(
         params.rays.iter().map(|&k| ("each pair once (reciprocity)".to_string(), k, true)).collect();
     cases.push(("column by column".to_string(), 1, false));
     for (label, rays, reciprocal) in cases {
-        let spec = BackendSpec::parse(&format!("analytic:rays={rays}"))?;
-        let BackendSpec::Analytic(analytic) = spec else {
-            return Err(LabError::Invalid(format!("analytic:rays={rays} is not an analytic backend")));
-        };
+        let analytic = AnalyticParams { rays, ..AnalyticParams::default() };
         let analytic = AnalyticColumns::new(scene, &prepared.visibility, &prepared.analysis, analytic);
         let mut seconds = Vec::new();
         let mut last = None;

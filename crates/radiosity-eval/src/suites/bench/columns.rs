@@ -17,7 +17,7 @@ use crate::suites::bench::json::ColumnsJson;
 use crate::suites::bench::report_text::{duration, percent, sig};
 use radiosity_core::ColumnSource;
 use radiosity_ff::pair_visibility::SamplingPath;
-use radiosity_ff::{AnalyticColumns, AnalyticParams, Backend, BackendSpec, ColumnRays, FormFactorInput, TracedRays};
+use radiosity_ff::{AnalyticColumns, AnalyticParams, BackendSpec, ColumnRays, FormFactorInput, TracedRays};
 use radiosity_geom::PreparedScene;
 use radiosity_geom::Visibility;
 use radiosity_geom::visibility::RawTracer;
@@ -192,11 +192,12 @@ pub fn measure(
     // Columns are timed as computed for the first time: the passes repeat the sample, and
     // with its visible fractions recorded a repeated column traces nothing. The record
     // changes no entry, so the backend is the same one.
-    let first_time = match spec {
-        BackendSpec::Analytic(p) => BackendSpec::Analytic(AnalyticParams { cache_mib: 0, ..*p }),
-        other => other.clone(),
+    let analytic = spec.params::<AnalyticParams>();
+    let first_time = match analytic {
+        Some(p) => BackendSpec::new(AnalyticParams { cache_mib: 0, ..*p }),
+        None => spec.clone(),
     };
-    let backend = Backend::columns(&first_time, input);
+    let backend = first_time.build(input)?;
     // One column untimed first: the BVH and the backend's tables paged in and cached.
     if let Some(&j) = sample.first() {
         pools[1].install(|| time_sequential(&backend, &[j], 0.0));
@@ -205,10 +206,10 @@ pub fn measure(
     run.columns[0] = pools[0].install(|| time_parallel(&backend, sample, min_seconds));
     run.columns[1] = pools[1].install(|| time_parallel(&backend, sample, min_seconds));
     run.columns[2] = pools[1].install(|| time_sequential(&backend, sample, min_seconds));
-    if let BackendSpec::Analytic(p) = spec {
+    if let Some(p) = analytic {
         let analytic = AnalyticColumns::new(input.scene, input.visibility, input.analysis, *p);
         run.paths = time_by_sampling_path(&analytic, sample);
-        let recorded = Backend::columns(spec, input);
+        let recorded = spec.build(input)?;
         pools[1].install(|| time_sequential(&recorded, sample, 0.0));
         run.recorded = pools[1].install(|| time_sequential(&recorded, sample, min_seconds));
     }
@@ -321,7 +322,8 @@ pub fn run(
         let rays = runs[0].rays as f64;
         let per_column = rays / columns.len() as f64;
         let rate = |f: &dyn Fn(&ColumnRun) -> f64| median(&runs.iter().map(f).collect::<Vec<_>>());
-        let kind = if matches!(spec, BackendSpec::Analytic(_)) { "segments" } else { "rays" };
+        let analytic = spec.params::<AnalyticParams>();
+        let kind = if analytic.is_some() { "segments" } else { "rays" };
         for (row, label, raw_index) in [(0, "1", 0), (1, "2", 1), (2, "2, one at a time", 1)] {
             let cps = rate(&|r| columns.len() as f64 / r.columns[row]);
             let pipeline = rate(&|r| rays / r.columns[row]);
@@ -339,7 +341,7 @@ pub fn run(
                 sig(obvhs, 3),
                 percent(pipeline, obvhs),
             );
-            if row == 1 && matches!(spec, BackendSpec::Analytic(p) if p.rays == 1) && rays > 0.0 {
+            if row == 1 && analytic.is_some_and(|p| p.rays == 1) && rays > 0.0 {
                 section.analytic_ratio = Some((pipeline / obvhs, pipeline / exact));
             }
         }
@@ -350,8 +352,7 @@ pub fn run(
             rays_per_column: per_column,
             // As the table's ratio: the median pipeline rate over the median raw rate.
             raw_share: rate(&|r| rays / r.columns[1]) / rate(&|r| rays / r.raw[3]),
-            recorded_columns_per_second: matches!(spec, BackendSpec::Analytic(_))
-                .then(|| rate(&|r| columns.len() as f64 / r.recorded)),
+            recorded_columns_per_second: analytic.is_some().then(|| rate(&|r| columns.len() as f64 / r.recorded)),
         });
         let (exact, raw) = runs[0].agree;
         if exact != raw {
@@ -364,7 +365,7 @@ pub fn run(
                 if kind == "segments" { "clear" } else { "hitting a patch" },
             );
         }
-        if let BackendSpec::Analytic(_) = spec {
+        if analytic.is_some() {
             let column = rate(&|r| r.columns[0] / columns.len() as f64);
             let listing = rate(&|r| r.listing / columns.len() as f64);
             let tracing = rate(&|r| r.raw[0] / columns.len() as f64);

@@ -110,11 +110,11 @@ pub fn scale_run(
     let rules = StopRules::parse(&format!("time={}ms,residual={STOP_RESIDUAL:e}", (max_seconds * 1e3).ceil() as u64))?;
     let options = LabOptions::default().with_reference(ReferenceKind::None).with_residuals(false);
     let lab = Lab::new(prepared, ff, options, &NoProgress)?;
-    let operator = lab.hierarchy().map(|h| OperatorFigures {
-        seconds: h.seconds,
-        far_links: h.far_links,
-        near_links: h.near_links,
-        bytes: h.bytes,
+    let operator = lab.backend_figures().map(|f| OperatorFigures {
+        seconds: f.seconds,
+        far_links: f.count("far links").unwrap_or(0.0) as usize,
+        near_links: f.count("near links").unwrap_or(0.0) as usize,
+        bytes: f.bytes,
     });
     let backend_seconds = start.elapsed().as_secs_f64() - scene_seconds;
     let setup = start.elapsed().as_secs_f64();

@@ -13,7 +13,7 @@ use crate::reference::solution::{ReferenceParams, ReferenceSolution};
 use crate::suites::stress::cases::{CONVERGED, Case, RESIDUAL_TARGET, STEP_CAP, SuiteBackend};
 use radiosity_core::dense_lu::solve_m_matrix;
 use radiosity_core::{LinearSystem, Real};
-use radiosity_ff::BackendSpec;
+use radiosity_ff::BackendRegistry;
 use radiosity_geom::PreparedScene;
 use radiosity_solvers::{
     Executor, ObserverMode, Problem, Record, SolverRegistry, State, StopRule, StopRules, TerminationReason,
@@ -101,10 +101,12 @@ impl Ended {
     }
 }
 
-/// Assembles F with `backend`, solves the reference and runs every solver.
+/// Assembles F with `backend` (its argument parsed by `backends`), solves the reference and
+/// runs every solver.
 pub(super) fn run_backend(
     prepared: &PreparedScene,
     backend: SuiteBackend,
+    backends: &BackendRegistry,
     solvers: &[String],
     registry: &SolverRegistry,
 ) -> Result<BackendResult, LabError> {
@@ -127,7 +129,7 @@ pub(super) fn run_backend(
         result.left_out = Some("the scene is open, so its rows need not sum to 1".into());
         return Ok(result);
     }
-    let mut matrix = assemble(prepared, backend)?;
+    let mut matrix = assemble(prepared, backend, backends)?;
     if backend.close_rows {
         result.closure_factors = Some(matrix.close_rows());
     }
@@ -161,9 +163,13 @@ pub(super) fn run_backend(
     Ok(result)
 }
 
-/// F of `backend` on the prepared scene, in `f64`.
-fn assemble(prepared: &PreparedScene, backend: SuiteBackend) -> Result<FormFactors, LabError> {
-    let spec = BackendSpec::parse(backend.spec)?;
+/// F of `backend` (its argument parsed by `backends`) on the prepared scene, in `f64`.
+fn assemble(
+    prepared: &PreparedScene,
+    backend: SuiteBackend,
+    backends: &BackendRegistry,
+) -> Result<FormFactors, LabError> {
+    let spec = backends.parse(backend.spec)?;
     let limit = ReferenceParams::default().max_matrix_bytes;
     Ok(FormFactors::assemble(&fresh_backend(prepared, &spec, &NoProgress)?, limit)?)
 }

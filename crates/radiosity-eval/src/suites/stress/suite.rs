@@ -5,11 +5,12 @@ use crate::error::LabError;
 use crate::progress::Progress;
 use crate::suites::stress::cases::{BACKENDS, CASES, Case, SuiteBackend, all_solvers};
 use crate::suites::stress::judge::{CaseResult, StressReport, run_backend};
+use radiosity_ff::BackendRegistry;
 use radiosity_geom::PreparedScene;
 use radiosity_solvers::SolverRegistry;
 
-/// The suite to run: cases, backends and solvers (built by name from a registry, so that a
-/// researcher's own solver, registered there, runs beside the built-in ones).
+/// The suite to run: cases, backends and solvers (built by name from registries, so that a
+/// researcher's own solver or backend, registered there, runs beside the built-in ones).
 pub struct StressSuite<'r> {
     /// The scenes.
     pub cases: Vec<Case>,
@@ -19,12 +20,20 @@ pub struct StressSuite<'r> {
     pub solvers: Vec<String>,
     /// Where the solvers are built from.
     pub registry: &'r SolverRegistry,
+    /// Where the backends' arguments are parsed ([`BackendRegistry::builtin`] by default).
+    pub backend_registry: &'r BackendRegistry,
 }
 
 impl<'r> StressSuite<'r> {
     /// Every case, backend and solver.
     pub fn full(registry: &'r SolverRegistry) -> StressSuite<'r> {
-        StressSuite { cases: CASES.to_vec(), backends: BACKENDS.to_vec(), solvers: all_solvers(), registry }
+        StressSuite {
+            cases: CASES.to_vec(),
+            backends: BACKENDS.to_vec(),
+            solvers: all_solvers(),
+            registry,
+            backend_registry: radiosity_ff::registry::builtin(),
+        }
     }
 
     /// Runs the suite; `progress` counts scene-and-backend pairs.
@@ -43,7 +52,8 @@ impl<'r> StressSuite<'r> {
             let mut runs = Vec::new();
             for backend in &self.backends {
                 progress.advance(done, &format!("{} · {}", case.key, backend.label));
-                runs.push(run_backend(&prepared, *backend, &self.solvers, self.registry)?);
+                let backends = self.backend_registry;
+                runs.push(run_backend(&prepared, *backend, backends, &self.solvers, self.registry)?);
                 done += 1;
             }
             results.push(CaseResult { case: *case, patches: prepared.scene().len(), runs });

@@ -1,0 +1,253 @@
+//! Building the operator: the cluster tree, the links refined from the root's link with
+//! itself (`links`), the optional later passes, the figures, and closure.
+//!
+//! With `passes` above 1 the refinement is driven again by the solution (multigridding,
+//! Hanrahan, Salzman & Aupperle's BF refinement on the current `B`): the operator of a pass is
+//! swept from the emission (`SWEEPS` Jacobi products), the brightness is taken from that
+//! radiosity instead of the estimate, and every far link that may no longer be far under it is
+//! refined again from its nodes; the others keep their rays' tally. A pass refines and never
+//! coarsens.
+
+use super::HierarchicalColumns;
+use super::adjacency::{Adjacency, Lists};
+use super::brightness::Brightness;
+use super::links::{self, BuildProgress, Links, Refiner, Watch};
+use super::params::HierarchicalParams;
+use super::shaft::ShaftTree;
+use super::tree::{self, ClusterTree};
+use crate::analytic::{AnalyticColumns, AnalyticParams};
+use radiosity_core::{ColumnSource, Real, Scene};
+use radiosity_geom::{SceneAnalysis, Visibility};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// What building the operator found and cost (written with the links when they are cached).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct HierarchyFigures {
+    /// Nodes of the cluster tree.
+    pub nodes: usize,
+    /// Far links with a cluster at one end at least (a far link between two patches is
+    /// stored as a near link, counted in `far_pairs`).
+    pub far_links: usize,
+    /// Of the far links, those whose kernel is taken to zeroth order (grazing links, where the
+    /// first-order kernel could turn negative).
+    pub zeroth_links: usize,
+    /// Near links, patch to patch, each one number: the analytic entry, or the far kernel's
+    /// for patches far apart (`far_pairs`).
+    pub near_links: usize,
+    /// Of the near links, those between patches far apart.
+    pub far_pairs: u64,
+    /// Shadow rays traced for far links.
+    pub rays: u64,
+    /// Links dropped because every ray was blocked.
+    pub occluded: u64,
+    /// Far links and near pairs whose shafts held no patch: seen whole without their rays
+    /// (`shafts=true`).
+    pub clear_shafts: u64,
+    /// Seconds to build the tree and the links.
+    pub seconds: f64,
+    /// Bytes held by the tree and the links.
+    pub bytes: usize,
+    /// Patches whose far links and far pairs closure weighs below 1: the rows that would
+    /// otherwise sum above 1.
+    pub capped: usize,
+    /// Rows whose near links alone sum above 1 (their analytic entries' noise), counted with
+    /// closure or without; closure leaves them above 1.
+    pub near_above: usize,
+    /// The smallest closure weight (1 when no row was capped).
+    pub lowest_weight: Real,
+    /// Whether the links were read from disk ([`HierarchicalColumns::from_bytes`]) rather than
+    /// built: the figures above are then the build's.
+    pub loaded: bool,
+}
+
+impl HierarchicalColumns {
+    /// Builds the operator: the tree, then the links (on rayon's threads, the same whatever
+    /// their number).
+    pub fn new(
+        scene: &Scene,
+        visibility: &Visibility,
+        analysis: &SceneAnalysis,
+        params: HierarchicalParams,
+    ) -> HierarchicalColumns {
+        HierarchicalColumns::new_observed(scene, visibility, analysis, params, &|_| {})
+    }
+
+    /// [`HierarchicalColumns::new`], calling `observe` from the building threads every
+    /// thousandth of the pairs of patches settled.
+    pub fn new_observed(
+        scene: &Scene,
+        visibility: &Visibility,
+        analysis: &SceneAnalysis,
+        params: HierarchicalParams,
+        observe: &(dyn Fn(BuildProgress) + Sync),
+    ) -> HierarchicalColumns {
+        let start = Instant::now();
+        let tree = ClusterTree::new(scene);
+        let near_params = AnalyticParams {
+            order: params.order,
+            tolerance: params.tolerance,
+            seed: params.seed,
+            budget: params.budget,
+            ..AnalyticParams::default()
+        };
+        let analytic = AnalyticColumns::new(scene, visibility, analysis, near_params);
+        let mut cumulative = Vec::with_capacity(scene.len() + 1);
+        cumulative.push(0.0);
+        for &p in &tree.order {
+            cumulative.push(cumulative.last().unwrap() + scene.patches()[p as usize].area());
+        }
+        let shafts = (params.shafts && analysis.occlusion.value).then(|| ShaftTree::new(scene));
+        let refiner = Refiner {
+            scene,
+            tree: &tree,
+            visibility: analysis.occlusion.value.then_some(visibility),
+            analytic: &analytic,
+            brightness: Brightness::estimate(scene, &tree, params.oracle, params.floor),
+            eps: params.eps,
+            shadows: params.shadows * params.eps,
+            strata: links::strata_order(params.rays.max(1)),
+            seed: params.seed,
+            shafts: shafts.as_ref(),
+            tolerance: 1e-9 * scene.diagonal(),
+            cumulative,
+            watch: Watch::new(scene.len(), observe),
+        };
+        let mut links = refiner.refine_all();
+        for _ in 1..params.passes {
+            // Multigridding: the radiosity of this pass's operator weighs the next pass.
+            let b = HierarchicalColumns::assemble(scene, tree.clone(), &links, start).radiosity(scene, SWEEPS);
+            let again = Refiner {
+                brightness: Brightness::from_radiosity(scene, &tree, &b, params.floor),
+                watch: Watch::new(scene.len(), &|_| {}),
+                cumulative: refiner.cumulative.clone(),
+                strata: refiner.strata.clone(),
+                ..refiner
+            };
+            let Links { far, near, pairs, rays, occluded, clear, .. } = std::mem::take(&mut links);
+            let mut next = again.refine_again(&far);
+            next.near.splice(0..0, near);
+            next.pairs.splice(0..0, pairs);
+            (next.rays, next.occluded, next.clear) = (next.rays + rays, next.occluded + occluded, next.clear + clear);
+            links = next;
+        }
+        let mut operator = HierarchicalColumns::assemble(scene, tree, &links, start);
+        let near = operator.near_sums();
+        operator.figures.near_above = near.iter().filter(|&&s| s > 1.0).count();
+        if params.closure {
+            operator.close(&near);
+        }
+        operator.figures.seconds = start.elapsed().as_secs_f64();
+        operator
+    }
+
+    /// The operator of `links` over `tree`, its figures timed from `start`.
+    fn assemble(scene: &Scene, tree: ClusterTree, links: &Links, start: Instant) -> HierarchicalColumns {
+        let Links { far: far_links, near: near_links, pairs: pair_links, rays, occluded, clear, zeroth, .. } = links;
+        let far = Adjacency::new(tree.nodes.len(), far_links, |l| (l.a, l.b, [l.clear, l.count]));
+        let near = Adjacency::new(scene.len(), near_links, |l| (l.i, l.j, l.transfer));
+        let pairs = Adjacency::new(scene.len(), pair_links, |l| (l.i, l.j, l.transfer));
+        let figures = HierarchyFigures {
+            nodes: tree.nodes.len(),
+            far_links: far_links.len(),
+            zeroth_links: *zeroth as usize,
+            near_links: near_links.len() + pair_links.len(),
+            far_pairs: pair_links.len() as u64,
+            rays: *rays,
+            occluded: *occluded,
+            clear_shafts: *clear,
+            seconds: start.elapsed().as_secs_f64(),
+            bytes: HierarchicalColumns::bytes_of(&tree, &[far.bytes(), near.bytes(), pairs.bytes()], scene.len()),
+            capped: 0,
+            near_above: 0,
+            lowest_weight: 1.0,
+            loaded: false,
+        };
+        let weights = vec![1.0; scene.len()];
+        HierarchicalColumns::from_parts(scene, tree, Lists { far, near, pairs, weights }, figures)
+    }
+
+    /// The operator of `tree` and its links over `scene`.
+    pub(super) fn from_parts(
+        scene: &Scene,
+        tree: ClusterTree,
+        lists: Lists,
+        figures: HierarchyFigures,
+    ) -> HierarchicalColumns {
+        let Lists { far, near, pairs, weights } = lists;
+        HierarchicalColumns {
+            parent: parents(&tree),
+            far,
+            near,
+            pairs,
+            weights,
+            areas: scene.patches().iter().map(|p| p.area()).collect(),
+            normals: scene.patches().iter().map(|p| p.normal()).collect(),
+            centroids: scene.patches().iter().map(|p| p.centroid()).collect(),
+            tree,
+            figures,
+        }
+    }
+
+    /// An approximation of the operator's radiosity over `scene` in RGB: `sweeps` Jacobi
+    /// sweeps from the emission, each one product.
+    fn radiosity(&self, scene: &Scene, sweeps: usize) -> Vec<Real> {
+        let n = scene.len();
+        let e: Vec<Real> = (0..3 * n).map(|idx| scene.emission(idx / 3).0[idx % 3]).collect();
+        let (mut b, mut fb) = (e.clone(), vec![0.0; 3 * n]);
+        for _ in 0..sweeps {
+            self.multiply(&b, 3, &mut fb);
+            for (idx, v) in b.iter_mut().enumerate() {
+                *v = e[idx] + scene.reflectivity(idx / 3).0[idx % 3] * fb[idx];
+            }
+        }
+        b
+    }
+
+    /// Each row's two parts, summed: its near links' (the analytic backend's entries) and its
+    /// far links' and far pairs' (with their closure weights). A row is their sum.
+    pub fn row_parts(&self) -> (Vec<Real>, Vec<Real>) {
+        let n = self.areas.len();
+        let near = self.near_sums();
+        let mut estimated = vec![0.0; n];
+        self.estimated_product(&vec![1.0; n], 1, &self.weights, &mut estimated);
+        estimated.iter_mut().zip(&self.weights).for_each(|(e, w)| *e *= w);
+        (near, estimated)
+    }
+
+    /// Each row's near part: the sum of its near links' entries.
+    pub(super) fn near_sums(&self) -> Vec<Real> {
+        (0..self.areas.len())
+            .into_par_iter()
+            .map(|i| self.near.of(i).map(|(_, &t)| t).sum::<Real>() / self.areas[i])
+            .collect()
+    }
+
+    /// What building found and cost.
+    pub fn figures(&self) -> HierarchyFigures {
+        self.figures
+    }
+
+    /// The bytes held by a tree, its link lists (`lists`, their bytes) and the patches' areas,
+    /// normals, centroids and weights.
+    pub(super) fn bytes_of(tree: &ClusterTree, lists: &[usize], patches: usize) -> usize {
+        tree.nodes.len() * (size_of::<tree::Node>() + 4) + lists.iter().sum::<usize>() + patches * 48
+    }
+}
+
+/// The parent of each node of `tree` (`u32::MAX` for the root).
+fn parents(tree: &ClusterTree) -> Vec<u32> {
+    let mut parent = vec![u32::MAX; tree.nodes.len()];
+    for (k, node) in tree.nodes.iter().enumerate() {
+        if let Some(children) = node.children {
+            for c in children {
+                parent[c as usize] = k as u32;
+            }
+        }
+    }
+    parent
+}
+
+/// The Jacobi sweeps of the radiosity a later refinement pass is weighed by: light bounced
+/// this many times, enough for an oracle that only needs each patch's brightness to a factor.
+const SWEEPS: usize = 8;

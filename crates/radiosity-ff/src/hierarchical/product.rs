@@ -1,0 +1,257 @@
+//! Products and columns of the operator.
+//!
+//! `κ` is bilinear in a sender's normal `m` and offset `b`, so a far link's transfer needs only
+//! the sender's moments `M0 = Σ A_j x_j m_j` and `M1 = Σ A_j x_j m_j b_jᵀ`, and gives the
+//! receiver a linear form `n · V + nᵀ W a` of a patch's normal and offset. A product gathers
+//! the moments up the tree (shifting `M1` by `M0 δᵀ` to a parent's centre), adds each link's
+//! form at both ends, pushes the forms down (shifting `V` by `W δ`) and evaluates them at the
+//! leaves, plus the near links: `O(links + n)`. A column `j` evaluates the links of `j`'s
+//! ancestors at the patches of their other ends; each entry comes from exactly one link, so a
+//! row (`F_ij` for every `j`, through `i`'s ancestors) holds bit for bit the entries the
+//! columns hold.
+
+use super::HierarchicalColumns;
+use super::links::{Span, kernel_factor};
+use radiosity_core::{ColumnSource, Real, Vec3};
+use rayon::prelude::*;
+
+impl HierarchicalColumns {
+    /// Calls `f(k)` for the leaf of `patch` and each of its ancestors.
+    pub(super) fn ancestors(&self, patch: usize, mut f: impl FnMut(u32)) {
+        let mut k = self.tree.leaf[patch];
+        while k != u32::MAX {
+            f(k);
+            k = self.parent[k as usize];
+        }
+    }
+
+    /// `F_ij` for every `i` (`row = false`: a column) or every `j` (`row = true`: a row), for
+    /// the patch `p` that is `j` or `i` respectively. A far entry is `A_j · g · κ` with `κ` the
+    /// link's kernel factor ([`kernel_factor`]) seen from `p`'s end: swapping the ends negates
+    /// `e`, `Δ` and `PΔ` exactly and swaps `α` and `β`, so a row and a column compute each
+    /// entry to the same bits.
+    pub(super) fn fill_line(&self, p: usize, line: &mut [Real], row: bool) {
+        line.fill(0.0);
+        let w = &self.weights;
+        self.ancestors(p, |k| {
+            let ck = self.tree.nodes[k as usize].centre;
+            for (&other, &[clear, count]) in self.far.of(k as usize) {
+                let span = Span::new(&self.tree, k, other, clear, count);
+                let co = self.tree.nodes[other as usize].centre;
+                let at_p = (self.normals[p], self.centroids[p] - ck);
+                for &q in self.tree.patches_of(other) {
+                    let q = q as usize;
+                    let kappa = kernel_factor(&span, at_p, (self.normals[q], self.centroids[q] - co));
+                    // F_pq or F_qp: the area is the sender's.
+                    let sender = if row { q } else { p };
+                    line[q] = w[p] * w[q] * (self.areas[sender] * (span.g * kappa));
+                }
+            }
+        });
+        for (&q, &transfer) in self.near.of(p) {
+            let q = q as usize;
+            line[q] = transfer / if row { self.areas[p] } else { self.areas[q] };
+        }
+        for (&q, &transfer) in self.pairs.of(p) {
+            let q = q as usize;
+            line[q] = w[p] * w[q] * (transfer / if row { self.areas[p] } else { self.areas[q] });
+        }
+    }
+}
+
+impl ColumnSource for HierarchicalColumns {
+    fn patch_count(&self) -> usize {
+        self.areas.len()
+    }
+
+    fn fill_column(&self, j: usize, column: &mut [Real]) {
+        self.fill_line(j, column, false);
+    }
+
+    fn fill_row(&self, i: usize, row: &mut [Real]) -> bool {
+        self.fill_line(i, row, true);
+        true
+    }
+
+    /// Each pair's two entries are `(g (A_j c_j)) c_i` and `(g (A_i c_i)) c_j`, or
+    /// `t / A_i` and `t / A_j`: a few roundings apart.
+    fn reciprocity_bound(&self) -> Option<Real> {
+        Some(16.0 * Real::EPSILON)
+    }
+
+    /// Moments up the tree, the far links' transfers gathered at each node (in parallel over
+    /// the nodes, each summing its own links in a fixed order, so the result is the same
+    /// whatever the thread count), the linear forms down the tree, and the pairs and near
+    /// links: `O(links + n)` for all channels in one pass over the links (module doc).
+    fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
+        self.estimated_product(x, channels, &self.weights, out);
+        out.par_chunks_mut(channels).enumerate().for_each(|(i, out)| {
+            let w = self.weights[i];
+            out.iter_mut().for_each(|o| *o *= w);
+            for (&j, &transfer) in self.near.of(i) {
+                let f = transfer / self.areas[i];
+                for ch in 0..channels {
+                    out[ch] += f * x[j as usize * channels + ch];
+                }
+            }
+        });
+        true
+    }
+}
+
+impl HierarchicalColumns {
+    /// `Σ_j E_ij w_j x_j` for every `i`, over the estimated entries `E` alone (far links and
+    /// far pairs, before any closure weight), each sender weighed by `weights`.
+    pub(super) fn estimated_product(&self, x: &[Real], channels: usize, weights: &[Real], out: &mut [Real]) {
+        let k = channels;
+        let nodes = &self.tree.nodes;
+        let mut moments = vec![Moments::default(); nodes.len() * k];
+        // Gathered up: children come after their parent, so a backward pass sees them first.
+        for node in (0..nodes.len()).rev() {
+            match nodes[node].children {
+                None => {
+                    let p = self.tree.order[nodes[node].first as usize] as usize;
+                    let offset = self.centroids[p] - nodes[node].centre;
+                    for ch in 0..k {
+                        let w = self.areas[p] * weights[p] * x[p * k + ch];
+                        moments[node * k + ch] = Moments::of(self.normals[p] * w, offset);
+                    }
+                }
+                Some([a, b]) => {
+                    let (da, db) =
+                        (nodes[a as usize].centre - nodes[node].centre, nodes[b as usize].centre - nodes[node].centre);
+                    for ch in 0..k {
+                        moments[node * k + ch] =
+                            moments[a as usize * k + ch].shifted(da).plus(&moments[b as usize * k + ch].shifted(db));
+                    }
+                }
+            }
+        }
+        let mut forms = vec![Form::default(); nodes.len() * k];
+        forms.par_chunks_mut(k).enumerate().for_each(|(node, forms)| {
+            for (&other, &[clear, count]) in self.far.of(node) {
+                // From this node to the other end.
+                let span = Span::new(&self.tree, node as u32, other, clear, count);
+                let from = &moments[other as usize * k..(other as usize + 1) * k];
+                Form::receive(forms, from, &span);
+            }
+        });
+        for node in 0..nodes.len() {
+            match nodes[node].children {
+                None => {
+                    let p = self.tree.order[nodes[node].first as usize] as usize;
+                    let offset = self.centroids[p] - nodes[node].centre;
+                    for ch in 0..k {
+                        out[p * k + ch] = forms[node * k + ch].at(self.normals[p], offset);
+                    }
+                }
+                Some(children) => {
+                    for c in children {
+                        let delta = nodes[c as usize].centre - nodes[node].centre;
+                        for ch in 0..k {
+                            let shifted = forms[node * k + ch].shifted(delta);
+                            forms[c as usize * k + ch].add(&shifted);
+                        }
+                    }
+                }
+            }
+        }
+        out.par_chunks_mut(k).enumerate().for_each(|(i, out)| {
+            for (&j, &transfer) in self.pairs.of(i) {
+                let f = transfer / self.areas[i] * weights[j as usize];
+                for ch in 0..k {
+                    out[ch] += f * x[j as usize * k + ch];
+                }
+            }
+        });
+    }
+}
+
+/// What a node sends through its far links: `M0 = Σ w m` and `M1 = Σ w m bᵀ` (rows `k` of
+/// `M1` are `Σ w m_k b`) over its patches, `w = A x`, `m` the normal and `b` the offset of the
+/// centroid from the node's centre.
+#[derive(Clone, Copy, Debug, Default)]
+struct Moments {
+    m0: Vec3,
+    m1: [Vec3; 3],
+}
+
+impl Moments {
+    fn of(wm: Vec3, b: Vec3) -> Moments {
+        Moments { m0: wm, m1: [b * wm.x, b * wm.y, b * wm.z] }
+    }
+
+    /// About a centre `δ` away: `b` becomes `b + δ`.
+    fn shifted(&self, delta: Vec3) -> Moments {
+        let m = self.m0;
+        Moments { m0: m, m1: [self.m1[0] + delta * m.x, self.m1[1] + delta * m.y, self.m1[2] + delta * m.z] }
+    }
+
+    fn plus(&self, o: &Moments) -> Moments {
+        Moments { m0: self.m0 + o.m0, m1: [self.m1[0] + o.m1[0], self.m1[1] + o.m1[1], self.m1[2] + o.m1[2]] }
+    }
+}
+
+/// What a node receives through its far links, as a function of a patch's normal `n` and
+/// offset `a` from the node's centre: `n · V + Σ_k n_k (W_k · a)`.
+#[derive(Clone, Copy, Debug, Default)]
+struct Form {
+    v: Vec3,
+    w: [Vec3; 3],
+}
+
+impl Form {
+    /// Adds to `forms` (one per channel) the transfer from a node with moments `from` (one per
+    /// channel) along the direction `e` (from this
+    /// node to that one), at distance `r`, with `g = V / (π r²)`: the first-order kernel of
+    /// [`kernel_factor`] summed over the sender's patches. With `S = Σ w β = −e · M0`,
+    /// `Q = Σ w β (e · b) = −eᵀ M1 e`, `U = Σ w β b = −M1ᵀ e`, `T = Σ w m · P b = tr M1 − eᵀ M1 e`:
+    /// `V += g (S e − 2Q e / r + P U / r − T e / r)` and
+    /// `W += g (2S e eᵀ / r − S P / r + e (P M0)ᵀ / r)`.
+    /// To zeroth order (`span.first` false), `V += g S e` alone.
+    fn receive(forms: &mut [Form], from: &[Moments], span: &Span) {
+        let (e, r, g) = (span.d, span.r, span.g);
+        if !span.first {
+            for (form, from) in forms.iter_mut().zip(from) {
+                form.v += e * (g * -e.dot(from.m0));
+            }
+            return;
+        }
+        // `W`'s rows are `(g / r) (e_k (3S e + P M0) − S u_k)`, `u_k` the unit vectors.
+        let g_r = g / r;
+        for (form, from) in forms.iter_mut().zip(from) {
+            let m1e = Vec3::new(from.m1[0].dot(e), from.m1[1].dot(e), from.m1[2].dot(e));
+            let e_m1_e = e.dot(m1e);
+            let m1t_e = from.m1[0] * e.x + from.m1[1] * e.y + from.m1[2] * e.z;
+            let e_m0 = e.dot(from.m0);
+            let s = -e_m0;
+            let q = -e_m1_e;
+            let u = -m1t_e;
+            let t = from.m1[0].x + from.m1[1].y + from.m1[2].z - e_m1_e;
+            let pu = u - e * e.dot(u);
+            let pm0 = from.m0 - e * e_m0;
+            form.v += g * (e * (s - (2.0 * q + t) / r) + pu / r);
+            let c = e * (3.0 * s) + pm0;
+            for k in 0..3 {
+                form.w[k] += (g_r * e[k]) * c;
+                form.w[k][k] -= g_r * s;
+            }
+        }
+    }
+
+    /// About a centre `δ` away (a child's): `a` becomes `a + δ`.
+    fn shifted(&self, delta: Vec3) -> Form {
+        Form { v: self.v + Vec3::new(self.w[0].dot(delta), self.w[1].dot(delta), self.w[2].dot(delta)), w: self.w }
+    }
+
+    fn add(&mut self, o: &Form) {
+        self.v += o.v;
+        for k in 0..3 {
+            self.w[k] += o.w[k];
+        }
+    }
+
+    fn at(&self, n: Vec3, a: Vec3) -> Real {
+        n.dot(self.v) + n.x * self.w[0].dot(a) + n.y * self.w[1].dot(a) + n.z * self.w[2].dot(a)
+    }
+}

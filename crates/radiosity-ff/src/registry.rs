@@ -1,0 +1,382 @@
+//! Form-factor backends by name: the [`BackendRegistry`] that reads `NAME[:key=value…]` into a
+//! [`BackendSpec`], and the traits a backend's parameters implement to get a name.
+//!
+//! ## Rule
+//!
+//! A backend is registered under a name, with a help line, the `key=value` parameters it takes
+//! ([`ParamDoc`]) and a parser of the items after the name: typed, from a parameter struct that
+//! implements [`BackendParams`] ([`BackendRegistry::register`]; the keys are checked against its
+//! [`BackendParams::PARAMS`] before it reads them), or as a closure
+//! ([`BackendRegistry::register_fn`], which also gets the registry, so that a backend naming
+//! another, as `matrix`'s `of`, reads it through the same names). A parser gives a
+//! [`BackendArgument`]: what the parameters are, their canonical argument, and how to build the
+//! source ([`FormFactorBackend`]) from the scene.
+//!
+//! [`BackendRegistry::parse`] looks the name up; the first entry of that name decides (a
+//! later entry of the same name is never reached: start from [`BackendRegistry::empty`] to
+//! give a built-in name another meaning). An unknown name is [`FfError::UnknownBackend`], with
+//! the list of names ([`BackendRegistry::names`]) and, when a known name is within
+//! [`suggestion_distance`] edits (Damerau–Levenshtein, from `strsim`), that name as a
+//! suggestion. Refused parameters are one sentence beginning `form-factor backend 'NAME'` and
+//! naming the key ([`KeyValueParams`]).
+//!
+//! The built-ins ([`BackendRegistry::builtin`]), in this order: `analytic`, `hemicube`,
+//! `montecarlo`, `hierarchical` and `matrix` ([`crate::spec`]).
+//!
+//! ## References
+//!
+//! - Damerau 1964, "A technique for computer detection and correction of spelling errors",
+//!   Communications of the ACM 7(3).
+
+use crate::analytic::AnalyticParams;
+use crate::backend::{FormFactorBackend, FormFactorInput};
+use crate::error::FfError;
+use crate::hemicube::HemicubeParams;
+use crate::hierarchical::HierarchicalParams;
+use crate::montecarlo::MonteCarloParams;
+use crate::spec::{BackendSpec, MatrixParams};
+use crate::traced::ColumnRays;
+use radiosity_geom::{KeyValueParams, ParamDoc};
+use std::any::Any;
+use std::fmt;
+use std::sync::{Arc, OnceLock};
+
+/// What a backend reports while it builds: stages, each with a count of steps (the lab shows
+/// them as progress bars). Every method does nothing by default.
+pub trait BuildObserver: Sync {
+    /// A stage begins: `total` steps of `unit` (0: unknown).
+    fn begin(&self, _stage: &str, _total: u64, _unit: &str) {}
+    /// `done` steps of the stage are done.
+    fn advance(&self, _done: u64, _note: &str) {}
+    /// The stage ended.
+    fn end(&self) {}
+    /// Something the user should know that does not stop the build.
+    fn warn(&self, _message: &str) {}
+}
+
+/// A [`BuildObserver`] that shows nothing.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Unobserved;
+
+impl BuildObserver for Unobserved {}
+
+/// A backend's parsed parameters: what a [`BackendSpec`] holds. Implemented by every backend's
+/// parameter struct (through [`BackendParams`] for typed ones).
+pub trait BackendArgument: Any + fmt::Debug + Send + Sync {
+    /// The argument with every parameter that changes an entry spelled out, beginning with the
+    /// name: arguments that give the same entries give equal strings, so it keys caches.
+    fn canonical(&self) -> String;
+
+    /// Builds the source on `input`, reporting its stages to `observer`.
+    fn build<'a>(
+        &self,
+        input: FormFactorInput<'a>,
+        observer: &dyn BuildObserver,
+    ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError>;
+
+    /// Whether the source gives single entries reciprocal by construction
+    /// ([`FormFactorBackend::pairs`]), so that its matrix is assembled each pair once: known
+    /// before building, since it names the assembly in cache keys. False by default.
+    fn pairs_once(&self) -> bool {
+        false
+    }
+
+    /// For a stored matrix: the backend it stores and whether it is rebalanced. `None` by
+    /// default.
+    fn stores(&self) -> Option<(&BackendSpec, bool)> {
+        None
+    }
+
+    /// The cache kind under which a built source is kept ([`FormFactorBackend::persist`]) and
+    /// read back ([`Self::load`]), for a backend whose build is worth keeping. `None` by
+    /// default.
+    fn cache_kind(&self) -> Option<&'static str> {
+        None
+    }
+
+    /// The source written by [`FormFactorBackend::persist`] under `key`, read back for
+    /// `input`'s scene. Refused by default.
+    fn load<'a>(
+        &self,
+        _bytes: &[u8],
+        _key: &str,
+        _input: FormFactorInput<'a>,
+    ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
+        Err(FfError::NotPersistent(self.canonical()))
+    }
+
+    /// The rays each column traces, listed without computing it ([`ColumnRays`]); `None` by
+    /// default (a backend that traces nothing per column).
+    fn column_rays<'a>(&self, _input: FormFactorInput<'a>) -> Option<ColumnRays<'a>> {
+        None
+    }
+}
+
+/// A typed backend: its name, help line and parameters, and how it reads them
+/// ([`BackendRegistry::register`]).
+pub trait BackendParams: BackendArgument + Sized {
+    /// The name on the command line.
+    const NAME: &'static str;
+    /// What the backend does, in one line.
+    const HELP: &'static str;
+    /// The keys it takes, with their defaults.
+    const PARAMS: &'static [ParamDoc];
+    /// The parameters from `params`, whose keys are known to be among [`Self::PARAMS`];
+    /// refusals name the key ([`KeyValueParams::reject`]).
+    fn from_params(params: &KeyValueParams) -> Result<Self, FfError>;
+}
+
+/// What a registry entry does with the items after the name.
+type ParseFn = dyn Fn(&[&str], &BackendRegistry) -> Result<Arc<dyn BackendArgument>, FfError> + Send + Sync;
+
+/// One backend of a [`BackendRegistry`].
+#[derive(Clone)]
+pub struct BackendEntry {
+    name: String,
+    help: String,
+    params: &'static [ParamDoc],
+    parse: Arc<ParseFn>,
+}
+
+impl BackendEntry {
+    /// The name on the command line.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// What the backend does, in one line.
+    pub fn help(&self) -> &str {
+        &self.help
+    }
+
+    /// The `key=value` parameters it takes.
+    pub fn params(&self) -> &'static [ParamDoc] {
+        self.params
+    }
+}
+
+impl fmt::Debug for BackendEntry {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("BackendEntry").field("name", &self.name).field("help", &self.help).finish_non_exhaustive()
+    }
+}
+
+/// Form-factor backends by name (module doc).
+#[derive(Clone, Debug, Default)]
+pub struct BackendRegistry {
+    entries: Vec<BackendEntry>,
+}
+
+impl BackendRegistry {
+    /// A registry with no backend: every name is unknown until backends are registered.
+    pub fn empty() -> BackendRegistry {
+        BackendRegistry::default()
+    }
+
+    /// The built-in backends (module doc). Cheap: five entries.
+    pub fn builtin() -> BackendRegistry {
+        let mut registry = BackendRegistry::empty();
+        registry
+            .register::<AnalyticParams>()
+            .register::<HemicubeParams>()
+            .register::<MonteCarloParams>()
+            .register::<HierarchicalParams>()
+            .register_fn(MatrixParams::NAME, MatrixParams::HELP, MatrixParams::PARAMS, |items, registry| {
+                Ok(Arc::new(MatrixParams::parse(items, registry)?))
+            });
+        registry
+    }
+
+    /// Adds the backend of parameter struct `P`, after those already there.
+    pub fn register<P: BackendParams>(&mut self) -> &mut BackendRegistry {
+        self.register_fn(P::NAME, P::HELP, P::PARAMS, |items, _| {
+            let params = KeyValueParams::parse(&owner(P::NAME), items.iter().copied(), P::PARAMS)?;
+            Ok(Arc::new(P::from_params(&params)?))
+        })
+    }
+
+    /// Adds a backend, after those already there, from its name, help line, parameters and a
+    /// closure that reads the items after the name (`["res=64", "seed=3"]`) with this registry
+    /// at hand; its refusals should begin `form-factor backend 'NAME'` and name the key, as
+    /// [`KeyValueParams`]'s do.
+    pub fn register_fn<F>(
+        &mut self,
+        name: impl Into<String>,
+        help: impl Into<String>,
+        params: &'static [ParamDoc],
+        parse: F,
+    ) -> &mut BackendRegistry
+    where
+        F: Fn(&[&str], &BackendRegistry) -> Result<Arc<dyn BackendArgument>, FfError> + Send + Sync + 'static,
+    {
+        self.entries.push(BackendEntry { name: name.into(), help: help.into(), params, parse: Arc::new(parse) });
+        self
+    }
+
+    /// The backends, in the order they are listed.
+    pub fn entries(&self) -> &[BackendEntry] {
+        &self.entries
+    }
+
+    /// Parses `NAME[:key=value…]`.
+    pub fn parse(&self, arg: &str) -> Result<BackendSpec, FfError> {
+        let mut parts = arg.split(':').filter(|s| !s.is_empty());
+        let name = parts.next().unwrap_or_default();
+        let items: Vec<&str> = parts.collect();
+        self.parse_named(name, &items)
+    }
+
+    /// Parses the backend `name` with the items after it.
+    pub fn parse_named(&self, name: &str, items: &[&str]) -> Result<BackendSpec, FfError> {
+        let Some(entry) = self.entries.iter().find(|e| e.name == name) else {
+            return Err(FfError::UnknownBackend {
+                name: name.to_string(),
+                valid: self.names(),
+                suggestion: self.suggest(name),
+            });
+        };
+        Ok(BackendSpec::from_argument(&entry.name, (entry.parse)(items, self)?))
+    }
+
+    /// The names, comma-separated, in order.
+    pub fn names(&self) -> String {
+        self.entries.iter().map(|e| e.name.as_str()).collect::<Vec<_>>().join(", ")
+    }
+
+    /// A help text for a command line: one line per backend, its name and what it does, then
+    /// one line per parameter with its default; each line ends with a newline.
+    pub fn help(&self) -> String {
+        let width = self.entries.iter().map(|e| e.name.chars().count()).max().unwrap_or(0);
+        let mut out = String::new();
+        for entry in &self.entries {
+            out.push_str(&format!("{:width$}  {}\n", entry.name, entry.help));
+            for p in entry.params {
+                out.push_str(&format!("{:width$}    {}={}: {}\n", "", p.key, p.default, p.doc));
+            }
+        }
+        out
+    }
+
+    /// The known name nearest to `name`, if one is near enough to be a typo (module doc).
+    pub fn suggest(&self, name: &str) -> Option<String> {
+        let mut best: Option<(usize, &str)> = None;
+        for entry in &self.entries {
+            let distance = strsim::damerau_levenshtein(name, &entry.name);
+            if distance > 0 && best.is_none_or(|(d, _)| distance < d) {
+                best = Some((distance, &entry.name));
+            }
+        }
+        let (distance, candidate) = best?;
+        (distance <= suggestion_distance(name.chars().count().max(candidate.chars().count())))
+            .then(|| candidate.to_string())
+    }
+}
+
+/// The owner named by a backend's refusals: `form-factor backend 'NAME'`.
+pub fn owner(name: &str) -> String {
+    format!("form-factor backend '{name}'")
+}
+
+/// The most edits at which a name of `length` characters (the longer of the two compared) is
+/// suggested: a quarter of it, at least 1.
+pub fn suggestion_distance(length: usize) -> usize {
+    (length / 4).max(1)
+}
+
+/// The built-in registry, built once ([`BackendSpec::parse`]).
+pub fn builtin() -> &'static BackendRegistry {
+    static BUILTIN: OnceLock<BackendRegistry> = OnceLock::new();
+    BUILTIN.get_or_init(BackendRegistry::builtin)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use radiosity_core::{ColumnSource, Real};
+    use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
+
+    /// `F_ij = c` off the diagonal: a backend of one's own, registered with a closure.
+    #[derive(Debug)]
+    struct Uniform(Real);
+
+    struct UniformColumns(usize, Real);
+
+    impl ColumnSource for UniformColumns {
+        fn patch_count(&self) -> usize {
+            self.0
+        }
+
+        fn fill_column(&self, j: usize, column: &mut [Real]) {
+            column.iter_mut().enumerate().for_each(|(i, f)| *f = if i == j { 0.0 } else { self.1 });
+        }
+    }
+
+    impl FormFactorBackend for UniformColumns {}
+
+    impl BackendArgument for Uniform {
+        fn canonical(&self) -> String {
+            format!("uniform:c={}", self.0)
+        }
+
+        fn build<'a>(
+            &self,
+            input: FormFactorInput<'a>,
+            _: &dyn BuildObserver,
+        ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
+            Ok(Box::new(UniformColumns(input.scene.len(), self.0)))
+        }
+    }
+
+    const UNIFORM_PARAMS: &[ParamDoc] = &[ParamDoc { key: "c", default: "0.1", doc: "every entry" }];
+
+    fn with_uniform() -> BackendRegistry {
+        let mut registry = BackendRegistry::builtin();
+        registry.register_fn("uniform", "every entry c", UNIFORM_PARAMS, |items, _| {
+            let p = KeyValueParams::parse(&owner("uniform"), items.iter().copied(), UNIFORM_PARAMS)?;
+            Ok(Arc::new(Uniform(p.real("c", 0.1, |c| (0.0..=1.0).contains(&c), "an entry in [0, 1]")?)))
+        });
+        registry
+    }
+
+    #[test]
+    fn the_built_ins_are_listed_in_order_and_typos_get_the_nearest_name() {
+        let registry = BackendRegistry::builtin();
+        assert_eq!(registry.names(), "analytic, hemicube, montecarlo, hierarchical, matrix");
+        assert_eq!(registry.suggest("hemicub").as_deref(), Some("hemicube"));
+        assert_eq!(registry.suggest("radiance"), None);
+        let e = registry.parse("analytc:order=2").unwrap_err().to_string();
+        assert!(e.contains("unknown form-factor backend 'analytc' (did you mean 'analytic'?)"), "{e}");
+        let help = registry.help();
+        for entry in registry.entries() {
+            assert!(help.contains(entry.name()), "{help}");
+            entry.params().iter().for_each(|p| assert!(help.contains(&format!("{}={}", p.key, p.default)), "{help}"));
+        }
+        assert!(BackendRegistry::empty().parse("analytic").is_err());
+    }
+
+    #[test]
+    fn a_registered_backend_parses_builds_and_is_stored_as_a_matrix() {
+        let registry = with_uniform();
+        let spec = registry.parse("uniform:c=0.25").unwrap();
+        assert_eq!((spec.name(), spec.canonical().as_str()), ("uniform", "uniform:c=0.25"));
+        let e = registry.parse("uniform:c=2").unwrap_err().to_string();
+        assert!(e.contains("form-factor backend 'uniform'") && e.contains("c=2"), "{e}");
+        assert!(BackendRegistry::builtin().parse("uniform").is_err());
+
+        let scene = load_scene("furnace:res=2").unwrap().scene;
+        let visibility = Visibility::new(&scene);
+        let analysis = SceneAnalysis::new(&scene, &visibility);
+        let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
+        let stored = registry.parse("matrix:of=uniform:c=0.25").unwrap();
+        assert_eq!(stored.canonical(), "matrix:of=uniform:rebalance=false:c=0.25");
+        assert!(!stored.pairs_once(), "a column backend is assembled column by column");
+        let built = stored.build(input).unwrap();
+        let matrix = built.stored().expect("a stored matrix");
+        let n = scene.len();
+        for (i, j) in [(0, 1), (1, 0), (3, 3), (n - 1, 0)] {
+            assert_eq!(matrix.get(i, j), if i == j { 0.0 } else { 0.25 }, "({i}, {j})");
+        }
+        let e = registry.parse("matrix:of=matrix").unwrap_err().to_string();
+        assert!(e.contains("of=matrix") && e.contains("assembled from a column backend"), "{e}");
+    }
+}

@@ -542,8 +542,8 @@ struct Face {
 
 /// An object opened by `o`, as a node of the tree of open objects.
 struct ObjectNode {
-    parent: Option<usize>,
-    name: String,
+    /// The names of the open objects down to this one, joined by `/`.
+    path: String,
     /// The scene object, once a face has been made in it.
     id: Option<ObjectId>,
 }
@@ -746,7 +746,12 @@ impl<'a> Loader<'a> {
                     let next = self.object_nodes.len();
                     let node = *self.object_children.entry((parent, name.clone())).or_insert(next);
                     if node == next {
-                        self.object_nodes.push(ObjectNode { parent, name, id: None });
+                        let path = match parent {
+                            Some(p) => format!("{}/{name}", self.object_nodes[p].path),
+                            None => name,
+                        };
+                        self.spend(path.len() as u64, at, "the name of the object opened here")?;
+                        self.object_nodes.push(ObjectNode { path, id: None });
                     }
                     self.objects.push(node);
                 }
@@ -930,18 +935,9 @@ impl<'a> Loader<'a> {
         }
         let name = match node {
             None => self.root.file_name().map_or_else(|| "(top level)".into(), |n| n.to_string_lossy().into_owned()),
-            Some(n) => {
-                let mut names = Vec::new();
-                let mut next = Some(n);
-                while let Some(n) = next {
-                    names.push(self.object_nodes[n].name.as_str());
-                    next = self.object_nodes[n].parent;
-                }
-                names.reverse();
-                names.join("/")
-            }
+            Some(n) => self.object_nodes[n].path.clone(),
         };
-        self.spend(name.len() as u64, at, "the name of the object opened here")?;
+        self.spend(name.len() as u64, at, "the name of the object of the face here")?;
         let id = match self.object_ids.get(&name) {
             Some(&id) => id,
             None => {

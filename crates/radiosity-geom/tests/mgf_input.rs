@@ -272,6 +272,24 @@ fn real_scenes_load() {
 }
 
 #[test]
+fn real_scenes_load_within_a_64th_of_each_limit() {
+    let limits = mgf::Limits {
+        instances: limits::MAX_INSTANCES / 64,
+        patches: limits::MAX_PATCHES / 64,
+        work: limits::MAX_WORK / 64,
+        include_depth: 1,
+    };
+    for file in ["cube.mgf", "examp1.mgf", "corridor.mgf", "office3/office.mgf", "salon/classroom.mgf"] {
+        let path = format!("{SCENES}/{file}");
+        let bytes = std::fs::read(&path).unwrap();
+        let params = KeyValueParams::default();
+        let small = mgf::load_slice_limited(&bytes, Path::new(&path), &BTreeMap::new(), &params, &limits);
+        let small = small.unwrap_or_else(|e| panic!("{file}: {e}")).scene;
+        assert_eq!(small.len(), load(&path).scene.len(), "{file}");
+    }
+}
+
+#[test]
 fn unknown_entities_are_ignored_with_one_warning_and_vertices_default_to_the_origin() {
     let loaded = load(&mgf("unknown.mgf"));
     assert_eq!(loaded.scene.len(), 1);

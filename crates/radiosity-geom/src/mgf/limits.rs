@@ -15,24 +15,25 @@
 //!
 //! - **Instances** ([`MAX_INSTANCES`], 10^6): the copies that `xf -a` arrays make, counting the
 //!   innermost copies of nested arrays (two nested arrays of 1000 make 10^6), through includes.
-//!   The product of the counts of nested arrays is checked before the first copy is made. The
-//!   real scenes make at most 8 (`corridor.mgf`).
+//!   The product of the counts of nested arrays is checked before the first copy is made.
 //! - **Patches** ([`MAX_PATCHES`], 2^22 = 4 194 304): each face and each facet of a curved
 //!   primitive is at least one patch unless it is degenerate, so their count is checked by the
 //!   survey; the exact count, after splitting faces and cutting them to `size`, is checked before
-//!   the patches are built. 330 times the largest real scene (`office.mgf`, 12 626 patches), and
-//!   about 4 GB at the peak of loading.
+//!   the patches are built. 330 times the largest real scene (`office.mgf`, 12 626 patches).
 //! - **Work** ([`MAX_WORK`], 2^27 units): the bytes of the entities run, counting each repetition
-//!   by arrays and includes, plus the square of the vertex count of every face of more than
-//!   four vertices (splitting a face compares its corners pairwise), the facets of curved
-//!   primitives, and the matrix products of `xf -i`. About a second of loading in a release
-//!   build; the largest real scene (`classroom.mgf`, 1.4 MB) takes 1% of it. The names of objects
+//!   by arrays and includes, plus a third of the cube of the vertex count of every face of
+//!   more than four vertices (the corner tests of ear clipping at worst: each of the `k − 3`
+//!   ears clipped may test every corner against every other), the facets of curved primitives,
+//!   and the matrix products of `xf -i`. A unit is a few nanoseconds of loading, so the limit is
+//!   seconds, far beyond the largest real scene (`classroom.mgf`, 1.1 MB). The names of objects
 //!   and materials, whose creation costs their length, are counted as they are created.
 //! - **Include depth** ([`MAX_INCLUDE_DEPTH`], 32 files including one another): the reader
-//!   recurses into each include; the real scenes nest one deep.
+//!   recurses into each include, so the depth bounds its stack.
 //! - **Arguments** ([`MAX_WORDS`], 1024 words to an entity, MGF's reference parser's
-//!   `MG_MAXARGC`): the reference parser reads no more, and it bounds the vertices of one face,
-//!   whose splitting takes up to the cube of their count. The real scenes have at most 41.
+//!   `MG_MAXARGC`): the reference parser reads no more. The real scenes have at most 41.
+//!
+//! The five real scenes in `shared/scenes/mgf/` load within a 64th of each limit (a test checks
+//! it), so the limits refuse only files that ask for far more than any of them.
 
 use super::{At, Loader, Source, matching_end, parse_xf};
 use crate::error::GeomError;
@@ -123,8 +124,8 @@ fn faces_of(words: &[String], div: u64) -> u64 {
     }
 }
 
-/// The work of running an entity once, `xf` repetitions aside: its bytes, the square of the
-/// vertex count of a face (or prism base) of more than four vertices, and its facets.
+/// The work of running an entity once, `xf` repetitions aside: its bytes, a third of the cube
+/// of the vertex count of a face (or prism base) of more than four vertices, and its facets.
 fn work_of(words: &[String], faces: u64) -> u64 {
     let bytes: u64 = words.iter().map(|w| w.len() as u64 + 1).sum();
     let vertices = match words[0].as_str() {
@@ -132,7 +133,7 @@ fn work_of(words: &[String], faces: u64) -> u64 {
         "prism" => (words.len() as u64).saturating_sub(2),
         _ => 0,
     };
-    let splitting = if vertices > 4 { vertices * vertices } else { 0 };
+    let splitting = if vertices > 4 { vertices.pow(3) / 3 } else { 0 };
     bytes + splitting + faces
 }
 

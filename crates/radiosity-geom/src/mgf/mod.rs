@@ -66,6 +66,17 @@
 //! colour, a bare `xf` with nothing to end, an include that cannot be read; and a file with no
 //! usable face, or one holding binary data (a NUL byte, or bytes that are not UTF-8).
 //!
+//! - **Limits.** Before a file is run, it is surveyed with its includes, and refused at the
+//!   line where its arrays would make more than 10^6 instances (the product of nested counts
+//!   is checked before the first copy), its entities more than 2^22 faces, or its reading more
+//!   than 2^27 units of work; entities longer than MGF's reference parser reads (1024 words)
+//!   and chains of more than 32 includes are refused too, and the exact patch count after
+//!   cutting to `size` is checked before the patches are made. Each refusal is one sentence
+//!   with the file, the line and the count; the limits and why they are what they are are in
+//!   [`limits`].
+//! - **Memory.** [`load_slice`] loads MGF held in memory, with the files it includes given in a
+//!   map, through the same code as [`load`]: nothing is read from the disk.
+//!
 //! ## References
 //!
 //! - G. Ward, *The Materials and Geometry Format*, version 2.0, Lawrence Berkeley National

@@ -512,3 +512,18 @@ fn files_in_memory_load_as_the_same_files_on_disk() {
     assert!(matches!(e, GeomError::MgfMissingInclude { line: 3, .. }), "{e:?}");
     assert!(e.to_string().contains("no such file among the files given in memory"), "{e}");
 }
+
+#[test]
+fn iterated_transforms_count_their_matrix_products_as_work() {
+    // `xf -i 1000000` is a million matrix products each time it is run; a thousand copies of it
+    // are 10^9, past the work limit, refused at the array before any is made.
+    let text = "xf -a 1000 -t 0 0 1\nxf -i 1000000 -t 1 0 0\nxf\nxf\n";
+    let (e, m, seconds) = refused_in_memory("iterated.mgf", text, &[], &[]);
+    assert!(seconds < QUICK, "{seconds} s");
+    assert!(matches!(e, GeomError::MgfLimit { line: Some(1), .. }), "{e:?}");
+    assert!(
+        m.contains("iterated.mgf:1: reading the file up to here, repeated by arrays and includes, would take "),
+        "{m}"
+    );
+    assert!(m.ends_with(&format!("more than the {} a file may take", limits::MAX_WORK)), "{m}");
+}

@@ -4,10 +4,10 @@
 //! A few lines of MGF can ask for unbounded work: arrays multiply (three nested `xf -a 1000000`
 //! are 10^18 instances), includes multiply (ten lines `i next.mgf` in each of ten files are
 //! 10^10 runs of the last one), and every curved primitive is hundreds of facets. So before a
-//! file is run, [`Loader::survey`] walks its entities and those of its includes once each (an
-//! included file once, however often it is included), multiplying the counts of arrays and
-//! includes with saturating arithmetic, and refuses the file at the first line where the totals
-//! exceed the [`Limits`]: the error names the file, the line and the count. What the survey
+//! file is run, a survey walks its entities and those of its includes once each (an included
+//! file once, however often it is included), multiplying the counts of arrays and includes with
+//! saturating arithmetic, and refuses the file at the first line where the totals exceed the
+//! [`Limits`]: the error names the file, the line and the count. What the survey
 //! cannot see (the number of patches `size` cuts the faces into; names whose creation costs
 //! their length) is counted when it happens, before the memory is allocated.
 //!

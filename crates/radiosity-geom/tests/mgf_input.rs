@@ -527,3 +527,23 @@ fn iterated_transforms_count_their_matrix_products_as_work() {
     );
     assert!(m.ends_with(&format!("more than the {} a file may take", limits::MAX_WORK)), "{m}");
 }
+
+/// Files just under the limits load; how long they take is printed, for docs/scenes.md:
+/// `cargo test -p radiosity-geom --test lib mgf_input::files_just_under_the_limits_load --
+/// --ignored --nocapture`. Ignored by default: seconds each.
+#[test]
+#[ignore = "seconds of loading, for the figures in docs/scenes.md"]
+fn files_just_under_the_limits_load() {
+    let params = KeyValueParams::default();
+    // Work: 10 000 copies of 1 600 lines `p 1 2 3` (8 bytes each) are 1.28e8 units, just under
+    // 2^27 = 1.34e8.
+    let work = VERTICES.to_string() + "f a b c\nv d =\nxf -a 10000\n" + &"p 1 2 3\n".repeat(1600) + "xf\n";
+    // Patches: 1 000 copies of 4 000 triangles are 4e6 patches, just under 2^22 = 4.19e6.
+    let patches = VERTICES.to_string() + "xf -a 1000\n" + &"f a b c\n".repeat(4000) + "xf\n";
+    for (what, text, expected) in [("work", work, 1), ("patches", patches, 4_000_000)] {
+        let start = Instant::now();
+        let loaded = mgf::load_slice(text.as_bytes(), Path::new("limit.mgf"), &BTreeMap::new(), &params).unwrap();
+        eprintln!("{what}: {} patches in {:.2} s", loaded.scene.len(), start.elapsed().as_secs_f64());
+        assert_eq!(loaded.scene.len(), expected);
+    }
+}

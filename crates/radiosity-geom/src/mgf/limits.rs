@@ -25,8 +25,8 @@
 //!   more than four vertices (the corner tests of ear clipping at worst: each of the `k − 3`
 //!   ears clipped may test every corner against every other), the facets of curved primitives,
 //!   and the matrix products of `xf -i` (so one face of more than about 730 vertices is
-//!   refused on its own). A unit is a few nanoseconds of loading, so the limit is
-//!   seconds, far beyond the largest real scene (`classroom.mgf`, 1.1 MB). The names of objects
+//!   refused on its own). The limit is about a second of loading (measured in
+//!   `docs/scenes.md`), far beyond the largest real scene (`classroom.mgf`, 1.1 MB). The names of objects
 //!   and materials, whose creation costs their length, are counted as they are created.
 //! - **Include depth** ([`MAX_INCLUDE_DEPTH`], 32 files including one another): the reader
 //!   recurses into each include, so the depth bounds its stack.

@@ -76,13 +76,17 @@ fn bad_gltf_files_are_refused_by_every_command() {
 #[test]
 fn bad_mgf_files_are_refused() {
     // (fixture, words the sentence must contain besides the file's name and line)
-    let cases: [(&str, &[&str]); 6] = [
+    let cases: [(&str, &[&str]); 7] = [
         ("mgf/not_a_name.mgf", &["it has no faces", "skipped 1 line whose first word is not an entity name"]),
         ("mgf/undefined_vertex.mgf", &["undefined vertex 'v12'"]),
         ("mgf/undefined_material.mgf", &["undefined material 'nowhere'"]),
         ("mgf/cycle_a.mgf", &["cycle_a.mgf", "include cycle"]),
         ("mgf/missing_include.mgf", &["cannot read included file", "no_such_file.mgf"]),
         ("mgf/two_vertices.mgf", &["it has no faces", "skipped 1 face or hole with fewer than 3 vertices"]),
+        (
+            "mgf/nested_arrays.mgf",
+            &["nested_arrays.mgf:12", "would make 1000000000000 instances", "more than the 1000000 a file may create"],
+        ),
     ];
     for (file, words) in cases {
         let e = refused(&["solve", "--scene", &fixture(file), "--solver", "pr"], words);
@@ -92,6 +96,8 @@ fn bad_mgf_files_are_refused() {
         &["compare", "--scene", &fixture("mgf/not_a_name.mgf"), "--solvers", "pr"],
         &["not_a_name.mgf:3", "no usable triangles"],
     );
+    // A file that would make too much is refused by every command that loads it, at once.
+    refused(&["scenes", "--explain", &fixture("mgf/nested_arrays.mgf")], &["nested_arrays.mgf:12", "instances"]);
 }
 
 #[test]

@@ -142,6 +142,18 @@ pub enum GeomError {
         /// The operating system's message.
         message: String,
     },
+    /// An MGF file that would make more instances or patches, or take more work, than a file
+    /// may (see [`crate::mgf::Limits`]), found before the work is done.
+    #[error("{}: {message}", location(.path, .line))]
+    MgfLimit {
+        /// The file.
+        path: PathBuf,
+        /// The line (1-based) of the entity that would cross the limit; `None` when it is the
+        /// meshing of the whole file.
+        line: Option<usize>,
+        /// What would be made, how much, and the limit.
+        message: String,
+    },
     /// A file format this build does not read yet.
     #[error("{path}: {format} input is not supported yet")]
     UnsupportedFormat {
@@ -150,6 +162,14 @@ pub enum GeomError {
         /// The format's name.
         format: &'static str,
     },
+}
+
+/// `path:line`, or the path alone.
+fn location(path: &std::path::Path, line: &Option<usize>) -> String {
+    match line {
+        Some(line) => format!("{}:{line}", path.display()),
+        None => path.display().to_string(),
+    }
 }
 
 impl GeomError {

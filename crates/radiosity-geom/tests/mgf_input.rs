@@ -1,12 +1,17 @@
 //! Tests: MGF input. Hand-made fixtures in `test_data/mgf/` check each entity kind, transforms,
 //! includes, triangulation and colours against values worked out by hand, and one fixture per
-//! bad input checks that the error names the file and line. The five real scenes, files
-//! written by others, are tested in `third_party_scenes.rs`.
+//! bad input checks that the error names the file and line. Files that would make more than a
+//! file may (nested arrays, includes that multiply, huge tessellations) are refused at once,
+//! with the line and the count. The five real scenes, files written by others, are tested in
+//! `third_party_scenes.rs`.
 
 use radiosity_core::{Real, Scene, Vec3};
-use radiosity_geom::GeomError;
 use radiosity_geom::mgf::colour::Colour;
+use radiosity_geom::mgf::{self, limits};
+use radiosity_geom::{GeomError, KeyValueParams};
 use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use crate::{fixture, load, load_err};
 
@@ -282,4 +287,214 @@ fn lines_the_reference_parser_passes_over_are_skipped_with_one_warning_each() {
     let (_, m) = load_err(bad.to_str().unwrap());
     assert!(m.ends_with("bad_colour.mgf:2: 'cxy -0.2 0.3' is not a chromaticity"), "{m}");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Loads MGF held in memory (`name` and the files it includes), which must fail: the error,
+/// its message, and how long the load took.
+fn refused_in_memory(name: &str, text: &str, includes: &[(&str, String)], params: &[&str]) -> (GeomError, String, f64) {
+    let files: BTreeMap<PathBuf, Vec<u8>> =
+        includes.iter().map(|(path, text)| (PathBuf::from(path), text.clone().into_bytes())).collect();
+    let params = KeyValueParams::parse("test", params.iter().copied(), mgf::PARAMS).unwrap();
+    let start = Instant::now();
+    let result = mgf::load_slice(text.as_bytes(), Path::new(name), &files, &params);
+    let seconds = start.elapsed().as_secs_f64();
+    match result {
+        Ok(_) => panic!("{name} should be refused"),
+        Err(e) => {
+            let message = e.to_string();
+            (e, message, seconds)
+        }
+    }
+}
+
+/// Three vertices of a unit right triangle, `a b c`, on six lines.
+const VERTICES: &str = "v a =\n\tp 0 0 0\nv b =\n\tp 1 0 0\nv c =\n\tp 0 1 0\n";
+
+/// A refusal that must come at once: nothing was instantiated before it.
+const QUICK: f64 = 2.0;
+
+#[test]
+fn nested_arrays_are_refused_by_the_product_of_their_counts_before_any_copy() {
+    // 10^6 x 10^6 at the second array already exceeds the limit of 10^6 instances.
+    let start = Instant::now();
+    let (e, m) = load_err(&mgf("nested_arrays.mgf"));
+    assert!(start.elapsed().as_secs_f64() < QUICK, "{:?}", start.elapsed());
+    assert!(matches!(e, GeomError::MgfLimit { line: Some(12), .. }), "{e:?}");
+    assert!(
+        m.ends_with(
+            "nested_arrays.mgf:12: the nested `xf -a` arrays here would make 1000000000000 instances, more than the \
+             1000000 a file may create"
+        ),
+        "{m}"
+    );
+    assert_eq!(limits::MAX_INSTANCES, 1_000_000);
+    // Two counts on one line multiply the same way.
+    let (_, m, seconds) = refused_in_memory("one_line.mgf", "xf -a 1000000 -a 1000000\nxf\n", &[], &[]);
+    assert!(seconds < QUICK);
+    assert!(m.ends_with("one_line.mgf:1: the `xf -a` arrays here would make 1000000000000 instances, more than the 1000000 a file may create"), "{m}");
+    // Counts whose product overflows 64 bits are refused the same way, not wrapped around.
+    let deep = "xf -a 1000000\n".repeat(4) + "xf\n";
+    let (_, m, _) = refused_in_memory("deep.mgf", &deep, &[], &[]);
+    assert!(m.ends_with("deep.mgf:2: the nested `xf -a` arrays here would make 1000000000000 instances, more than the 1000000 a file may create"), "{m}");
+    let wide = format!("xf{}\nxf\n", " -a 1000000".repeat(4));
+    let (_, m, _) = refused_in_memory("wide.mgf", &wide, &[], &[]);
+    assert!(m.contains(&format!("would make more than {} instances", u64::MAX)), "{m}");
+}
+
+#[test]
+fn arrays_inside_includes_multiply_with_the_arrays_around_them() {
+    // The part alone makes 1000 x 1000 instances (of a colour), the limit, and one triangle: it loads.
+    let part = load(&mgf("include_arrays_part.mgf")).scene;
+    assert_eq!(part.len(), 1);
+    // A thousand copies of it are 10^9 instances.
+    let start = Instant::now();
+    let (e, m) = load_err(&mgf("include_arrays.mgf"));
+    assert!(start.elapsed().as_secs_f64() < QUICK, "{:?}", start.elapsed());
+    assert!(matches!(e, GeomError::MgfLimit { line: Some(3), .. }), "{e:?}");
+    assert!(m.contains("include_arrays.mgf:3: the `xf -a` arrays around this include and in "), "{m}");
+    assert!(
+        m.ends_with("include_arrays_part.mgf would make 1000000000 instances, more than the 1000000 a file may create"),
+        "{m}"
+    );
+}
+
+#[test]
+fn include_chains_that_multiply_are_refused_where_the_faces_exceed_the_limit() {
+    // c0 defines three vertices and includes c1 ten times, c1 includes c2 ten times, …, c8
+    // holds one triangle: 10^8 triangles, with no array. c1's tenth of its total is 10^6 faces per include line, so its
+    // includes cross the limit of 2^22 = 4194304 patches at line 5 (5 x 10^6).
+    let mut files = Vec::new();
+    for k in 1..=8 {
+        let text = if k == 8 { "f a b c\n".to_string() } else { format!("i c{}.mgf\n", k + 1).repeat(10) };
+        files.push((format!("c{k}.mgf"), text));
+    }
+    let includes: Vec<(&str, String)> = files.iter().map(|(n, t)| (n.as_str(), t.clone())).collect();
+    let (e, m, seconds) =
+        refused_in_memory("c0.mgf", &(VERTICES.to_string() + &"i c1.mgf\n".repeat(10)), &includes, &[]);
+    assert!(seconds < QUICK, "{seconds} s");
+    let per_line = 1_000_000;
+    let line = (limits::MAX_PATCHES / per_line + 1) as usize;
+    assert!(matches!(e, GeomError::MgfLimit { line: Some(l), .. } if l == line), "{e:?}");
+    assert!(
+        m.starts_with(&format!(
+            "c1.mgf:{line}: the entities up to here, repeated by arrays and includes, would make {} faces",
+            line as u64 * per_line
+        )),
+        "{m}"
+    );
+    assert!(m.ends_with("more than the 4194304 patches a file may create"), "{m}");
+}
+
+#[test]
+fn huge_tessellations_are_refused_before_they_are_made() {
+    // 1000 spheres of 8 div² facets at div=64.
+    let start = Instant::now();
+    let (e, m) = load_err(&format!("{}:div=64", mgf("sphere_array.mgf")));
+    assert!(start.elapsed().as_secs_f64() < QUICK, "{:?}", start.elapsed());
+    assert!(matches!(e, GeomError::MgfLimit { line: Some(6), .. }), "{e:?}");
+    assert!(
+        m.contains(&format!(
+            "sphere_array.mgf:6: the entities up to here, repeated by arrays and includes, would make {} faces",
+            1000 * 8 * 64 * 64
+        )),
+        "{m}"
+    );
+    // At div=4 the same file is 1000 x 128 patches, and loads.
+    assert_eq!(load(&mgf("sphere_array.mgf")).scene.len(), 1000 * 8 * 4 * 4);
+    // A unit square cut to 1e-4 of its diagonal √2: ceil(1 / (1e-4 √2)) = 7072 cuts a side.
+    let square = "v a =\n\tp 0 0 0\nv b =\n\tp 1 0 0\nv c =\n\tp 1 1 0\nv d =\n\tp 0 1 0\nf a b c d\n";
+    let (e, m, seconds) = refused_in_memory("square.mgf", square, &[], &["size=0.0001"]);
+    assert!(seconds < QUICK, "{seconds} s");
+    assert!(matches!(e, GeomError::MgfLimit { line: None, .. }), "{e:?}");
+    assert_eq!(
+        m,
+        format!(
+            "square.mgf: cut to size=0.0001, its faces would make {} patches, more than the 4194304 a file may create",
+            7072 * 7072
+        )
+    );
+}
+
+#[test]
+fn long_entities_deep_includes_and_deep_objects_are_refused() {
+    // A face of 2000 vertices: more words than MGF's reference parser reads.
+    let face = format!("f{}\n", " a".repeat(2000));
+    let (_, m, _) = refused_in_memory("long.mgf", &face, &[], &[]);
+    assert!(
+        m.ends_with(
+            "long.mgf:1: 'f' has 2000 arguments, more than the 1023 MGF's reference parser reads in one entity"
+        ),
+        "{m}"
+    );
+    // A chain of 40 files each including the next: refused at the 33rd.
+    let files: Vec<(String, String)> = (1..=40).map(|k| (format!("d{k}.mgf"), format!("i d{}.mgf\n", k + 1))).collect();
+    let includes: Vec<(&str, String)> = files.iter().map(|(n, t)| (n.as_str(), t.clone())).collect();
+    let (_, m, _) = refused_in_memory("d0.mgf", "i d1.mgf\n", &includes, &[]);
+    assert!(
+        m.ends_with("d32.mgf:1: including d33.mgf here nests includes 33 deep, more than the 32 a file may"),
+        "{m}"
+    );
+    // An object opened in each of a million copies and never closed: each copy's path is one
+    // level longer, and naming them all would take 10^12 bytes. Names are counted as they are
+    // made, so the refusal comes after about 11 000 copies (the square root of the work
+    // limit), when the names made reach it: not at once, but in bounded time.
+    let objects = VERTICES.to_string() + "xf -a 1000000\no x\nf a b c\nxf\n";
+    let (e, m, seconds) = refused_in_memory("objects.mgf", &objects, &[], &[]);
+    assert!(seconds < 5.0 * QUICK, "{seconds} s");
+    assert!(matches!(e, GeomError::MgfLimit { line: Some(8), .. }), "{e:?}");
+    assert!(m.contains("objects.mgf:8: the name of the object opened here would take the file's work to "), "{m}");
+}
+
+#[test]
+fn files_in_memory_load_as_the_same_files_on_disk() {
+    let on_disk = load(&mgf("include.mgf")).scene;
+    let read = |name: &str| std::fs::read(mgf(name)).unwrap();
+    let includes = BTreeMap::from([(PathBuf::from("./scenes/part.mgf"), read("part.mgf"))]);
+    let params = KeyValueParams::default();
+    let in_memory =
+        mgf::load_slice(&read("include.mgf"), Path::new("scenes/include.mgf"), &includes, &params).unwrap().scene;
+    assert_eq!(in_memory.len(), on_disk.len());
+    for (a, b) in in_memory.patches().iter().zip(on_disk.patches()) {
+        assert_eq!(a.vertices(), b.vertices());
+    }
+    // Nothing is read from the disk: without the map the include is missing.
+    let e =
+        mgf::load_slice(&read("include.mgf"), Path::new(&mgf("include.mgf")), &BTreeMap::new(), &params).unwrap_err();
+    assert!(matches!(e, GeomError::MgfMissingInclude { line: 3, .. }), "{e:?}");
+    assert!(e.to_string().contains("no such file among the files given in memory"), "{e}");
+}
+
+#[test]
+fn iterated_transforms_count_their_matrix_products_as_work() {
+    // `xf -i 1000000` is a million matrix products each time it is run; a thousand copies of it
+    // are 10^9, past the work limit, refused at the array before any is made.
+    let text = "xf -a 1000 -t 0 0 1\nxf -i 1000000 -t 1 0 0\nxf\nxf\n";
+    let (e, m, seconds) = refused_in_memory("iterated.mgf", text, &[], &[]);
+    assert!(seconds < QUICK, "{seconds} s");
+    assert!(matches!(e, GeomError::MgfLimit { line: Some(1), .. }), "{e:?}");
+    assert!(
+        m.contains("iterated.mgf:1: reading the file up to here, repeated by arrays and includes, would take "),
+        "{m}"
+    );
+    assert!(m.ends_with(&format!("more than the {} a file may take", limits::MAX_WORK)), "{m}");
+}
+
+/// Files just under the limits load; how long they take is printed, for docs/scenes.md:
+/// `cargo test -p radiosity-geom --test lib mgf_input::files_just_under_the_limits_load --
+/// --ignored --nocapture`. Ignored by default: seconds each.
+#[test]
+#[ignore = "seconds of loading, for the figures in docs/scenes.md"]
+fn files_just_under_the_limits_load() {
+    let params = KeyValueParams::default();
+    // Work: 10 000 copies of 1 600 lines `p 1 2 3` (8 bytes each) are 1.28e8 units, just under
+    // 2^27 = 1.34e8.
+    let work = VERTICES.to_string() + "f a b c\nv d =\nxf -a 10000\n" + &"p 1 2 3\n".repeat(1600) + "xf\n";
+    // Patches: 1 000 copies of 4 000 triangles are 4e6 patches, just under 2^22 = 4.19e6.
+    let patches = VERTICES.to_string() + "xf -a 1000\n" + &"f a b c\n".repeat(4000) + "xf\n";
+    for (what, text, expected) in [("work", work, 1), ("patches", patches, 4_000_000)] {
+        let start = Instant::now();
+        let loaded = mgf::load_slice(text.as_bytes(), Path::new("limit.mgf"), &BTreeMap::new(), &params).unwrap();
+        eprintln!("{what}: {} patches in {:.2} s", loaded.scene.len(), start.elapsed().as_secs_f64());
+        assert_eq!(loaded.scene.len(), expected);
+    }
 }

@@ -4,8 +4,11 @@
 //! ignored, with the reason, on a checkout without the folder.
 
 use radiosity_core::{Patch, Real};
-use radiosity_geom::{LoadedScene, load_scene};
+use radiosity_geom::mgf::{self, limits};
+use radiosity_geom::{KeyValueParams, LoadedScene, load_scene};
 use radiosity_testkit::{SceneTest, Scenes};
+use std::collections::BTreeMap;
+use std::path::Path;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
@@ -31,8 +34,17 @@ fn main() -> ExitCode {
             ],
             run: real_mgf_scenes_load,
         },
+        SceneTest {
+            name: "real_mgf_scenes_load_within_a_64th_of_each_limit",
+            needs: &REAL_MGF,
+            run: real_mgf_scenes_load_within_a_64th_of_each_limit,
+        },
     ])
 }
+
+/// RenderPark's scenes, in the scenes folder.
+const REAL_MGF: [&str; 5] =
+    ["mgf/cube.mgf", "mgf/examp1.mgf", "mgf/corridor.mgf", "mgf/office3/office.mgf", "mgf/salon/classroom.mgf"];
 
 /// Loads a scene argument that must load.
 fn load(arg: &str) -> LoadedScene {
@@ -128,5 +140,22 @@ fn real_mgf_scenes_load(scenes: &Scenes) {
         );
         assert_eq!(scene.emitters().len(), emitters, "{file}");
         assert!(scene.mean_reflectivity() > 0.2 && scene.mean_reflectivity() < 0.7, "{file}");
+    }
+}
+
+fn real_mgf_scenes_load_within_a_64th_of_each_limit(scenes: &Scenes) {
+    let limits = mgf::Limits {
+        instances: limits::MAX_INSTANCES / 64,
+        patches: limits::MAX_PATCHES / 64,
+        work: limits::MAX_WORK / 64,
+        include_depth: 1,
+    };
+    for file in ["cube.mgf", "examp1.mgf", "corridor.mgf", "office3/office.mgf", "salon/classroom.mgf"] {
+        let path = scenes.path(&format!("mgf/{file}"));
+        let bytes = std::fs::read(&path).unwrap();
+        let params = KeyValueParams::default();
+        let small = mgf::load_slice_limited(&bytes, Path::new(&path), &BTreeMap::new(), &params, &limits);
+        let small = small.unwrap_or_else(|e| panic!("{file}: {e}")).scene;
+        assert_eq!(small.len(), load(&path).scene.len(), "{file}");
     }
 }

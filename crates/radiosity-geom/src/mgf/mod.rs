@@ -66,6 +66,17 @@
 //! colour, a bare `xf` with nothing to end, an include that cannot be read; and a file with no
 //! usable face, or one holding binary data (a NUL byte, or bytes that are not UTF-8).
 //!
+//! - **Limits.** Before a file is run, it is surveyed with its includes, and refused at the
+//!   line where its arrays would make more than 10^6 instances (the product of nested counts
+//!   is checked before the first copy), its entities more than 2^22 faces, or its reading more
+//!   than 2^27 units of work; entities longer than MGF's reference parser reads (1024 words)
+//!   and chains of more than 32 includes are refused too, and the exact patch count after
+//!   cutting to `size` is checked before the patches are made. Each refusal is one sentence
+//!   with the file, the line and the count; the limits and why they are what they are are in
+//!   [`limits`].
+//! - **Memory.** [`load_slice`] loads MGF held in memory, with the files it includes given in a
+//!   map, through the same code as [`load`]: nothing is read from the disk.
+//!
 //! ## References
 //!
 //! - G. Ward, *The Materials and Geometry Format*, version 2.0, Lawrence Berkeley National
@@ -78,20 +89,23 @@
 //!   degenerate faces, chromaticities with `Y ≤ 0` set to black).
 
 pub mod colour;
+pub mod limits;
 pub(crate) mod polygon;
 pub(crate) mod shapes;
 
 use crate::LoadedScene;
 use crate::error::GeomError;
 use crate::mesh::SceneBuilder;
+use crate::mesh::divisions;
 use crate::spec::{KeyValueParams, ParamDoc};
 use colour::Colour;
 use glam::{DMat4, DVec3};
+pub use limits::Limits;
 use radiosity_core::math::bounding_diagonal;
-use radiosity_core::{Material, MaterialId, ObjectId, Real, Spectrum, Vec3};
+use radiosity_core::{Material, MaterialId, ObjectId, Patch, Real, Spectrum, Vec3};
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::ops::Range;
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 use std::rc::Rc;
 
 /// Parameters an MGF file takes after its path.
@@ -111,20 +125,132 @@ pub const PARAMS: &[ParamDoc] = &[
 /// The largest reflectivity a converted colour keeps.
 const MAX_REFLECTIVITY: Real = 0.999;
 
-/// Loads an MGF file as a scene; see the module documentation for the mapping.
+/// Loads an MGF file as a scene; see the module documentation for the mapping. Includes are
+/// read from the disk, relative to the including file.
 pub fn load(path: &Path, params: &KeyValueParams) -> Result<LoadedScene, GeomError> {
-    let size = params.real("size", 0.0, |v| v >= 0.0, "a fraction of the bounding-box diagonal, at least 0")?;
-    let div = params.count("div", 4, 1, 64)?;
-    let name = std::iter::once(path.display().to_string())
-        .chain(params.given().map(|(k, v)| format!(":{k}={v}")))
-        .collect::<String>();
+    let options = Options::parse(path, params)?;
     let bytes = std::fs::read(path).map_err(|e| GeomError::Io { path: path.to_path_buf(), message: e.to_string() })?;
+    let key = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+    load_from(bytes, path, key, Files::Disk, options, &Limits::DEFAULT)
+}
+
+/// Loads MGF held in memory exactly as [`load`] loads a file with these bytes. `name` stands
+/// for the file in error messages and in the scene's name, and `includes` holds the files it
+/// may include, by their paths relative to the directory of `name` (an include `i part.mgf`
+/// in `room/scene.mgf` reads `room/part.mgf`; paths are compared after removing `.` and
+/// resolving `..`). The disk is never read.
+pub fn load_slice(
+    bytes: &[u8],
+    name: &Path,
+    includes: &BTreeMap<PathBuf, Vec<u8>>,
+    params: &KeyValueParams,
+) -> Result<LoadedScene, GeomError> {
+    load_slice_limited(bytes, name, includes, params, &Limits::DEFAULT)
+}
+
+/// [`load_slice`] with other limits than [`Limits::DEFAULT`] (the fuzzer's, smaller).
+pub fn load_slice_limited(
+    bytes: &[u8],
+    name: &Path,
+    includes: &BTreeMap<PathBuf, Vec<u8>>,
+    params: &KeyValueParams,
+    limits: &Limits,
+) -> Result<LoadedScene, GeomError> {
+    let options = Options::parse(name, params)?;
+    let files = includes.iter().map(|(path, bytes)| (normalised(path), bytes.as_slice())).collect();
+    load_from(bytes.to_vec(), name, normalised(name), Files::Memory(files), options, limits)
+}
+
+/// The parameters of a load.
+struct Options {
+    size: Real,
+    div: usize,
+    /// The scene's name: the path and the parameters given.
+    name: String,
+}
+
+impl Options {
+    fn parse(path: &Path, params: &KeyValueParams) -> Result<Options, GeomError> {
+        let size = params.real("size", 0.0, |v| v >= 0.0, "a fraction of the bounding-box diagonal, at least 0")?;
+        let div = params.count("div", 4, 1, 64)?;
+        let name = std::iter::once(path.display().to_string())
+            .chain(params.given().map(|(k, v)| format!(":{k}={v}")))
+            .collect::<String>();
+        Ok(Options { size, div, name })
+    }
+}
+
+/// Loads the MGF `bytes` read from `path` (identified by `key` among `files`, for include
+/// cycles): surveys it against `limits`, runs it, meshes it.
+fn load_from(
+    bytes: Vec<u8>,
+    path: &Path,
+    key: PathBuf,
+    files: Files<'_>,
+    options: Options,
+    limits: &Limits,
+) -> Result<LoadedScene, GeomError> {
     let text = text_of(path, bytes)?;
     let root = Rc::new(parse(path, &text));
-    let mut loader = Loader::new(path, div, name);
-    loader.include_stack.push(std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf()));
+    let mut loader = Loader::new(path, options.div, options.name, files, *limits);
+    loader.include_stack.push(key);
+    let tally = loader.survey(&root, 0..root.entities.len(), 1)?;
+    loader.work = tally.work;
     loader.run(&root, 0..root.entities.len(), 1)?;
-    loader.finish(size)
+    loader.finish(options.size)
+}
+
+/// Where included files come from.
+enum Files<'a> {
+    /// The file system, relative to the including file.
+    Disk,
+    /// Files held in memory, by their normalised paths.
+    Memory(BTreeMap<PathBuf, &'a [u8]>),
+}
+
+impl Files<'_> {
+    /// What identifies the file at `path`, for include cycles and for reading it once: its
+    /// canonical path on disk, its normalised path in memory; an error message when there is
+    /// no such file.
+    fn key(&self, path: &Path) -> Result<PathBuf, String> {
+        match self {
+            Files::Disk => std::fs::canonicalize(path).map_err(|e| e.to_string()),
+            Files::Memory(files) => {
+                let key = normalised(path);
+                if files.contains_key(&key) {
+                    Ok(key)
+                } else {
+                    Err("no such file among the files given in memory".to_string())
+                }
+            }
+        }
+    }
+
+    /// The bytes of the file at `path`, identified by `key`.
+    fn read(&self, path: &Path, key: &Path) -> Result<Vec<u8>, String> {
+        match self {
+            Files::Disk => std::fs::read(path).map_err(|e| e.to_string()),
+            Files::Memory(files) => {
+                files.get(key).map(|b| b.to_vec()).ok_or_else(|| "no such file among the files given in memory".into())
+            }
+        }
+    }
+}
+
+/// `path` without `.` components and with each `..` removing the component before it (kept
+/// when there is none), as a key for files held in memory.
+fn normalised(path: &Path) -> PathBuf {
+    let mut out: Vec<Component<'_>> = Vec::new();
+    for c in path.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir if matches!(out.last(), Some(Component::Normal(_))) => {
+                out.pop();
+            }
+            c => out.push(c),
+        }
+    }
+    out.iter().collect()
 }
 
 /// The text of an MGF file; a file holding NUL bytes or bytes that are not UTF-8 is binary, not
@@ -199,21 +325,55 @@ struct Vertex {
 }
 
 /// A named context (colours, materials, vertices): the named values and the current one.
+/// Names are stored once and values found by index, so that changing the current value of a
+/// named context costs the same whatever the length of its name.
 #[derive(Debug)]
 struct Context<T> {
     kind: &'static str,
-    named: HashMap<String, T>,
+    /// The index in `values` and `names` of each name.
+    index: HashMap<String, usize>,
+    values: Vec<T>,
+    names: Vec<String>,
     current: T,
-    current_name: Option<String>,
+    /// The index of the named value the current one is, if any.
+    current_index: Option<usize>,
 }
 
 impl<T: Clone + Default> Context<T> {
     fn new(kind: &'static str) -> Self {
-        Context { kind, named: HashMap::new(), current: T::default(), current_name: None }
+        Context {
+            kind,
+            index: HashMap::new(),
+            values: Vec::new(),
+            names: Vec::new(),
+            current: T::default(),
+            current_index: None,
+        }
+    }
+
+    fn index_of(&self, name: &str, at: &At<'_>) -> Result<usize, GeomError> {
+        self.index.get(name).copied().ok_or_else(|| at.undefined(self.kind, name))
     }
 
     fn get(&self, name: &str, at: &At<'_>) -> Result<&T, GeomError> {
-        self.named.get(name).ok_or_else(|| at.undefined(self.kind, name))
+        self.index_of(name, at).map(|i| &self.values[i])
+    }
+
+    /// Sets the value named `name`, defining it if new; its index.
+    fn define(&mut self, name: &str, value: T) -> usize {
+        match self.index.get(name) {
+            Some(&i) => {
+                self.values[i] = value;
+                i
+            }
+            None => {
+                let i = self.values.len();
+                self.index.insert(name.to_string(), i);
+                self.values.push(value);
+                self.names.push(name.to_string());
+                i
+            }
+        }
     }
 
     /// `c`, `c name`, `c name =`, `c name = template`.
@@ -221,21 +381,20 @@ impl<T: Clone + Default> Context<T> {
         match words {
             [_] => {
                 self.current = T::default();
-                self.current_name = None;
+                self.current_index = None;
             }
             [_, name] => {
-                self.current = self.get(name, at)?.clone();
-                self.current_name = Some(name.clone());
+                let i = self.index_of(name, at)?;
+                self.current = self.values[i].clone();
+                self.current_index = Some(i);
             }
             [_, name, eq] if eq == "=" => {
                 self.current = T::default();
-                self.named.insert(name.clone(), self.current.clone());
-                self.current_name = Some(name.clone());
+                self.current_index = Some(self.define(name, T::default()));
             }
             [_, name, eq, template] if eq == "=" => {
                 self.current = self.get(template, at)?.clone();
-                self.named.insert(name.clone(), self.current.clone());
-                self.current_name = Some(name.clone());
+                self.current_index = Some(self.define(name, self.current.clone()));
             }
             _ => return Err(at.bad(format!("'{}' takes a name, 'name =' or 'name = template'", words[0]))),
         }
@@ -245,9 +404,14 @@ impl<T: Clone + Default> Context<T> {
     /// Changes the current value (and the named one it is).
     fn modify(&mut self, f: impl FnOnce(&mut T)) {
         f(&mut self.current);
-        if let Some(name) = &self.current_name {
-            self.named.insert(name.clone(), self.current.clone());
+        if let Some(i) = self.current_index {
+            self.values[i] = self.current.clone();
         }
+    }
+
+    /// The name of the current value, if it is a named one.
+    fn current_name(&self) -> Option<&str> {
+        self.current_index.map(|i| self.names[i].as_str())
     }
 }
 
@@ -292,8 +456,8 @@ enum Repeat {
     Array(usize),
 }
 
-/// The instances of an `xf` argument list: one matrix per array element (one if no `-a`).
-fn transforms(words: &[String], at: &At<'_>) -> Result<Vec<DMat4>, GeomError> {
+/// The groups of an `xf` argument list: how each repeats, and its transform.
+fn parse_xf(words: &[String], at: &At<'_>) -> Result<Vec<(Repeat, DMat4)>, GeomError> {
     let mut groups: Vec<(Repeat, DMat4)> = vec![(Repeat::Once, DMat4::IDENTITY)];
     let mut i = 0;
     let number = |i: usize| -> Result<Real, GeomError> {
@@ -344,6 +508,20 @@ fn transforms(words: &[String], at: &At<'_>) -> Result<Vec<DMat4>, GeomError> {
         let last = groups.last_mut().expect("groups start non-empty");
         last.1 = m * last.1;
     }
+    Ok(groups)
+}
+
+/// The instances of an `xf` argument list: one matrix per array element (one if no `-a`).
+/// More instances than `limit` are an error, found before any is made.
+fn transforms(words: &[String], at: &At<'_>, limit: u64) -> Result<Vec<DMat4>, GeomError> {
+    let groups = parse_xf(words, at)?;
+    let count = groups.iter().fold(1u64, |count, (repeat, _)| match repeat {
+        Repeat::Array(n) => count.saturating_mul(*n as u64),
+        _ => count,
+    });
+    if count > limit {
+        return Err(Limits { instances: limit, ..Limits::DEFAULT }.nested(at, count, false));
+    }
     let mut instances = vec![DMat4::IDENTITY];
     for (repeat, m) in groups {
         instances = match repeat {
@@ -373,20 +551,41 @@ struct Face {
     object: ObjectId,
 }
 
-struct Loader {
+/// An object opened by `o`, as a node of the tree of open objects.
+struct ObjectNode {
+    /// The names of the open objects down to this one, joined by `/`.
+    path: String,
+    /// The scene object, once a face has been made in it.
+    id: Option<ObjectId>,
+}
+
+struct Loader<'a> {
     root: PathBuf,
     div: usize,
+    files: Files<'a>,
+    limits: Limits,
+    /// Units of work: the survey's, then names as they are created.
+    work: u64,
+    /// The survey of each included file, by key.
+    tallies: HashMap<PathBuf, limits::Tally>,
     builder: SceneBuilder,
     colours: Context<Colour>,
     materials: Context<Mat>,
     vertices: Context<Vertex>,
     /// Cumulative transforms; the last is current.
     xf: Vec<DMat4>,
-    objects: Vec<String>,
+    /// The open objects, innermost last, as indices in `object_nodes`.
+    objects: Vec<usize>,
+    object_nodes: Vec<ObjectNode>,
+    /// The node of each name under each parent node.
+    object_children: HashMap<(Option<usize>, String), usize>,
+    /// The scene object of faces outside any object.
+    top_object: Option<ObjectId>,
     include_stack: Vec<PathBuf>,
     sources: HashMap<PathBuf, Rc<Source>>,
     faces: Vec<Face>,
-    material_ids: HashMap<(String, [u64; 6]), MaterialId>,
+    /// Scene materials by MGF material (its index, or `None` if unnamed) and values.
+    material_ids: HashMap<(Option<usize>, [u64; 6]), MaterialId>,
     object_ids: HashMap<String, ObjectId>,
     ignored: BTreeMap<String, usize>,
     /// Entities this loader does not know, by name, with how often they were met.
@@ -406,17 +605,24 @@ struct Loader {
     read: usize,
 }
 
-impl Loader {
-    fn new(root: &Path, div: usize, name: String) -> Self {
+impl<'a> Loader<'a> {
+    fn new(root: &Path, div: usize, name: String, files: Files<'a>, limits: Limits) -> Self {
         Loader {
             root: root.to_path_buf(),
             div,
+            files,
+            limits,
+            work: 0,
+            tallies: HashMap::new(),
             builder: SceneBuilder::new(name),
             colours: Context::new("colour"),
             materials: Context::new("material"),
             vertices: Context::new("vertex"),
             xf: vec![DMat4::IDENTITY],
             objects: Vec::new(),
+            object_nodes: Vec::new(),
+            object_children: HashMap::new(),
+            top_object: None,
             include_stack: Vec::new(),
             sources: HashMap::new(),
             faces: Vec::new(),
@@ -441,6 +647,9 @@ impl Loader {
         while i < range.end {
             let e = &src.entities[i];
             let at = At { path: &src.path, line: e.line };
+            if e.words.len() > limits::MAX_WORDS {
+                return Err(Limits::too_many_words(&at, &e.words));
+            }
             if e.words[0] == "xf" {
                 if e.words.len() == 1 {
                     if self.xf.len() <= floor {
@@ -450,7 +659,7 @@ impl Loader {
                     i += 1;
                     continue;
                 }
-                let instances = transforms(&e.words[1..], &at)?;
+                let instances = transforms(&e.words[1..], &at, self.limits.instances)?;
                 let current = *self.xf.last().expect("the identity is never popped");
                 if instances.len() == 1 {
                     self.xf.push(current * instances[0]);
@@ -543,7 +752,19 @@ impl Loader {
                         self.unmatched.note(at);
                     }
                 } else {
-                    self.objects.push(words[1..].join(" "));
+                    let name = words[1..].join(" ");
+                    let parent = self.objects.last().copied();
+                    let next = self.object_nodes.len();
+                    let node = *self.object_children.entry((parent, name.clone())).or_insert(next);
+                    if node == next {
+                        let path = match parent {
+                            Some(p) => format!("{}/{name}", self.object_nodes[p].path),
+                            None => name,
+                        };
+                        self.spend(path.len() as u64, at, "the name of the object opened here")?;
+                        self.object_nodes.push(ObjectNode { path, id: None });
+                    }
+                    self.objects.push(node);
                 }
             }
             "i" => self.include(words, at)?,
@@ -675,7 +896,7 @@ impl Loader {
         let m = *self.xf.last().expect("the identity is never popped");
         let mirrored = m.determinant() < 0.0;
         let material = self.material_id(at)?;
-        let object = self.object_id();
+        let object = self.object_id(at)?;
         for polygon in polygons {
             let mut points: Vec<Vec3> = polygon.iter().map(|p| m.transform_point3(*p)).collect();
             if mirrored {
@@ -688,17 +909,18 @@ impl Loader {
 
     fn material_id(&mut self, at: &At<'_>) -> Result<MaterialId, GeomError> {
         let mat = &self.materials.current;
-        let name = self.materials.current_name.clone().unwrap_or_else(|| "(unnamed material)".into());
         let mut reflectivity = mat.rd_colour.rgb(mat.rd);
         let emission = mat.ed_colour.rgb(mat.ed);
         let key = {
             let r = reflectivity.0;
             let e = emission.0;
-            (name.clone(), [r[0], r[1], r[2], e[0], e[1], e[2]].map(Real::to_bits))
+            (self.materials.current_index, [r[0], r[1], r[2], e[0], e[1], e[2]].map(Real::to_bits))
         };
         if let Some(&id) = self.material_ids.get(&key) {
             return Ok(id);
         }
+        let name = self.materials.current_name().unwrap_or("(unnamed material)").to_string();
+        self.spend(name.len() as u64, at, "the material made here")?;
         if reflectivity.0.iter().any(|&r| r > MAX_REFLECTIVITY) {
             self.clamped.insert(name.clone());
             reflectivity = Spectrum(reflectivity.0.map(|r| r.min(MAX_REFLECTIVITY)));
@@ -711,18 +933,67 @@ impl Loader {
         Ok(id)
     }
 
-    fn object_id(&mut self) -> ObjectId {
-        let name = if self.objects.is_empty() {
-            self.root.file_name().map_or_else(|| "(top level)".into(), |n| n.to_string_lossy().into_owned())
-        } else {
-            self.objects.join("/")
+    /// The scene object of the open objects: their names joined by `/`, or the file's name
+    /// outside any object.
+    fn object_id(&mut self, at: &At<'_>) -> Result<ObjectId, GeomError> {
+        let node = self.objects.last().copied();
+        let known = match node {
+            Some(n) => self.object_nodes[n].id,
+            None => self.top_object,
         };
-        if let Some(&id) = self.object_ids.get(&name) {
-            return id;
+        if let Some(id) = known {
+            return Ok(id);
         }
-        let id = self.builder.object(name.clone());
-        self.object_ids.insert(name, id);
-        id
+        let name = match node {
+            None => self.root.file_name().map_or_else(|| "(top level)".into(), |n| n.to_string_lossy().into_owned()),
+            Some(n) => self.object_nodes[n].path.clone(),
+        };
+        self.spend(name.len() as u64, at, "the name of the object of the face here")?;
+        let id = match self.object_ids.get(&name) {
+            Some(&id) => id,
+            None => {
+                let id = self.builder.object(name.clone());
+                self.object_ids.insert(name, id);
+                id
+            }
+        };
+        match node {
+            Some(n) => self.object_nodes[n].id = Some(id),
+            None => self.top_object = Some(id),
+        }
+        Ok(id)
+    }
+
+    /// Counts `units` of work done at `at` for `what`, which must not take the file's work
+    /// past the limit.
+    fn spend(&mut self, units: u64, at: &At<'_>, what: &str) -> Result<(), GeomError> {
+        self.work = self.work.saturating_add(units);
+        if self.work > self.limits.work {
+            return Err(GeomError::MgfLimit {
+                path: at.path.to_path_buf(),
+                line: Some(at.line),
+                message: format!(
+                    "{what} would take the file's work to {} units (bytes read and names made), more than the {} a \
+                     file may take",
+                    self.work, self.limits.work
+                ),
+            });
+        }
+        Ok(())
+    }
+
+    /// The parsed file at `path`, identified by `key`, read once: `Err` with a message when it
+    /// cannot be read, `Ok(Err(_))` when it is not text.
+    fn source(&mut self, path: &Path, key: &Path) -> Result<Result<Rc<Source>, GeomError>, String> {
+        if let Some(s) = self.sources.get(key) {
+            return Ok(Ok(Rc::clone(s)));
+        }
+        let bytes = self.files.read(path, key)?;
+        Ok(text_of(path, bytes).map(|text| {
+            let s = Rc::new(parse(path, &text));
+            self.sources.insert(key.to_path_buf(), Rc::clone(&s));
+            s
+        }))
     }
 
     /// `i file [xf arguments]`.
@@ -737,24 +1008,15 @@ impl Loader {
             include: include.clone(),
             message,
         };
-        let canonical = std::fs::canonicalize(&include).map_err(|e| missing(e.to_string()))?;
-        if self.include_stack.contains(&canonical) {
+        let key = self.files.key(&include).map_err(&missing)?;
+        if self.include_stack.contains(&key) {
             return Err(GeomError::MgfIncludeCycle { path: at.path.to_path_buf(), line: at.line, include });
         }
-        let source = match self.sources.get(&canonical) {
-            Some(s) => Rc::clone(s),
-            None => {
-                let bytes = std::fs::read(&include).map_err(|e| missing(e.to_string()))?;
-                let text = text_of(&include, bytes)?;
-                let s = Rc::new(parse(&include, &text));
-                self.sources.insert(canonical.clone(), Rc::clone(&s));
-                s
-            }
-        };
-        let instances = transforms(&words[2..], at)?;
+        let source = self.source(&include, &key).map_err(&missing)??;
+        let instances = transforms(&words[2..], at, self.limits.instances)?;
         let current = *self.xf.last().expect("the identity is never popped");
         let depth = self.xf.len();
-        self.include_stack.push(canonical);
+        self.include_stack.push(key);
         for m in instances {
             self.xf.push(current * m);
             self.run(&source, 0..source.entities.len(), depth + 1)?;
@@ -790,6 +1052,10 @@ impl Loader {
             return Err(GeomError::EmptyFile { path, detail });
         }
         let target = size * bounding_diagonal(pieces.iter().flat_map(|(p, _, _)| p.iter().copied()));
+        let patches = pieces.iter().fold(0u64, |n, (p, _, _)| n.saturating_add(patches_of(p, size > 0.0, target)));
+        if patches > self.limits.patches {
+            return Err(self.limits.too_many_patches(&path, size, patches));
+        }
         for (p, material, object) in pieces {
             let added = match (size > 0.0, p.as_slice()) {
                 (true, &[a, b, c]) => self.builder.triangle_sized([a, b, c], target, material, object),
@@ -837,6 +1103,29 @@ impl Loader {
     }
 }
 
+/// The patches `finish` makes of a piece (a triangle or a convex quad): one, or when cut to
+/// edges of at most `target` (`sized`), as many as `SceneBuilder::triangle_sized` and
+/// `quad_sized` make, counted before they are made.
+fn patches_of(piece: &[Vec3], sized: bool, target: Real) -> u64 {
+    let cuts = |a: Vec3, b: Vec3, c: Vec3, d: Vec3| divisions((b - a).length().max((c - d).length()), target) as u64;
+    match (sized, piece) {
+        (true, &[a, b, c]) => {
+            let k = divisions((b - a).length().max((c - b).length()).max((a - c).length()), target) as u64;
+            k.saturating_mul(k)
+        }
+        (true, &[a, b, c, d]) => {
+            let (nu, nv) = (cuts(a, b, c, d), cuts(a, d, c, b));
+            if Patch::quad([a, b, c, d], MaterialId(0), ObjectId(0)).is_ok() {
+                nu.saturating_mul(nv)
+            } else {
+                let k = nu.max(nv);
+                k.saturating_mul(k).saturating_mul(2)
+            }
+        }
+        _ => 1,
+    }
+}
+
 /// Lines of one kind passed over with a warning: how many, and where the first was.
 #[derive(Default)]
 struct Skipped {
@@ -870,7 +1159,7 @@ impl Skipped {
     }
 }
 
-impl Loader {
+impl Loader<'_> {
     /// The kinds of line passed over that were met, each with how its warning reads.
     fn skipped_kinds(&self) -> Vec<(&Skipped, SkippedKind)> {
         let kinds = [

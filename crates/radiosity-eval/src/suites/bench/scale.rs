@@ -35,12 +35,8 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 /// The scenes of the section: three office sizes, then the largest real scene.
-pub const SCENES: [&str; 4] = [
-    "office:size=0.186",
-    "office:size=0.093",
-    "office:size=0.05",
-    "mgf/office3/office.mgf:size=0.007",
-];
+pub const SCENES: [&str; 4] =
+    ["office:size=0.186", "office:size=0.093", "office:size=0.05", "mgf/office3/office.mgf:size=0.007"];
 
 /// The certified bounds timed.
 pub const BOUNDS: [Real; 3] = [1e-1, 1e-2, 1e-3];

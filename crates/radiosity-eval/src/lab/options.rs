@@ -1,12 +1,15 @@
 //! How a lab is set up ([`LabOptions`]) and how its solvers pay for the columns they fetch
 //! ([`ColumnCost`], [`ColumnCharge`]).
 
+use crate::error::EvalError;
 use crate::lab::timing::sample;
 use crate::reference::cache::Cache;
 use crate::reference::kind::{MemoryBudget, ReferenceKind};
 use crate::reference::shooting::ShootingParams;
 use crate::reference::solution::ReferenceParams;
 use radiosity_core::{ColumnSource, Real};
+use std::fmt;
+use std::str::FromStr;
 use std::time::Instant;
 
 /// How a lab is set up.
@@ -46,6 +49,40 @@ pub enum ColumnCost {
     Charged,
 }
 
+impl ColumnCost {
+    /// Both ways, in a fixed order.
+    pub const ALL: [ColumnCost; 2] = [ColumnCost::Computed, ColumnCost::Charged];
+
+    /// The name the command line (`--columns`) and Python (`columns=`) take: `computed` or
+    /// `charged`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ColumnCost::Computed => "computed",
+            ColumnCost::Charged => "charged",
+        }
+    }
+}
+
+/// Reads [`ColumnCost::name`].
+impl FromStr for ColumnCost {
+    type Err = EvalError;
+
+    fn from_str(s: &str) -> Result<ColumnCost, EvalError> {
+        ColumnCost::ALL.into_iter().find(|c| c.name() == s.trim()).ok_or_else(|| EvalError::InvalidParameter {
+            name: "columns",
+            value: s.to_string(),
+            reason: "it must be computed or charged",
+        })
+    }
+}
+
+/// [`ColumnCost::name`].
+impl fmt::Display for ColumnCost {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// The prices a lab charges for the columns its solvers fetch from its stored matrix
 /// ([`ColumnCost::Charged`]), measured once on the backend. A fresh column costs the mean of
 /// the matrix's assembly when the lab assembled it (every pair once, the cost of all its
@@ -76,6 +113,13 @@ pub struct ColumnCharge {
 impl ColumnCharge {
     /// Columns timed to measure the charge.
     pub const SAMPLE: usize = 8;
+
+    /// Prices given rather than measured: `fresh` seconds a fresh column, `recorded` (at most
+    /// `fresh`) one whose pairs the backend has recorded; for runs whose charge must be known
+    /// in advance ([`crate::Lab::with_charge`]).
+    pub fn new(fresh: Real, recorded: Real) -> ColumnCharge {
+        ColumnCharge { fresh, recorded: recorded.min(fresh), sampled: 0, from_assembly: false }
+    }
 
     /// Times [`ColumnCharge::SAMPLE`] seeded columns of `source` (fewer when it has fewer
     /// patches), one at a time, fresh and then again; `assembled`, a fresh column's mean cost
@@ -115,15 +159,23 @@ impl ColumnCharge {
 
     /// One sentence saying how a run's columns were paid for, for reports.
     pub fn describe(&self) -> String {
-        let fresh = if self.from_assembly { "the matrix's assembly" } else { "the sample" };
-        format!(
-            "columns read from the stored matrix and charged as the backend computes them: {:.3} ms a fresh \
-             column (mean of {fresh}), {:.3} ms one whose pairs it has recorded (mean of {} columns computed \
-             twice)",
-            self.fresh * 1e3,
-            self.recorded * 1e3,
-            self.sampled
-        )
+        let prices = if self.sampled == 0 {
+            format!(
+                "{:.3} ms a fresh column, {:.3} ms one whose pairs it has recorded (prices given)",
+                self.fresh * 1e3,
+                self.recorded * 1e3
+            )
+        } else {
+            let fresh = if self.from_assembly { "the matrix's assembly" } else { "the sample" };
+            format!(
+                "{:.3} ms a fresh column (mean of {fresh}), {:.3} ms one whose pairs it has recorded (mean of {} \
+                 columns computed twice)",
+                self.fresh * 1e3,
+                self.recorded * 1e3,
+                self.sampled
+            )
+        };
+        format!("columns read from the stored matrix and charged as the backend computes them: {prices}")
     }
 }
 

@@ -127,13 +127,13 @@ fn compare_writes_the_table_the_report_and_the_plots() {
     let out = xtask(&args).success().get_output().stdout.clone();
     let summary = String::from_utf8(out).unwrap();
     assert!(summary.contains("pr") && summary.contains("xu-g8-m16:f=4") && summary.contains("e_rms @n"), "{summary}");
-    // Every output names the clock of its seconds: by default, columns charged.
-    assert!(summary.lines().next().unwrap().ends_with("seconds (charged)"), "{summary}");
-    assert!(summary.contains("\nseconds (charged): solving timed, columns read from the stored matrix"), "{summary}");
+    // Every output names the clock of its seconds: by default, columns computed.
+    assert!(summary.lines().next().unwrap().ends_with("seconds (measured)"), "{summary}");
+    assert!(summary.contains("\nseconds (measured): form factors and solving timed"), "{summary}");
     let csv = std::fs::read_to_string(dir.join("convergence.csv")).unwrap();
     assert!(csv.starts_with("solver,step,columns,seconds,ff_seconds,clock,e_rms,e_max,residual,bound\n"), "{csv}");
     assert!(csv.lines().any(|l| l.starts_with("xu-g8-m16:f=4,")), "{csv}");
-    assert!(csv.lines().skip(1).all(|l| l.contains(",charged,")), "{csv}");
+    assert!(csv.lines().skip(1).all(|l| l.contains(",measured,")), "{csv}");
     let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
     for section in [
         "n/4",
@@ -143,13 +143,13 @@ fn compare_writes_the_table_the_report_and_the_plots() {
         "Left out",
         "dense LU",
         "e_rms-seconds.png",
-        "Seconds (charged): solving timed",
-        "charged seconds to reach",
-        "form factors (charged)",
+        "Seconds (measured): form factors and solving timed",
+        "measured seconds to reach",
+        "form factors (measured)",
     ] {
         assert!(report.contains(section), "missing {section} in\n{report}");
     }
-    assert!(std::fs::read_to_string(dir.join("e_rms-seconds.svg")).unwrap().contains("charged seconds"));
+    assert!(std::fs::read_to_string(dir.join("e_rms-seconds.svg")).unwrap().contains("measured seconds"));
     for plot in ["e_rms-steps", "e_rms-columns", "e_rms-seconds"] {
         let svg = std::fs::read_to_string(dir.join(format!("{plot}.svg"))).unwrap();
         assert!(svg.contains("<svg") && svg.contains("xu-g8-m16:f=4"), "{plot}");
@@ -157,12 +157,12 @@ fn compare_writes_the_table_the_report_and_the_plots() {
         assert!(png.starts_with(b"\x89PNG"), "{plot}");
     }
     std::fs::remove_dir_all(&dir).unwrap();
-    // Columns computed: measured seconds, and the same numbers.
-    let computed = [&args[..], &["--columns", "computed"]].concat();
-    let out = xtask(&computed).success().get_output().stdout.clone();
-    let measured = String::from_utf8(out).unwrap();
-    assert!(measured.lines().next().unwrap().ends_with("seconds (measured)"), "{measured}");
-    assert!(measured.contains("\nseconds (measured): form factors and solving timed"), "{measured}");
+    // Columns charged: charged seconds, and the same numbers.
+    let charged = [&args[..], &["--columns", "charged"]].concat();
+    let out = xtask(&charged).success().get_output().stdout.clone();
+    let charged = String::from_utf8(out).unwrap();
+    assert!(charged.lines().next().unwrap().ends_with("seconds (charged)"), "{charged}");
+    assert!(charged.contains("\nseconds (charged): solving timed, columns read from the stored matrix"), "{charged}");
     let without_seconds = |table: &str| -> Vec<Vec<String>> {
         let rows = table.lines().skip(1).take_while(|l| !l.starts_with("seconds"));
         rows.map(|l| {
@@ -171,8 +171,13 @@ fn compare_writes_the_table_the_report_and_the_plots() {
         })
         .collect()
     };
-    assert_eq!(without_seconds(&summary), without_seconds(&measured));
-    assert!(std::fs::read_to_string(dir.join("convergence.csv")).unwrap().contains(",measured,"));
+    assert_eq!(without_seconds(&summary), without_seconds(&charged));
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(
+        report.contains("Seconds (charged): solving timed") && report.contains("form factors (charged)"),
+        "{report}"
+    );
+    assert!(std::fs::read_to_string(dir.join("convergence.csv")).unwrap().contains(",charged,"));
     std::fs::remove_dir_all(&dir).unwrap();
     let e = failure(&["compare", "--columns", "free"]);
     assert!(e.contains("it must be computed or charged"), "{e}");

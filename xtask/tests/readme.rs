@@ -6,7 +6,7 @@ use super::xtask;
 
 /// The line `compare` prints under its table by default: which clock its seconds are on.
 const DEFAULT_CLOCK_LINE: &str =
-    "seconds (charged): solving timed, columns read from the stored matrix and charged as the backend computes them";
+    "seconds (measured): form factors and solving timed, every column computed when a solver asked for it";
 
 /// The fenced table between the README's compare-output markers, one line a row.
 fn readme_table() -> Vec<String> {

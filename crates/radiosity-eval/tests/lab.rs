@@ -407,7 +407,7 @@ fn charged_columns_give_the_computed_runs_numbers_at_the_measured_price() {
     }
     // Jacobi's first sweep gathers each row once, in order: the k-th has k of its pairs
     // recorded, so n rows cost n·fresh − (fresh − recorded)(n − 1)/2.
-    let lab = lab(&scene, LabOptions::default());
+    let lab = lab(&scene, LabOptions::default().with_columns(ColumnCost::Charged));
     let mut jacobi = registry.build("jacobi").unwrap();
     let run = lab.run(jacobi.as_mut(), &StopRules::parse("steps=n").unwrap(), &RecordPlan::default(), &NoProgress);
     let charge = lab.charge().unwrap();
@@ -426,7 +426,8 @@ fn the_clock_rules_and_the_report_read_the_same_seconds() {
     let scene = PreparedScene::load("cornell:res=2").unwrap();
     let registry = SolverRegistry::builtin();
     let time = |limit: &str| StopRules::parse(&format!("time={limit}")).unwrap();
-    let charged = lab(&scene, LabOptions::default()).with_charge(ColumnCharge::new(1.0, 1.0));
+    let charged =
+        lab(&scene, LabOptions::default().with_columns(ColumnCost::Charged)).with_charge(ColumnCharge::new(1.0, 1.0));
     assert_eq!(charged.clock(), Clock::Charged);
     let comparison = charged.compare(vec![registry.build("pr").unwrap()], &time("10.5s"), &NoProgress).unwrap();
     assert_eq!(comparison.clock, Clock::Charged);
@@ -462,10 +463,12 @@ fn the_clock_rules_and_the_report_read_the_same_seconds() {
         let run = lab.run(solver.as_mut(), &steps, &RecordPlan::default(), &NoProgress).unwrap();
         (run.record.count("group_steps").unwrap(), run.state.radiosity)
     };
-    let dear = lab(&scene, LabOptions::default()).with_charge(ColumnCharge::new(1e3, 1e3));
+    let dear =
+        lab(&scene, LabOptions::default().with_columns(ColumnCost::Charged)).with_charge(ColumnCharge::new(1e3, 1e3));
     let (timed, every) = (groups(&dear, "xu-g4:f=timed"), groups(&dear, "xu-g4:f=1"));
     assert!(every.0 > 10 && timed == every, "{} and {} group steps", timed.0, every.0);
-    let cheap = lab(&scene, LabOptions::default()).with_charge(ColumnCharge::new(1e-15, 1e-15));
+    let cheap = lab(&scene, LabOptions::default().with_columns(ColumnCost::Charged))
+        .with_charge(ColumnCharge::new(1e-15, 1e-15));
     let (timed, once) = (groups(&cheap, "xu-g4:f=timed"), groups(&cheap, "xu-g4:f=1000000"));
     assert!(once.0 == 1 && timed == once, "{} and {} group steps", timed.0, once.0);
 }

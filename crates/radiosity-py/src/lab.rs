@@ -397,7 +397,7 @@ fn residual_bound(result: &Bound<'_, PyAny>, areas: &[Real], k: usize) -> PyResu
 
 /// Runs `solvers` (built-in names and Python solver objects) on `scene` over the backend `ff`
 /// under `until`, measured against `reference`, their columns paid for as `columns` says
-/// (`computed` or `charged`; by default as `cargo xtask compare`); the comparison.
+/// (`computed` or `charged`; by default as `cargo xtask compare`, computed); the comparison.
 #[pyfunction]
 #[pyo3(signature = (scene, solvers, ff = "analytic", until = "columns=2n", reference = "auto", columns = None))]
 pub fn compare(

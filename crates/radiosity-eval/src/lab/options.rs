@@ -30,22 +30,29 @@ pub struct LabOptions {
     pub shooting: ShootingParams,
     /// The memory a stored matrix may take; `None`: [`MemoryBudget::from_env`].
     pub memory: Option<MemoryBudget>,
-    /// How solvers pay for their columns (default [`ColumnCost::Charged`]).
+    /// How solvers pay for their columns, and so the clock of their seconds (default
+    /// [`ColumnCost::Computed`]).
     pub columns: ColumnCost,
 }
 
-/// How a lab's solvers pay for the columns (and rows) of F they fetch.
+/// How a lab's solvers pay for the columns (and rows) of F they fetch, which decides the
+/// clock of their seconds ([`crate::Clock`]): computed columns are timed (`measured`), stored
+/// ones charged (`charged`).
+///
+/// The default is `Computed`: on the default comparison the charged seconds of the six solvers
+/// are within 2% of each other and do not rank them as their computed seconds do (`docs/solvers.md`,
+/// "The default comparison"), so the seconds a report prints by default are measured ones.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum ColumnCost {
     /// Every column is computed through the backend when a solver asks for it, and its time is
-    /// the run's form-factor time.
+    /// the run's form-factor time (the default).
+    #[default]
     Computed,
     /// Where the lab keeps the stored matrix of a geometric backend (a `matrix` reference),
     /// solvers read their columns from it, the same `f32` entries the backend's columns give,
     /// and each column fetched is charged the backend's median time for a fresh column,
     /// measured once on a seeded sample ([`ColumnCharge`]). Elsewhere as `Computed`.
-    #[default]
     Charged,
 }
 

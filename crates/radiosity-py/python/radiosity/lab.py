@@ -25,7 +25,8 @@ class Lab:
     figure, ``time=`` rule and timed group frequency reads: ``"computed"`` (every column
     computed when asked for, ``measured`` seconds) or ``"charged"`` (read from the stored
     matrix of a ``matrix`` reference, each charged the backend's measured cost); ``None``,
-    the default, is ``cargo xtask compare``'s default. ``Comparison.clock`` names the clock.
+    the default, is ``cargo xtask compare``'s default, ``"computed"``. ``Comparison.clock``
+    names the clock.
     """
 
     def __init__(self, scene, ff="analytic", reference="auto", columns=None):

@@ -34,8 +34,8 @@ def test_a_comparison_names_its_clock_in_every_output(cornell, tmp_path):
 
 
 def test_the_defaults_are_the_command_lines(cornell):
-    # `compare` charges its columns by default, `solve` computes them.
-    assert radiosity.Lab(cornell).compare(["pr"], until="columns=8").clock == "charged"
+    # `compare` and `solve` compute their columns by default.
+    assert radiosity.Lab(cornell).compare(["pr"], until="columns=8").clock == "measured"
     run = radiosity.solve(cornell, "pr", until="columns=8")
     assert run.clock == run.stats["clock"] == "measured"
 

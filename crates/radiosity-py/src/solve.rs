@@ -50,7 +50,9 @@ pub struct Run {
 /// the run there (`stats["termination"]` says so); an exception ends it and is raised again
 /// from `solve`. Its time is not the run's.
 #[pyfunction]
-#[pyo3(signature = (scene, solver, ff = "analytic", until = "columns=2n", reference = "auto", callback = None, columns = None))]
+#[pyo3(signature = (
+    scene, solver, ff = "analytic", until = "columns=2n", reference = "auto", callback = None, columns = None
+))]
 #[allow(clippy::too_many_arguments)]
 pub fn solve(
     py: Python<'_>,

@@ -5,8 +5,8 @@
 //! paper's axis), columns and seconds, as SVG and PNG, and a summary table for the
 //! terminal. Every one of them names the clock its seconds were counted on ([`Clock::name`]:
 //! `measured`, columns computed and timed; `charged`, columns read from the stored matrix and
-//! each charged the backend's modelled cost). Without a reference (`--reference none`) the certified bound of every step takes
-//! e_rms's place in the tables and plots.
+//! each charged the backend's modelled cost). Without a reference (`--reference none`) the
+//! certified bound of every step takes e_rms's place in the tables and plots.
 
 use crate::error::LabError;
 use crate::lab::compare::Comparison;

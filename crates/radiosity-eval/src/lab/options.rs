@@ -39,9 +39,9 @@ pub struct LabOptions {
 /// clock of their seconds ([`crate::Clock`]): computed columns are timed (`measured`), stored
 /// ones charged (`charged`).
 ///
-/// The default is `Computed`: on the default comparison the charged seconds of the six solvers
-/// are within 2% of each other and do not rank them as their computed seconds do (`docs/solvers.md`,
-/// "The default comparison"), so the seconds a report prints by default are measured ones.
+/// The default is `Computed`: the charged seconds of the default comparison's solvers do not
+/// rank them as their computed seconds do (`docs/solvers.md`, "The default comparison"), so
+/// the seconds a report prints by default are measured ones.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum ColumnCost {

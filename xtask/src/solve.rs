@@ -56,6 +56,9 @@ struct PatchJson {
 
 #[derive(Serialize)]
 struct StatsJson {
+    /// The clock of every seconds figure ([`radiosity_core::Clock::name`]): `measured`, or
+    /// `charged` when the columns were read from the stored matrix and charged.
+    clock: &'static str,
     columns: u64,
     columns_reused: u64,
     /// Products `F x` the backend computed itself (a stored matrix's, the hierarchical
@@ -191,6 +194,7 @@ pub fn run(args: &Args) -> Result<()> {
     };
     let s = &outcome.state;
     let stats = StatsJson {
+        clock: lab.clock().name(),
         columns: s.columns,
         columns_reused: s.columns_reused,
         products: s.products,
@@ -222,8 +226,8 @@ pub fn run(args: &Args) -> Result<()> {
             k => format!(", {k} products"),
         };
         println!(
-            "work         {} steps, {} columns{reused}{products}, {:.3} s ({:.3} s in form factors)",
-            stats.steps, stats.columns, stats.seconds, stats.ff_seconds
+            "work         {} steps, {} columns{reused}{products}, {:.3} s ({:.3} s in form factors; {} seconds)",
+            stats.steps, stats.columns, stats.seconds, stats.ff_seconds, stats.clock
         );
         if stats.group_seconds > 0.0 {
             println!(

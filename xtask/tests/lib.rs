@@ -138,13 +138,29 @@ fn compare_writes_the_table_the_report_and_the_plots() {
     let out = xtask(&args).success().get_output().stdout.clone();
     let summary = String::from_utf8(out).unwrap();
     assert!(summary.contains("pr") && summary.contains("xu-g8-m16:f=4") && summary.contains("e_rms @n"), "{summary}");
+    // Every output names the clock of its seconds: by default, columns computed.
+    assert!(summary.lines().next().unwrap().ends_with("seconds (measured)"), "{summary}");
+    assert!(summary.contains("\nseconds (measured): form factors and solving timed"), "{summary}");
     let csv = std::fs::read_to_string(dir.join("convergence.csv")).unwrap();
-    assert!(csv.starts_with("solver,step,columns,seconds,ff_seconds,e_rms,e_max,residual,bound\n"), "{csv}");
+    assert!(csv.starts_with("solver,step,columns,seconds,ff_seconds,clock,e_rms,e_max,residual,bound\n"), "{csv}");
     assert!(csv.lines().any(|l| l.starts_with("xu-g8-m16:f=4,")), "{csv}");
+    assert!(csv.lines().skip(1).all(|l| l.contains(",measured,")), "{csv}");
     let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
-    for section in ["n/4", "1e-2", "1e-3", "Where the time went", "Left out", "dense LU", "e_rms-seconds.png"] {
+    for section in [
+        "n/4",
+        "1e-2",
+        "1e-3",
+        "Where the time went",
+        "Left out",
+        "dense LU",
+        "e_rms-seconds.png",
+        "Seconds (measured): form factors and solving timed",
+        "measured seconds to reach",
+        "form factors (measured)",
+    ] {
         assert!(report.contains(section), "missing {section} in\n{report}");
     }
+    assert!(std::fs::read_to_string(dir.join("e_rms-seconds.svg")).unwrap().contains("measured seconds"));
     for plot in ["e_rms-steps", "e_rms-columns", "e_rms-seconds"] {
         let svg = std::fs::read_to_string(dir.join(format!("{plot}.svg"))).unwrap();
         assert!(svg.contains("<svg") && svg.contains("xu-g8-m16:f=4"), "{plot}");
@@ -152,6 +168,30 @@ fn compare_writes_the_table_the_report_and_the_plots() {
         assert!(png.starts_with(b"\x89PNG"), "{plot}");
     }
     std::fs::remove_dir_all(&dir).unwrap();
+    // Columns charged: charged seconds, and the same numbers.
+    let charged = [&args[..], &["--columns", "charged"]].concat();
+    let out = xtask(&charged).success().get_output().stdout.clone();
+    let charged = String::from_utf8(out).unwrap();
+    assert!(charged.lines().next().unwrap().ends_with("seconds (charged)"), "{charged}");
+    assert!(charged.contains("\nseconds (charged): solving timed, columns read from the stored matrix"), "{charged}");
+    let without_seconds = |table: &str| -> Vec<Vec<String>> {
+        let rows = table.lines().skip(1).take_while(|l| !l.starts_with("seconds"));
+        rows.map(|l| {
+            let fields: Vec<String> = l.split_whitespace().map(str::to_string).collect();
+            fields[..fields.len() - 1].to_vec()
+        })
+        .collect()
+    };
+    assert_eq!(without_seconds(&summary), without_seconds(&charged));
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(
+        report.contains("Seconds (charged): solving timed") && report.contains("form factors (charged)"),
+        "{report}"
+    );
+    assert!(std::fs::read_to_string(dir.join("convergence.csv")).unwrap().contains(",charged,"));
+    std::fs::remove_dir_all(&dir).unwrap();
+    let e = failure(&["compare", "--columns", "free"]);
+    assert!(e.contains("it must be computed or charged"), "{e}");
     let e = failure(&["compare", "--solvers", "pr,magic"]);
     assert!(e.contains("unknown solver 'magic'") && e.contains("pr-g30"), "{e}");
     let e = failure(&["compare", "--solvers", " , "]);
@@ -523,6 +563,7 @@ fn solve_stops_at_every_kind_of_rule() {
     // 480 columns take about 0.3 s: 20 ms stops the run early, after at least 20 ms.
     let s = stats("time=20ms");
     assert!(s["termination"].as_str().unwrap().starts_with("time limit"), "{s}");
+    assert_eq!(s["clock"], "measured", "solve computes its columns: {s}");
     assert!(s["seconds"].as_f64().unwrap() >= 0.02 && s["columns"].as_u64().unwrap() < 480, "{s}");
     // An error below round-off cannot be reached: the run ends at round-off, and says so.
     let r = stdout_json(&["solve", "--scene", "furnace:res=2", "--solver", "pr", "--until", "rms=1e-30", "--json"]);

@@ -62,6 +62,16 @@ pub trait ColumnSource: Sync {
     /// another each start from the same cost; no entry changes. The default keeps nothing.
     fn reset_memory(&self) {}
 
+    /// The seconds charged for the columns, rows and products fetched since the last
+    /// [`ColumnSource::reset_memory`], when the source charges a modelled cost for them rather
+    /// than the time it takes to give them (a stored matrix serving in place of the backend
+    /// whose columns it holds, each charged what the backend would have cost): a run's
+    /// form-factor seconds are then this charge ([`crate::Clock::Charged`]). `None` (the
+    /// default): they cost the time they take ([`crate::Clock::Measured`]).
+    fn charged_seconds(&self) -> Option<Real> {
+        None
+    }
+
     /// Writes `F x` into `out` and returns `true` when the source multiplies a whole vector
     /// cheaper than its `n` columns (a stored matrix: one pass over its entries); returns
     /// `false`, leaving `out` unspecified, otherwise (the default), and callers sum columns
@@ -140,6 +150,10 @@ impl<T: ColumnSource + ?Sized> ColumnSource for &T {
         (**self).reset_memory()
     }
 
+    fn charged_seconds(&self) -> Option<Real> {
+        (**self).charged_seconds()
+    }
+
     fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
         (**self).multiply(x, channels, out)
     }
@@ -166,6 +180,10 @@ impl<T: ColumnSource + ?Sized> ColumnSource for Box<T> {
         (**self).reset_memory()
     }
 
+    fn charged_seconds(&self) -> Option<Real> {
+        (**self).charged_seconds()
+    }
+
     fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
         (**self).multiply(x, channels, out)
     }
@@ -190,6 +208,10 @@ impl<T: ColumnSource + ?Sized + Send> ColumnSource for std::sync::Arc<T> {
 
     fn reset_memory(&self) {
         (**self).reset_memory()
+    }
+
+    fn charged_seconds(&self) -> Option<Real> {
+        (**self).charged_seconds()
     }
 
     fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
@@ -351,6 +373,10 @@ impl<S: ColumnSource> ColumnSource for CountingColumns<S> {
 
     fn reset_memory(&self) {
         self.inner.reset_memory()
+    }
+
+    fn charged_seconds(&self) -> Option<Real> {
+        self.inner.charged_seconds()
     }
 
     /// Counts a product's time, not as a column.

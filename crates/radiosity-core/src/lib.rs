@@ -10,6 +10,7 @@
 //! - [`LinearSystem`]: areas, reflectivities and emissions per channel, the data of
 //!   `B_i = E_i + ρ_i Σ_j F_ij B_j`;
 //! - [`ColumnSource`]: "fill column j of F", the only thing a solver knows about form factors;
+//! - [`Clock`]: whether a run's seconds are measured or charged by its source;
 //! - [`RadiosityOperator`]: `F·x`, `(I − diag(ρ) F)·x` and the residual over any source, also
 //!   as faer's `LinOp` (scipy's `LinearOperator`, in Rust).
 //!
@@ -25,6 +26,7 @@
 //! assert_eq!(counted.stats().columns, 1);
 //! ```
 
+pub mod clock;
 pub mod column;
 pub mod dense_lu;
 pub mod error;
@@ -37,6 +39,7 @@ pub mod scene;
 pub mod spectrum;
 pub mod system;
 
+pub use clock::Clock;
 pub use column::{ColumnSource, ColumnStats, CountingColumns, DenseColumns, measured_reciprocity};
 pub use error::CoreError;
 pub use faer_operator::SymmetrizedOperator;

@@ -6,7 +6,8 @@
 //! public API:
 //!
 //! - **the lab**: [`Lab`] sets a prepared scene up for measurement ([`LabOptions`], how
-//!   columns are paid for: [`ColumnCost`]), runs any solver with a [`Recorder`] into an
+//!   columns are paid for: [`ColumnCost`], and so which [`Clock`] every run's seconds, stop
+//!   rules and reports read), runs any solver with a [`Recorder`] into an
 //!   [`Outcome`], and compares many into a [`Comparison`]; [`backend`] builds the backend a
 //!   spec names, stored matrices from the [`Cache`];
 //! - **references and certificates**: [`ReferenceSolution`], `B*` by dense LU or by certified
@@ -85,6 +86,7 @@ pub use lab::recorder::{Point, RecordPlan, Recorder, TableRow};
 pub use lab::run::rgb;
 pub use lab::setup::{ChosenReference, Lab, ReferenceOrigin, require_emitters};
 pub use progress::{NoProgress, Progress};
+pub use radiosity_core::Clock;
 pub use reference::cache::{CACHE_DIR_VAR, Cache, Lookup, scene_key};
 pub use reference::certificate::{Contraction, ErrorBound, Residual, SolverBound};
 pub use reference::kind::{MEMORY_VARIABLE, MemoryBudget, ReferenceKind, matrix_bytes, parse_bytes};

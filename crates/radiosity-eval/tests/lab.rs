@@ -2,9 +2,10 @@
 //! the reference, `--reference none` runs without matrix or reference, `auto` weighs the
 //! matrix against the memory budget, the shooting and stored-matrix references agree with
 //! dense LU within their certificates, the cache tells reference kinds apart and keeps the
-//! hierarchical operator.
+//! hierarchical operator; charged columns give the computed runs' numbers, and the clock a
+//! `time=` rule and `:f=timed` read is the one the report prints.
 
-use radiosity_core::ColumnSource;
+use radiosity_core::{Clock, ColumnSource};
 use radiosity_eval::ShootingParams;
 use radiosity_eval::{
     Cache, ColumnCharge, ColumnCost, Lab, LabOptions, Method, NoProgress, RecordPlan, ReferenceOrigin, ReferenceParams,
@@ -406,7 +407,7 @@ fn charged_columns_give_the_computed_runs_numbers_at_the_measured_price() {
     }
     // Jacobi's first sweep gathers each row once, in order: the k-th has k of its pairs
     // recorded, so n rows cost n·fresh − (fresh − recorded)(n − 1)/2.
-    let lab = lab(&scene, LabOptions::default());
+    let lab = lab(&scene, LabOptions::default().with_columns(ColumnCost::Charged));
     let mut jacobi = registry.build("jacobi").unwrap();
     let run = lab.run(jacobi.as_mut(), &StopRules::parse("steps=n").unwrap(), &RecordPlan::default(), &NoProgress);
     let charge = lab.charge().unwrap();
@@ -415,4 +416,67 @@ fn charged_columns_give_the_computed_runs_numbers_at_the_measured_price() {
     let ff = run.unwrap().state.ff_seconds;
     assert!((ff - expected).abs() <= 1e-9 * expected, "{ff} against {expected}");
     assert!(charged.seconds_phrase().contains("charged"), "{}", charged.seconds_phrase());
+}
+
+#[test]
+fn the_clock_rules_and_the_report_read_the_same_seconds() {
+    // Charged at given prices, a run's form-factor seconds are known in advance: at 1 s a
+    // column, fresh or not, `pr` (one column a step) passes 10.5 s at its 11th column, its
+    // solving taking microseconds. The report prints the same seconds, named `charged`.
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let registry = SolverRegistry::builtin();
+    let time = |limit: &str| StopRules::parse(&format!("time={limit}")).unwrap();
+    let charged =
+        lab(&scene, LabOptions::default().with_columns(ColumnCost::Charged)).with_charge(ColumnCharge::new(1.0, 1.0));
+    assert_eq!(charged.clock(), Clock::Charged);
+    let comparison = charged.compare(vec![registry.build("pr").unwrap()], &time("10.5s"), &NoProgress).unwrap();
+    assert_eq!(comparison.clock, Clock::Charged);
+    let run = &comparison.outcomes[0];
+    assert_eq!(run.clock, Clock::Charged);
+    assert_eq!((run.state.columns, run.state.ff_seconds), (11, 11.0));
+    assert!(run.state.solve_seconds < 0.5, "{}", run.state.solve_seconds);
+    stopped_where_the_seconds_pass(run, 10.5);
+    let summary = comparison.summary();
+    let header = summary.lines().next().unwrap();
+    assert!(header.ends_with("seconds (charged)"), "{summary}");
+    let printed: f64 = summary.lines().nth(1).unwrap().split_whitespace().last().unwrap().parse().unwrap();
+    assert_eq!(printed, (run.seconds() * 1e3).round() / 1e3, "{summary}");
+    let mut csv = Vec::new();
+    comparison.table().write_csv(&mut csv).unwrap();
+    let csv = String::from_utf8(csv).unwrap();
+    assert!(csv.lines().skip(1).all(|l| l.split(',').nth(5) == Some("charged")), "{csv}");
+
+    // Computed, the same rule stops on measured seconds, as the report prints them.
+    let computed = lab(&scene, LabOptions::default().with_columns(ColumnCost::Computed));
+    assert_eq!(computed.clock(), Clock::Measured);
+    let comparison = computed.compare(vec![registry.build("pr").unwrap()], &time("5ms"), &NoProgress).unwrap();
+    assert_eq!((comparison.clock, comparison.outcomes[0].clock), (Clock::Measured, Clock::Measured));
+    stopped_where_the_seconds_pass(&comparison.outcomes[0], 5e-3);
+    assert!(comparison.summary().lines().next().unwrap().ends_with("seconds (measured)"));
+
+    // `:f=timed` takes a column's cost from the same clock: at 1000 s a column a group step of
+    // milliseconds is due after every step (as with f=1); at 1e-15 s, never after the first
+    // (as with an f beyond the run).
+    let steps = StopRules::parse("steps=n").unwrap();
+    let groups = |lab: &Lab<'_>, name: &str| {
+        let mut solver = registry.build(name).unwrap();
+        let run = lab.run(solver.as_mut(), &steps, &RecordPlan::default(), &NoProgress).unwrap();
+        (run.record.count("group_steps").unwrap(), run.state.radiosity)
+    };
+    let dear =
+        lab(&scene, LabOptions::default().with_columns(ColumnCost::Charged)).with_charge(ColumnCharge::new(1e3, 1e3));
+    let (timed, every) = (groups(&dear, "xu-g4:f=timed"), groups(&dear, "xu-g4:f=1"));
+    assert!(every.0 > 10 && timed == every, "{} and {} group steps", timed.0, every.0);
+    let cheap = lab(&scene, LabOptions::default().with_columns(ColumnCost::Charged))
+        .with_charge(ColumnCharge::new(1e-15, 1e-15));
+    let (timed, once) = (groups(&cheap, "xu-g4:f=timed"), groups(&cheap, "xu-g4:f=1000000"));
+    assert!(once.0 == 1 && timed == once, "{} and {} group steps", timed.0, once.0);
+}
+
+/// `run` ended on its `time=` rule at its first point whose seconds reached `limit`.
+fn stopped_where_the_seconds_pass(run: &radiosity_eval::Outcome, limit: f64) {
+    assert!(run.termination.starts_with("time limit"), "{}", run.termination);
+    let [.., before, last] = &run.points[..] else { panic!("{:?}", run.points) };
+    assert!(before.seconds < limit && last.seconds >= limit, "{} then {}", before.seconds, last.seconds);
+    assert_eq!(last.seconds, run.seconds());
 }

@@ -48,7 +48,7 @@ fn fewer_digits() {
 
 #[test]
 fn without_timings() {
-    // Both formats lose the same two columns, and nothing else.
+    // Both formats lose the same three columns (the seconds and their clock), and nothing else.
     let t = table().without_timings();
     let (mut csv, mut markdown) = (Vec::new(), Vec::new());
     t.write_csv(&mut csv).unwrap();

@@ -28,7 +28,7 @@ use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use radiosity_core::Real;
-use radiosity_eval::{Comparison, Lab, LabOptions, NoProgress, ReferenceKind};
+use radiosity_eval::{ColumnCost, Comparison, Lab, LabOptions, NoProgress, ReferenceKind};
 use radiosity_ff::BackendSpec;
 use radiosity_solvers::{
     Problem, Record, ResidualBound, Solver, SolverError, SolverRegistry, State, StepKind, StopRules,
@@ -396,9 +396,10 @@ fn residual_bound(result: &Bound<'_, PyAny>, areas: &[Real], k: usize) -> PyResu
 }
 
 /// Runs `solvers` (built-in names and Python solver objects) on `scene` over the backend `ff`
-/// under `until`, measured against `reference`; the comparison.
+/// under `until`, measured against `reference`, their columns paid for as `columns` says
+/// (`computed` or `charged`; by default as `cargo xtask compare`, computed); the comparison.
 #[pyfunction]
-#[pyo3(signature = (scene, solvers, ff = "analytic", until = "columns=2n", reference = "auto"))]
+#[pyo3(signature = (scene, solvers, ff = "analytic", until = "columns=2n", reference = "auto", columns = None))]
 pub fn compare(
     py: Python<'_>,
     scene: &Scene,
@@ -406,8 +407,10 @@ pub fn compare(
     ff: &str,
     until: &str,
     reference: &str,
+    columns: Option<&str>,
 ) -> PyResult<PyComparison> {
     let spec = BackendSpec::parse(ff).map_err(value_error)?;
+    let columns: ColumnCost = columns.map_or(Ok(ColumnCost::default()), str::parse).map_err(value_error)?;
     let rules = StopRules::parse(until).map_err(value_error)?;
     let kind: ReferenceKind = reference.parse().map_err(value_error)?;
     check_measurable(&rules, kind)?;
@@ -464,7 +467,7 @@ pub fn compare(
     let worker_to_main = to_main.clone();
     let worker = std::thread::spawn(move || {
         let run = || -> Result<Box<Comparison>, String> {
-            let options = LabOptions::default().with_cache(cache()).with_reference(kind);
+            let options = LabOptions::default().with_cache(cache()).with_reference(kind).with_columns(columns);
             let lab = Lab::new(&prepared, &spec, options, &NoProgress).map_err(|e| e.to_string())?;
             let registry = SolverRegistry::builtin();
             let mut built: Vec<Box<dyn Solver>> = Vec::new();
@@ -533,6 +536,13 @@ impl PyComparison {
         self.comparison.outcomes.iter().map(|o| o.solver.clone()).collect()
     }
 
+    /// The clock of every seconds figure of the comparison (its table, summary, report and
+    /// plots): `measured` or `charged`.
+    #[getter]
+    fn clock(&self) -> &'static str {
+        self.comparison.clock.name()
+    }
+
     /// The terminal summary `cargo xtask compare` prints.
     fn summary(&self) -> String {
         self.comparison.summary()
@@ -544,12 +554,14 @@ impl PyComparison {
     }
 
     /// Every recorded row of every run, as `convergence.csv` holds them: a dict of `solver`
-    /// (a list of names) and numpy arrays `step`, `columns`, `products`, `seconds`,
-    /// `ff_seconds`, `e_rms`, `e_max`, `residual` and `bound`.
+    /// (a list of names), `clock` (the clock of the seconds, `measured` or `charged`) and numpy
+    /// arrays `step`, `columns`, `products`, `seconds`, `ff_seconds`, `e_rms`, `e_max`,
+    /// `residual` and `bound`.
     fn table<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let rows: Vec<_> = self.comparison.outcomes.iter().flat_map(|o| &o.rows).collect();
         let d = PyDict::new(py);
         d.set_item("solver", rows.iter().map(|r| r.solver.clone()).collect::<Vec<_>>())?;
+        d.set_item("clock", self.comparison.clock.name())?;
         let column =
             |f: &dyn Fn(&radiosity_eval::TableRow) -> Real| PyArray1::from_vec(py, rows.iter().map(|r| f(r)).collect());
         d.set_item("step", column(&|r| r.step as Real))?;

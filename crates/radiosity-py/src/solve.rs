@@ -10,10 +10,13 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use radiosity_core::Real;
-use radiosity_eval::{FinalMetrics, Lab, LabOptions, NoProgress, Point, RecordPlan, ReferenceKind};
+use radiosity_eval::{Clock, ColumnCost, FinalMetrics, Lab, LabOptions, NoProgress, Point, RecordPlan, ReferenceKind};
 use radiosity_ff::BackendSpec;
 use radiosity_solvers::{SolverError, SolverRegistry, State, StopRules, Value};
 use std::ops::ControlFlow;
+
+/// How one run pays for its columns unless told: as `cargo xtask solve` does.
+const ONE_RUN: ColumnCost = ColumnCost::Computed;
 
 /// What a run left.
 #[pyclass(frozen, module = "radiosity")]
@@ -28,12 +31,18 @@ pub struct Run {
     /// With an `rms=` rule: where `e_rms` first fell to each power of ten.
     reached: Vec<(Real, Point)>,
     reference: (String, String),
+    /// The clock of every seconds figure.
+    clock: Clock,
 }
 
 /// Runs `solver` (a built-in name, or `reference` for the exact solution) on `scene` over the
 /// backend `ff` until `until` holds (a stop-rule list: `rms=1e-3`, `columns=2n`,
 /// `residual=1e-6`, `time=10s`, comma-separated), measured against the reference `reference`
-/// (`auto`, `matrix`, `shooting` or `none`), with the GIL released while it runs.
+/// (`auto`, `matrix`, `shooting` or `none`), with the GIL released while it runs. `columns`
+/// says how the run pays for its columns, and so which clock its seconds, its `time=` rule and
+/// its timed group frequencies read (`stats["clock"]`): `computed` (the default, as `cargo
+/// xtask solve`: every column computed, `measured` seconds) or `charged` (read from the stored
+/// matrix of a `matrix` reference and each charged the backend's measured cost).
 ///
 /// `callback(point)`, when given, is called with every recorded point, after every step and
 /// on the initial state: a dict of `step`, `columns`, `products`, `seconds`, `e_rms`,
@@ -41,7 +50,10 @@ pub struct Run {
 /// the run there (`stats["termination"]` says so); an exception ends it and is raised again
 /// from `solve`. Its time is not the run's.
 #[pyfunction]
-#[pyo3(signature = (scene, solver, ff = "analytic", until = "columns=2n", reference = "auto", callback = None))]
+#[pyo3(signature = (
+    scene, solver, ff = "analytic", until = "columns=2n", reference = "auto", callback = None, columns = None
+))]
+#[allow(clippy::too_many_arguments)]
 pub fn solve(
     py: Python<'_>,
     scene: &Scene,
@@ -50,8 +62,10 @@ pub fn solve(
     until: &str,
     reference: &str,
     callback: Option<Py<PyAny>>,
+    columns: Option<&str>,
 ) -> PyResult<Run> {
     let spec = BackendSpec::parse(ff).map_err(value_error)?;
+    let columns: ColumnCost = columns.map_or(Ok(ONE_RUN), str::parse).map_err(value_error)?;
     // Built here to refuse a bad name before any work, and again inside the run: a solver
     // is not `Send`.
     let build = |name: &str| {
@@ -85,9 +99,10 @@ pub fn solve(
     };
     let run = py.detach(|| {
         let mut built = named.map(|_| SolverRegistry::builtin().build(&solver)).transpose()?;
-        let options = LabOptions::default().with_cache(cache()).with_reference(kind);
+        let options = LabOptions::default().with_cache(cache()).with_reference(kind).with_columns(columns);
         let lab = Lab::new(&prepared, &spec, options, &NoProgress)?;
         let chosen = (lab.chosen().kind.to_string(), lab.chosen().why.clone());
+        let clock = lab.clock();
         let run = match built.as_mut() {
             None => {
                 let state = lab.reference_state()?;
@@ -102,6 +117,7 @@ pub fn solve(
                     points: Vec::new(),
                     reached: Vec::new(),
                     reference: chosen,
+                    clock,
                 }
             }
             Some(solver) => {
@@ -118,6 +134,7 @@ pub fn solve(
                     last: o.last,
                     points: o.points,
                     reference: chosen,
+                    clock,
                 }
             }
         };
@@ -167,7 +184,15 @@ impl Run {
         &self.backend
     }
 
-    /// The run's figures, with the keys of `cargo xtask solve --json`'s `stats`: `columns`,
+    /// The clock of every seconds figure of the run (`stats`, `points`): `measured` or
+    /// `charged`.
+    #[getter]
+    fn clock(&self) -> &'static str {
+        self.clock.name()
+    }
+
+    /// The run's figures, with the keys of `cargo xtask solve --json`'s `stats`: `clock` (of
+    /// every seconds figure: `measured` or `charged`), `columns`,
     /// `columns_reused`, `products`, `steps`, `seconds`, `ff_seconds`, `group_seconds`,
     /// `e_rms`, `e_max`, `residual` and `residual_of` (which vector it is the residual of),
     /// `bound`, `termination`, `reached` (with an `rms=` rule, where `e_rms` first fell to
@@ -177,6 +202,7 @@ impl Run {
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let s = &self.state;
         let d = PyDict::new(py);
+        d.set_item("clock", self.clock.name())?;
         d.set_item("columns", s.columns)?;
         d.set_item("columns_reused", s.columns_reused)?;
         d.set_item("products", s.products)?;

@@ -1,9 +1,11 @@
 //! Tests of radiosity-solvers on small in-memory systems with exact answers: the furnace
-//! identity, the two-patch closed form, the unit cube, and the accounting and stop rules.
+//! identity, the two-patch closed form, the unit cube, and the accounting and stop rules (and
+//! the clock they read, `clock`).
 
 use radiosity_core::{Channels, DenseColumns, LinearSystem, Real};
 use radiosity_solvers::*;
 
+mod clock;
 mod krylov;
 mod residual_bound;
 

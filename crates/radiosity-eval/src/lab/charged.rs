@@ -1,15 +1,18 @@
 //! The stored matrix serving a lab's solvers in place of the backend, each column charged as
-//! the backend would have cost it ([`crate::ColumnCost::Charged`], [`ColumnCharge`]).
+//! the backend would have cost it ([`crate::ColumnCost::Charged`], [`ColumnCharge`]): the
+//! charge is the run's clock ([`ColumnSource::charged_seconds`], [`Clock::Charged`]), which its
+//! stop rules and timed group frequencies read and its reports print.
 
 use crate::lab::options::ColumnCharge;
+use crate::lab::setup::Lab;
 use crate::reference::matrix::FormFactors;
-use radiosity_core::{ColumnSource, Real};
+use radiosity_core::{Clock, ColumnSource, Real};
 use std::sync::{Arc, Mutex, PoisonError};
 
 /// The columns of a lab's stored matrix, served in place of the backend's own: the same `f32`
 /// entries, exact rows only where the backend served them, and the backend's stated
 /// reciprocity, so that every solver takes the same path and gets the same numbers as over
-/// the backend. It keeps the run's charge ([`ChargedColumns::charged_seconds`]), which
+/// the backend. It keeps the run's charge ([`ColumnSource::charged_seconds`]), which
 /// [`ColumnSource::reset_memory`] sets back to zero with the columns it has seen.
 pub(crate) struct ChargedColumns {
     matrix: Arc<FormFactors>,
@@ -39,11 +42,6 @@ impl ChargedColumns {
     /// The prices it charges.
     pub(crate) fn charge(&self) -> &ColumnCharge {
         &self.charge
-    }
-
-    /// The seconds charged since the last [`ColumnSource::reset_memory`].
-    pub(crate) fn charged_seconds(&self) -> Real {
-        self.ledger.lock().unwrap_or_else(PoisonError::into_inner).seconds
     }
 
     /// Charges the column (or row) of patch `j`.
@@ -81,10 +79,37 @@ impl ColumnSource for ChargedColumns {
         self.reciprocity
     }
 
+    /// The seconds charged since the last [`ColumnSource::reset_memory`]: a run's clock is
+    /// [`radiosity_core::Clock::Charged`].
+    fn charged_seconds(&self) -> Option<Real> {
+        Some(self.ledger.lock().unwrap_or_else(PoisonError::into_inner).seconds)
+    }
+
     /// A new run: no column seen, nothing charged.
     fn reset_memory(&self) {
         let mut ledger = self.ledger.lock().unwrap_or_else(PoisonError::into_inner);
         ledger.seen.fill(false);
         (ledger.known, ledger.seconds) = (0, 0.0);
+    }
+}
+
+impl<'p> Lab<'p> {
+    /// The lab with its columns charged at `charge`'s prices instead of those it measured,
+    /// so that a run's charged seconds are known in advance (a test of what reads the clock,
+    /// or a comparison priced as another machine measured); the same lab when its columns are
+    /// computed ([`Lab::clock`] is [`Clock::Measured`]).
+    pub fn with_charge(mut self, charge: ColumnCharge) -> Lab<'p> {
+        if let Some(old) = &self.charged {
+            let charged = Arc::new(ChargedColumns::new(old.matrix.clone(), old.rows, old.reciprocity, charge));
+            self.source = Box::new(charged.clone());
+            self.charged = Some(charged);
+        }
+        self
+    }
+
+    /// The clock the lab's runs are counted on: [`Clock::Charged`] when its solvers read their
+    /// columns from its stored matrix and are charged for them, [`Clock::Measured`] otherwise.
+    pub fn clock(&self) -> Clock {
+        if self.charged.is_some() { Clock::Charged } else { Clock::Measured }
     }
 }

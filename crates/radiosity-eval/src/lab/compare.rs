@@ -12,7 +12,7 @@ use crate::lab::outcome::Outcome;
 use crate::lab::recorder::{Point, RecordPlan};
 use crate::lab::setup::{ChosenReference, Lab, ReferenceOrigin};
 use crate::progress::Progress;
-use radiosity_core::Real;
+use radiosity_core::{Clock, Real};
 use radiosity_geom::SceneReport;
 use radiosity_solvers::{Problem, Solver, StopRules};
 
@@ -63,6 +63,9 @@ pub struct Comparison {
     /// What each column was charged, when the lab served columns from its stored matrix
     /// (`None`: every column was computed and timed).
     pub charge: Option<ColumnCharge>,
+    /// The clock every run's seconds were counted on ([`Lab::clock`]), named wherever they are
+    /// printed.
+    pub clock: Clock,
 }
 
 impl Comparison {
@@ -79,6 +82,7 @@ impl Comparison {
             reference_origin: lab.origin().clone(),
             outcomes,
             charge: lab.charge().copied(),
+            clock: lab.clock(),
         }
     }
 

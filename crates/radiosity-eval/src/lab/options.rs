@@ -1,12 +1,15 @@
 //! How a lab is set up ([`LabOptions`]) and how its solvers pay for the columns they fetch
 //! ([`ColumnCost`], [`ColumnCharge`]).
 
+use crate::error::EvalError;
 use crate::lab::timing::sample;
 use crate::reference::cache::Cache;
 use crate::reference::kind::{MemoryBudget, ReferenceKind};
 use crate::reference::shooting::ShootingParams;
 use crate::reference::solution::ReferenceParams;
 use radiosity_core::{ColumnSource, Real};
+use std::fmt;
+use std::str::FromStr;
 use std::time::Instant;
 
 /// How a lab is set up.
@@ -27,23 +30,64 @@ pub struct LabOptions {
     pub shooting: ShootingParams,
     /// The memory a stored matrix may take; `None`: [`MemoryBudget::from_env`].
     pub memory: Option<MemoryBudget>,
-    /// How solvers pay for their columns (default [`ColumnCost::Charged`]).
+    /// How solvers pay for their columns, and so the clock of their seconds (default
+    /// [`ColumnCost::Computed`]).
     pub columns: ColumnCost,
 }
 
-/// How a lab's solvers pay for the columns (and rows) of F they fetch.
+/// How a lab's solvers pay for the columns (and rows) of F they fetch, which decides the
+/// clock of their seconds ([`crate::Clock`]): computed columns are timed (`measured`), stored
+/// ones charged (`charged`).
+///
+/// The default is `Computed`: the charged seconds of the default comparison's solvers do not
+/// rank them as their computed seconds do (`docs/solvers.md`, "The default comparison"), so
+/// the seconds a report prints by default are measured ones.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum ColumnCost {
     /// Every column is computed through the backend when a solver asks for it, and its time is
-    /// the run's form-factor time.
+    /// the run's form-factor time (the default).
+    #[default]
     Computed,
     /// Where the lab keeps the stored matrix of a geometric backend (a `matrix` reference),
     /// solvers read their columns from it, the same `f32` entries the backend's columns give,
     /// and each column fetched is charged the backend's median time for a fresh column,
     /// measured once on a seeded sample ([`ColumnCharge`]). Elsewhere as `Computed`.
-    #[default]
     Charged,
+}
+
+impl ColumnCost {
+    /// Both ways, in a fixed order.
+    pub const ALL: [ColumnCost; 2] = [ColumnCost::Computed, ColumnCost::Charged];
+
+    /// The name the command line (`--columns`) and Python (`columns=`) take: `computed` or
+    /// `charged`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ColumnCost::Computed => "computed",
+            ColumnCost::Charged => "charged",
+        }
+    }
+}
+
+/// Reads [`ColumnCost::name`].
+impl FromStr for ColumnCost {
+    type Err = EvalError;
+
+    fn from_str(s: &str) -> Result<ColumnCost, EvalError> {
+        ColumnCost::ALL.into_iter().find(|c| c.name() == s.trim()).ok_or_else(|| EvalError::InvalidParameter {
+            name: "columns",
+            value: s.to_string(),
+            reason: "it must be computed or charged",
+        })
+    }
+}
+
+/// [`ColumnCost::name`].
+impl fmt::Display for ColumnCost {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
 }
 
 /// The prices a lab charges for the columns its solvers fetch from its stored matrix
@@ -76,6 +120,13 @@ pub struct ColumnCharge {
 impl ColumnCharge {
     /// Columns timed to measure the charge.
     pub const SAMPLE: usize = 8;
+
+    /// Prices given rather than measured: `fresh` seconds a fresh column, `recorded` (at most
+    /// `fresh`) one whose pairs the backend has recorded; for runs whose charge must be known
+    /// in advance ([`crate::Lab::with_charge`]).
+    pub fn new(fresh: Real, recorded: Real) -> ColumnCharge {
+        ColumnCharge { fresh, recorded: recorded.min(fresh), sampled: 0, from_assembly: false }
+    }
 
     /// Times [`ColumnCharge::SAMPLE`] seeded columns of `source` (fewer when it has fewer
     /// patches), one at a time, fresh and then again; `assembled`, a fresh column's mean cost
@@ -115,15 +166,23 @@ impl ColumnCharge {
 
     /// One sentence saying how a run's columns were paid for, for reports.
     pub fn describe(&self) -> String {
-        let fresh = if self.from_assembly { "the matrix's assembly" } else { "the sample" };
-        format!(
-            "columns read from the stored matrix and charged as the backend computes them: {:.3} ms a fresh \
-             column (mean of {fresh}), {:.3} ms one whose pairs it has recorded (mean of {} columns computed \
-             twice)",
-            self.fresh * 1e3,
-            self.recorded * 1e3,
-            self.sampled
-        )
+        let prices = if self.sampled == 0 {
+            format!(
+                "{:.3} ms a fresh column, {:.3} ms one whose pairs it has recorded (prices given)",
+                self.fresh * 1e3,
+                self.recorded * 1e3
+            )
+        } else {
+            let fresh = if self.from_assembly { "the matrix's assembly" } else { "the sample" };
+            format!(
+                "{:.3} ms a fresh column (mean of {fresh}), {:.3} ms one whose pairs it has recorded (mean of {} \
+                 columns computed twice)",
+                self.fresh * 1e3,
+                self.recorded * 1e3,
+                self.sampled
+            )
+        };
+        format!("columns read from the stored matrix and charged as the backend computes them: {prices}")
     }
 }
 

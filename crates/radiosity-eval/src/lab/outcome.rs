@@ -2,7 +2,7 @@
 //! and the metrics of its final radiosity ([`FinalMetrics`]).
 
 use crate::lab::recorder::{Point, TableRow};
-use radiosity_core::Real;
+use radiosity_core::{Clock, Real};
 use radiosity_solvers::{Record, State};
 
 /// The metrics of a run's final radiosity.
@@ -44,6 +44,8 @@ pub struct Outcome {
     pub overhead: Real,
     /// The final radiosity's metrics.
     pub last: FinalMetrics,
+    /// The clock its seconds were counted on (its points', rows' and state's).
+    pub clock: Clock,
 }
 
 impl Outcome {

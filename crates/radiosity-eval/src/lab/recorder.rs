@@ -2,7 +2,6 @@
 //! measures e_rms and the certified bound after every step and every metric at planned steps
 //! ([`RecordPlan`]), its own time kept apart.
 
-use crate::lab::charged::ChargedColumns;
 use crate::progress::Progress;
 use crate::reference::certificate::{Contraction, SolverBound, relative_without_reference};
 use crate::reference::metrics::{Evaluator, Metrics, errors_against};
@@ -53,7 +52,8 @@ pub struct Point {
     pub columns: u64,
     /// Products `F·x` of the source's own ([`radiosity_core::ColumnSource::multiply`]).
     pub products: u64,
-    /// The run's seconds so far (form factors and solving; measurement excluded).
+    /// The run's seconds so far (form factors and solving; measurement excluded), on the run's
+    /// clock ([`crate::Lab::clock`]): what a `time=` rule reads.
     pub seconds: Real,
     /// Wall seconds since the recorder's clock started (for a lab's runs, when the run was
     /// set up), its own measuring taken out: the run's seconds and the executor's bookkeeping.
@@ -77,9 +77,9 @@ pub struct TableRow {
     pub columns: u64,
     /// Products by F the source computed itself.
     pub products: u64,
-    /// Wall-clock seconds of the run so far (metrics excluded).
+    /// Seconds of the run so far (metrics excluded), on the run's clock ([`crate::Lab::clock`]).
     pub seconds: Real,
-    /// Seconds spent computing form factors.
+    /// Of them, the form factors' seconds, on the same clock.
     pub ff_seconds: Real,
     /// Area-weighted relative RMS error.
     pub e_rms: Real,
@@ -117,8 +117,6 @@ pub struct Recorder<'a> {
     /// Where each step is reported, if anywhere (no message is formatted otherwise).
     pub(super) progress: Option<&'a dyn Progress>,
     pub(super) by_columns: bool,
-    /// The source that charges the columns, when they are charged rather than timed.
-    pub(super) charged: Option<&'a ChargedColumns>,
     /// The e_rms of the last state observed, which [`Recorder::monitor`] hands the `rms=` rule.
     pub(super) latest: Rc<Cell<Option<Real>>>,
     /// Shown every point recorded with its state; `Break` ends the run ([`Lab::run_watched`]).
@@ -149,7 +147,6 @@ impl<'a> Recorder<'a> {
             overhead: 0.0,
             progress: None,
             by_columns: true,
-            charged: None,
             latest: Rc::default(),
             watch: None,
             stop: false,
@@ -201,7 +198,7 @@ impl Observer for Recorder<'_> {
             (Some(known), Some(c)) => SolverBound::new(self.system, c, &known, &state.radiosity).relative,
             _ => Real::NAN,
         };
-        let ff_seconds = self.charged.map_or(state.ff_seconds, ChargedColumns::charged_seconds);
+        let ff_seconds = state.ff_seconds;
         let seconds = ff_seconds + state.solve_seconds;
         let new_mark =
             self.marks.contains(&state.columns) && self.points.last().is_none_or(|p| p.columns != state.columns);

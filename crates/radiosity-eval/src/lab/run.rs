@@ -81,7 +81,6 @@ impl Lab<'_> {
             overhead: 0.0,
             progress: Some(progress),
             by_columns: unit == "columns",
-            charged: self.charged.as_deref(),
             latest: Rc::default(),
             watch: Some(watch),
             stop: false,
@@ -99,10 +98,7 @@ impl Lab<'_> {
         }
         let run = executor.add_observer(&mut recorder, ObserverMode::Always).run(&problem);
         progress.end();
-        let mut run = run?;
-        if let Some(charged) = &self.charged {
-            run.state.ff_seconds = charged.charged_seconds();
-        }
+        let run = run?;
         let solver_residual = solver.residual_power(&problem, &run.state);
         let known = solver.residual_bound(&problem, &run.state);
         let solver_bound =
@@ -143,6 +139,7 @@ impl Lab<'_> {
             overhead: recorder.overhead,
             last,
             state: run.state,
+            clock: self.clock(),
         })
     }
 

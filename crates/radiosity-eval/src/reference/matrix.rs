@@ -228,6 +228,10 @@ impl<S: ColumnSource> ColumnSource for F32Columns<S> {
         self.0.reset_memory()
     }
 
+    fn charged_seconds(&self) -> Option<Real> {
+        self.0.charged_seconds()
+    }
+
     fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
         self.0.multiply(x, channels, out)
     }

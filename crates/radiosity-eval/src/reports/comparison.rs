@@ -2,9 +2,11 @@
 //! the recorded steps), `report.md` (e_rms at n/4, n/2, n and 2n columns; columns and seconds
 //! to reach e_rms 1e-2 and 1e-3; where the time went; what the scene analysis left out; the
 //! reference, its kind and its certificate) and plots of e_rms against shooting steps (the
-//! paper's axis), columns and wall seconds, as SVG and PNG, and a summary table for the
-//! terminal. Without a reference (`--reference none`) the certified bound of every step takes
-//! e_rms's place in the tables and plots.
+//! paper's axis), columns and seconds, as SVG and PNG, and a summary table for the
+//! terminal. Every one of them names the clock its seconds were counted on ([`Clock::name`]:
+//! `measured`, columns computed and timed; `charged`, columns read from the stored matrix and
+//! each charged the backend's modelled cost). Without a reference (`--reference none`) the
+//! certified bound of every step takes e_rms's place in the tables and plots.
 
 use crate::error::LabError;
 use crate::lab::compare::Comparison;
@@ -13,7 +15,7 @@ use crate::lab::recorder::Point;
 use crate::lab::setup::ReferenceOrigin;
 use crate::reports::plot::{Curve, PlotSpec, write_png, write_svg};
 use crate::reports::table::{ConvergenceTable, round_significant};
-use radiosity_core::Real;
+use radiosity_core::{Clock, Real};
 use radiosity_solvers::Value;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -30,7 +32,7 @@ pub struct Written {
 impl Comparison {
     /// Every recorded row of every run.
     pub fn table(&self) -> ConvergenceTable {
-        let mut table = ConvergenceTable::new();
+        let mut table = ConvergenceTable::new().with_clock(self.clock);
         for row in self.outcomes.iter().flat_map(|o| &o.rows) {
             table.push(row.clone());
         }
@@ -54,10 +56,11 @@ impl Comparison {
     /// Writes the three plots as SVG and PNG; returns their file stems and titles.
     fn write_plots(&self, dir: &Path, files: &mut Vec<PathBuf>) -> Result<Vec<(String, String)>, LabError> {
         type Axis = fn(&Point) -> Real;
+        let seconds = format!("{} seconds (form factors and solving)", self.clock.name());
         let axes: [(&str, &str, Axis); 3] = [
             ("steps", "shooting steps", |p| p.step as Real),
             ("columns", "form-factor columns computed", |p| p.columns as Real),
-            ("seconds", "wall seconds (form factors and solving)", |p| p.seconds),
+            ("seconds", &seconds, |p| p.seconds),
         ];
         let metric = self.metric();
         let what = if self.has_reference() { "e_rms" } else { "certified bound" };
@@ -98,7 +101,7 @@ impl Comparison {
             n, self.scene.mean_reflectivity, self.backend, self.rules
         );
         let _ = writeln!(md, "- Left out by the scene analysis: {}.", self.scene.left_out_phrase());
-        let _ = writeln!(md, "- Seconds: {}.", self.seconds_phrase());
+        let _ = writeln!(md, "- {}: {}.", capitalised(&self.clock.seconds_label()), self.seconds_phrase());
         let origin = match &self.reference_origin {
             ReferenceOrigin::Solved { assembly_seconds, solve_seconds } if *assembly_seconds > 0.0 => {
                 format!("F assembled in {assembly_seconds:.2} s, solved in {solve_seconds:.2} s")
@@ -129,7 +132,11 @@ impl Comparison {
             let at = |c: u64| cell(o.at_columns_point(c).map(|p| self.value(&p)));
             let _ = writeln!(md, "| `{}` | {} | {} | {} | {} |", o.solver, at(n / 4), at(n / 2), at(n), at(2 * n));
         }
-        let _ = writeln!(md, "\n## Columns (and products) and seconds to reach {metric} 1e-2 and 1e-3\n");
+        let _ = writeln!(
+            md,
+            "\n## Columns (and products) and {} seconds to reach {metric} 1e-2 and 1e-3\n",
+            self.clock.name()
+        );
         let _ = writeln!(md, "| solver | 1e-2 | 1e-3 |\n|---|--:|--:|");
         for o in &self.outcomes {
             let _ =
@@ -138,13 +145,16 @@ impl Comparison {
         let _ = writeln!(md, "\n## Where the time went\n");
         let _ = writeln!(
             md,
-            "Form factors and solving are the run's own time; group solving is part of solving; \
-             measurement (e_rms every step, all metrics at about 100 points) is outside the run.\n"
+            "Form factors and solving are the run's own time, the form factors' seconds {}; group solving is part \
+             of solving; solving and measurement (e_rms every step, all metrics at about 100 points, outside the \
+             run) are measured.\n",
+            self.clock.name()
         );
         let _ = writeln!(
             md,
-            "| solver | steps | columns (reused) | products | form factors | solving | of which groups | measurement | stopped \
-             |\n|---|--:|--:|--:|--:|--:|--:|--:|---|"
+            "| solver | steps | columns (reused) | products | form factors ({}) | solving | of which groups | \
+             measurement | stopped |\n|---|--:|--:|--:|--:|--:|--:|--:|---|",
+            self.clock.name()
         );
         for o in &self.outcomes {
             let s = &o.state;
@@ -178,12 +188,13 @@ impl Comparison {
         md
     }
 
-    /// How the seconds of every run were counted: columns computed and timed, or read from
-    /// the stored matrix and charged ([`ColumnCharge`](crate::ColumnCharge)).
+    /// How the seconds of every run were counted, on its clock ([`Comparison::clock`]):
+    /// columns computed and timed, or read from the stored matrix and charged
+    /// ([`ColumnCharge`](crate::ColumnCharge)).
     pub fn seconds_phrase(&self) -> String {
-        match &self.charge {
-            Some(charge) => format!("solving timed, {}", charge.describe()),
-            None => "form factors and solving, every column computed when a solver asked for it".into(),
+        match (&self.charge, self.clock) {
+            (Some(charge), Clock::Charged) => format!("solving timed, {}", charge.describe()),
+            _ => "form factors and solving timed, every column computed when a solver asked for it".into(),
         }
     }
 
@@ -192,21 +203,22 @@ impl Comparison {
     pub fn summary(&self) -> String {
         let metric = self.metric();
         let bound = if self.has_reference() { format!(" {:>10}", "bound end") } else { String::new() };
+        let seconds = self.clock.seconds_label();
+        let width = seconds.len();
         let mut out = format!(
-            "{:<24} {:>8} {:>8} {:>10} {:>10}{bound} {:>10} {:>9}\n",
+            "{:<24} {:>8} {:>8} {:>10} {:>10}{bound} {:>10} {seconds}\n",
             "solver",
             "steps",
             "columns",
             format!("{metric} @n"),
             format!("{metric} end"),
             "1e-3 at",
-            "seconds"
         );
         for o in &self.outcomes {
             let bound = if self.has_reference() { format!(" {:>10}", cell(o.last.bound)) } else { String::new() };
             let _ = writeln!(
                 out,
-                "{:<24} {:>8} {:>8} {:>10} {:>10}{bound} {:>10} {:>9.3}",
+                "{:<24} {:>8} {:>8} {:>10} {:>10}{bound} {:>10} {:>width$.3}",
                 o.solver,
                 o.state.step,
                 o.state.columns,
@@ -225,6 +237,12 @@ impl Comparison {
             k => format!("{} + {k} products / {:.3} s", p.columns, p.seconds),
         })
     }
+}
+
+/// `text` with its first letter in capitals.
+fn capitalised(text: &str) -> String {
+    let mut chars = text.chars();
+    chars.next().map_or_else(String::new, |first| first.to_uppercase().chain(chars).collect())
 }
 
 fn create(path: &Path) -> Result<std::fs::File, LabError> {

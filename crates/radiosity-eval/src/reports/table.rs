@@ -1,7 +1,8 @@
 //! Convergence tables: one row per measured step of a run, written as CSV or Markdown.
 //!
-//! A row records where a solver stood (step, columns computed, wall and form-factor seconds)
-//! and its metrics ([`crate::reference::metrics`]). Floats are rounded to a fixed number of
+//! A row records where a solver stood (step, columns computed, the run's and the form factors'
+//! seconds, with the clock they were counted on: `measured` or `charged`, [`Clock::name`]) and
+//! its metrics ([`crate::reference::metrics`]). Floats are rounded to a fixed number of
 //! significant digits (default 4), so tables under snapshot tests stay stable across platforms
 //! and round-off. Tables write to any [`std::io::Write`]; opening files is the caller's business.
 //! Timings vary from run to run, so a table can leave them out
@@ -10,38 +11,51 @@
 //! make) is written only when some row made one, so tables of column methods read as before.
 
 use crate::lab::recorder::TableRow;
-use radiosity_core::Real;
+use radiosity_core::{Clock, Real};
 use std::io::{self, Write};
 
-/// The columns of a table, in order.
-pub const HEADER: [&str; 10] =
-    ["solver", "step", "columns", "products", "seconds", "ff_seconds", "e_rms", "e_max", "residual", "bound"];
+/// The columns of a table, in order; `clock` names the clock of `seconds` and `ff_seconds`
+/// ([`Clock::name`]).
+pub const HEADER: [&str; 11] =
+    ["solver", "step", "columns", "products", "seconds", "ff_seconds", "clock", "e_rms", "e_max", "residual", "bound"];
 
 /// The position in [`HEADER`] of `products`.
 const PRODUCTS_COLUMN: usize = 3;
 
-/// The positions in [`HEADER`] of the timing columns, `seconds` and `ff_seconds`.
-const TIMING_COLUMNS: [usize; 2] = [4, 5];
+/// The positions in [`HEADER`] of the timing columns, `seconds`, `ff_seconds` and `clock`.
+const TIMING_COLUMNS: [usize; 3] = [4, 5, 6];
 
-/// Rows of convergence data, the precision they are written with, and whether their timings
-/// are written.
+/// Rows of convergence data, the clock of their seconds, the precision they are written
+/// with, and whether their timings are written.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ConvergenceTable {
     rows: Vec<TableRow>,
+    clock: Clock,
     digits: usize,
     timings: bool,
 }
 
 impl Default for ConvergenceTable {
     fn default() -> Self {
-        ConvergenceTable { rows: Vec::new(), digits: 4, timings: true }
+        ConvergenceTable { rows: Vec::new(), clock: Clock::Measured, digits: 4, timings: true }
     }
 }
 
 impl ConvergenceTable {
-    /// An empty table writing floats with 4 significant digits.
+    /// An empty table writing floats with 4 significant digits, its seconds measured.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// The table with its seconds counted on `clock` (written in its `clock` column).
+    pub fn with_clock(mut self, clock: Clock) -> Self {
+        self.clock = clock;
+        self
+    }
+
+    /// The clock its seconds were counted on.
+    pub fn clock(&self) -> Clock {
+        self.clock
     }
 
     /// Writes floats with `digits` significant digits (at least 1).
@@ -50,7 +64,7 @@ impl ConvergenceTable {
         self
     }
 
-    /// Leaves the `seconds` and `ff_seconds` columns out of CSV and Markdown: a table
+    /// Leaves the `seconds`, `ff_seconds` and `clock` columns out of CSV and Markdown: a table
     /// without them is deterministic, so it can sit under a snapshot test.
     pub fn without_timings(mut self) -> Self {
         self.timings = false;
@@ -74,7 +88,7 @@ impl ConvergenceTable {
     }
 
     /// The entries of `all` (one per column of [`HEADER`]) that are written.
-    fn written<T>(&self, all: [T; 10]) -> Vec<T> {
+    fn written<T>(&self, all: [T; 11]) -> Vec<T> {
         let products = self.rows.iter().any(|r| r.products > 0);
         let keep = |i: &usize| (self.timings || !TIMING_COLUMNS.contains(i)) && (products || *i != PRODUCTS_COLUMN);
         all.into_iter().enumerate().filter(|(i, _)| keep(i)).map(|(_, cell)| cell).collect()
@@ -89,6 +103,7 @@ impl ConvergenceTable {
             row.products.to_string(),
             round_significant(row.seconds, d),
             round_significant(row.ff_seconds, d),
+            self.clock.name().to_string(),
             round_significant(row.e_rms, d),
             round_significant(row.e_max, d),
             round_significant(row.residual, d),

@@ -21,14 +21,23 @@ class Lab:
 
     ``reference`` is the reference kind (``auto``, ``matrix``, ``shooting`` or ``none``). The
     reference is computed for each comparison unless ``$RADIOSITY_CACHE_DIR`` keeps it.
+    ``columns`` says how solvers pay for their columns, and so which clock every seconds
+    figure, ``time=`` rule and timed group frequency reads: ``"computed"`` (every column
+    computed when asked for, ``measured`` seconds) or ``"charged"`` (read from the stored
+    matrix of a ``matrix`` reference, each charged the backend's measured cost); ``None``,
+    the default, is ``cargo xtask compare``'s default, ``"computed"``. ``Comparison.clock``
+    names the clock.
     """
 
-    def __init__(self, scene, ff="analytic", reference="auto"):
+    def __init__(self, scene, ff="analytic", reference="auto", columns=None):
         self.scene = scene
         self.ff = ff
         self.reference = reference
+        self.columns = columns
 
     def compare(self, solvers, until="columns=2n"):
         """Runs ``solvers`` (names and Python solver objects) under the stop rules ``until``;
-        a ``Comparison`` with ``table()``, ``summary()`` and ``write(dir)``."""
-        return _radiosity.compare(self.scene, list(solvers), ff=self.ff, until=until, reference=self.reference)
+        a ``Comparison`` with ``clock``, ``table()``, ``summary()`` and ``write(dir)``."""
+        return _radiosity.compare(
+            self.scene, list(solvers), ff=self.ff, until=until, reference=self.reference, columns=self.columns
+        )

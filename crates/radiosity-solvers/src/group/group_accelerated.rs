@@ -23,7 +23,8 @@
 //!   - `auto`: `c_group = ops_group`, the operations the group step counted, and
 //!     `c_column =` [`column_operations`]`(n)`, the modelled cost of one form-factor column.
 //!   - `timed`: `c_group` the measured seconds of that group step and `c_column` the mean
-//!     seconds of a column so far.
+//!     seconds of a column so far, on the run's clock ([`Problem::ff_seconds`]): measured, or
+//!     what the source charged, as the run's report prints them.
 //! - **Steps are shooting steps.** A step is one point shot, followed by a group step when one
 //!   is due, so the group holds the newest shooter; `steps=` counts shots, the paper's axis.
 //!   A group step costs no column. Its seconds are reported apart ([`State::group_seconds`]).

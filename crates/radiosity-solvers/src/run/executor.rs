@@ -2,8 +2,11 @@
 //! the stop rules (the argmin pattern: a solver defines one step, the executor loops).
 //!
 //! Timing: a run's time is split into form-factor seconds (measured by the [`Problem`] around
-//! every column) and solve seconds (the rest of each step). Observers run between steps,
-//! outside both, so computing metrics against a reference never counts as solver time.
+//! every column, or charged by its source: the run's clock, [`Problem::clock`]) and solve
+//! seconds (the rest of each step's wall time, the source's measured time taken out). A
+//! `time=` rule reads their sum, on the run's clock, as every report of the run does.
+//! Observers run between steps, outside both, so computing metrics against a reference never
+//! counts as solver time.
 //!
 //! ## Observers, the error monitor and breakdowns
 //!
@@ -312,7 +315,7 @@ impl<'a> Executor<'a> {
         }
         let n = problem.n();
         let mut state = State::from_emission(problem.system().emissions(), problem.channels());
-        let start_ff = problem.ff_seconds();
+        let start_ff = Spent::of(problem);
         self.solver.applicable(problem)?;
         let start = Instant::now();
         self.solver.init(problem, &mut state)?;
@@ -340,7 +343,7 @@ impl<'a> Executor<'a> {
             if state.step >= cap {
                 break TerminationReason::StepCap(cap);
             }
-            let ff_before = problem.ff_seconds();
+            let ff_before = Spent::of(problem);
             let step_start = Instant::now();
             let step = self.solver.next_step(problem, &mut state);
             let wall = step_start.elapsed().as_secs_f64();
@@ -400,14 +403,15 @@ impl<'a> Executor<'a> {
         }
     }
 
-    /// Adds a step's columns and seconds to the state.
-    fn account(&self, problem: &Problem<'_>, state: &mut State, wall: f64, ff_before: f64) {
-        let ff = problem.ff_seconds() - ff_before;
+    /// Adds a step's columns and seconds to the state: its form factors on the run's clock,
+    /// and its wall time less the source's measured time as solving.
+    fn account(&self, problem: &Problem<'_>, state: &mut State, wall: f64, ff_before: Spent) {
+        let now = Spent::of(problem);
         state.columns = problem.columns_fetched();
         state.columns_reused = problem.columns_reused();
         state.products = problem.products();
-        state.ff_seconds += ff;
-        state.solve_seconds += (wall - ff).max(0.0);
+        state.ff_seconds += now.clock - ff_before.clock;
+        state.solve_seconds += (wall - (now.measured - ff_before.measured)).max(0.0);
     }
 
     /// Why the run ends before the next step, if it does: a residual power that is not finite
@@ -445,6 +449,19 @@ impl<'a> Executor<'a> {
             return Ok(Some(reason));
         }
         Ok(residual.is_some_and(|r| r <= ROUND_OFF).then_some(TerminationReason::RoundOff))
+    }
+}
+
+/// The form-factor seconds of a problem at one moment: on the run's clock, and measured.
+#[derive(Clone, Copy)]
+struct Spent {
+    clock: f64,
+    measured: f64,
+}
+
+impl Spent {
+    fn of(problem: &Problem<'_>) -> Spent {
+        Spent { clock: problem.ff_seconds(), measured: problem.measured_ff_seconds() }
     }
 }
 

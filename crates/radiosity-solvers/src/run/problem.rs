@@ -12,13 +12,22 @@
 //! hierarchical operator's `O(links + n)`), counted as one product beside the columns;
 //! otherwise it is the columns of the patches where the vector is not zero, each counted.
 //!
+//! **The run's clock.** Every column, row and product is timed. A source that charges a
+//! modelled cost for what it serves ([`ColumnSource::charged_seconds`]: a lab's stored matrix
+//! in place of the backend) sets the run's clock to [`Clock::Charged`]: the problem's
+//! form-factor seconds ([`Problem::ff_seconds`]), which the executor adds to the state, a
+//! `time=` rule reads and a timed group frequency divides by the columns, are then the charge
+//! since the problem was made, and the time the source took is kept apart
+//! ([`Problem::measured_ff_seconds`]) so that the solving time excludes it. Otherwise the
+//! clock is [`Clock::Measured`] and both are the measured time.
+//!
 //! A problem may also carry a spatially coherent order of the patches
 //! ([`Problem::with_patch_order`]), for solvers that group patches by proximity
 //! (`group-gs-gM:groups=spatial`); the others ignore it.
 
 use crate::error::SolverError;
 use radiosity_core::operator::{Product, multiply_by_columns};
-use radiosity_core::{ColumnSource, LinearSystem, Real};
+use radiosity_core::{Clock, ColumnSource, LinearSystem, Real};
 use std::cell::Cell;
 use std::time::Instant;
 
@@ -29,7 +38,10 @@ pub struct Problem<'a> {
     fetched: Cell<u64>,
     products: Cell<u64>,
     reused: Cell<u64>,
+    /// Seconds spent in the source, measured.
     ff_seconds: Cell<f64>,
+    /// What the source had charged when the problem was made, when it charges (module doc).
+    charged_from: Option<Real>,
     order: Option<&'a [usize]>,
 }
 
@@ -46,6 +58,7 @@ impl<'a> Problem<'a> {
             products: Cell::new(0),
             reused: Cell::new(0),
             ff_seconds: Cell::new(0.0),
+            charged_from: columns.charged_seconds(),
             order: None,
         })
     }
@@ -169,8 +182,23 @@ impl<'a> Problem<'a> {
         self.reused.get()
     }
 
-    /// Seconds spent computing columns so far.
+    /// The clock the run's seconds are counted on (module doc).
+    pub fn clock(&self) -> Clock {
+        if self.charged_from.is_some() { Clock::Charged } else { Clock::Measured }
+    }
+
+    /// Seconds the columns, rows and products fetched so far cost on the run's clock
+    /// ([`Problem::clock`]): charged by the source, or measured.
     pub fn ff_seconds(&self) -> f64 {
+        match (self.charged_from, self.columns.charged_seconds()) {
+            (Some(from), Some(now)) => (now - from).max(0.0),
+            _ => self.ff_seconds.get(),
+        }
+    }
+
+    /// Seconds spent in the source so far, measured, whatever the clock: what a step's wall
+    /// time less its form factors leaves as solving time.
+    pub fn measured_ff_seconds(&self) -> f64 {
         self.ff_seconds.get()
     }
 }

@@ -29,7 +29,8 @@ pub struct State {
     /// Products `F x` the source computed itself ([`crate::Problem::multiply`]), each in
     /// `O(links + n)` or a pass over a stored matrix: counted beside `columns`, not in them.
     pub products: u64,
-    /// Seconds spent computing columns and products.
+    /// Seconds the columns and products cost, on the run's clock ([`crate::Problem::clock`]):
+    /// measured, or charged by the source.
     pub ff_seconds: f64,
     /// Seconds spent in the solver outside column computations.
     pub solve_seconds: f64,

@@ -2,7 +2,8 @@
 //!
 //! Rules are a comma list, and the first that holds stops the run: `columns=N`, `columns=2n`
 //! (a multiple of the patch count), `steps=N` (also `steps=3n`), `rms=1e-3`, `residual=1e-4`,
-//! `time=30s` (`ms`, `s` or `min`). Every run ends even if no rule can hold any more: at
+//! `time=30s` (`ms`, `s` or `min`, on the run's clock: measured, or charged by the source,
+//! [`crate::Problem::clock`]). Every run ends even if no rule can hold any more: at
 //! round-off convergence (nothing left to shoot or gather), at a step cap of `20n` steps,
 //! raised to the largest `steps=` or `columns=` rule given, or when the residual power shows
 //! that the iteration diverges ([`crate::run::executor`]).
@@ -41,7 +42,8 @@ pub enum StopRule {
     Rms(Real),
     /// Stop once the solver's residual power is at most this.
     Residual(Real),
-    /// Stop once the run's time (form factors and solving) reaches this.
+    /// Stop once the run's time (form factors and solving) reaches this, on the run's clock
+    /// ([`crate::Problem::clock`]): the seconds every report of the run prints.
     Time(Duration),
 }
 

@@ -20,7 +20,7 @@ use crate::reference::metrics::errors_against;
 use crate::suites::bench::json::E2eJson;
 use crate::suites::bench::memory::peak_rss;
 use crate::suites::bench::report_text::{duration, human_bytes, sig};
-use radiosity_core::{ColumnSource, LinearSystem, Real};
+use radiosity_core::{Clock, ColumnSource, LinearSystem, Real};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
 use radiosity_solvers::{Executor, ObserverMode, Problem, Solver, StopRules};
@@ -228,6 +228,7 @@ pub fn report(
         section.json.push(E2eJson {
             method: solver.clone(),
             backend: ff.clone(),
+            clock: Clock::Measured.name().to_string(),
             seconds_to: THRESHOLDS
                 .iter()
                 .enumerate()

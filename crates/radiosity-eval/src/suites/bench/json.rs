@@ -80,6 +80,9 @@ pub struct E2eJson {
     pub method: String,
     /// The backend argument.
     pub backend: String,
+    /// The clock of `seconds_to` ([`radiosity_core::Clock::name`]): always `measured`, wall
+    /// time, since every column is computed.
+    pub clock: String,
     /// Wall seconds from scene load to e_rms ≤ `"1e-1"`, `"1e-2"`, `"1e-3"`.
     pub seconds_to: BTreeMap<String, Option<f64>>,
     /// Columns computed until e_rms ≤ 1e-3.

@@ -1,12 +1,11 @@
 //! The stored matrix serving a lab's solvers in place of the backend, each column charged as
 //! the backend would have cost it ([`crate::ColumnCost::Charged`], [`ColumnCharge`]): the
-//! charge is the run's clock ([`ColumnSource::charged_seconds`], [`Clock::Charged`]), which its
+//! charge is the run's clock ([`ColumnSource::charged_seconds`], [`radiosity_core::Clock::Charged`]), which its
 //! stop rules and timed group frequencies read and its reports print.
 
 use crate::lab::options::ColumnCharge;
-use crate::lab::setup::Lab;
 use crate::reference::matrix::FormFactors;
-use radiosity_core::{Clock, ColumnSource, Real};
+use radiosity_core::{ColumnSource, Real};
 use std::sync::{Arc, Mutex, PoisonError};
 
 /// The columns of a lab's stored matrix, served in place of the backend's own: the same `f32`
@@ -37,6 +36,12 @@ impl ChargedColumns {
         let n = matrix.patch_count();
         let ledger = Mutex::new(Ledger { seen: vec![false; n], ..Ledger::default() });
         ChargedColumns { matrix, rows, reciprocity, charge, ledger }
+    }
+
+    /// The same matrix, rows and reciprocity, charged at `charge`'s prices, with nothing
+    /// charged yet.
+    pub(crate) fn repriced(&self, charge: ColumnCharge) -> ChargedColumns {
+        ChargedColumns::new(self.matrix.clone(), self.rows, self.reciprocity, charge)
     }
 
     /// The prices it charges.
@@ -90,26 +95,5 @@ impl ColumnSource for ChargedColumns {
         let mut ledger = self.ledger.lock().unwrap_or_else(PoisonError::into_inner);
         ledger.seen.fill(false);
         (ledger.known, ledger.seconds) = (0, 0.0);
-    }
-}
-
-impl<'p> Lab<'p> {
-    /// The lab with its columns charged at `charge`'s prices instead of those it measured,
-    /// so that a run's charged seconds are known in advance (a test of what reads the clock,
-    /// or a comparison priced as another machine measured); the same lab when its columns are
-    /// computed ([`Lab::clock`] is [`Clock::Measured`]).
-    pub fn with_charge(mut self, charge: ColumnCharge) -> Lab<'p> {
-        if let Some(old) = &self.charged {
-            let charged = Arc::new(ChargedColumns::new(old.matrix.clone(), old.rows, old.reciprocity, charge));
-            self.source = Box::new(charged.clone());
-            self.charged = Some(charged);
-        }
-        self
-    }
-
-    /// The clock the lab's runs are counted on: [`Clock::Charged`] when its solvers read their
-    /// columns from its stored matrix and are charged for them, [`Clock::Measured`] otherwise.
-    pub fn clock(&self) -> Clock {
-        if self.charged.is_some() { Clock::Charged } else { Clock::Measured }
     }
 }

@@ -14,7 +14,7 @@ use crate::reference::matrix::{F32Columns, FormFactors};
 use crate::reference::metrics::Evaluator;
 use crate::reference::shooting::solve_by_shooting;
 use crate::reference::solution::ReferenceSolution;
-use radiosity_core::{ColumnSource, LinearSystem, Real};
+use radiosity_core::{Clock, ColumnSource, LinearSystem, Real};
 use radiosity_ff::{BackendFigures, BackendSpec, FormFactorBackend};
 use radiosity_geom::{PreparedScene, SceneReport};
 use std::sync::Arc;
@@ -469,4 +469,25 @@ fn assemble(
 ) -> Result<FormFactors, LabError> {
     let (matrix, _) = assemble_matrix(system.areas(), source, pair, progress)?;
     Ok(FormFactors::from_stored(matrix))
+}
+
+impl<'p> Lab<'p> {
+    /// The lab with its columns charged at `charge`'s prices instead of those it measured,
+    /// so that a run's charged seconds are known in advance (a test of what reads the clock,
+    /// or a comparison priced as another machine measured); the same lab when its columns are
+    /// computed ([`Lab::clock`] is [`Clock::Measured`]).
+    pub fn with_charge(mut self, charge: ColumnCharge) -> Lab<'p> {
+        if let Some(old) = &self.charged {
+            let charged = Arc::new(old.repriced(charge));
+            self.source = Box::new(charged.clone());
+            self.charged = Some(charged);
+        }
+        self
+    }
+
+    /// The clock the lab's runs are counted on: [`Clock::Charged`] when its solvers read their
+    /// columns from its stored matrix and are charged for them, [`Clock::Measured`] otherwise.
+    pub fn clock(&self) -> Clock {
+        if self.charged.is_some() { Clock::Charged } else { Clock::Measured }
+    }
 }

@@ -1,7 +1,8 @@
 //! The stored matrix serving a lab's solvers in place of the backend, each column charged as
 //! the backend would have cost it ([`crate::ColumnCost::Charged`], [`ColumnCharge`]): the
-//! charge is the run's clock ([`ColumnSource::charged_seconds`], [`radiosity_core::Clock::Charged`]), which its
-//! stop rules and timed group frequencies read and its reports print.
+//! charge is the run's clock ([`ColumnSource::charged_seconds`],
+//! [`radiosity_core::Clock::Charged`]), which its stop rules and timed group frequencies read
+//! and its reports print.
 
 use crate::lab::options::ColumnCharge;
 use crate::reference::matrix::FormFactors;

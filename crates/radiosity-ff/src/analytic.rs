@@ -63,6 +63,7 @@
 //! are drawn from a Xoshiro256++ stream keyed by the seed and the unordered pair, so
 //! `V_ij = V_ji` exactly and every column is the same whatever the thread that computes it.
 
+use crate::backend::{FormFactorBackend, PairEntries};
 use crate::ff_point_polygon::{MAX_CLIPPED, clip_above, distance_to_polygon, point_to_polygon, point_to_polygon_each};
 use crate::guard::ClampCounter;
 use crate::pair_visibility::{self, RayBudget, SamplingPath};
@@ -650,5 +651,25 @@ impl ColumnSource for AnalyticColumns<'_> {
             let fresh = Arc::new(VisibilityCache::new(self.scene.len(), self.cache_bytes));
             *lock.write().unwrap_or_else(|e| e.into_inner()) = fresh;
         }
+    }
+}
+
+impl FormFactorBackend for AnalyticColumns<'_> {
+    fn serves_rows(&self) -> bool {
+        true
+    }
+
+    fn clamped(&self) -> u64 {
+        AnalyticColumns::clamped(self)
+    }
+
+    fn pairs(&self) -> Option<&dyn PairEntries> {
+        Some(self)
+    }
+}
+
+impl PairEntries for AnalyticColumns<'_> {
+    fn pair(&self, i: usize, j: usize) -> Real {
+        AnalyticColumns::pair(self, i, j)
     }
 }

@@ -1,17 +1,18 @@
 //! What a built backend is asked, whichever it is: [`FormFactorBackend`], a
 //! [`ColumnSource`] with its capabilities (exact rows, clamped entries, single entries, a
-//! stored matrix, figures to print, bytes to keep), implemented here by the built-ins and by
-//! any backend of one's own; and [`FormFactorInput`], what backends are built from.
+//! stored matrix, figures to print, bytes to keep); [`FormFactorInput`], what backends are
+//! built from; and [`BuildObserver`], what a backend reports while it builds.
+//!
+//! This file is the vocabulary only and names no backend but the stored matrix its trait
+//! returns: each built-in implements [`FormFactorBackend`] in its own file ([`crate::analytic`],
+//! [`crate::hemicube`], [`crate::montecarlo`], [`crate::hierarchical`],
+//! [`crate::matrix_backend`]), as a backend of one's own does in its crate.
 //!
 //! A [`crate::BackendSpec`] builds its source ([`crate::BackendSpec::build`]); callers ask the
 //! source what it can do instead of matching on which backend it is. A native product is
 //! [`ColumnSource::multiply`]'s (`true` when the source has one).
 
-use crate::analytic::AnalyticColumns;
-use crate::hemicube::HemicubeColumns;
-use crate::hierarchical::{HierarchicalColumns, HierarchyFigures};
 use crate::matrix::StoredMatrix;
-use crate::montecarlo::MonteCarloColumns;
 use radiosity_core::{ColumnSource, Real, Scene};
 use radiosity_geom::{SceneAnalysis, Visibility};
 use std::fmt;
@@ -75,6 +76,25 @@ pub trait FormFactorBackend: ColumnSource + Send {
     }
 }
 
+/// What a backend reports while it builds: stages, each with a count of steps (the lab shows
+/// them as progress bars). Every method does nothing by default.
+pub trait BuildObserver: Sync {
+    /// A stage begins: `total` steps of `unit` (0: unknown).
+    fn begin(&self, _stage: &str, _total: u64, _unit: &str) {}
+    /// `done` steps of the stage are done.
+    fn advance(&self, _done: u64, _note: &str) {}
+    /// The stage ended.
+    fn end(&self) {}
+    /// Something the user should know that does not stop the build.
+    fn warn(&self, _message: &str) {}
+}
+
+/// A [`BuildObserver`] that shows nothing.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Unobserved;
+
+impl BuildObserver for Unobserved {}
+
 /// Single form-factor entries ([`FormFactorBackend::pairs`]).
 pub trait PairEntries: Sync {
     /// `F_ij` before clamping.
@@ -107,108 +127,6 @@ impl BackendFigures {
 impl fmt::Display for BackendFigures {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(&self.summary)
-    }
-}
-
-impl From<HierarchyFigures> for BackendFigures {
-    fn from(h: HierarchyFigures) -> BackendFigures {
-        let summary = format!(
-            "{} nodes, {} far links ({} of them to zeroth order), {} near links ({} of them far pairs of patches), {} \
-             shadow rays ({} links occluded, {} seen whole through clear shafts); {} rows capped at 1 by closure \
-              (lowest weight {:.3}), {} above 1 by their near links alone",
-            h.nodes,
-            h.far_links,
-            h.zeroth_links,
-            h.near_links,
-            h.far_pairs,
-            h.rays,
-            h.occluded,
-            h.clear_shafts,
-            h.capped,
-            h.lowest_weight,
-            h.near_above
-        );
-        let counts = [
-            ("nodes", h.nodes as f64),
-            ("far links", h.far_links as f64),
-            ("zeroth-order links", h.zeroth_links as f64),
-            ("near links", h.near_links as f64),
-            ("far pairs", h.far_pairs as f64),
-            ("shadow rays", h.rays as f64),
-            ("occluded links", h.occluded as f64),
-            ("clear shafts", h.clear_shafts as f64),
-            ("capped rows", h.capped as f64),
-            ("rows above 1", h.near_above as f64),
-            ("lowest weight", h.lowest_weight),
-        ];
-        BackendFigures {
-            seconds: h.seconds,
-            bytes: h.bytes,
-            loaded: h.loaded,
-            counts: counts.into_iter().map(|(l, v)| (l.to_string(), v)).collect(),
-            summary,
-        }
-    }
-}
-
-impl FormFactorBackend for AnalyticColumns<'_> {
-    fn serves_rows(&self) -> bool {
-        true
-    }
-
-    fn clamped(&self) -> u64 {
-        AnalyticColumns::clamped(self)
-    }
-
-    fn pairs(&self) -> Option<&dyn PairEntries> {
-        Some(self)
-    }
-}
-
-impl PairEntries for AnalyticColumns<'_> {
-    fn pair(&self, i: usize, j: usize) -> Real {
-        AnalyticColumns::pair(self, i, j)
-    }
-}
-
-/// Hemicube columns are not reciprocal: a row of the matrix they assemble would need every
-/// column.
-impl FormFactorBackend for HemicubeColumns<'_> {
-    fn clamped(&self) -> u64 {
-        HemicubeColumns::clamped(self)
-    }
-}
-
-/// Monte Carlo columns are not reciprocal: a row of the matrix they assemble would need every
-/// column.
-impl FormFactorBackend for MonteCarloColumns<'_> {
-    fn clamped(&self) -> u64 {
-        MonteCarloColumns::clamped(self)
-    }
-}
-
-impl FormFactorBackend for HierarchicalColumns {
-    fn serves_rows(&self) -> bool {
-        true
-    }
-
-    fn figures(&self) -> Option<BackendFigures> {
-        Some(HierarchicalColumns::figures(self).into())
-    }
-
-    fn persist(&self, key: &str) -> Option<Vec<u8>> {
-        Some(HierarchicalColumns::to_bytes(self, key))
-    }
-}
-
-/// Clamped when it was assembled.
-impl FormFactorBackend for StoredMatrix {
-    fn serves_rows(&self) -> bool {
-        true
-    }
-
-    fn stored(&self) -> Option<&StoredMatrix> {
-        Some(self)
     }
 }
 

@@ -82,6 +82,7 @@
 //! - M. F. Cohen, J. R. Wallace, *Radiosity and Realistic Image Synthesis*, Academic Press
 //!   1993, ch. 4 (the hemicube, its aliasing, random rotation about the normal).
 
+use crate::backend::FormFactorBackend;
 use crate::guard::ClampCounter;
 use radiosity_core::{ColumnSource, Real, Scene, Vec3};
 use radiosity_geom::{ParamDoc, Visibility};
@@ -318,5 +319,13 @@ impl ColumnSource for HemicubeColumns<'_> {
             }
         }
         self.clamped.clamp(column);
+    }
+}
+
+/// Hemicube columns are not reciprocal: a row of the matrix they assemble would need every
+/// column.
+impl FormFactorBackend for HemicubeColumns<'_> {
+    fn clamped(&self) -> u64 {
+        HemicubeColumns::clamped(self)
     }
 }

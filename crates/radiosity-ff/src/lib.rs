@@ -1,9 +1,9 @@
 //! Form factors: kernels and backends that implement [`radiosity_core::ColumnSource`].
 //!
 //! This is the only crate that turns geometry into form factors. Backends are chosen by a
-//! [`BackendSpec`] that a [`BackendRegistry`] parses from `NAME[:key=value…]` ([`registry`]);
-//! a built backend is a [`FormFactorBackend`], asked what it can do ([`backend`]). The
-//! built-ins:
+//! [`BackendSpec`] ([`spec`]) that a [`BackendRegistry`] parses from `NAME[:key=value…]`
+//! ([`registry`]); a built backend is a [`FormFactorBackend`], asked what it can do
+//! ([`backend`]). The built-ins, registered by [`builtins`]:
 //!
 //! - `analytic` ([`analytic`]): Lambert's point-to-polygon formula integrated over the
 //!   receiver, times each pair's visible fraction, estimated with shadow rays drawn as the
@@ -13,7 +13,8 @@
 //! - `hierarchical` ([`hierarchical`]): links between clusters of a tree over the patches, so
 //!   that a product `F x` costs `O(links + n)` and a column `O(n)`; exactly reciprocal,
 //!   non-negative, its rows held to at most 1 (docs/design.md §5);
-//! - `matrix` ([`matrix`]): the full matrix of another backend, assembled once and stored.
+//! - `matrix` ([`matrix`], [`matrix_backend`]): the full matrix of another backend, assembled
+//!   once and stored.
 //!
 //! Every backend clamps its entries into `[0, 1]` and counts what it clamped ([`guard`]).
 //!
@@ -36,6 +37,7 @@
 
 pub mod analytic;
 pub mod backend;
+pub mod builtins;
 pub mod error;
 pub mod ff_point_polygon;
 mod framing;
@@ -43,6 +45,7 @@ pub mod guard;
 pub mod hemicube;
 pub mod hierarchical;
 pub mod matrix;
+pub mod matrix_backend;
 pub mod montecarlo;
 pub mod pair_visibility;
 pub mod quadrature;
@@ -56,20 +59,21 @@ pub mod spec;
 pub mod traced;
 pub mod visibility_cache;
 
-pub use analytic::AnalyticColumns;
+pub use analytic::{AnalyticColumns, AnalyticParams};
 
 /// The revision of the backends' entries: raised whenever a backend computes different
 /// entries for the same canonical argument (a change of rule, not of parameters), so that
 /// caches keyed by the canonical argument ([`BackendSpec::canonical`]) and this revision are
 /// not read across it. What each revision changed: docs/form-factors.md, "Entries revisions".
 pub const ENTRIES_REVISION: u32 = 4;
-pub use backend::{BackendFigures, FormFactorBackend, FormFactorInput, PairEntries};
+pub use backend::{BackendFigures, BuildObserver, FormFactorBackend, FormFactorInput, PairEntries, Unobserved};
+pub use builtins::MatrixParams;
 pub use error::FfError;
-pub use hemicube::HemicubeColumns;
-pub use hierarchical::{BuildProgress, HierarchicalColumns, HierarchyFigures, Oracle};
+pub use hemicube::{HemicubeColumns, HemicubeParams};
+pub use hierarchical::{BuildProgress, HierarchicalColumns, HierarchicalParams, HierarchyFigures, Oracle};
 pub use matrix::StoredMatrix;
-pub use montecarlo::{MonteCarloColumns, RayTally};
+pub use montecarlo::{MonteCarloColumns, MonteCarloParams, RayTally};
 pub use rays::{HitRay, ShadowSegment, TracedRays};
-pub use registry::{BackendArgument, BackendParams, BackendRegistry, BuildObserver, Unobserved};
-pub use spec::{AnalyticParams, BackendSpec, HemicubeParams, HierarchicalParams, MatrixParams, MonteCarloParams};
+pub use registry::BackendRegistry;
+pub use spec::{BackendArgument, BackendParams, BackendSpec};
 pub use traced::ColumnRays;

@@ -1,5 +1,7 @@
-//! The `matrix` backend: the full form-factor matrix of another backend, assembled once and
-//! served column by column from memory.
+//! The `matrix` backend's matrix: the full form-factor matrix of another backend, assembled
+//! once and served column by column from memory. Its role as a backend (the
+//! [`FormFactorBackend`](crate::FormFactorBackend) it is, its assembly from one as an observed
+//! build stage) is [`crate::matrix_backend`]'s.
 //!
 //! ## Assembly
 //!
@@ -80,11 +82,9 @@
 //! [`FfError::StoredMatrix`]. Where files live is the caller's business (only `eval` and
 //! `xtask` write files).
 
-use crate::backend::FormFactorBackend;
 use crate::error::FfError;
 use crate::framing::{frame, unframe};
 use crate::guard::{MatrixFigures, matrix_figures};
-use crate::registry::BuildObserver;
 use radiosity_core::column::reciprocity_after_f32;
 use radiosity_core::{ColumnSource, Real};
 use rayon::prelude::*;
@@ -448,57 +448,6 @@ impl StoredMatrix {
         // Measured, not assumed: clamping and `f32` rounding each move a pair's entries.
         matrix.reciprocity = Some(matrix.figures(area).max_reciprocity_error);
         Ok((matrix, clamped.load(Ordering::Relaxed)))
-    }
-
-    /// Assembles the matrix of `source` (areas `area`), a stage of `observer`: each unordered
-    /// pair once when it gives single entries ([`FormFactorBackend::pairs`],
-    /// [`Self::assemble_reciprocal`]), column by column otherwise ([`Self::assemble`]). Returns
-    /// the matrix and the entries clamped into `[0, 1]` (the source's own count for columns).
-    pub fn assemble_backend(
-        area: &[Real],
-        source: &dyn FormFactorBackend,
-        observer: &dyn BuildObserver,
-    ) -> Result<(StoredMatrix, u64), FfError> {
-        let pair = source.pairs().map(|p| move |i: usize, j: usize| p.pair(i, j));
-        let pair = pair.as_ref().map(|f| f as &(dyn Fn(usize, usize) -> Real + Sync));
-        let (matrix, clamped) = Self::assemble_observed(area, source, pair, observer)?;
-        Ok((matrix, clamped.unwrap_or_else(|| source.clamped())))
-    }
-
-    /// Assembles the matrix of `source` (areas `area`), a stage of `observer`: with `pair`
-    /// (`F_ij` before clamping, for a source whose entries are reciprocal by construction),
-    /// each unordered pair once ([`Self::assemble_reciprocal`]); without, column by column
-    /// ([`Self::assemble`]). Returns the matrix and, with `pair`, the entries clamped into
-    /// `[0, 1]` (a column source counts its own).
-    pub fn assemble_observed(
-        area: &[Real],
-        source: &dyn ColumnSource,
-        pair: Option<&(dyn Fn(usize, usize) -> Real + Sync)>,
-        observer: &dyn BuildObserver,
-    ) -> Result<(StoredMatrix, Option<u64>), FfError> {
-        let n = source.patch_count() as u64;
-        let done = AtomicU64::new(0);
-        Ok(match pair {
-            Some(pair) => {
-                observer.begin("assembling the matrix (each pair once)", n * (n + 1) / 2, "pairs");
-                let m = StoredMatrix::assemble_reciprocal(area, pair, &|k| {
-                    let k = done.fetch_max(k as u64, Ordering::Relaxed).max(k as u64);
-                    observer.advance(k, "");
-                });
-                observer.end();
-                let (m, clamped) = m?;
-                (m, Some(clamped))
-            }
-            None => {
-                observer.begin("assembling the matrix", n, "columns");
-                let m = StoredMatrix::assemble(source, &|_| {
-                    let k = done.fetch_add(1, Ordering::Relaxed) + 1;
-                    observer.advance(k, "");
-                });
-                observer.end();
-                (m, None)
-            }
-        })
     }
 
     /// The number of patches `n`.

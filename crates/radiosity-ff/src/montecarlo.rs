@@ -70,6 +70,7 @@
 //! - A. B. Owen, "Monte Carlo variance of scrambled net quadrature", SIAM J. Numer. Anal.
 //!   34(5), 1997.
 
+use crate::backend::FormFactorBackend;
 use crate::guard::ClampCounter;
 use radiosity_core::math::cosine_direction;
 use radiosity_core::{ColumnSource, Patch, Real, Scene, Vec3};
@@ -288,5 +289,13 @@ impl ColumnSource for MonteCarloColumns<'_> {
 
     fn fill_column(&self, j: usize, column: &mut [Real]) {
         self.column_with_variance(j, column, &mut [])
+    }
+}
+
+/// Monte Carlo columns are not reciprocal: a row of the matrix they assemble would need every
+/// column.
+impl FormFactorBackend for MonteCarloColumns<'_> {
+    fn clamped(&self) -> u64 {
+        MonteCarloColumns::clamped(self)
     }
 }

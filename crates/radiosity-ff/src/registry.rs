@@ -1,5 +1,5 @@
 //! Form-factor backends by name: the [`BackendRegistry`] that reads `NAME[:key=value…]` into a
-//! [`BackendSpec`], and the traits a backend's parameters implement to get a name.
+//! [`BackendSpec`] through the parsers its backends were registered with.
 //!
 //! ## Rule
 //!
@@ -10,7 +10,7 @@
 //! ([`BackendRegistry::register_fn`], which also gets the registry, so that a backend naming
 //! another, as `matrix`'s `of`, reads it through the same names). A parser gives a
 //! [`BackendArgument`]: what the parameters are, their canonical argument, and how to build the
-//! source ([`FormFactorBackend`]) from the scene.
+//! source ([`FormFactorBackend`](crate::FormFactorBackend)) from the scene.
 //!
 //! [`BackendRegistry::parse`] looks the name up; the first entry of that name decides (a
 //! later entry of the same name is never reached: start from [`BackendRegistry::empty`] to
@@ -20,111 +20,19 @@
 //! suggestion. Refused parameters are one sentence beginning `form-factor backend 'NAME'` and
 //! naming the key ([`KeyValueParams`]).
 //!
-//! The built-ins ([`BackendRegistry::builtin`]), in this order: `analytic`, `hemicube`,
-//! `montecarlo`, `hierarchical` and `matrix` ([`crate::spec`]).
+//! This file names no backend. The built-ins ([`BackendRegistry::builtin`]), in this order:
+//! `analytic`, `hemicube`, `montecarlo`, `hierarchical` and `matrix` ([`crate::builtins`]).
 //!
 //! ## References
 //!
 //! - Damerau 1964, "A technique for computer detection and correction of spelling errors",
 //!   Communications of the ACM 7(3).
 
-use crate::analytic::AnalyticParams;
-use crate::backend::{FormFactorBackend, FormFactorInput};
 use crate::error::FfError;
-use crate::hemicube::HemicubeParams;
-use crate::hierarchical::HierarchicalParams;
-use crate::montecarlo::MonteCarloParams;
-use crate::spec::{BackendSpec, MatrixParams};
-use crate::traced::ColumnRays;
+use crate::spec::{BackendArgument, BackendParams, BackendSpec};
 use radiosity_geom::{KeyValueParams, ParamDoc};
-use std::any::Any;
 use std::fmt;
-use std::sync::{Arc, OnceLock};
-
-/// What a backend reports while it builds: stages, each with a count of steps (the lab shows
-/// them as progress bars). Every method does nothing by default.
-pub trait BuildObserver: Sync {
-    /// A stage begins: `total` steps of `unit` (0: unknown).
-    fn begin(&self, _stage: &str, _total: u64, _unit: &str) {}
-    /// `done` steps of the stage are done.
-    fn advance(&self, _done: u64, _note: &str) {}
-    /// The stage ended.
-    fn end(&self) {}
-    /// Something the user should know that does not stop the build.
-    fn warn(&self, _message: &str) {}
-}
-
-/// A [`BuildObserver`] that shows nothing.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Unobserved;
-
-impl BuildObserver for Unobserved {}
-
-/// A backend's parsed parameters: what a [`BackendSpec`] holds. Implemented by every backend's
-/// parameter struct (through [`BackendParams`] for typed ones).
-pub trait BackendArgument: Any + fmt::Debug + Send + Sync {
-    /// The argument with every parameter that changes an entry spelled out, beginning with the
-    /// name: arguments that give the same entries give equal strings, so it keys caches.
-    fn canonical(&self) -> String;
-
-    /// Builds the source on `input`, reporting its stages to `observer`.
-    fn build<'a>(
-        &self,
-        input: FormFactorInput<'a>,
-        observer: &dyn BuildObserver,
-    ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError>;
-
-    /// Whether the source gives single entries reciprocal by construction
-    /// ([`FormFactorBackend::pairs`]), so that its matrix is assembled each pair once: known
-    /// before building, since it names the assembly in cache keys. False by default.
-    fn pairs_once(&self) -> bool {
-        false
-    }
-
-    /// For a stored matrix: the backend it stores and whether it is rebalanced. `None` by
-    /// default.
-    fn stores(&self) -> Option<(&BackendSpec, bool)> {
-        None
-    }
-
-    /// The cache kind under which a built source is kept ([`FormFactorBackend::persist`]) and
-    /// read back ([`Self::load`]), for a backend whose build is worth keeping. `None` by
-    /// default.
-    fn cache_kind(&self) -> Option<&'static str> {
-        None
-    }
-
-    /// The source written by [`FormFactorBackend::persist`] under `key`, read back for
-    /// `input`'s scene. Refused by default.
-    fn load<'a>(
-        &self,
-        _bytes: &[u8],
-        _key: &str,
-        _input: FormFactorInput<'a>,
-    ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
-        Err(FfError::NotPersistent(self.canonical()))
-    }
-
-    /// The rays each column traces, listed without computing it ([`ColumnRays`]); `None` by
-    /// default (a backend that traces nothing per column).
-    fn column_rays<'a>(&self, _input: FormFactorInput<'a>) -> Option<ColumnRays<'a>> {
-        None
-    }
-}
-
-/// A typed backend: its name, help line and parameters, and how it reads them
-/// ([`BackendRegistry::register`]).
-pub trait BackendParams: BackendArgument + Sized {
-    /// The name on the command line.
-    const NAME: &'static str;
-    /// What the backend does, in one line.
-    const HELP: &'static str;
-    /// The keys it takes, with their defaults.
-    const PARAMS: &'static [ParamDoc];
-    /// The parameters from `params`, whose keys are known to be among [`Self::PARAMS`];
-    /// refusals name the key ([`KeyValueParams::reject`]).
-    fn from_params(params: &KeyValueParams) -> Result<Self, FfError>;
-}
+use std::sync::Arc;
 
 /// What a registry entry does with the items after the name.
 type ParseFn = dyn Fn(&[&str], &BackendRegistry) -> Result<Arc<dyn BackendArgument>, FfError> + Send + Sync;
@@ -171,20 +79,6 @@ impl BackendRegistry {
     /// A registry with no backend: every name is unknown until backends are registered.
     pub fn empty() -> BackendRegistry {
         BackendRegistry::default()
-    }
-
-    /// The built-in backends (module doc). Cheap: five entries.
-    pub fn builtin() -> BackendRegistry {
-        let mut registry = BackendRegistry::empty();
-        registry
-            .register::<AnalyticParams>()
-            .register::<HemicubeParams>()
-            .register::<MonteCarloParams>()
-            .register::<HierarchicalParams>()
-            .register_fn(MatrixParams::NAME, MatrixParams::HELP, MatrixParams::PARAMS, |items, registry| {
-                Ok(Arc::new(MatrixParams::parse(items, registry)?))
-            });
-        registry
     }
 
     /// Adds the backend of parameter struct `P`, after those already there.
@@ -283,15 +177,10 @@ pub fn suggestion_distance(length: usize) -> usize {
     (length / 4).max(1)
 }
 
-/// The built-in registry, built once ([`BackendSpec::parse`]).
-pub fn builtin() -> &'static BackendRegistry {
-    static BUILTIN: OnceLock<BackendRegistry> = OnceLock::new();
-    BUILTIN.get_or_init(BackendRegistry::builtin)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::backend::{BuildObserver, FormFactorBackend, FormFactorInput};
     use radiosity_core::{ColumnSource, Real};
     use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
 

@@ -1,30 +1,19 @@
 //! Backend arguments: the opaque [`BackendSpec`] a [`crate::BackendRegistry`] parses from
-//! `NAME[:key=value…]`, and the built-ins' typed, validated parameters.
-//!
-//! The built-ins: `analytic`, `hemicube`, `montecarlo`, `hierarchical` ([`BackendParams`]
-//! each) and `matrix` ([`MatrixParams`]), which stores the full matrix of another backend named
-//! by `of` (default `analytic`), read through the same registry; parameters it does not take
-//! itself go to that backend: `matrix:of=hemicube:res=64:rebalance=true`.
+//! `NAME[:key=value…]`, and the traits a backend's parameters implement to be one:
+//! [`BackendArgument`] (canonical argument, build, what is known before building) and
+//! [`BackendParams`] (a typed backend's name, help line and parameters).
 //!
 //! A canonical argument ([`BackendSpec::canonical`]) spells out every parameter that changes
 //! an entry, so that arguments giving the same entries give equal strings: it keys caches
 //! (with [`crate::ENTRIES_REVISION`]) and labels results. `analytic`'s `cache`, which changes
 //! no entry, is left out.
+//!
+//! This file names no backend: the built-ins' parameters, their registration and
+//! [`BackendSpec::parse`] are [`crate::builtins`]'.
 
-use crate::analytic::AnalyticColumns;
-pub use crate::analytic::{ANALYTIC_PARAMS, AnalyticParams};
-use crate::backend::{FormFactorBackend, FormFactorInput};
+use crate::backend::{BuildObserver, FormFactorBackend, FormFactorInput, Unobserved};
 use crate::error::FfError;
-use crate::hemicube::HemicubeColumns;
-pub use crate::hemicube::{HEMICUBE_PARAMS, HemicubeParams};
-use crate::hierarchical::{BuildProgress, HierarchicalColumns};
-pub use crate::hierarchical::{HIERARCHICAL_PARAMS, HierarchicalParams, Oracle};
-use crate::matrix::StoredMatrix;
-use crate::montecarlo::MonteCarloColumns;
-pub use crate::montecarlo::{MONTECARLO_PARAMS, MonteCarloParams};
-use crate::registry::{BackendArgument, BackendParams, BackendRegistry, BuildObserver, Unobserved, owner};
 use crate::traced::ColumnRays;
-use radiosity_core::Real;
 use radiosity_geom::{KeyValueParams, ParamDoc};
 use std::any::Any;
 use std::fmt;
@@ -38,12 +27,6 @@ pub struct BackendSpec {
 }
 
 impl BackendSpec {
-    /// Parses `NAME[:key=value…]` with the built-in backends
-    /// ([`crate::BackendRegistry::builtin`]).
-    pub fn parse(arg: &str) -> Result<BackendSpec, FfError> {
-        crate::registry::builtin().parse(arg)
-    }
-
     /// The backend of typed parameters `params`.
     pub fn new<P: BackendParams>(params: P) -> BackendSpec {
         BackendSpec::from_argument(P::NAME, Arc::new(params))
@@ -131,270 +114,77 @@ impl fmt::Display for BackendSpec {
     }
 }
 
-impl BackendArgument for AnalyticParams {
-    fn canonical(&self) -> String {
-        format!(
-            "analytic:order={}:tol={:e}:rays={}:budget={}:seed={}",
-            self.order, self.tolerance, self.rays, self.budget, self.seed
-        )
-    }
+/// A backend's parsed parameters: what a [`BackendSpec`] holds. Implemented by every backend's
+/// parameter struct (through [`BackendParams`] for typed ones).
+pub trait BackendArgument: Any + fmt::Debug + Send + Sync {
+    /// The argument with every parameter that changes an entry spelled out, beginning with the
+    /// name: arguments that give the same entries give equal strings, so it keys caches.
+    fn canonical(&self) -> String;
 
-    fn build<'a>(
-        &self,
-        input: FormFactorInput<'a>,
-        _: &dyn BuildObserver,
-    ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
-        Ok(Box::new(AnalyticColumns::new(input.scene, input.visibility, input.analysis, *self)))
-    }
-
-    fn pairs_once(&self) -> bool {
-        true
-    }
-
-    fn column_rays<'a>(&self, input: FormFactorInput<'a>) -> Option<ColumnRays<'a>> {
-        Some(ColumnRays::analytic(AnalyticColumns::new(input.scene, input.visibility, input.analysis, *self)))
-    }
-}
-
-impl BackendParams for AnalyticParams {
-    const NAME: &'static str = "analytic";
-    const HELP: &'static str =
-        "Lambert's point-to-polygon formula integrated over the receiver, times the pair's visible fraction";
-    const PARAMS: &'static [ParamDoc] = ANALYTIC_PARAMS;
-
-    fn from_params(p: &KeyValueParams) -> Result<AnalyticParams, FfError> {
-        let defaults = AnalyticParams::default();
-        Ok(AnalyticParams {
-            order: quadrature_order(p, defaults.order)?,
-            tolerance: quadrature_tolerance(p, defaults.tolerance)?,
-            rays: p.count("rays", defaults.rays, 1, 1 << 20)?,
-            budget: p.count("budget", defaults.budget, 0, 1 << 24)?,
-            seed: p.seed("seed", 0)?,
-            cache_mib: p.count("cache", defaults.cache_mib, 0, 1 << 20)?,
-        })
-    }
-}
-
-impl BackendArgument for HemicubeParams {
-    fn canonical(&self) -> String {
-        format!("hemicube:res={}:seed={}", self.resolution, self.seed)
-    }
-
-    fn build<'a>(
-        &self,
-        input: FormFactorInput<'a>,
-        _: &dyn BuildObserver,
-    ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
-        Ok(Box::new(HemicubeColumns::new(input.scene, input.visibility, *self)))
-    }
-
-    fn column_rays<'a>(&self, input: FormFactorInput<'a>) -> Option<ColumnRays<'a>> {
-        Some(ColumnRays::hemicube(HemicubeColumns::new(input.scene, input.visibility, *self)))
-    }
-}
-
-impl BackendParams for HemicubeParams {
-    const NAME: &'static str = "hemicube";
-    const HELP: &'static str = "a ray-cast hemicube at the shooter, giving its row";
-    const PARAMS: &'static [ParamDoc] = HEMICUBE_PARAMS;
-
-    fn from_params(p: &KeyValueParams) -> Result<HemicubeParams, FfError> {
-        let resolution = p.count("res", 128, 2, crate::hemicube::MAX_RESOLUTION)?;
-        if resolution % 2 == 1 {
-            // The side faces are res × res/2 pixels.
-            return Err(p.reject("res", "an even number of pixels from 2 to 4096").into());
-        }
-        Ok(HemicubeParams { resolution, seed: p.seed("seed", 0)? })
-    }
-}
-
-impl BackendArgument for MonteCarloParams {
-    fn canonical(&self) -> String {
-        format!("montecarlo:rays={}:seed={}", self.rays, self.seed)
-    }
-
-    fn build<'a>(
-        &self,
-        input: FormFactorInput<'a>,
-        _: &dyn BuildObserver,
-    ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
-        Ok(Box::new(MonteCarloColumns::new(input.scene, input.visibility, *self)))
-    }
-
-    fn column_rays<'a>(&self, input: FormFactorInput<'a>) -> Option<ColumnRays<'a>> {
-        Some(ColumnRays::montecarlo(input.scene, *self))
-    }
-}
-
-impl BackendParams for MonteCarloParams {
-    const NAME: &'static str = "montecarlo";
-    const HELP: &'static str = "cosine-weighted rays from the shooter, giving its row";
-    const PARAMS: &'static [ParamDoc] = MONTECARLO_PARAMS;
-
-    fn from_params(p: &KeyValueParams) -> Result<MonteCarloParams, FfError> {
-        Ok(MonteCarloParams { rays: p.count("rays", 10_000, 1, 1_000_000_000)?, seed: p.seed("seed", 0)? })
-    }
-}
-
-impl BackendArgument for HierarchicalParams {
-    fn canonical(&self) -> String {
-        format!(
-            "hierarchical:eps={:e}:shadows={}:rays={}:budget={}:order={}:tol={:e}:seed={}:oracle={}:floor={}:passes={}:closure={}",
-            self.eps,
-            self.shadows,
-            self.rays,
-            self.budget,
-            self.order,
-            self.tolerance,
-            self.seed,
-            match self.oracle {
-                Oracle::Flux => "flux",
-                Oracle::Area => "area",
-            },
-            self.floor,
-            self.passes,
-            self.closure
-        )
-    }
-
+    /// Builds the source on `input`, reporting its stages to `observer`.
     fn build<'a>(
         &self,
         input: FormFactorInput<'a>,
         observer: &dyn BuildObserver,
-    ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
-        // The count is of thousandths of the pairs of patches settled: links high in the tree
-        // settle many at once, so it runs fast at first and slows down.
-        observer.begin("building the hierarchical operator", 1000, "‰ pairs settled");
-        let observe = |p: BuildProgress| {
-            observer.advance((p.settled * 1000.0) as u64, &format!("{} links", p.links));
-        };
-        let built = HierarchicalColumns::new_observed(input.scene, input.visibility, input.analysis, *self, &observe);
-        observer.end();
-        Ok(Box::new(built))
+    ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError>;
+
+    /// Whether the source gives single entries reciprocal by construction
+    /// ([`FormFactorBackend::pairs`]), so that its matrix is assembled each pair once: known
+    /// before building, since it names the assembly in cache keys. False by default.
+    fn pairs_once(&self) -> bool {
+        false
     }
 
+    /// For a stored matrix: the backend it stores and whether it is rebalanced. `None` by
+    /// default.
+    fn stores(&self) -> Option<(&BackendSpec, bool)> {
+        None
+    }
+
+    /// The cache kind under which a built source is kept ([`FormFactorBackend::persist`]) and
+    /// read back ([`Self::load`]), for a backend whose build is worth keeping. `None` by
+    /// default.
     fn cache_kind(&self) -> Option<&'static str> {
-        Some("hierarchical")
+        None
     }
 
+    /// The source written by [`FormFactorBackend::persist`] under `key`, read back for
+    /// `input`'s scene. Refused by default.
     fn load<'a>(
         &self,
-        bytes: &[u8],
-        key: &str,
-        input: FormFactorInput<'a>,
+        _bytes: &[u8],
+        _key: &str,
+        _input: FormFactorInput<'a>,
     ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
-        Ok(Box::new(HierarchicalColumns::from_bytes(bytes, key, input.scene)?))
+        Err(FfError::NotPersistent(self.canonical()))
+    }
+
+    /// The rays each column traces, listed without computing it ([`ColumnRays`]); `None` by
+    /// default (a backend that traces nothing per column).
+    fn column_rays<'a>(&self, _input: FormFactorInput<'a>) -> Option<ColumnRays<'a>> {
+        None
     }
 }
 
-impl BackendParams for HierarchicalParams {
-    const NAME: &'static str = "hierarchical";
-    const HELP: &'static str = "links between clusters of a tree over the patches, refined to an error threshold";
-    const PARAMS: &'static [ParamDoc] = HIERARCHICAL_PARAMS;
-
-    fn from_params(p: &KeyValueParams) -> Result<HierarchicalParams, FfError> {
-        let defaults = HierarchicalParams::default();
-        Ok(HierarchicalParams {
-            eps: p.real("eps", defaults.eps, |e| e > 0.0 && e <= 1.0, "a threshold in (0, 1]")?,
-            shadows: p.real("shadows", defaults.shadows, |s| s > 0.0 && s <= 1.0, "a fraction in (0, 1]")?,
-            rays: p.count("rays", defaults.rays, 1, 4096)?,
-            budget: p.count("budget", defaults.budget, 0, 1 << 24)?,
-            order: quadrature_order(p, defaults.order)?,
-            tolerance: quadrature_tolerance(p, defaults.tolerance)?,
-            seed: p.seed("seed", 0)?,
-            oracle: match p.given().find(|(k, _)| *k == "oracle").map(|(_, v)| v) {
-                None | Some("flux") => Oracle::Flux,
-                Some("area") => Oracle::Area,
-                Some(_) => return Err(p.reject("oracle", "flux or area").into()),
-            },
-            floor: p.real("floor", defaults.floor, |f| f > 0.0 && f <= 1.0, "a weight in (0, 1]")?,
-            passes: p.count("passes", defaults.passes, 1, 4)?,
-            closure: p.flag("closure", defaults.closure)?,
-            shafts: p.flag("shafts", defaults.shafts)?,
-        })
-    }
-}
-
-/// Parameters of `matrix`: the full matrix of another backend, assembled once and stored.
-#[derive(Clone, Debug, PartialEq)]
-pub struct MatrixParams {
-    /// The backend whose matrix is stored.
-    pub of: BackendSpec,
-    /// Symmetrise `A·F` and rescale rows to closure after assembly.
-    pub rebalance: bool,
-}
-
-/// Parameters of `matrix` (others go to the backend named by `of`).
-pub const MATRIX_PARAMS: &[ParamDoc] = &[
-    ParamDoc { key: "of", default: "analytic", doc: "the backend whose matrix is assembled and stored" },
-    ParamDoc {
-        key: "rebalance",
-        default: "false",
-        doc: "symmetrise A·F, then rescale rows to closure (closed scenes)",
-    },
-];
-
-impl MatrixParams {
+/// A typed backend: its name, help line and parameters, and how it reads them
+/// ([`BackendRegistry::register`](crate::BackendRegistry::register)).
+pub trait BackendParams: BackendArgument + Sized {
     /// The name on the command line.
-    pub const NAME: &'static str = "matrix";
+    const NAME: &'static str;
     /// What the backend does, in one line.
-    pub const HELP: &'static str = "the full matrix of another backend (of=NAME), assembled once and stored";
-    /// The keys it takes itself.
-    pub const PARAMS: &'static [ParamDoc] = MATRIX_PARAMS;
-
-    /// Reads `of` and `rebalance` from `items`, and the backend `of` names, with the other
-    /// items, through `registry`. A stored matrix of a stored matrix is refused.
-    pub fn parse(items: &[&str], registry: &BackendRegistry) -> Result<MatrixParams, FfError> {
-        let (own, inner): (Vec<&str>, Vec<&str>) =
-            items.iter().partition(|item| MATRIX_PARAMS.iter().any(|d| item.split('=').next() == Some(d.key)));
-        let p = KeyValueParams::parse(&owner(Self::NAME), own.iter().copied(), MATRIX_PARAMS)?;
-        let of = own.iter().find_map(|i| i.strip_prefix("of=")).unwrap_or("analytic");
-        let of = registry.parse_named(of, &inner)?;
-        if of.stores().is_some() {
-            let expected =
-                format!("a backend other than '{}': a stored matrix is assembled from a column backend", of.name());
-            return Err(p.reject("of", &expected).into());
-        }
-        Ok(MatrixParams { of, rebalance: p.flag("rebalance", false)? })
-    }
+    const HELP: &'static str;
+    /// The keys it takes, with their defaults.
+    const PARAMS: &'static [ParamDoc];
+    /// The parameters from `params`, whose keys are known to be among [`Self::PARAMS`];
+    /// refusals name the key ([`KeyValueParams::reject`]).
+    fn from_params(params: &KeyValueParams) -> Result<Self, FfError>;
 }
 
-impl BackendArgument for MatrixParams {
-    fn canonical(&self) -> String {
-        let inner = self.of.canonical();
-        let (name, rest) = inner.split_once(':').unwrap_or((&inner, ""));
-        format!("matrix:of={name}:rebalance={}:{rest}", self.rebalance)
+impl<'a> ColumnRays<'a> {
+    /// The rays of the backend `spec` names, on `input` ([`BackendSpec::column_rays`]): `None`
+    /// for `matrix`, which traces nothing once stored, and for `hierarchical`, whose rays are
+    /// traced once, when it is built.
+    pub fn new(spec: &BackendSpec, input: FormFactorInput<'a>) -> Option<ColumnRays<'a>> {
+        spec.column_rays(input)
     }
-
-    /// Assembles the matrix of `of` ([`StoredMatrix::assemble_backend`]) and rebalances it when
-    /// asked; the lab obtains it from its cache instead.
-    fn build<'a>(
-        &self,
-        input: FormFactorInput<'a>,
-        observer: &dyn BuildObserver,
-    ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
-        let source = self.of.build_observed(input, observer)?;
-        let area: Vec<Real> = input.scene.patches().iter().map(|p| p.area()).collect();
-        let (mut matrix, _) = StoredMatrix::assemble_backend(&area, source.as_ref(), observer)?;
-        if self.rebalance {
-            matrix.rebalance(&area, input.analysis.closure.value.is_closed())?;
-        }
-        Ok(Box::new(matrix))
-    }
-
-    fn stores(&self) -> Option<(&BackendSpec, bool)> {
-        Some((&self.of, self.rebalance))
-    }
-}
-
-/// A quadrature's largest Gauss–Legendre order (`order`, 1 to 32): the analytic backend's, and
-/// the hierarchical operator's near pairs'.
-fn quadrature_order(p: &KeyValueParams, default: usize) -> Result<usize, FfError> {
-    Ok(p.count("order", default, 1, 32)?)
-}
-
-/// A quadrature's relative error target (`tol`, in (0, 1]): the analytic backend's, and the
-/// hierarchical operator's near pairs'.
-fn quadrature_tolerance(p: &KeyValueParams, default: f64) -> Result<f64, FfError> {
-    Ok(p.real("tol", default, |t| t > 0.0 && t <= 1.0, "a tolerance in (0, 1]")?)
 }

@@ -10,14 +10,15 @@
 //!   Monte Carlo batches), in the order the backends trace them; the tests below check that
 //!   tracing them gives exactly the backends' rows.
 //!
-//! A stored matrix traces nothing.
+//! A stored matrix traces nothing. Which rays an argument's backend traces is the argument's
+//! to say ([`crate::BackendArgument::column_rays`]); [`ColumnRays::new`], which asks a
+//! [`crate::BackendSpec`], is defined beside them ([`crate::spec`]), so that this file knows
+//! the backends and not their arguments.
 
 use crate::analytic::AnalyticColumns;
-use crate::backend::FormFactorInput;
 use crate::hemicube::HemicubeColumns;
-use crate::montecarlo::{batch_rays, batch_sizes};
+use crate::montecarlo::{MonteCarloParams, batch_rays, batch_sizes};
 use crate::rays::{HitRay, TracedRays};
-use crate::spec::{BackendSpec, MonteCarloParams};
 use radiosity_core::{ColumnSource, Scene};
 
 /// Lists the rays each column of one backend traces.
@@ -34,13 +35,6 @@ enum Kind<'a> {
 }
 
 impl<'a> ColumnRays<'a> {
-    /// The rays of the backend `spec` names, on `input` ([`BackendSpec::column_rays`]): `None`
-    /// for `matrix`, which traces nothing once stored, and for `hierarchical`, whose rays are
-    /// traced once, when it is built.
-    pub fn new(spec: &BackendSpec, input: FormFactorInput<'a>) -> Option<ColumnRays<'a>> {
-        spec.column_rays(input)
-    }
-
     /// The shadow-ray segments of the analytic backend.
     pub fn analytic(columns: AnalyticColumns<'a>) -> ColumnRays<'a> {
         ColumnRays { kind: Kind::Analytic(columns) }
@@ -99,7 +93,7 @@ fn montecarlo_rays(scene: &Scene, params: MonteCarloParams, j: usize, out: &mut 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{AnalyticParams, HemicubeParams, MonteCarloColumns};
+    use crate::{AnalyticParams, BackendSpec, FormFactorInput, HemicubeParams, MonteCarloColumns};
     use radiosity_core::Real;
     use radiosity_geom::{SceneAnalysis, Visibility, load_scene};
 

@@ -123,7 +123,7 @@ fn the_closed_forms_give_the_published_values() {
 #[test]
 fn documented_defaults_are_the_defaults() {
     use radiosity_ff::BackendSpec;
-    use radiosity_ff::spec::{ANALYTIC_PARAMS, HEMICUBE_PARAMS, MATRIX_PARAMS, MONTECARLO_PARAMS};
+    use radiosity_ff::builtins::{ANALYTIC_PARAMS, HEMICUBE_PARAMS, MATRIX_PARAMS, MONTECARLO_PARAMS};
     for (name, docs) in [
         ("analytic", ANALYTIC_PARAMS),
         ("hemicube", HEMICUBE_PARAMS),

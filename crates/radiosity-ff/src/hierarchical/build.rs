@@ -16,6 +16,7 @@ use super::params::HierarchicalParams;
 use super::shaft::ShaftTree;
 use super::tree::{self, ClusterTree};
 use crate::analytic::{AnalyticColumns, AnalyticParams};
+use crate::backend::BackendFigures;
 use radiosity_core::{ColumnSource, Real, Scene};
 use radiosity_geom::{SceneAnalysis, Visibility};
 use rayon::prelude::*;
@@ -59,6 +60,47 @@ pub struct HierarchyFigures {
     /// Whether the links were read from disk ([`HierarchicalColumns::from_bytes`]) rather than
     /// built: the figures above are then the build's.
     pub loaded: bool,
+}
+
+impl From<HierarchyFigures> for BackendFigures {
+    fn from(h: HierarchyFigures) -> BackendFigures {
+        let summary = format!(
+            "{} nodes, {} far links ({} of them to zeroth order), {} near links ({} of them far pairs of patches), {} \
+             shadow rays ({} links occluded, {} seen whole through clear shafts); {} rows capped at 1 by closure \
+              (lowest weight {:.3}), {} above 1 by their near links alone",
+            h.nodes,
+            h.far_links,
+            h.zeroth_links,
+            h.near_links,
+            h.far_pairs,
+            h.rays,
+            h.occluded,
+            h.clear_shafts,
+            h.capped,
+            h.lowest_weight,
+            h.near_above
+        );
+        let counts = [
+            ("nodes", h.nodes as f64),
+            ("far links", h.far_links as f64),
+            ("zeroth-order links", h.zeroth_links as f64),
+            ("near links", h.near_links as f64),
+            ("far pairs", h.far_pairs as f64),
+            ("shadow rays", h.rays as f64),
+            ("occluded links", h.occluded as f64),
+            ("clear shafts", h.clear_shafts as f64),
+            ("capped rows", h.capped as f64),
+            ("rows above 1", h.near_above as f64),
+            ("lowest weight", h.lowest_weight),
+        ];
+        BackendFigures {
+            seconds: h.seconds,
+            bytes: h.bytes,
+            loaded: h.loaded,
+            counts: counts.into_iter().map(|(l, v)| (l.to_string(), v)).collect(),
+            summary,
+        }
+    }
 }
 
 impl HierarchicalColumns {

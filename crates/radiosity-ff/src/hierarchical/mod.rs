@@ -28,10 +28,12 @@
 //!
 //! - `params`: the parameters and their defaults;
 //! - `tree`, `brightness`, `links`, `shaft` and `build`: the cluster tree, the oracle, the
-//!   refinement into links, shafts, and the build with its passes and figures;
+//!   refinement into links, shafts, and the build with its passes and figures (also as the
+//!   [`BackendFigures`](crate::BackendFigures) reports print);
 //! - `closure`: every row held to at most 1, reciprocity kept;
 //! - `adjacency`: the link lists (compressed sparse rows);
-//! - `product`: products, columns and rows;
+//! - `product`: products, columns and rows, and what the operator can do as a
+//!   [`FormFactorBackend`](crate::FormFactorBackend);
 //! - `stored`: the operator as bytes, for the lab's cache.
 //!
 //! ## References

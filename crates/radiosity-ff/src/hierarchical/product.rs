@@ -1,4 +1,4 @@
-//! Products and columns of the operator.
+//! Products and columns of the operator, and what it can do as a [`FormFactorBackend`].
 //!
 //! `κ` is bilinear in a sender's normal `m` and offset `b`, so a far link's transfer needs only
 //! the sender's moments `M0 = Σ A_j x_j m_j` and `M1 = Σ A_j x_j m_j b_jᵀ`, and gives the
@@ -12,6 +12,7 @@
 
 use super::HierarchicalColumns;
 use super::links::{Span, kernel_factor};
+use crate::backend::{BackendFigures, FormFactorBackend};
 use radiosity_core::{ColumnSource, Real, Vec3};
 use rayon::prelude::*;
 
@@ -96,6 +97,20 @@ impl ColumnSource for HierarchicalColumns {
             }
         });
         true
+    }
+}
+
+impl FormFactorBackend for HierarchicalColumns {
+    fn serves_rows(&self) -> bool {
+        true
+    }
+
+    fn figures(&self) -> Option<BackendFigures> {
+        Some(HierarchicalColumns::figures(self).into())
+    }
+
+    fn persist(&self, key: &str) -> Option<Vec<u8>> {
+        Some(HierarchicalColumns::to_bytes(self, key))
     }
 }
 

@@ -32,7 +32,7 @@ impl<'r> StressSuite<'r> {
             backends: BACKENDS.to_vec(),
             solvers: all_solvers(),
             registry,
-            backend_registry: radiosity_ff::registry::builtin(),
+            backend_registry: radiosity_ff::builtins::builtin(),
         }
     }
 

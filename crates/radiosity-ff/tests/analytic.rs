@@ -2,6 +2,7 @@
 //! clipping, closure in closed scenes, reciprocity and determinism across thread counts.
 
 use super::closed_forms::*;
+use crate::shared_checks;
 use radiosity_core::{ColumnSource, Material, Real, Scene, Spectrum, Vec3};
 use radiosity_ff::ff_point_polygon::point_to_polygon;
 use radiosity_ff::pair_visibility::SamplingPath;
@@ -184,25 +185,12 @@ fn analytic_for(arg_scene: &str, arg_ff: &str) -> (Scene, Visibility, SceneAnaly
     (scene, vis, analysis, params(arg_ff))
 }
 
-fn row_sums(f: &impl ColumnSource) -> Vec<Real> {
-    let n = f.patch_count();
-    let mut sums = vec![0.0; n];
-    let mut column = vec![0.0; n];
-    for j in 0..n {
-        f.fill_column(j, &mut column);
-        for i in 0..n {
-            sums[i] += column[i];
-        }
-    }
-    sums
-}
-
 #[test]
 fn closed_furnace_rows_sum_to_one() {
     let (scene, vis, analysis, p) = analytic_for("furnace:res=4", "analytic");
     let f = AnalyticColumns::new(&scene, &vis, &analysis, p);
     assert!(!f.traces_shadow_rays());
-    for (i, s) in row_sums(&f).iter().enumerate() {
+    for (i, s) in shared_checks::row_sums(&f).iter().enumerate() {
         assert!((s - 1.0).abs() < 1e-3, "row {i} sums to {s}");
     }
 }
@@ -219,7 +207,7 @@ fn closed_occluded_scenes_close() {
         let (scene, vis, analysis, p) = analytic_for(scene, "analytic");
         let f = AnalyticColumns::new(&scene, &vis, &analysis, p);
         assert!(f.traces_shadow_rays());
-        let sums = row_sums(&f);
+        let sums = shared_checks::row_sums(&f);
         for (i, s) in sums.iter().enumerate() {
             assert!((s - 1.0).abs() < 2e-2, "{}: row {i} sums to {s}", scene.name());
         }
@@ -236,13 +224,13 @@ fn overlapping_coplanar_quads_leave_no_row_above_one() {
     // closed room sums to 1 (no shadow rays are traced: only quadrature error is left).
     let arg = format!("{}/../radiosity-geom/test_data/mgf/coplanar_overlap.mgf", env!("CARGO_MANIFEST_DIR"));
     let (scene, vis, analysis, p) = analytic_for(&arg, "analytic");
-    let raw = row_sums(&AnalyticColumns::new(&scene, &vis, &analysis, p));
+    let raw = shared_checks::row_sums(&AnalyticColumns::new(&scene, &vis, &analysis, p));
     let worst = raw.iter().copied().fold(0.0, Real::max);
     assert!(worst > 1.15, "as loaded, the worst row sums to {worst}");
     let prepared = radiosity_geom::PreparedScene::load(&arg).unwrap();
     let f = AnalyticColumns::new(prepared.scene(), &prepared.visibility, &prepared.analysis, p);
     assert!(!f.traces_shadow_rays());
-    for (i, s) in row_sums(&f).iter().enumerate() {
+    for (i, s) in shared_checks::row_sums(&f).iter().enumerate() {
         assert!((s - 1.0).abs() < 1e-3, "row {i} sums to {s}");
     }
     // Coplanar pairs (the pieces of the floor and of the rugs) exchange nothing, exactly.
@@ -270,7 +258,7 @@ fn closure_improves_with_the_ray_budget() {
     // the default, within 3.9e-3), the k^-1/2 of sampling noise.
     let (scene, vis, analysis, p) = analytic_for("furnace:res=4:block=true", "analytic:budget=262144");
     let f = AnalyticColumns::new(&scene, &vis, &analysis, p);
-    for (i, s) in row_sums(&f).iter().enumerate() {
+    for (i, s) in shared_checks::row_sums(&f).iter().enumerate() {
         assert!((s - 1.0).abs() < 1.5e-3, "row {i} sums to {s}");
     }
 }

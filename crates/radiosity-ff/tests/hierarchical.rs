@@ -9,7 +9,7 @@ use radiosity_ff::row_comparison::{compare_rows, sampled_rows};
 use radiosity_ff::{AnalyticColumns, AnalyticParams, HierarchicalColumns, HierarchicalParams, Oracle};
 use radiosity_geom::PreparedScene;
 
-use crate::shaft_check;
+use crate::shared_checks;
 
 fn prepared(arg: &str) -> PreparedScene {
     PreparedScene::load(arg).unwrap()
@@ -306,6 +306,6 @@ fn clear_shafts_give_the_operator_their_rays_would() {
         ("furnace:block=true:res=6", 3e-3),
         ("labyrinth:cells=4:size=0.5", 1e-2),
     ] {
-        shaft_check::clear_shafts_give_the_same_operator(&prepared(arg), arg, eps);
+        shared_checks::clear_shafts_give_the_same_operator(&prepared(arg), arg, eps);
     }
 }

@@ -10,4 +10,4 @@ mod matrix;
 mod montecarlo;
 mod pair_visibility;
 mod scale;
-mod shaft_check;
+mod shared_checks;

@@ -4,9 +4,8 @@
 //! corridor unchanged. Run by `radiosity_testkit::run`, which reports them as ignored, with
 //! the reason, on a checkout without the folder.
 
-mod shaft_check;
+mod shared_checks;
 
-use radiosity_core::{ColumnSource, Real};
 use radiosity_ff::{AnalyticColumns, AnalyticParams};
 use radiosity_geom::PreparedScene;
 use radiosity_testkit::{SceneTest, Scenes};
@@ -27,20 +26,6 @@ fn main() -> ExitCode {
     ])
 }
 
-/// The row sums of `f`, column by column.
-fn row_sums(f: &impl ColumnSource) -> Vec<Real> {
-    let n = f.patch_count();
-    let mut sums = vec![0.0; n];
-    let mut column = vec![0.0; n];
-    for j in 0..n {
-        f.fill_column(j, &mut column);
-        for (s, c) in sums.iter_mut().zip(&column) {
-            *s += c;
-        }
-    }
-    sums
-}
-
 fn renderpark_mgf_scenes_have_no_row_above_one(scenes: &Scenes) {
     // Open scenes written by others, prepared as every command prepares them (hidden patches
     // left out): no row of F may create energy beyond the estimator's noise (before the
@@ -51,7 +36,7 @@ fn renderpark_mgf_scenes_have_no_row_above_one(scenes: &Scenes) {
         assert!(!prepared.analysis.closure.value.is_closed(), "{name} is open");
         let f =
             AnalyticColumns::new(prepared.scene(), &prepared.visibility, &prepared.analysis, AnalyticParams::default());
-        for (i, s) in row_sums(&f).iter().enumerate() {
+        for (i, s) in shared_checks::row_sums(&f).iter().enumerate() {
             assert!(*s <= 1.01, "{name}: row {i} sums to {s}");
         }
     }
@@ -60,5 +45,5 @@ fn renderpark_mgf_scenes_have_no_row_above_one(scenes: &Scenes) {
 fn clear_shafts_give_the_corridor_the_operator_their_rays_would(scenes: &Scenes) {
     // Curved doors and many occluders.
     let p = PreparedScene::load(&scenes.path("mgf/corridor.mgf")).unwrap();
-    shaft_check::clear_shafts_give_the_same_operator(&p, "corridor.mgf", 3e-3);
+    shared_checks::clear_shafts_give_the_same_operator(&p, "corridor.mgf", 3e-3);
 }

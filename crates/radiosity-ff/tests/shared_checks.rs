@@ -1,10 +1,24 @@
-//! The check that shaft culling changes nothing in the hierarchical operator, shared by the
-//! tests on built-in scenes (`hierarchical.rs`) and on scenes written by others
-//! (`third_party_scenes.rs`).
+//! What the tests on built-in scenes (`lib.rs`'s modules) and on scenes written by others
+//! (`third_party_scenes.rs`) both use: row sums column by column, and the check that shaft
+//! culling changes nothing in the hierarchical operator.
 
 use radiosity_core::{ColumnSource, Real};
 use radiosity_ff::{HierarchicalColumns, HierarchicalParams};
 use radiosity_geom::PreparedScene;
+
+/// The row sums of `f`, column by column.
+pub fn row_sums(f: &impl ColumnSource) -> Vec<Real> {
+    let n = f.patch_count();
+    let mut sums = vec![0.0; n];
+    let mut column = vec![0.0; n];
+    for j in 0..n {
+        f.fill_column(j, &mut column);
+        for (s, c) in sums.iter_mut().zip(&column) {
+            *s += c;
+        }
+    }
+    sums
+}
 
 /// With `shafts`, a link between patches or flat clusters whose shaft holds no other patch
 /// is taken as clear without its rays: every segment they could draw lies in the shaft. So

@@ -27,7 +27,7 @@ pub struct Args {
     #[arg(long, default_value = DEFAULT_SOLVERS)]
     solvers: String,
     /// The form-factor backend, with `:key=value` parameters.
-    #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic", long_help = crate::ff::backend_help())]
+    #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic", long_help = crate::experiment::backend_help())]
     ff: String,
     /// Stop rules for every solver.
     #[arg(long, value_name = "RULES", default_value = "columns=2n")]

@@ -6,7 +6,7 @@ use crate::bars::Bars;
 use anyhow::{Result, bail};
 use radiosity_eval::ReferenceKind;
 use radiosity_eval::{Cache, ColumnCost, FinalMetrics, Lab, LabOptions, Progress};
-use radiosity_ff::BackendSpec;
+use radiosity_ff::{BackendRegistry, BackendSpec};
 use radiosity_geom::PreparedScene;
 use radiosity_solvers::{Solver, SolverError, SolverRegistry, StopRules};
 use std::path::{Path, PathBuf};
@@ -24,7 +24,7 @@ pub struct SolveArgs {
     #[arg(long, value_name = "SOLVER", long_help = solver_help())]
     pub solver: String,
     /// The form-factor backend, with `:key=value` parameters.
-    #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic", long_help = crate::ff::backend_help())]
+    #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic", long_help = backend_help())]
     pub ff: String,
     /// Stop rules, the first to hold stops the run: columns=N, columns=2n, steps=N, rms=1e-3,
     /// residual=1e-4, time=30s.
@@ -236,4 +236,13 @@ pub fn error_phrase(last: &FinalMetrics) -> String {
         None => parts.push("no certified bound".into()),
     }
     parts.join(", ")
+}
+
+/// The `--ff` help: every backend the registry parses, with its parameters.
+pub fn backend_help() -> String {
+    format!(
+        "The form-factor backend, NAME[:key=value…] (for example `matrix:of=hemicube:res=64:rebalance=true`). \
+         Every backend, with its parameters and their defaults:\n{}",
+        BackendRegistry::builtin().help().trim_end()
+    )
 }

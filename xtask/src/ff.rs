@@ -34,7 +34,7 @@ use radiosity_eval::{
 use radiosity_ff::guard::MatrixFigures;
 use radiosity_ff::row_comparison::{compare_rows, sampled_rows};
 use radiosity_ff::row_diagnosis::{RowDiagnosis, worst_rows};
-use radiosity_ff::{BackendRegistry, BackendSpec, StoredMatrix};
+use radiosity_ff::{BackendSpec, StoredMatrix};
 use radiosity_geom::{Closure, PreparedScene};
 use serde::Serialize;
 use serde::ser::{SerializeSeq, Serializer};
@@ -55,7 +55,7 @@ pub struct Args {
     scene: String,
     /// The backend, with `:key=value` parameters (for example
     /// `matrix:of=hemicube:res=64:rebalance=true`).
-    #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic", long_help = backend_help())]
+    #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic", long_help = crate::experiment::backend_help())]
     ff: String,
     /// Print the patches, the matrix (rows), its row sums and reciprocity error as JSON.
     #[arg(long)]
@@ -76,15 +76,6 @@ pub struct Args {
     /// `scipy.sparse.load_npz` reads it, with `area`, `emission` and `reflectivity`).
     #[arg(long, value_name = "FILE", conflicts_with = "against")]
     out: Option<PathBuf>,
-}
-
-/// The `--ff` help: every backend the registry parses, with its parameters.
-pub fn backend_help() -> String {
-    format!(
-        "The form-factor backend, NAME[:key=value…] (for example `matrix:of=hemicube:res=64:rebalance=true`). \
-         Every backend, with its parameters and their defaults:\n{}",
-        BackendRegistry::builtin().help().trim_end()
-    )
 }
 
 /// Runs `ff`.

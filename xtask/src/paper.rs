@@ -21,7 +21,7 @@ pub struct Args {
     scenes: String,
     /// The form-factor backend, with `:key=value` parameters: the paper's claims under other
     /// form factors (the paper used analytic ones).
-    #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic", long_help = crate::ff::backend_help())]
+    #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic", long_help = crate::experiment::backend_help())]
     ff: String,
     #[command(flatten)]
     reference: ReferenceArg,

@@ -39,7 +39,7 @@ pub struct Args {
     #[arg(long, value_name = "N", default_value_t = 6000)]
     max_patches: usize,
     /// The form-factor backend of the discrete system, with `:key=value` parameters.
-    #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic", long_help = crate::ff::backend_help())]
+    #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic", long_help = crate::experiment::backend_help())]
     ff: String,
     /// Print the result as JSON.
     #[arg(long)]

@@ -13,7 +13,7 @@ use crate::spec::{FileFormat, KeyValueParams, split_file_argument};
 use crate::third_party::ScenesFolder;
 use crate::{LoadedScene, gltf_input, mgf};
 use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::str::FromStr;
 
 /// Where a scene comes from.
@@ -109,12 +109,6 @@ impl SceneSpec {
             items.push(format!("{key}={value}"));
         }
         SceneSpec::parse(&std::iter::once(self.head.clone()).chain(items).collect::<Vec<_>>().join(":"))
-    }
-
-    /// Where a file is read from: its path when that exists from the current directory, else
-    /// the same relative path in the folder of third-party scenes ([`ScenesFolder::resolve`]).
-    pub fn resolved_file(&self) -> Option<PathBuf> {
-        self.file().map(|path| ScenesFolder::from_env().resolve(path))
     }
 
     /// Builds or loads the scene.

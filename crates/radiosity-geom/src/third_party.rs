@@ -46,11 +46,6 @@ impl ScenesFolder {
         &self.path
     }
 
-    /// Whether the folder exists.
-    pub fn exists(&self) -> bool {
-        self.path.is_dir()
-    }
-
     /// `relative` in the folder, if that file exists.
     pub fn file(&self, relative: impl AsRef<Path>) -> Option<PathBuf> {
         let path = self.path.join(relative);

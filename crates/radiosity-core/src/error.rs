@@ -76,4 +76,24 @@ pub enum CoreError {
         /// The offending area.
         area: Real,
     },
+    /// Weights that are not a distribution: empty, negative, not finite or all zero.
+    #[error(
+        "{len} weights summing to {total} are not a distribution: they must be finite, non-negative and not all zero"
+    )]
+    InvalidDistribution {
+        /// How many weights.
+        len: usize,
+        /// Their sum.
+        total: Real,
+    },
+    /// A form factor that is negative or not finite.
+    #[error("F[{row}][{column}] is {value}; form factors must be finite and non-negative")]
+    InvalidEntry {
+        /// The row.
+        row: usize,
+        /// The column.
+        column: usize,
+        /// The entry.
+        value: Real,
+    },
 }

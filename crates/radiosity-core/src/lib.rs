@@ -10,6 +10,9 @@
 //! - [`LinearSystem`]: areas, reflectivities and emissions per channel, the data of
 //!   `B_i = E_i + ρ_i Σ_j F_ij B_j`;
 //! - [`ColumnSource`]: "fill column j of F", the only thing a solver knows about form factors;
+//! - [`TransportSampler`]: "where does a ray leaving patch j land?", the seam of the solvers
+//!   that estimate transport with rays and never form F; [`ColumnTransport`] samples any
+//!   column source's matrix exactly;
 //! - [`Clock`]: whether a run's seconds are measured or charged by its source;
 //! - [`RadiosityOperator`]: `F·x`, `(I − diag(ρ) F)·x` and the residual over any source, also
 //!   as faer's `LinOp` (scipy's `LinearOperator`, in Rust).
@@ -28,6 +31,7 @@
 
 pub mod clock;
 pub mod column;
+pub mod column_transport;
 pub mod dense_lu;
 pub mod error;
 pub mod faer_operator;
@@ -36,11 +40,14 @@ pub mod math;
 pub mod operator;
 pub mod patch;
 pub mod scene;
+pub mod sobol;
 pub mod spectrum;
 pub mod system;
+pub mod transport;
 
 pub use clock::Clock;
 pub use column::{ColumnSource, ColumnStats, CountingColumns, DenseColumns, measured_reciprocity};
+pub use column_transport::{AliasTable, ColumnTransport};
 pub use error::CoreError;
 pub use faer_operator::SymmetrizedOperator;
 pub use ids::{MaterialId, ObjectId};
@@ -52,3 +59,4 @@ pub use patch::{Patch, PatchShape};
 pub use scene::{Material, Scene};
 pub use spectrum::{Channels, Spectrum};
 pub use system::LinearSystem;
+pub use transport::{LineTransfers, SampleCost, TransportSampler};

@@ -87,6 +87,7 @@ mod naming;
 mod registry;
 mod run;
 mod shooting;
+mod stochastic;
 
 pub use error::{MESSAGE_WIDTH, SolverError};
 pub use gathering::gauss_seidel::{GaussSeidel, GaussSeidelParams};
@@ -107,9 +108,10 @@ pub use registry::{SolverEntry, SolverRegistry};
 pub use run::executor::{
     DIVERGENCE_FACTOR, DIVERGENCE_FLOOR, ErrorMonitor, Executor, Observer, ObserverMode, Run, Solver, StepKind,
 };
-pub use run::problem::Problem;
+pub use run::problem::{Problem, Rays};
 pub use run::record::{Entries, Record, Value};
 pub use run::residual_bound::{ResidualBound, area_norms};
+pub use run::standard_error::{StandardError, t_coverage_of_two};
 pub use run::state::State;
 pub use run::stop::{Count, StopRule, StopRules, TerminationReason};
 pub use shooting::overshooting::overshoot::{AmbientTerm, Overshoot, RowTerm};
@@ -118,6 +120,7 @@ pub use shooting::overshooting::xu::XuParts;
 pub use shooting::progressive::ProgressiveRefinement;
 pub use shooting::rule::unshot_power;
 pub use shooting::southwell::Southwell;
+pub use stochastic::sequence::{PointStream, Sequence};
 
 /// The point solvers, by canonical name: every one of them is run by the scene-level tests
 /// and snapshots.

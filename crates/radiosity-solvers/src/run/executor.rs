@@ -58,6 +58,7 @@ use crate::error::SolverError;
 use crate::run::problem::Problem;
 use crate::run::record::Record;
 use crate::run::residual_bound::ResidualBound;
+use crate::run::standard_error::StandardError;
 use crate::run::state::State;
 use crate::run::stop::{StopRule, StopRules, TerminationReason};
 use radiosity_core::Real;
@@ -125,6 +126,9 @@ pub enum StepKind {
     /// One patch, or one group, gathered along rows of F ([`Problem::row`]): the solver's
     /// system is then the column system only if the source serves exact rows.
     Gather,
+    /// One iteration of a solver that samples transport with rays ([`Problem::cast`]): its
+    /// cost is counted in rays, and a lab records every such step.
+    Sampled,
     /// One whole matrix–vector product, up to `n` columns (the Krylov solvers, such as
     /// [`crate::Gmres`]). The step cap counts it as `n` steps, so that it allows as many
     /// columns as it allows a gathering solver, and a lab records every such step.
@@ -167,6 +171,15 @@ pub trait Solver {
     /// A bound on the residual of the displayed radiosity known without extra columns
     /// ([`ResidualBound`]), or None when the solver knows none.
     fn residual_bound(&self, problem: &Problem<'_>, state: &State) -> Option<ResidualBound> {
+        let _ = (problem, state);
+        None
+    }
+
+    /// The solver's own error bar on its displayed radiosity, when it is an estimate with one
+    /// ([`StandardError`]: the spread of independent replicates, for the solvers that sample
+    /// transport); `None` by default. Needs no reference and no column; called between steps,
+    /// outside the timed region, like [`Solver::residual_bound`].
+    fn standard_error(&self, problem: &Problem<'_>, state: &State) -> Option<StandardError> {
         let _ = (problem, state);
         None
     }
@@ -410,6 +423,7 @@ impl<'a> Executor<'a> {
         state.columns = problem.columns_fetched();
         state.columns_reused = problem.columns_reused();
         state.products = problem.products();
+        state.rays = problem.rays_cast();
         state.ff_seconds += now.clock - ff_before.clock;
         state.solve_seconds += (wall - (now.measured - ff_before.measured)).max(0.0);
     }
@@ -437,6 +451,7 @@ impl<'a> Executor<'a> {
             let reason = match *rule {
                 StopRule::Columns(c) if state.columns >= c.resolve(n) => TerminationReason::Columns(state.columns),
                 StopRule::Steps(c) if state.step >= c.resolve(n) => TerminationReason::Steps(state.step),
+                StopRule::Rays(c) if state.rays >= c.resolve(n) => TerminationReason::Rays(state.rays),
                 StopRule::Rms(target) if error.is_some_and(|e| e <= target) => TerminationReason::Rms(error.unwrap()),
                 StopRule::Residual(target) if residual.is_some_and(|r| r <= target) => {
                     TerminationReason::Residual(residual.unwrap())

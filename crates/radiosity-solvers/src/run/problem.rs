@@ -21,14 +21,23 @@
 //! ([`Problem::measured_ff_seconds`]) so that the solving time excludes it. Otherwise the
 //! clock is [`Clock::Measured`] and both are the measured time.
 //!
+//! **Transport by rays.** A problem may carry a [`TransportSampler`]
+//! ([`Problem::with_transport`]), for the solvers that estimate transport with rays and never
+//! form `F` (stochastic relaxation, random walks). They cast through [`Problem::cast`], which
+//! hands them a [`Rays`] that counts every ray (atomically: rays are cast in parallel) and
+//! times the whole section as form-factor seconds, measured: the rays are those solvers'
+//! form factors. The same problem's columns still serve the others; a problem without a
+//! sampler refuses the solvers that need one ([`SolverError::NotApplicable`]).
+//!
 //! A problem may also carry a spatially coherent order of the patches
 //! ([`Problem::with_patch_order`]), for solvers that group patches by proximity
 //! (`group-gs-gM:groups=spatial`); the others ignore it.
 
 use crate::error::SolverError;
 use radiosity_core::operator::{Product, multiply_by_columns};
-use radiosity_core::{Clock, ColumnSource, LinearSystem, Real};
+use radiosity_core::{Clock, ColumnSource, LineTransfers, LinearSystem, Real, SampleCost, TransportSampler};
 use std::cell::Cell;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 /// A system and its form factors.
@@ -43,6 +52,49 @@ pub struct Problem<'a> {
     /// What the source had charged when the problem was made, when it charges (module doc).
     charged_from: Option<Real>,
     order: Option<&'a [usize]>,
+    transport: Option<&'a dyn TransportSampler>,
+    rays: AtomicU64,
+}
+
+/// A problem's [`TransportSampler`] while a solver casts ([`Problem::cast`]): every ray it
+/// casts is counted. `Sync`, for casting in parallel.
+pub struct Rays<'p> {
+    sampler: &'p dyn TransportSampler,
+    count: &'p AtomicU64,
+}
+
+impl Rays<'_> {
+    /// One ray from the front of `from` driven by `u` ([`TransportSampler::cast`]).
+    pub fn cast(&self, from: usize, u: [Real; 4]) -> Option<usize> {
+        self.count.fetch_add(1, Ordering::Relaxed);
+        self.sampler.cast(from, u)
+    }
+
+    /// A batch of rays from `from` ([`TransportSampler::cast_batch`]).
+    pub fn cast_batch(&self, from: usize, u: &[[Real; 4]], landings: &mut [Option<usize>]) {
+        self.count.fetch_add(u.len() as u64, Ordering::Relaxed);
+        self.sampler.cast_batch(from, u, landings)
+    }
+
+    /// One global line ([`TransportSampler::global_line`]), its rays counted; `false` when
+    /// the sampler has no lines.
+    pub fn global_line(&self, u: [Real; 4], line: &mut LineTransfers) -> bool {
+        let has = self.sampler.global_line(u, line);
+        if has {
+            self.count.fetch_add(line.rays, Ordering::Relaxed);
+        }
+        has
+    }
+
+    /// The power a ray from `from` carries ([`TransportSampler::ray_weight`]).
+    pub fn ray_weight(&self, from: usize) -> Real {
+        self.sampler.ray_weight(from)
+    }
+
+    /// `Σ_j F_ij` when the sampler knows it ([`TransportSampler::row_sum`]).
+    pub fn row_sum(&self, i: usize) -> Option<Real> {
+        self.sampler.row_sum(i)
+    }
 }
 
 impl<'a> Problem<'a> {
@@ -60,7 +112,49 @@ impl<'a> Problem<'a> {
             ff_seconds: Cell::new(0.0),
             charged_from: columns.charged_seconds(),
             order: None,
+            transport: None,
+            rays: AtomicU64::new(0),
         })
+    }
+
+    /// The problem with transport sampled by `sampler` (module doc), which must have the
+    /// system's patches.
+    pub fn with_transport(mut self, sampler: &'a dyn TransportSampler) -> Result<Problem<'a>, SolverError> {
+        if sampler.patch_count() != self.n() {
+            return Err(SolverError::SizeMismatch { columns: sampler.patch_count(), system: self.n() });
+        }
+        self.transport = Some(sampler);
+        Ok(self)
+    }
+
+    /// Whether the problem samples transport by rays ([`Problem::with_transport`]).
+    pub fn samples_transport(&self) -> bool {
+        self.transport.is_some()
+    }
+
+    /// What one ray costs, when the problem samples transport.
+    pub fn ray_cost(&self) -> Option<SampleCost> {
+        self.transport.map(|t| t.cost())
+    }
+
+    /// Runs `cast` with the problem's sampler, counting its rays and timing it as form-factor
+    /// seconds (module doc). Refuses, for `solver`, a problem without a sampler.
+    pub fn cast<R>(&self, solver: &str, cast: impl FnOnce(&Rays<'_>) -> R) -> Result<R, SolverError> {
+        let sampler = self.transport.ok_or_else(|| SolverError::NotApplicable {
+            solver: solver.to_string(),
+            reason: "it samples transport with rays, and this problem has no transport sampler \
+                     (Problem::with_transport; the lab gives one: rays in the scene, or the stored matrix sampled)"
+                .into(),
+        })?;
+        let start = Instant::now();
+        let out = cast(&Rays { sampler, count: &self.rays });
+        self.ff_seconds.set(self.ff_seconds.get() + start.elapsed().as_secs_f64());
+        Ok(out)
+    }
+
+    /// Rays cast so far ([`Problem::cast`]).
+    pub fn rays_cast(&self) -> u64 {
+        self.rays.load(Ordering::Relaxed)
     }
 
     /// The problem with a spatially coherent order of its patches (patches near each other

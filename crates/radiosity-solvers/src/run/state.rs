@@ -5,6 +5,9 @@
 //! `x = B − ΔB`, and the residual of `x` is exactly `ΔB` (docs/design.md §4.1). Gathering methods
 //! keep `unshot` as the last change of each patch.
 //!
+//! `ff_seconds` holds the form factors' seconds, or the rays' for a solver that samples
+//! transport.
+//!
 //! The state is what every solver has: the iterate and its cost. Figures that only some
 //! solvers have (group steps, condition numbers, fallbacks) are in their
 //! [`crate::Record`].
@@ -29,6 +32,9 @@ pub struct State {
     /// Products `F x` the source computed itself ([`crate::Problem::multiply`]), each in
     /// `O(links + n)` or a pass over a stored matrix: counted beside `columns`, not in them.
     pub products: u64,
+    /// Rays cast by a solver that samples transport ([`crate::Problem::cast`]): its cost, as
+    /// columns are the others'.
+    pub rays: u64,
     /// Seconds the columns and products cost, on the run's clock ([`crate::Problem::clock`]):
     /// measured, or charged by the source.
     pub ff_seconds: f64,
@@ -52,6 +58,7 @@ impl State {
             columns: 0,
             columns_reused: 0,
             products: 0,
+            rays: 0,
             ff_seconds: 0.0,
             solve_seconds: 0.0,
             group_seconds: 0.0,

@@ -1,7 +1,9 @@
 //! Stop rules (docs/cli.md, "Stop rules") and why a run ended.
 //!
 //! Rules are a comma list, and the first that holds stops the run: `columns=N`, `columns=2n`
-//! (a multiple of the patch count), `steps=N` (also `steps=3n`), `rms=1e-3`, `residual=1e-4`,
+//! (a multiple of the patch count), `steps=N` (also `steps=3n`), `rays=1e7` (rays cast by a
+//! solver that samples transport, [`crate::Problem::cast`]; also `rays=100n`), `rms=1e-3`,
+//! `residual=1e-4`,
 //! `time=30s` (`ms`, `s` or `min`, on the run's clock: measured, or charged by the source,
 //! [`crate::Problem::clock`]). Every run ends even if no rule can hold any more: at
 //! round-off convergence (nothing left to shoot or gather), at a step cap of `20n` steps,
@@ -38,6 +40,8 @@ pub enum StopRule {
     Columns(Count),
     /// Stop after this many steps.
     Steps(Count),
+    /// Stop once this many rays were cast ([`crate::Problem::cast`]).
+    Rays(Count),
     /// Stop once the observed `e_rms` is at most this.
     Rms(Real),
     /// Stop once the solver's residual power is at most this.
@@ -71,6 +75,7 @@ impl std::fmt::Display for StopRule {
         match *self {
             StopRule::Columns(c) => write!(f, "columns={c}"),
             StopRule::Steps(c) => write!(f, "steps={c}"),
+            StopRule::Rays(c) => write!(f, "rays={c}"),
             StopRule::Rms(e) => write!(f, "rms={}", short(e)),
             StopRule::Residual(r) => write!(f, "residual={}", short(r)),
             StopRule::Time(t) => write!(f, "time={}s", short(t.as_secs_f64())),
@@ -106,9 +111,13 @@ fn parse_count(rule: &str, value: &str) -> Result<Count, SolverError> {
         }
         return Ok(Count::PerPatch(m));
     }
-    match value.parse::<u64>() {
-        Ok(k) if k > 0 => Ok(Count::Absolute(k)),
-        _ => Err(bad(rule, "expected a positive integer or a multiple of n such as 2n")),
+    // A whole number, also in exponent form (`1e7`).
+    match value.parse::<u64>().ok().or_else(|| {
+        let v = value.parse::<f64>().ok()?;
+        (v.is_finite() && v >= 1.0 && v.fract() == 0.0 && v < 1.8e19).then_some(v as u64)
+    }) {
+        Some(k) if k > 0 => Ok(Count::Absolute(k)),
+        _ => Err(bad(rule, "expected a positive integer (such as 480 or 1e7) or a multiple of n such as 2n")),
     }
 }
 
@@ -143,6 +152,7 @@ impl StopRules {
             rules.push(match key.trim() {
                 "columns" => StopRule::Columns(parse_count(rule, value.trim())?),
                 "steps" => StopRule::Steps(parse_count(rule, value.trim())?),
+                "rays" => StopRule::Rays(parse_count(rule, value.trim())?),
                 "rms" => StopRule::Rms(parse_positive(rule, value.trim())?),
                 "residual" => StopRule::Residual(parse_positive(rule, value.trim())?),
                 "time" => StopRule::Time(parse_duration(rule, value.trim())?),
@@ -165,6 +175,8 @@ pub enum TerminationReason {
     Columns(u64),
     /// `steps=` reached.
     Steps(u64),
+    /// `rays=` reached.
+    Rays(u64),
     /// `rms=` reached.
     Rms(Real),
     /// `residual=` reached.
@@ -207,6 +219,7 @@ impl std::fmt::Display for TerminationReason {
         match self {
             TerminationReason::Columns(k) => write!(f, "{k} columns computed"),
             TerminationReason::Steps(k) => write!(f, "{k} steps taken"),
+            TerminationReason::Rays(k) => write!(f, "{k} rays cast"),
             TerminationReason::Rms(e) => write!(f, "e_rms reached {e:e}"),
             TerminationReason::Residual(r) => write!(f, "residual power reached {r:e}"),
             TerminationReason::Time(t) => write!(f, "time limit of {:.3} s reached", t.as_secs_f64()),

@@ -1,0 +1,5 @@
+//! The solvers that estimate transport with rays and never form `F` (stochastic relaxation and
+//! random walks, docs/stochastic.md), over [`crate::Problem::cast`], and the random numbers
+//! they share.
+
+pub(crate) mod sequence;

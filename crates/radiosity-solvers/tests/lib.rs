@@ -1,6 +1,7 @@
 //! Tests of radiosity-solvers on small in-memory systems with exact answers: the furnace
 //! identity, the two-patch closed form, the unit cube, and the accounting and stop rules (and
-//! the clock they read, `clock`).
+//! the clock they read, `clock`), and what the executor hands the observers of a solver that
+//! samples transport (`sampled`).
 
 use radiosity_core::{Channels, DenseColumns, LinearSystem, Real};
 use radiosity_solvers::*;
@@ -8,6 +9,7 @@ use radiosity_solvers::*;
 mod clock;
 mod krylov;
 mod residual_bound;
+mod sampled;
 
 /// Howell's form factors between unit squares: directly opposed at distance 1, and
 /// perpendicular sharing an edge (C-11 and C-14, evaluated in f64).

@@ -18,7 +18,9 @@
 //! ([`Observer::wants_residual_bound`]) also get, just before each of the first two, the
 //! solver's bound on the residual of the displayed radiosity
 //! ([`Observer::observe_residual_bound`], [`Solver::residual_bound`],
-//! [`crate::run::residual_bound`]), computed once for all of them. The `rms=` rule stops on
+//! [`crate::run::residual_bound`]), computed once for all of them, and likewise the solver's
+//! standard error ([`Observer::wants_standard_error`], [`Observer::observe_standard_error`],
+//! [`Solver::standard_error`]), for the solvers whose answer is an estimate. The `rms=` rule stops on
 //! the e_rms an [`ErrorMonitor`] measures ([`Executor::monitor`]), a separate part; a run with
 //! such a rule and no monitor is refused before its first step
 //! ([`SolverError::ErrorNotMeasured`]), since the rule could never hold and the run would go
@@ -230,6 +232,22 @@ pub trait Observer {
         let _ = (state, bound);
     }
 
+    /// Whether the executor passes the solver's standard error to
+    /// [`Observer::observe_standard_error`] (false by default: computing it costs `O(n k R)`
+    /// for a solver that has one).
+    fn wants_standard_error(&self) -> bool {
+        false
+    }
+
+    /// Called, when [`Observer::wants_standard_error`], just before [`Observer::observe_init`]
+    /// and each [`Observer::observe_step`] (after [`Observer::observe_residual_bound`]), on the
+    /// same state, with the solver's standard error of its displayed radiosity
+    /// ([`Solver::standard_error`]; `None` when it has none). Outside the timed region, like
+    /// every observer call.
+    fn observe_standard_error(&mut self, state: &State, error: Option<&StandardError>) {
+        let _ = (state, error);
+    }
+
     /// Whether the run should end before its next step (false by default): asked of every
     /// observer before every step, whatever its mode; the run then ends with
     /// [`TerminationReason::Stopped`].
@@ -382,8 +400,8 @@ impl<'a> Executor<'a> {
     }
 
     /// Calls `call` on every observer whose mode takes `step` (`true`: the initial state,
-    /// which every observer sees), after giving those that want it the solver's residual
-    /// bound; the bound is computed once, and only if some observer wants it.
+    /// which every observer sees), after giving those that want them the solver's residual
+    /// bound and standard error; each is computed once, and only if some observer wants it.
     fn observe(
         &mut self,
         problem: &Problem<'_>,
@@ -397,12 +415,17 @@ impl<'a> Executor<'a> {
         };
         let wanted = self.observers.iter().any(|(o, mode)| takes(*mode) && o.wants_residual_bound());
         let bound = wanted.then(|| self.solver.residual_bound(problem, state)).flatten();
+        let wanted = self.observers.iter().any(|(o, mode)| takes(*mode) && o.wants_standard_error());
+        let spread = wanted.then(|| self.solver.standard_error(problem, state)).flatten();
         for (observer, mode) in &mut self.observers {
             if !takes(*mode) {
                 continue;
             }
             if observer.wants_residual_bound() {
                 observer.observe_residual_bound(state, bound.as_ref());
+            }
+            if observer.wants_standard_error() {
+                observer.observe_standard_error(state, spread.as_ref());
             }
             call(&mut **observer);
         }

@@ -26,7 +26,8 @@
 //! form `F` (stochastic relaxation, random walks). They cast through [`Problem::cast`], which
 //! hands them a [`Rays`] that counts every ray (atomically: rays are cast in parallel) and
 //! times the whole section as form-factor seconds, measured: the rays are those solvers'
-//! form factors. The same problem's columns still serve the others; a problem without a
+//! form factors. On a charged clock the rays' measured seconds are added to the charge, as no
+//! source charges for them. The same problem's columns still serve the others; a problem without a
 //! sampler refuses the solvers that need one ([`SolverError::NotApplicable`]).
 //!
 //! A problem may also carry a spatially coherent order of the patches
@@ -54,6 +55,9 @@ pub struct Problem<'a> {
     order: Option<&'a [usize]>,
     transport: Option<&'a dyn TransportSampler>,
     rays: AtomicU64,
+    /// Seconds spent casting rays, measured (also in `ff_seconds`): on a charged clock they
+    /// are added to the charge, since no source charges for them.
+    ray_seconds: Cell<f64>,
 }
 
 /// A problem's [`TransportSampler`] while a solver casts ([`Problem::cast`]): every ray it
@@ -114,6 +118,7 @@ impl<'a> Problem<'a> {
             order: None,
             transport: None,
             rays: AtomicU64::new(0),
+            ray_seconds: Cell::new(0.0),
         })
     }
 
@@ -148,7 +153,9 @@ impl<'a> Problem<'a> {
         })?;
         let start = Instant::now();
         let out = cast(&Rays { sampler, count: &self.rays });
-        self.ff_seconds.set(self.ff_seconds.get() + start.elapsed().as_secs_f64());
+        let seconds = start.elapsed().as_secs_f64();
+        self.ff_seconds.set(self.ff_seconds.get() + seconds);
+        self.ray_seconds.set(self.ray_seconds.get() + seconds);
         Ok(out)
     }
 
@@ -282,10 +289,11 @@ impl<'a> Problem<'a> {
     }
 
     /// Seconds the columns, rows and products fetched so far cost on the run's clock
-    /// ([`Problem::clock`]): charged by the source, or measured.
+    /// ([`Problem::clock`]): charged by the source, or measured; rays cast are measured on
+    /// either clock (no source charges for them).
     pub fn ff_seconds(&self) -> f64 {
         match (self.charged_from, self.columns.charged_seconds()) {
-            (Some(from), Some(now)) => (now - from).max(0.0),
+            (Some(from), Some(now)) => (now - from).max(0.0) + self.ray_seconds.get(),
             _ => self.ff_seconds.get(),
         }
     }

@@ -7,7 +7,8 @@
 //!
 //! - **the lab**: [`Lab`] sets a prepared scene up for measurement ([`LabOptions`], how
 //!   columns are paid for: [`ColumnCost`], and so which [`Clock`] every run's seconds, stop
-//!   rules and reports read), runs any solver with a [`Recorder`] into an
+//!   rules and reports read; where the solvers that sample transport cast their rays:
+//!   [`Transport`]), runs any solver with a [`Recorder`] into an
 //!   [`Outcome`], and compares many into a [`Comparison`]; [`backend`] builds the backend a
 //!   spec names, stored matrices from the [`Cache`];
 //! - **references and certificates**: [`ReferenceSolution`], `B*` by dense LU or by certified
@@ -20,7 +21,8 @@
 //! - **reports**: a comparison's `convergence.csv`, `report.md`, plots and terminal summary
 //!   ([`Comparison::write`], [`Comparison::summary`]); [`ConvergenceTable`], rows written as
 //!   CSV or Markdown with floats rounded to fixed significant digits; plots of e_rms against
-//!   steps, columns or seconds ([`write_svg`], [`write_png`]); the paper's figures and claims
+//!   steps, columns, rays or seconds, standard errors as bands ([`write_svg`], [`write_png`]);
+//!   the paper's figures and claims
 //!   ([`paper`]);
 //! - **truth**: each object's area-mean radiosity by Monte Carlo path tracing
 //!   ([`path_trace()`]), and those means beside the discrete reference at increasing mesh
@@ -80,11 +82,12 @@ pub use lab::backends::{
     obtain_matrix,
 };
 pub use lab::compare::Comparison;
-pub use lab::options::{ColumnCharge, ColumnCost, LabOptions};
+pub use lab::options::{ColumnCharge, ColumnCost, LabOptions, Transport};
 pub use lab::outcome::{FinalMetrics, Outcome};
 pub use lab::recorder::{Point, RecordPlan, Recorder, TableRow};
 pub use lab::run::rgb;
 pub use lab::setup::{ChosenReference, Lab, ReferenceOrigin, require_emitters};
+pub use lab::transport::TransportBuilt;
 pub use progress::{NoProgress, Progress};
 pub use radiosity_core::Clock;
 pub use reference::cache::{CACHE_DIR_VAR, Cache, Lookup, scene_key};
@@ -97,7 +100,8 @@ pub use reference::solution::{Certificate, Method, ReferenceParams, ReferenceSol
 pub use reports::comparison::{Written, value_cell};
 pub use reports::paper;
 pub use reports::plot::{
-    Curve, Marker, PlotSpec, Style, Variant, Y_LABEL, Y_LABEL_SHORT, style_of, write_png, write_svg,
+    BAND_LABEL, BAND_STANDARD_ERRORS, Curve, Marker, PlotSpec, Style, Variant, Y_LABEL, Y_LABEL_SHORT, style_of,
+    write_png, write_svg,
 };
 pub use reports::table::{ConvergenceTable, HEADER, round_significant};
 pub use suites::{bench, stress};

@@ -13,6 +13,7 @@ mod path_trace;
 mod plot;
 mod reference;
 mod render;
+mod sampled;
 mod scenes;
 mod shading;
 mod table;

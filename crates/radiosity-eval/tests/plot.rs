@@ -13,7 +13,10 @@ fn decay(rate: f64) -> Vec<(f64, f64)> {
 }
 
 fn curves() -> Vec<Curve> {
-    vec![Curve { label: "pr".into(), points: decay(0.05) }, Curve { label: "xu-g30-m480".into(), points: decay(0.12) }]
+    vec![
+        Curve { label: "pr".into(), spread: Vec::new(), points: decay(0.05) },
+        Curve { label: "xu-g30-m480".into(), spread: Vec::new(), points: decay(0.12) },
+    ]
 }
 
 fn spec() -> PlotSpec {
@@ -68,9 +71,11 @@ fn legend_sample(img: &Rgb8, colour: [u8; 3]) -> HashSet<(u32, u32)> {
 fn a_name_has_the_same_style_whatever_else_is_plotted() {
     // pr drawn alone, and fourth after three others: its legend sample (colour, dashes and
     // marker) is drawn pixel for pixel the same.
-    let alone = vec![Curve { label: "pr".into(), points: decay(0.05) }];
-    let mut crowded: Vec<Curve> =
-        ["xu", "feda", "xu-g30"].iter().map(|&l| Curve { label: l.into(), points: decay(0.2) }).collect();
+    let alone = vec![Curve { label: "pr".into(), spread: Vec::new(), points: decay(0.05) }];
+    let mut crowded: Vec<Curve> = ["xu", "feda", "xu-g30"]
+        .iter()
+        .map(|&l| Curve { label: l.into(), spread: Vec::new(), points: decay(0.2) })
+        .collect();
     crowded.push(alone[0].clone());
     let pr = style_of("pr").colour;
     let (a, b) = (legend_sample(&png(&alone, &spec()), pr), legend_sample(&png(&crowded, &spec()), pr));
@@ -142,8 +147,11 @@ fn unknown_names_get_a_stable_style_of_their_own() {
 fn the_legend_sits_right_of_the_data_and_covers_none_of_it() {
     // A solid curve that runs across the whole data area near its top, where a legend inside
     // the plot would go.
-    let flat =
-        vec![Curve { label: "xu".into(), points: (0..=50).map(|s| (s as f64, 1.0 - 1e-3 * s as f64)).collect() }];
+    let flat = vec![Curve {
+        label: "xu".into(),
+        spread: Vec::new(),
+        points: (0..=50).map(|s| (s as f64, 1.0 - 1e-3 * s as f64)).collect(),
+    }];
     let img = png(&flat, &spec());
     let xu = style_of("xu").colour;
     let mut columns: Vec<u32> = img.enumerate().filter(|(_, _, p)| *p == xu).map(|(x, _, _)| x).collect();
@@ -167,7 +175,11 @@ fn the_legend_sits_right_of_the_data_and_covers_none_of_it() {
 fn a_legend_too_wide_for_the_side_goes_below_the_data() {
     let label = "xu with a label far too long to sit beside a plot of this width".to_string();
     let xu = style_of(&label).colour;
-    let curve = vec![Curve { label, points: (0..=50).map(|s| (s as f64, 1.0 - 1e-3 * s as f64)).collect() }];
+    let curve = vec![Curve {
+        label,
+        spread: Vec::new(),
+        points: (0..=50).map(|s| (s as f64, 1.0 - 1e-3 * s as f64)).collect(),
+    }];
     let img = png(&curve, &spec());
     // The curve in the data area, and below a gap the legend sample, one row near the bottom.
     let mut rows: Vec<u32> = img.enumerate().filter(|(_, _, p)| *p == xu).map(|(_, y, _)| y).collect();
@@ -193,6 +205,7 @@ fn the_axes_start_where_the_data_starts() {
     // beyond the data, the labels would show 0 or 1e-4.
     let curve = vec![Curve {
         label: "pr".into(),
+        spread: Vec::new(),
         points: (0..=10).map(|k| (1000.0 + 100.0 * k as f64, 1e-2 * 10f64.powf(-0.1 * k as f64))).collect(),
     }];
     let mut out = Vec::new();
@@ -206,7 +219,7 @@ fn the_axes_start_where_the_data_starts() {
 
 #[test]
 fn nothing_positive_is_a_clear_error() {
-    let flat = vec![Curve { label: "done".into(), points: vec![(0.0, 0.0), (1.0, f64::NAN)] }];
+    let flat = vec![Curve { label: "done".into(), spread: Vec::new(), points: vec![(0.0, 0.0), (1.0, f64::NAN)] }];
     let err = write_svg(&flat, &spec(), Vec::new()).unwrap_err();
     assert!(matches!(err, EvalError::Plot(_)) && err.to_string().contains("no positive e_rms"), "{err}");
 }

@@ -185,12 +185,14 @@ fn convergence_table(scene: &str) -> String {
                 step: r.step,
                 columns: r.columns,
                 products: 0,
+                rays: 0,
                 seconds: 0.0,
                 ff_seconds: 0.0,
                 e_rms: m.e_rms,
                 e_max: m.e_max,
                 residual: m.residual,
                 bound: m.relative_bound,
+                std_error: f64::NAN,
             });
         }
     }
@@ -282,12 +284,14 @@ fn end_table(scene: &str, names: &[&'static str], rule: &str, title: &str) -> (S
             step: run.state.step,
             columns: run.state.columns,
             products: run.state.products,
+            rays: 0,
             seconds: 0.0,
             ff_seconds: 0.0,
             e_rms: m.e_rms,
             e_max: m.e_max,
             residual: m.residual,
             bound: m.relative_bound,
+            std_error: f64::NAN,
         });
     }
     let mut out = format!("{title}\n\n").into_bytes();

@@ -11,12 +11,14 @@ fn table() -> ConvergenceTable {
         step,
         columns,
         products: 0,
+        rays: 0,
         seconds,
         ff_seconds,
         e_rms,
         e_max,
         residual,
         bound: residual * 10.0,
+        std_error: f64::NAN,
     };
     t.push(row("pr", 0, 0, 0.0, 0.0, 1.0, 1.0, 0.6123456));
     t.push(row("pr", 480, 480, 1.23456789, 1.19876543, 4.7123456e-3, 2.0987654e-2, 1.5e-3));
@@ -76,6 +78,32 @@ fn products_are_written_when_a_row_made_one() {
     assert!(csv.starts_with("solver,step,columns,products,seconds,ff_seconds,"), "{csv}");
     assert!(csv.contains("\ngmres-30,960,512,7,") && csv.contains("\npr,480,480,0,"), "{csv}");
     assert!(markdown.starts_with("| solver | step | columns | products | e_rms |"), "{markdown}");
+}
+
+#[test]
+fn rays_and_standard_errors_are_written_when_a_row_has_them() {
+    // A table of deterministic solvers has neither `rays` nor `std_error`; one where a row
+    // cast rays has both, `rays` after `products`' place and `std_error` after `bound`, the
+    // deterministic rows with 0 rays and no standard error.
+    let mut t = table();
+    let mut sampled = t.rows()[1].clone();
+    (sampled.solver, sampled.columns, sampled.rays, sampled.std_error) =
+        ("stochastic-jacobi".to_string(), 0, 1_000_000, 1.2345678e-3);
+    t.push(sampled);
+    let (mut csv, mut markdown) = (Vec::new(), Vec::new());
+    t.write_csv(&mut csv).unwrap();
+    t.without_timings().write_markdown(&mut markdown).unwrap();
+    let (csv, markdown) = (String::from_utf8(csv).unwrap(), String::from_utf8(markdown).unwrap());
+    assert!(
+        csv.starts_with("solver,step,columns,rays,seconds,ff_seconds,clock,e_rms,e_max,residual,bound,std_error\n"),
+        "{csv}"
+    );
+    assert!(csv.contains("\nstochastic-jacobi,480,0,1000000,") && csv.ends_with(",0.01500,0.001235\n"), "{csv}");
+    assert!(csv.contains("\npr,480,480,0,") && csv.contains(",0.01500,NaN\n"), "{csv}");
+    assert!(
+        markdown.starts_with("| solver | step | columns | rays | e_rms | e_max | residual | bound | std_error |"),
+        "{markdown}"
+    );
 }
 
 fn check(x: f64, digits: usize, expect: &str) {

@@ -11,31 +11,49 @@ use crate::lab::options::ColumnCharge;
 use crate::lab::outcome::Outcome;
 use crate::lab::recorder::{Point, RecordPlan};
 use crate::lab::setup::{ChosenReference, Lab, ReferenceOrigin};
+use crate::lab::transport::TransportBuilt;
 use crate::progress::Progress;
+use radiosity_core::TransportSampler;
 use radiosity_core::{Clock, Real};
 use radiosity_geom::SceneReport;
-use radiosity_solvers::{Problem, Solver, StopRules};
+use radiosity_solvers::{Problem, Solver, State, StepKind, StopRules};
+use std::ops::ControlFlow;
 
 impl Lab<'_> {
     /// Runs every solver in turn under the same rules and recording: the comparison that
     /// [`Comparison::write`] reports. A solver that refuses these form factors
-    /// ([`Solver::applicable`]) stops the comparison before anything runs.
+    /// ([`Solver::applicable`]) stops the comparison before anything runs; so does a lab whose
+    /// transport sampler cannot be built, when some solver samples transport.
     pub fn compare(
         &self,
         solvers: Vec<Box<dyn Solver>>,
         rules: &StopRules,
         progress: &dyn Progress,
     ) -> Result<Comparison, LabError> {
-        // A solver whose hypothesis these form factors break is refused before any runs.
-        let problem = Problem::new(self.system(), self.source())?;
+        // A solver whose hypothesis these form factors break is refused before any runs, on
+        // the problem it will have: with the lab's sampler when it samples transport.
+        // The sampler is built once, before any run, only when some solver casts rays.
+        let built = match solvers.iter().any(|s| s.step_kind() == StepKind::Sampled) {
+            true => Some(self.transport_sampler()?),
+            false => None,
+        };
+        let sampler = built.as_ref().map(|b| &*b.sampler as &dyn TransportSampler);
+        let mut problem = Problem::new(self.system(), self.source())?;
+        if let Some(sampler) = sampler {
+            problem = problem.with_transport(sampler)?;
+        }
         for solver in &solvers {
             solver.applicable(&problem)?;
         }
         let mut outcomes = Vec::with_capacity(solvers.len());
+        let plan = RecordPlan::default();
         for mut solver in solvers {
-            outcomes.push(self.run(solver.as_mut(), rules, &RecordPlan::default(), progress)?);
+            let mut watch = |_: &Point, _: &State| ControlFlow::Continue(());
+            outcomes.push(self.run_on(solver.as_mut(), rules, &plan, progress, &mut watch, sampler)?);
         }
-        Ok(Comparison::new(self, rules, outcomes))
+        let mut comparison = Comparison::new(self, rules, outcomes);
+        comparison.transport = built.as_ref().map(TransportBuilt::describe);
+        Ok(comparison)
     }
 }
 
@@ -66,6 +84,10 @@ pub struct Comparison {
     /// The clock every run's seconds were counted on ([`Lab::clock`]), named wherever they are
     /// printed.
     pub clock: Clock,
+    /// Where the solvers that sample transport cast their rays, what a ray is and what the
+    /// sampler took to build ([`TransportBuilt::describe`]), when some solver sampled
+    /// transport; set by [`Lab::compare`].
+    pub transport: Option<String>,
 }
 
 impl Comparison {
@@ -83,6 +105,7 @@ impl Comparison {
             outcomes,
             charge: lab.charge().copied(),
             clock: lab.clock(),
+            transport: None,
         }
     }
 

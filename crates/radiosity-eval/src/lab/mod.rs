@@ -71,3 +71,4 @@ pub(crate) mod recorder;
 pub(crate) mod run;
 pub(crate) mod setup;
 pub(crate) mod timing;
+pub(crate) mod transport;

@@ -1,5 +1,6 @@
-//! How a lab is set up ([`LabOptions`]) and how its solvers pay for the columns they fetch
-//! ([`ColumnCost`], [`ColumnCharge`]).
+//! How a lab is set up ([`LabOptions`]), how its solvers pay for the columns they fetch
+//! ([`ColumnCost`], [`ColumnCharge`]), and where the solvers that sample transport cast their
+//! rays ([`Transport`]).
 
 use crate::error::EvalError;
 use crate::lab::timing::sample;
@@ -33,6 +34,66 @@ pub struct LabOptions {
     /// How solvers pay for their columns, and so the clock of their seconds (default
     /// [`ColumnCost::Computed`]).
     pub columns: ColumnCost,
+    /// Where the solvers that sample transport cast their rays (default
+    /// [`Transport::Scene`]).
+    pub transport: Transport,
+}
+
+/// Where a lab's solvers that sample transport (`StepKind::Sampled`) cast their rays: the
+/// [`radiosity_core::TransportSampler`] of their problem, built once per lab, when the first
+/// such run starts.
+///
+/// - `Scene` (the default): rays through the scene's BVH (`radiosity_ff::SceneTransport`),
+///   the exact geometry, which the lab's backend approximates; the sampler states that rows
+///   of F sum to 1 (for a control variate) only where the scene analysis finds the scene
+///   closed. Its system is the scene's, so e_rms against a reference over another backend
+///   includes that backend's form-factor error.
+/// - `Matrix`: the lab's stored matrix sampled exactly (`radiosity_core::ColumnTransport`, an
+///   alias table per column, built by reading every column): the very system the reference
+///   solves, so e_rms is the solver's error alone. It needs the stored matrix: a `matrix`
+///   reference (which then keeps the matrix) or a stored backend.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Transport {
+    /// Rays in the scene (the default).
+    #[default]
+    Scene,
+    /// The stored matrix, sampled exactly.
+    Matrix,
+}
+
+impl Transport {
+    /// Both, in a fixed order.
+    pub const ALL: [Transport; 2] = [Transport::Scene, Transport::Matrix];
+
+    /// The name the command line (`--transport`) and Python (`transport=`) take: `scene` or
+    /// `matrix`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Transport::Scene => "scene",
+            Transport::Matrix => "matrix",
+        }
+    }
+}
+
+/// Reads [`Transport::name`].
+impl FromStr for Transport {
+    type Err = EvalError;
+
+    fn from_str(s: &str) -> Result<Transport, EvalError> {
+        Transport::ALL.into_iter().find(|t| t.name() == s.trim()).ok_or_else(|| EvalError::InvalidParameter {
+            name: "transport",
+            value: s.to_string(),
+            reason: "it must be scene or matrix",
+        })
+    }
+}
+
+/// [`Transport::name`].
+impl fmt::Display for Transport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
 }
 
 /// How a lab's solvers pay for the columns (and rows) of F they fetch, which decides the
@@ -196,6 +257,7 @@ impl Default for LabOptions {
             shooting: ShootingParams::default(),
             memory: None,
             columns: ColumnCost::default(),
+            transport: Transport::default(),
         }
     }
 }
@@ -228,6 +290,12 @@ impl LabOptions {
     /// Sets [`LabOptions::columns`].
     pub fn with_columns(mut self, columns: ColumnCost) -> Self {
         self.columns = columns;
+        self
+    }
+
+    /// Sets [`LabOptions::transport`].
+    pub fn with_transport(mut self, transport: Transport) -> Self {
+        self.transport = transport;
         self
     }
 

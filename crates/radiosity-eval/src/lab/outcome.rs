@@ -3,7 +3,7 @@
 
 use crate::lab::recorder::{Point, TableRow};
 use radiosity_core::{Clock, Real};
-use radiosity_solvers::{Record, State};
+use radiosity_solvers::{Record, StandardError, State};
 
 /// The metrics of a run's final radiosity.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,6 +23,12 @@ pub struct FinalMetrics {
     /// The residual power the solver knows without F (for shooting methods, that of the shot
     /// radiosity), when it knows one.
     pub solver_residual: Option<Real>,
+    /// The solver's standard error of its final radiosity, relative as e_rms is
+    /// ([`StandardError::relative_rms`]), when its answer is an estimate with one: a spread,
+    /// not a promise (module doc of [`StandardError`]).
+    pub standard_error: Option<Real>,
+    /// The independent replicates the standard error rests on.
+    pub replicates: Option<usize>,
 }
 
 /// What one run did and measured.
@@ -46,6 +52,8 @@ pub struct Outcome {
     pub last: FinalMetrics,
     /// The clock its seconds were counted on (its points', rows' and state's).
     pub clock: Clock,
+    /// The solver's standard error of its final radiosity, patch by patch, when it has one.
+    pub standard_error: Option<StandardError>,
 }
 
 impl Outcome {

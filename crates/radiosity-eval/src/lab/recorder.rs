@@ -1,12 +1,19 @@
 //! The recorder: an observer the executor calls between steps, outside the timed region, that
-//! measures e_rms and the certified bound after every step and every metric at planned steps
-//! ([`RecordPlan`]), its own time kept apart.
+//! measures e_rms, the certified bound and the solver's standard error after every step and
+//! every metric at planned steps ([`RecordPlan`]), its own time kept apart.
+//!
+//! The standard error is the solver's own error bar, for a solver whose answer is an estimate
+//! ([`radiosity_solvers::Solver::standard_error`], the spread of independent replicates),
+//! summarised as e_rms is ([`StandardError::relative_rms`]), so that the two read side by side;
+//! NaN for the solvers that have none. A bound is a promise that holds every time; a standard
+//! error a spread, which the true error exceeds now and then (module doc of
+//! [`StandardError`]).
 
 use crate::progress::Progress;
 use crate::reference::certificate::{Contraction, SolverBound, relative_without_reference};
 use crate::reference::metrics::{Evaluator, Metrics, errors_against};
 use radiosity_core::{LinearSystem, Real};
-use radiosity_solvers::{ErrorMonitor, Observer, Record, ResidualBound, State};
+use radiosity_solvers::{ErrorMonitor, Observer, Record, ResidualBound, StandardError, State};
 use std::cell::Cell;
 use std::ops::ControlFlow;
 use std::rc::Rc;
@@ -17,7 +24,8 @@ use std::time::Instant;
 #[non_exhaustive]
 pub struct RecordPlan {
     /// Every metric every this many steps (`None`: about 100 points over the run's budget, and
-    /// every step of a solver whose step is a whole product by F, `StepKind::Product`).
+    /// every step of a solver whose step is a whole product by F, `StepKind::Product`, or an
+    /// iteration by rays, `StepKind::Sampled`).
     /// e_rms is recorded after every step regardless.
     pub every: Option<u64>,
     /// Also record every metric at `n/4`, `n/2`, `n` and `2n` columns.
@@ -52,6 +60,8 @@ pub struct Point {
     pub columns: u64,
     /// Products `F·x` of the source's own ([`radiosity_core::ColumnSource::multiply`]).
     pub products: u64,
+    /// Rays cast by a solver that samples transport.
+    pub rays: u64,
     /// The run's seconds so far (form factors and solving; measurement excluded), on the run's
     /// clock ([`crate::Lab::clock`]): what a `time=` rule reads.
     pub seconds: Real,
@@ -64,6 +74,9 @@ pub struct Point {
     /// reference's, from what the solver knows without extra columns ([`SolverBound`]); NaN
     /// when the solver knows none.
     pub bound: Real,
+    /// The solver's standard error of the displayed radiosity, summarised as e_rms is
+    /// ([`StandardError::relative_rms`]); NaN when the solver has none.
+    pub std_error: Real,
 }
 
 /// One measured point of a run. Fields are plain data, so rows are written as literals.
@@ -77,6 +90,8 @@ pub struct TableRow {
     pub columns: u64,
     /// Products by F the source computed itself.
     pub products: u64,
+    /// Rays cast by a solver that samples transport.
+    pub rays: u64,
     /// Seconds of the run so far (metrics excluded), on the run's clock ([`crate::Lab::clock`]).
     pub seconds: Real,
     /// Of them, the form factors' seconds, on the same clock.
@@ -90,13 +105,45 @@ pub struct TableRow {
     /// The certified bound on the area-weighted L1 error, relative to `Σ A |B|` of the reference
     /// (infinite where the system is not certifiable; NaN where F was not available).
     pub bound: Real,
+    /// The solver's standard error, relative as e_rms is ([`Point::std_error`]; NaN when the
+    /// solver has none).
+    pub std_error: Real,
 }
 
 /// What watches a run's points ([`crate::Lab::run_watched`]): `Break` ends the run.
 pub(crate) type PointWatch<'w> = dyn FnMut(&Point, &State) -> ControlFlow<()> + 'w;
 
-/// Records e_rms and the certified bound after every step and every metric at planned steps
-/// ([`RecordPlan`]), outside the run's timed region, its own time kept apart as measurement.
+/// What a run's progress counts (`Progress::advance`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum ProgressUnit {
+    Columns,
+    Steps,
+    Rays,
+}
+
+impl ProgressUnit {
+    /// The unit's name, for progress bars.
+    pub(crate) fn name(self) -> &'static str {
+        match self {
+            ProgressUnit::Columns => "columns",
+            ProgressUnit::Steps => "steps",
+            ProgressUnit::Rays => "rays",
+        }
+    }
+
+    /// The count of `state` in this unit.
+    fn of(self, state: &State) -> u64 {
+        match self {
+            ProgressUnit::Columns => state.columns,
+            ProgressUnit::Steps => state.step,
+            ProgressUnit::Rays => state.rays,
+        }
+    }
+}
+
+/// Records e_rms, the certified bound and the standard error after every step and every
+/// metric at planned steps ([`RecordPlan`]), outside the run's timed region, its own time kept
+/// apart as measurement.
 pub struct Recorder<'a> {
     pub(super) system: &'a LinearSystem,
     /// The exact answer, patch-major like the system's vectors, when there is one.
@@ -105,6 +152,8 @@ pub struct Recorder<'a> {
     pub(super) contraction: Option<&'a Contraction>,
     /// The solver's residual bound on the state about to be observed.
     pub(super) known: Option<ResidualBound>,
+    /// The solver's standard error on the state about to be observed.
+    pub(super) spread: Option<StandardError>,
     /// Where [`Point::wall`] counts from.
     pub(super) clock: Instant,
     pub(super) evaluator: Option<&'a Evaluator<'a>>,
@@ -116,7 +165,7 @@ pub struct Recorder<'a> {
     pub(super) overhead: Real,
     /// Where each step is reported, if anywhere (no message is formatted otherwise).
     pub(super) progress: Option<&'a dyn Progress>,
-    pub(super) by_columns: bool,
+    pub(super) unit: ProgressUnit,
     /// The e_rms of the last state observed, which [`Recorder::monitor`] hands the `rms=` rule.
     pub(super) latest: Rc<Cell<Option<Real>>>,
     /// Shown every point recorded with its state; `Break` ends the run ([`Lab::run_watched`]).
@@ -137,6 +186,7 @@ impl<'a> Recorder<'a> {
             reference: Some(reference),
             contraction: None,
             known: None,
+            spread: None,
             clock,
             evaluator: None,
             solver: String::new(),
@@ -146,7 +196,7 @@ impl<'a> Recorder<'a> {
             rows: Vec::new(),
             overhead: 0.0,
             progress: None,
-            by_columns: true,
+            unit: ProgressUnit::Columns,
             latest: Rc::default(),
             watch: None,
             stop: false,
@@ -198,6 +248,7 @@ impl Observer for Recorder<'_> {
             (Some(known), Some(c)) => SolverBound::new(self.system, c, &known, &state.radiosity).relative,
             _ => Real::NAN,
         };
+        let std_error = self.spread.take().map_or(Real::NAN, |s| s.relative_rms(self.system, &state.radiosity));
         let ff_seconds = state.ff_seconds;
         let seconds = ff_seconds + state.solve_seconds;
         let new_mark =
@@ -208,12 +259,14 @@ impl Observer for Recorder<'_> {
                 step: state.step,
                 columns: state.columns,
                 products: state.products,
+                rays: state.rays,
                 seconds,
                 ff_seconds,
                 e_rms,
                 e_max,
                 residual,
                 bound,
+                std_error,
             };
             match self.evaluator.map(|e| e.evaluate(&state.radiosity)) {
                 Some(Ok(m)) => {
@@ -229,19 +282,32 @@ impl Observer for Recorder<'_> {
             }
         }
         let wall = (start - self.clock).as_secs_f64() - self.overhead;
-        let point =
-            Point { step: state.step, columns: state.columns, products: state.products, seconds, wall, e_rms, bound };
+        let point = Point {
+            step: state.step,
+            columns: state.columns,
+            products: state.products,
+            rays: state.rays,
+            seconds,
+            wall,
+            e_rms,
+            bound,
+            std_error,
+        };
         self.points.push(point);
         if let Some(watch) = self.watch.as_mut() {
             self.stop |= watch(&point, state).is_break();
         }
         if let Some(progress) = self.progress {
-            let message = match (e_rms.is_nan(), bound.is_nan()) {
+            let mut message = match (e_rms.is_nan(), bound.is_nan()) {
                 (false, _) => format!("e_rms {e_rms:.2e}"),
                 (true, false) => format!("bound {bound:.2e}"),
                 (true, true) => String::new(),
             };
-            progress.advance(if self.by_columns { state.columns } else { state.step }, &message);
+            if !std_error.is_nan() {
+                let gap = if message.is_empty() { "" } else { ", " };
+                message.push_str(&format!("{gap}standard error {std_error:.2e}"));
+            }
+            progress.advance(self.unit.of(state), &message);
         }
         self.overhead += start.elapsed().as_secs_f64();
         self.latest.set((!e_rms.is_nan()).then_some(e_rms));
@@ -257,6 +323,14 @@ impl Observer for Recorder<'_> {
 
     fn observe_residual_bound(&mut self, _state: &State, bound: Option<&ResidualBound>) {
         self.known = bound.cloned();
+    }
+
+    fn wants_standard_error(&self) -> bool {
+        true
+    }
+
+    fn observe_standard_error(&mut self, _state: &State, error: Option<&StandardError>) {
+        self.spread = error.cloned();
     }
 }
 

@@ -1,15 +1,17 @@
 //! Running one solver in a lab: a [`Recorder`] set up for it, its columns paid for as the lab
-//! says ([`crate::ColumnCost`]), its final metrics; and the reference itself as a final state.
+//! says ([`crate::ColumnCost`]), its rays cast through the lab's transport sampler when it
+//! samples transport ([`Lab::transport_sampler`]), its final metrics; and the reference itself
+//! as a final state.
 
 use crate::error::LabError;
 use crate::lab::outcome::{FinalMetrics, Outcome};
-use crate::lab::recorder::{Point, RecordPlan, Recorder, matrix_relative_bound};
+use crate::lab::recorder::{Point, ProgressUnit, RecordPlan, Recorder, matrix_relative_bound};
 use crate::lab::setup::{Lab, ReferenceOrigin};
 use crate::progress::Progress;
 use crate::reference::certificate::SolverBound;
 use crate::reference::metrics::errors;
 use crate::reference::solution::Method;
-use radiosity_core::Real;
+use radiosity_core::{Real, TransportSampler};
 use radiosity_solvers::{Executor, ObserverMode, Problem, Solver, State, StepKind, StopRule, StopRules};
 use std::ops::ControlFlow;
 use std::rc::Rc;
@@ -53,24 +55,46 @@ impl Lab<'_> {
         progress: &dyn Progress,
         watch: &mut dyn FnMut(&Point, &State) -> ControlFlow<()>,
     ) -> Result<Outcome, LabError> {
+        // Built before the run (set-up, not the run's time), only for a run that casts rays.
+        let built = match solver.step_kind() {
+            StepKind::Sampled => Some(self.transport_sampler()?),
+            _ => None,
+        };
+        self.run_on(solver, rules, plan, progress, watch, built.as_ref().map(|b| &*b.sampler as &dyn TransportSampler))
+    }
+
+    /// [`Lab::run_watched`], a solver that samples transport casting its rays through
+    /// `sampler` ([`Lab::transport_sampler`], built by the caller: once for a comparison).
+    pub(crate) fn run_on(
+        &self,
+        solver: &mut dyn Solver,
+        rules: &StopRules,
+        plan: &RecordPlan,
+        progress: &dyn Progress,
+        watch: &mut dyn FnMut(&Point, &State) -> ControlFlow<()>,
+        sampler: Option<&dyn TransportSampler>,
+    ) -> Result<Outcome, LabError> {
         if let Some(w) = self.row_warning(solver) {
             progress.warn(&w);
         }
         let name = solver.name();
+        let sampled = solver.step_kind() == StepKind::Sampled;
+        let sampler = if sampled { sampler } else { None };
         let evaluator = self.evaluator()?;
-        let (target, unit) = progress_target(rules, self.n());
+        let (target, unit) = progress_target(rules, self.n(), sampled);
         let n = self.n() as u64;
         let mut recorder = Recorder {
             system: &self.system,
             reference: self.reference.as_ref().map(|r| r.values()),
             contraction: Some(&self.contraction),
             known: None,
+            spread: None,
             clock: Instant::now(),
             evaluator: evaluator.as_ref(),
             solver: name.clone(),
-            // A step that is a whole product by F is a sweep's worth of columns: every one is
-            // recorded.
-            every: plan.every.unwrap_or(if solver.step_kind() == StepKind::Product {
+            // A step that is a whole product by F is a sweep's worth of columns, and one by rays
+            // an iteration over every patch: every one is recorded.
+            every: plan.every.unwrap_or(if matches!(solver.step_kind(), StepKind::Product | StepKind::Sampled) {
                 1
             } else {
                 (target / 100).max(1)
@@ -80,17 +104,20 @@ impl Lab<'_> {
             rows: Vec::new(),
             overhead: 0.0,
             progress: Some(progress),
-            by_columns: unit == "columns",
+            unit,
             latest: Rc::default(),
             watch: Some(watch),
             stop: false,
         };
-        progress.begin(&name, target, unit);
+        progress.begin(&name, target, unit.name());
         // Every run starts from columns as costly as the first ones: what an earlier run left
         // in the source's memory (the analytic backend's visible fractions) would make later
         // solvers look faster.
         self.source.reset_memory();
-        let problem = Problem::new(&self.system, &*self.source)?.with_patch_order(&self.order)?;
+        let mut problem = Problem::new(&self.system, &*self.source)?.with_patch_order(&self.order)?;
+        if let Some(sampler) = sampler {
+            problem = problem.with_transport(sampler)?;
+        }
         let mut monitor = recorder.monitor();
         let mut executor = Executor::new(solver, rules.clone());
         if let Some(monitor) = monitor.as_mut() {
@@ -103,6 +130,9 @@ impl Lab<'_> {
         let known = solver.residual_bound(&problem, &run.state);
         let solver_bound =
             known.map(|k| SolverBound::new(&self.system, &self.contraction, &k, &run.state.radiosity).relative);
+        let spread = solver.standard_error(&problem, &run.state);
+        let standard_error = spread.as_ref().map(|s| s.relative_rms(&self.system, &run.state.radiosity));
+        let replicates = spread.as_ref().map(|s| s.replicates);
         let last = match (&evaluator, &self.reference) {
             (Some(e), _) => {
                 let m = e.evaluate(&run.state.radiosity)?;
@@ -114,6 +144,8 @@ impl Lab<'_> {
                     residual: Some(m.residual),
                     bound: solver_bound.or(matrix_bound),
                     solver_residual,
+                    standard_error,
+                    replicates,
                 }
             }
             (None, Some(reference)) => {
@@ -124,11 +156,19 @@ impl Lab<'_> {
                     residual: None,
                     bound: solver_bound,
                     solver_residual,
+                    standard_error,
+                    replicates,
                 }
             }
-            (None, None) => {
-                FinalMetrics { e_rms: None, e_max: None, residual: None, bound: solver_bound, solver_residual }
-            }
+            (None, None) => FinalMetrics {
+                e_rms: None,
+                e_max: None,
+                residual: None,
+                bound: solver_bound,
+                solver_residual,
+                standard_error,
+                replicates,
+            },
         };
         Ok(Outcome {
             solver: run.solver,
@@ -140,6 +180,7 @@ impl Lab<'_> {
             last,
             state: run.state,
             clock: self.clock(),
+            standard_error: spread,
         })
     }
 
@@ -180,6 +221,8 @@ impl Lab<'_> {
             residual: residual.map(|m| m.residual),
             bound: certificate.certified.then_some(certificate.relative_bound),
             solver_residual: None,
+            standard_error: None,
+            replicates: None,
         })
     }
 
@@ -210,16 +253,20 @@ pub fn rgb(state: &State) -> Vec<[Real; 3]> {
     state.radiosity.chunks_exact(k).map(|b| if k == 1 { [b[0]; 3] } else { [b[0], b[1], b[2]] }).collect()
 }
 
-/// The count a run's progress is measured against: its first `columns=` or `steps=` rule
-/// (`2n` columns otherwise), and its unit.
-fn progress_target(rules: &StopRules, n: usize) -> (u64, &'static str) {
+/// The count a run's progress is measured against, and its unit: for a solver that samples
+/// transport (`sampled`), its first `rays=` or `steps=` rule (rays, with no target,
+/// otherwise); for the others, their first `columns=` or `steps=` rule (`2n` columns
+/// otherwise). A rule that counts what the run does not spend never holds for it: in a
+/// comparison that mixes both, each solver stops on its own.
+fn progress_target(rules: &StopRules, n: usize, sampled: bool) -> (u64, ProgressUnit) {
     rules
         .rules
         .iter()
-        .find_map(|r| match r {
-            StopRule::Columns(c) => Some((c.resolve(n), "columns")),
-            StopRule::Steps(c) => Some((c.resolve(n), "steps")),
+        .find_map(|r| match *r {
+            StopRule::Rays(c) if sampled => Some((c.resolve(n), ProgressUnit::Rays)),
+            StopRule::Columns(c) if !sampled => Some((c.resolve(n), ProgressUnit::Columns)),
+            StopRule::Steps(c) => Some((c.resolve(n), ProgressUnit::Steps)),
             _ => None,
         })
-        .unwrap_or((2 * n as u64, "columns"))
+        .unwrap_or(if sampled { (0, ProgressUnit::Rays) } else { (2 * n as u64, ProgressUnit::Columns) })
 }

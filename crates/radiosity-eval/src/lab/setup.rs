@@ -5,7 +5,7 @@
 use crate::error::LabError;
 use crate::lab::backends::{assemble_matrix, backend, obtain_matrix};
 use crate::lab::charged::ChargedColumns;
-use crate::lab::options::{ColumnCharge, ColumnCost, LabOptions};
+use crate::lab::options::{ColumnCharge, ColumnCost, LabOptions, Transport};
 use crate::progress::Progress;
 use crate::reference::cache::{Lookup, checksum, scene_key};
 use crate::reference::certificate::Contraction;
@@ -71,6 +71,8 @@ pub struct Lab<'p> {
     /// What building the backend found and cost, when it says
     /// ([`radiosity_ff::FormFactorBackend::figures`]).
     pub(super) figures: Option<BackendFigures>,
+    /// Where the solvers that sample transport cast their rays ([`LabOptions::transport`]).
+    pub(super) transport: Transport,
 }
 
 /// How the matrix of a lab's source is obtained, when a `matrix` reference needs it.
@@ -119,7 +121,8 @@ impl<'p> Lab<'p> {
             let source = matrix.clone();
             let setup = Lab::setup(prepared, &label, &source, Assembly::Stored(matrix), &options, progress)?;
             // The backend is the matrix: its columns cost what they cost.
-            return Ok(Lab::finish(prepared, &label, Box::new(source), serves_rows, setup, ColumnCost::Computed));
+            let columns = ColumnCost::Computed;
+            return Ok(Lab::finish(prepared, &label, Box::new(source), serves_rows, setup, columns, options.transport));
         }
         let built = backend(prepared, spec, options.cache.as_ref(), progress)?;
         let (serves_rows, figures) = (built.serves_rows(), built.figures());
@@ -131,7 +134,8 @@ impl<'p> Lab<'p> {
             None => Assembly::Columns,
         };
         let setup = Lab::setup(prepared, &label, &source, assembly, &options, progress)?;
-        let lab = Lab::finish(prepared, &label, Box::new(source), serves_rows, setup, options.columns);
+        let lab =
+            Lab::finish(prepared, &label, Box::new(source), serves_rows, setup, options.columns, options.transport);
         Ok(Lab { figures, ..lab })
     }
 
@@ -160,7 +164,7 @@ impl<'p> Lab<'p> {
         }
         let source = F32Columns(source);
         let setup = Lab::setup(prepared, backend, &source, Assembly::Columns, &options, progress)?;
-        Ok(Lab::finish(prepared, backend, Box::new(source), serves_rows, setup, options.columns))
+        Ok(Lab::finish(prepared, backend, Box::new(source), serves_rows, setup, options.columns, options.transport))
     }
 
     fn finish(
@@ -170,6 +174,7 @@ impl<'p> Lab<'p> {
         serves_rows: bool,
         setup: Setup,
         columns: ColumnCost,
+        transport: Transport,
     ) -> Lab<'p> {
         let scene = prepared.scene();
         // Charged columns: the stored matrix serves them (exact rows too), at the backend's
@@ -198,6 +203,7 @@ impl<'p> Lab<'p> {
             order: radiosity_geom::spatial_order(scene),
             charged,
             figures: None,
+            transport,
         }
     }
 
@@ -267,7 +273,9 @@ impl<'p> Lab<'p> {
             }
             progress.end();
         }
-        let keep_matrix = kind == ReferenceKind::Matrix && (options.residuals || cached.is_none());
+        // A matrix that rays sample is kept too, so that it never depends on the cache.
+        let keep_matrix = kind == ReferenceKind::Matrix
+            && (options.residuals || options.transport == Transport::Matrix || cached.is_none());
         let n = system.len() as Real;
         let (matrix, assembly_seconds, assembled_column) = match (keep_matrix, assembly) {
             (false, _) => (stored, 0.0, None),

@@ -2,8 +2,17 @@
 //! the recorded steps), `report.md` (e_rms at n/4, n/2, n and 2n columns; columns and seconds
 //! to reach e_rms 1e-2 and 1e-3; where the time went; what the scene analysis left out; the
 //! reference, its kind and its certificate) and plots of e_rms against shooting steps (the
-//! paper's axis), columns and seconds, as SVG and PNG, and a summary table for the
-//! terminal. Every one of them names the clock its seconds were counted on ([`Clock::name`]:
+//! paper's axis), columns and seconds (and rays, when a solver cast rays), as SVG and PNG, and
+//! a summary table for the terminal.
+//!
+//! **Solvers that sample transport** sit in the same table and plots as the others. Their
+//! cost is counted in rays: the rays plot holds the solvers that cast rays, the columns plot
+//! those that computed columns (or cast none), and the steps and seconds plots every solver.
+//! Their error bar is a standard error (the spread of independent replicates, summarised as
+//! e_rms is), reported beside the certified bound of the deterministic solvers: a bound is a
+//! promise that holds every time, a standard error a spread that the true error exceeds now
+//! and then. The plots draw it as a shaded band up to twice the standard error
+//! ([`crate::reports::plot`]'s module doc). Every one of them names the clock its seconds were counted on ([`Clock::name`]:
 //! `measured`, columns computed and timed; `charged`, columns read from the stored matrix and
 //! each charged the backend's modelled cost). Without a reference (`--reference none`) the
 //! certified bound of every step takes e_rms's place in the tables and plots.
@@ -53,28 +62,36 @@ impl Comparison {
         Ok(Written { dir: dir.to_path_buf(), files })
     }
 
-    /// Writes the three plots as SVG and PNG; returns their file stems and titles.
+    /// Writes the plots as SVG and PNG (against steps, columns, rays and seconds, each that
+    /// has a solver to show: module doc); returns their file stems and titles.
     fn write_plots(&self, dir: &Path, files: &mut Vec<PathBuf>) -> Result<Vec<(String, String)>, LabError> {
         type Axis = fn(&Point) -> Real;
+        type Shown = fn(&Outcome) -> bool;
         let seconds = format!("{} seconds (form factors and solving)", self.clock.name());
-        let axes: [(&str, &str, Axis); 3] = [
-            ("steps", "shooting steps", |p| p.step as Real),
-            ("columns", "form-factor columns computed", |p| p.columns as Real),
-            ("seconds", &seconds, |p| p.seconds),
+        let axes: [(&str, &str, Axis, Shown); 4] = [
+            ("steps", "shooting steps", |p| p.step as Real, |_| true),
+            ("columns", "form-factor columns computed", |p| p.columns as Real, |o| !casts_only(o)),
+            ("rays", "rays cast", |p| p.rays as Real, |o| o.state.rays > 0),
+            ("seconds", &seconds, |p| p.seconds, |_| true),
         ];
         let metric = self.metric();
         let what = if self.has_reference() { "e_rms" } else { "certified bound" };
         let mut written = Vec::new();
-        for (axis, x_label, x) in axes {
+        for (axis, x_label, x, shown) in axes {
             let stem = format!("{metric}-{axis}");
             let curves: Vec<Curve> = self
                 .outcomes
                 .iter()
+                .filter(|o| shown(o))
                 .map(|o| Curve {
                     label: o.solver.clone(),
                     points: o.points.iter().map(|p| (x(p), self.value(p))).filter(|(_, y)| y.is_finite()).collect(),
+                    spread: o.points.iter().map(|p| (x(p), p.std_error)).filter(|(_, s)| s.is_finite()).collect(),
                 })
                 .collect();
+            if curves.is_empty() {
+                continue;
+            }
             let spec = PlotSpec {
                 title: format!("{}: {what} against {x_label}", self.scene.scene),
                 x_label: x_label.into(),
@@ -134,7 +151,7 @@ impl Comparison {
         }
         let _ = writeln!(
             md,
-            "\n## Columns (and products) and {} seconds to reach {metric} 1e-2 and 1e-3\n",
+            "\n## Columns (and products, or rays) and {} seconds to reach {metric} 1e-2 and 1e-3\n",
             self.clock.name()
         );
         let _ = writeln!(md, "| solver | 1e-2 | 1e-3 |\n|---|--:|--:|");
@@ -142,6 +159,7 @@ impl Comparison {
             let _ =
                 writeln!(md, "| `{}` | {} | {} |", o.solver, self.reached_cell(o, 1e-2), self.reached_cell(o, 1e-3));
         }
+        self.error_bars_markdown(&mut md);
         let _ = writeln!(md, "\n## Where the time went\n");
         let _ = writeln!(
             md,
@@ -150,22 +168,29 @@ impl Comparison {
              run) are measured.\n",
             self.clock.name()
         );
+        let rays = self.casts_rays();
+        if let Some(transport) = &self.transport {
+            let _ = writeln!(md, "Rays: {transport}; a ray's seconds are form-factor seconds, measured.\n");
+        }
         let _ = writeln!(
             md,
-            "| solver | steps | columns (reused) | products | form factors ({}) | solving | of which groups | \
-             measurement | stopped |\n|---|--:|--:|--:|--:|--:|--:|--:|---|",
-            self.clock.name()
+            "| solver | steps | columns (reused) | products |{} form factors ({}) | solving | of which groups | \
+             measurement | stopped |\n|---|--:|--:|--:|{}--:|--:|--:|--:|---|",
+            if rays { " rays |" } else { "" },
+            self.clock.name(),
+            if rays { "--:|" } else { "" },
         );
         for o in &self.outcomes {
             let s = &o.state;
             let _ = writeln!(
                 md,
-                "| `{}` | {} | {} ({}) | {} | {:.3} s | {:.3} s | {:.3} s | {:.3} s | {} |",
+                "| `{}` | {} | {} ({}) | {} |{} {:.3} s | {:.3} s | {:.3} s | {:.3} s | {} |",
                 o.solver,
                 s.step,
                 s.columns,
                 s.columns_reused,
                 s.products,
+                if rays { format!(" {} |", s.rays) } else { String::new() },
                 s.ff_seconds,
                 s.solve_seconds,
                 s.group_seconds,
@@ -199,14 +224,17 @@ impl Comparison {
     }
 
     /// The compact table for the terminal: with a reference, e_rms and the certified bound;
-    /// without, the bound alone.
+    /// without, the bound alone; when a solver cast rays or has a standard error, its rays and
+    /// its standard error too. `1e-3 at` counts columns, or rays for a solver that cast them.
     pub fn summary(&self) -> String {
         let metric = self.metric();
         let bound = if self.has_reference() { format!(" {:>10}", "bound end") } else { String::new() };
+        let sampled = self.casts_rays() || self.outcomes.iter().any(|o| o.last.standard_error.is_some());
+        let rays = if sampled { format!(" {:>12} {:>10}", "rays", "std error") } else { String::new() };
         let seconds = self.clock.seconds_label();
         let width = seconds.len();
         let mut out = format!(
-            "{:<24} {:>8} {:>8} {:>10} {:>10}{bound} {:>10} {seconds}\n",
+            "{:<24} {:>8} {:>8}{rays} {:>10} {:>10}{bound} {:>10} {seconds}\n",
             "solver",
             "steps",
             "columns",
@@ -216,27 +244,86 @@ impl Comparison {
         );
         for o in &self.outcomes {
             let bound = if self.has_reference() { format!(" {:>10}", cell(o.last.bound)) } else { String::new() };
+            let rays = if sampled {
+                format!(" {:>12} {:>10}", o.state.rays, cell(o.last.standard_error))
+            } else {
+                String::new()
+            };
             let _ = writeln!(
                 out,
-                "{:<24} {:>8} {:>8} {:>10} {:>10}{bound} {:>10} {:>width$.3}",
+                "{:<24} {:>8} {:>8}{rays} {:>10} {:>10}{bound} {:>10} {:>width$.3}",
                 o.solver,
                 o.state.step,
                 o.state.columns,
                 cell(o.at_columns_point(self.n).map(|p| self.value(&p))),
                 cell(o.points.last().map(|p| self.value(p))),
-                self.reached(o, 1e-3).map_or("—".into(), |p| p.columns.to_string()),
+                self.reached(o, 1e-3).map_or("—".into(), |p| if casts_only(o) {
+                    format!("{} rays", p.rays)
+                } else {
+                    p.columns.to_string()
+                }),
                 o.seconds()
             );
         }
         out
     }
 
+    /// Whether some run cast rays.
+    fn casts_rays(&self) -> bool {
+        self.outcomes.iter().any(|o| o.state.rays > 0)
+    }
+
+    /// `report.md`'s section on each run's error bar: the certified bound beside the standard
+    /// error, and what each promises.
+    fn error_bars_markdown(&self, md: &mut String) {
+        let _ = writeln!(md, "\n## Error bars: certified bounds and standard errors\n");
+        let _ = writeln!(
+            md,
+            "A certified bound is a promise: the final radiosity's area-weighted L1 error, relative to the \
+             reference's, is at most the bound, every time (docs/design.md §6.3). A standard error is a spread: that \
+             of independent replicates of a solver whose answer is an estimate, summarised as e_rms is, so the two \
+             read side by side; an unbiased estimate's e_rms is expected near it, and exceeds it now and then (per \
+             patch, within 2 standard errors about 70% of the time for 2 replicates, 95% as they grow). Neither \
+             needs the reference.\n"
+        );
+        let _ = writeln!(
+            md,
+            "| solver | {} end | certified bound | standard error (replicates) | rays |\n|---|--:|--:|--:|--:|",
+            self.metric()
+        );
+        for o in &self.outcomes {
+            let spread = match (o.last.standard_error, o.last.replicates) {
+                (Some(s), Some(r)) => format!("{} ({r})", cell(Some(s))),
+                (Some(s), None) => cell(Some(s)),
+                _ => "—".into(),
+            };
+            let _ = writeln!(
+                md,
+                "| `{}` | {} | {} | {spread} | {} |",
+                o.solver,
+                cell(o.points.last().map(|p| self.value(p))),
+                cell(o.last.bound),
+                o.state.rays
+            );
+        }
+    }
+
     fn reached_cell(&self, o: &Outcome, target: Real) -> String {
-        self.reached(o, target).map_or("—".into(), |p| match p.products {
-            0 => format!("{} / {:.3} s", p.columns, p.seconds),
-            k => format!("{} + {k} products / {:.3} s", p.columns, p.seconds),
+        self.reached(o, target).map_or("—".into(), |p| match (p.products, p.rays) {
+            (0, 0) => format!("{} / {:.3} s", p.columns, p.seconds),
+            (0, r) if p.columns == 0 => format!("{r} rays / {:.3} s", p.seconds),
+            (k, r) => {
+                let rays = if r > 0 { format!(" + {r} rays") } else { String::new() };
+                let products = if k > 0 { format!(" + {k} products") } else { String::new() };
+                format!("{}{products}{rays} / {:.3} s", p.columns, p.seconds)
+            }
         })
     }
+}
+
+/// Whether `o` cast rays and computed no column or product: a solver that samples transport.
+fn casts_only(o: &Outcome) -> bool {
+    o.state.rays > 0 && o.state.columns == 0 && o.state.products == 0
 }
 
 /// `text` with its first letter in capitals.

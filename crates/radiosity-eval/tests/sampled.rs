@@ -1,0 +1,249 @@
+//! Solvers that sample transport in the lab: the lab gives their problem its transport
+//! sampler (the stored matrix sampled exactly here), built only for them; every step is
+//! recorded with its rays and the solver's standard error; a comparison that mixes them with a
+//! deterministic solver gives one table and one set of plots, with a rays plot of its own.
+//!
+//! The solver is this file's own, [`DirectByRays`]: direct lighting `E + ρ F E` estimated by
+//! rays from the emitters, in two replicates, each step adding rays to both.
+
+use radiosity_core::Real;
+use radiosity_eval::{
+    Comparison, Lab, LabError, LabOptions, NoProgress, Progress, RecordPlan, ReferenceKind, Transport,
+};
+use radiosity_ff::BackendSpec;
+use radiosity_geom::PreparedScene;
+use radiosity_solvers::{
+    Problem, Record, Sequence, Solver, SolverError, SolverRegistry, StandardError, State, StepKind, StopRules,
+};
+use std::sync::Mutex;
+
+/// Direct lighting by rays: each step casts `rays` rays from every emitting patch in each of
+/// two replicates (independent streams), and each replicate's estimate of `E + ρ F E` is `E`
+/// plus `ρ` times the power landed on each patch over its area, averaged over the rays cast
+/// so far. Unbiased for the system the sampler samples; its standard error is the spread of
+/// the two replicates.
+struct DirectByRays {
+    rays: usize,
+    seed: u64,
+    /// Per replicate, the power landed on each patch and channel over its area, summed over
+    /// every step (divided by the steps taken, it is the estimate of `F E`).
+    landed: [Vec<Real>; 2],
+    error: Option<StandardError>,
+}
+
+impl DirectByRays {
+    fn new(rays: usize, seed: u64) -> DirectByRays {
+        DirectByRays { rays, seed, landed: [Vec::new(), Vec::new()], error: None }
+    }
+}
+
+impl Solver for DirectByRays {
+    fn name(&self) -> String {
+        "direct-rays".into()
+    }
+
+    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<Record, SolverError> {
+        let system = problem.system();
+        let (n, k) = (problem.n(), problem.channels());
+        let (areas, emission) = (system.areas(), system.emissions());
+        let step = state.step;
+        let (rays, seed, name) = (self.rays, self.seed, self.name());
+        let emitters: Vec<usize> = (0..n).filter(|&j| emission[j * k..(j + 1) * k].iter().any(|&e| e > 0.0)).collect();
+        for (r, landed) in self.landed.iter_mut().enumerate() {
+            landed.resize(n * k, 0.0);
+            problem.cast(&name, |cast| {
+                for &j in &emitters {
+                    let mut stream = Sequence::Random.stream(seed, [r as u64, step, j as u64]);
+                    let share = areas[j] * cast.ray_weight(j) / rays as Real;
+                    for _ in 0..rays {
+                        if let Some(i) = cast.cast(j, stream.next_point()) {
+                            for c in 0..k {
+                                landed[i * k + c] += share * emission[j * k + c] / areas[i];
+                            }
+                        }
+                    }
+                }
+            })?;
+        }
+        let steps = (step + 1) as Real;
+        let estimate = |landed: &[Real]| -> Vec<Real> {
+            (0..n * k).map(|idx| emission[idx] + system.reflectivities()[idx] * landed[idx] / steps).collect()
+        };
+        let replicates = [estimate(&self.landed[0]), estimate(&self.landed[1])];
+        let views: Vec<&[Real]> = replicates.iter().map(Vec::as_slice).collect();
+        self.error = Some(StandardError::of_replicates(&views, &mut state.radiosity));
+        state.unshot.fill(0.0);
+        Ok(Record::new())
+    }
+
+    fn residual_power(&self, _problem: &Problem<'_>, _state: &State) -> Option<Real> {
+        None
+    }
+
+    fn standard_error(&self, _problem: &Problem<'_>, _state: &State) -> Option<StandardError> {
+        self.error.clone()
+    }
+
+    fn step_kind(&self) -> StepKind {
+        StepKind::Sampled
+    }
+}
+
+/// A lab on `scene` over the analytic backend with a `matrix` reference and `transport`.
+fn lab(scene: &PreparedScene, reference: ReferenceKind, transport: Transport) -> Result<Lab<'_>, LabError> {
+    let options = LabOptions::default().with_reference(reference).with_transport(transport);
+    Lab::new(scene, &BackendSpec::parse("analytic").unwrap(), options, &NoProgress)
+}
+
+/// `E + ρ F E` over the lab's stored matrix: what [`DirectByRays`] estimates without bias.
+fn direct_lighting(lab: &Lab<'_>) -> Vec<Real> {
+    let (system, matrix) = (lab.system(), lab.matrix().unwrap());
+    let (n, k) = (lab.n(), system.channels().count());
+    let (e, rho) = (system.emissions(), system.reflectivities());
+    (0..n * k)
+        .map(|idx| {
+            let (i, c) = (idx / k, idx % k);
+            e[idx] + rho[idx] * (0..n).map(|j| matrix.get(i, j) * e[j * k + c]).sum::<Real>()
+        })
+        .collect()
+}
+
+/// The units the progress bars were given.
+#[derive(Default)]
+struct Units(Mutex<Vec<String>>);
+
+impl Progress for Units {
+    fn begin(&self, _task: &str, _total: u64, unit: &str) {
+        self.0.lock().unwrap().push(unit.to_string());
+    }
+}
+
+#[test]
+fn a_sampled_run_records_every_step_with_its_rays_and_standard_error() {
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let lab = lab(&scene, ReferenceKind::Matrix, Transport::Matrix).unwrap();
+    let units = Units::default();
+    let rules = StopRules::parse("rays=1e5").unwrap();
+    let o = lab.run(&mut DirectByRays::new(2000, 1), &rules, &RecordPlan::default(), &units).unwrap();
+    assert_eq!(*units.0.lock().unwrap(), ["rays"], "a rays= rule counts the progress in rays");
+    // Every step recorded, each with the rays so far; the first point is the initial state.
+    let steps = o.state.step;
+    assert!(o.termination.contains("rays"), "{}", o.termination);
+    assert_eq!(o.points.len() as u64, steps + 1);
+    assert_eq!(o.rows.len() as u64, steps + 1);
+    assert!(o.points.windows(2).all(|w| w[1].rays > w[0].rays), "rays grow at every step");
+    assert_eq!(o.points.last().unwrap().rays, o.state.rays);
+    assert!(o.state.rays >= 100_000 && o.state.columns == 0, "{} rays, {} columns", o.state.rays, o.state.columns);
+    // The initial state has no standard error; every step's has its two replicates'.
+    assert!(o.points[0].std_error.is_nan());
+    assert!(o.points[1..].iter().all(|p| p.std_error.is_finite() && p.std_error > 0.0));
+    assert_eq!(o.last.replicates, Some(2));
+    let last = o.last.standard_error.unwrap();
+    assert_eq!(last, o.points.last().unwrap().std_error);
+    assert_eq!(last, o.rows.last().unwrap().std_error);
+    let spread = o.standard_error.as_ref().unwrap();
+    assert_eq!(last, spread.relative_rms(lab.system(), &o.state.radiosity));
+    // No certified bound of the solver's own at any step (the final one is F's, the matrix being kept).
+    assert!(o.points.iter().all(|p| p.bound.is_nan()));
+    // The rays sampled the lab's stored matrix: the estimate is within 3 of its standard
+    // errors of `E + ρ F E` over that matrix. The squared summaries of the error and of the
+    // standard error have the same expectation, each a sum over the lit patches, so their
+    // ratio is near 1; 3 leaves room for the two-replicate spread, with a fixed seed.
+    let exact = direct_lighting(&lab);
+    let error = radiosity_eval::errors_against(lab.system(), &exact, &o.state.radiosity).unwrap().e_rms;
+    assert!(error <= 3.0 * last, "e_rms against E + ρ F E {error:e}, standard error {last:e}");
+    // A steps= rule counts the progress in steps.
+    let rules = StopRules::parse("steps=2").unwrap();
+    let units = Units::default();
+    lab.run(&mut DirectByRays::new(100, 1), &rules, &RecordPlan::default(), &units).unwrap();
+    assert_eq!(*units.0.lock().unwrap(), ["steps"]);
+}
+
+#[test]
+fn the_standard_error_falls_as_one_over_the_root_of_the_rays() {
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let lab = lab(&scene, ReferenceKind::Matrix, Transport::Matrix).unwrap();
+    let rules = StopRules::parse("steps=16").unwrap();
+    let o = lab.run(&mut DirectByRays::new(1000, 3), &rules, &RecordPlan::default(), &NoProgress).unwrap();
+    // 16 times the rays of step 1: a standard error 4 times smaller. The two-replicate
+    // summaries, each over the lit patches, spread by some tens of percent; the ratio is
+    // asked within a factor 1.6 of 4.
+    let (first, last) = (o.points[1].std_error, o.points[16].std_error);
+    let ratio = first / last;
+    assert!((2.5..6.4).contains(&ratio), "standard error {first:e} after 1 step, {last:e} after 16: ratio {ratio}");
+}
+
+#[test]
+fn the_sampler_is_built_only_for_runs_that_sample_transport() {
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    // No reference, so no stored matrix to sample.
+    let lab = lab(&scene, ReferenceKind::None, Transport::Matrix).unwrap();
+    let registry = SolverRegistry::builtin();
+    let rules = StopRules::parse("columns=n").unwrap();
+    lab.run(registry.build("pr").unwrap().as_mut(), &rules, &RecordPlan::default(), &NoProgress).unwrap();
+    let sampled = lab.run(&mut DirectByRays::new(10, 1), &rules, &RecordPlan::default(), &NoProgress);
+    let message = sampled.expect_err("no matrix to sample").to_string();
+    assert!(message.contains("--transport matrix") && message.contains("keeps none"), "{message}");
+    assert!(!message.contains('\n'), "one sentence: {message}");
+    // A comparison without a solver that casts rays builds no sampler; one with refuses
+    // before anything runs.
+    let comparison = lab.compare(vec![registry.build("pr").unwrap()], &rules, &NoProgress).unwrap();
+    assert!(comparison.transport.is_none());
+    let solvers: Vec<Box<dyn Solver>> = vec![registry.build("pr").unwrap(), Box::new(DirectByRays::new(10, 1))];
+    assert!(lab.compare(solvers, &rules, &NoProgress).is_err());
+    // With a matrix reference the lab keeps the matrix for the rays, even without residuals.
+    let options = LabOptions::default()
+        .with_reference(ReferenceKind::Matrix)
+        .with_transport(Transport::Matrix)
+        .with_residuals(false);
+    let kept = Lab::new(&scene, &BackendSpec::parse("analytic").unwrap(), options, &NoProgress).unwrap();
+    assert!(kept.matrix().is_some());
+    let built = kept.transport_sampler().unwrap();
+    assert_eq!(built.sampler.patch_count(), kept.n());
+    assert!(built.cost().constant, "a stored matrix's ray is an alias draw");
+}
+
+#[test]
+fn a_comparison_mixing_deterministic_and_sampled_solvers_gives_one_table_and_one_set_of_plots() {
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let lab = lab(&scene, ReferenceKind::Matrix, Transport::Matrix).unwrap();
+    let solvers: Vec<Box<dyn Solver>> =
+        vec![SolverRegistry::builtin().build("pr").unwrap(), Box::new(DirectByRays::new(500, 2))];
+    // Each solver stops on the rule that counts what it spends.
+    let rules = StopRules::parse("columns=n,rays=2e4").unwrap();
+    let comparison: Comparison = lab.compare(solvers, &rules, &NoProgress).unwrap();
+    let (pr, rays) = (&comparison.outcomes[0], &comparison.outcomes[1]);
+    assert!(pr.termination.contains("columns") && pr.state.rays == 0, "{}", pr.termination);
+    assert!(rays.termination.contains("rays") && rays.state.columns == 0, "{}", rays.termination);
+    assert!(comparison.transport.as_deref().is_some_and(|t| t.starts_with("`matrix`")), "{:?}", comparison.transport);
+    let dir = std::env::temp_dir().join(format!("radiosity-eval-sampled-{}", std::process::id()));
+    let written = comparison.write(&dir).unwrap();
+    let names: Vec<String> =
+        written.files.iter().map(|f| f.file_name().unwrap().to_string_lossy().into_owned()).collect();
+    for stem in ["e_rms-steps", "e_rms-columns", "e_rms-rays", "e_rms-seconds"] {
+        assert!(names.contains(&format!("{stem}.svg")) && names.contains(&format!("{stem}.png")), "{names:?}");
+    }
+    // One table: both solvers' rows, with the rays and standard errors.
+    let csv = std::fs::read_to_string(dir.join("convergence.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    assert!(header.contains(&"rays") && header.contains(&"std_error"), "{header:?}");
+    let solver_rows = |name: &str| csv.lines().filter(|l| l.starts_with(&format!("{name},"))).count();
+    assert!(solver_rows("pr") > 1 && solver_rows("direct-rays") > 1, "{csv}");
+    // The seconds plot holds both; the rays plot the solver that cast rays; the columns plot
+    // the one that computed columns.
+    let svg = |stem: &str| std::fs::read_to_string(dir.join(format!("{stem}.svg"))).unwrap();
+    // plotters writes each text on a line of its own.
+    let holds = |text: &str, label: &str| text.contains(&format!(">\n{label}\n</text>"));
+    assert!(holds(&svg("e_rms-seconds"), "pr") && holds(&svg("e_rms-seconds"), "direct-rays"));
+    assert!(holds(&svg("e_rms-rays"), "direct-rays") && !holds(&svg("e_rms-rays"), "pr"));
+    assert!(holds(&svg("e_rms-columns"), "pr") && !holds(&svg("e_rms-columns"), "direct-rays"));
+    assert!(holds(&svg("e_rms-rays"), radiosity_eval::BAND_LABEL), "the band is named in the legend");
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(report.contains("## Error bars: certified bounds and standard errors"), "{report}");
+    let row = report.lines().find(|l| l.starts_with("| `direct-rays` |") && l.contains("(2)")).unwrap();
+    assert!(row.contains(&rays.state.rays.to_string()), "{row}");
+    // The terminal summary gives the rays and the standard error beside the bound.
+    let summary = comparison.summary();
+    assert!(summary.lines().next().unwrap().contains("std error"), "{summary}");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -1,7 +1,7 @@
 //! Convergence plots: SVG with the solvers' names and what e_rms is, PNG of the right size
 //! with lines drawn and the legend beside the data, one style per solver name whatever else
-//! is plotted, axes that start where the data starts, and a clear error when nothing can go
-//! on a log scale.
+//! is plotted, axes that start where the data starts, standard errors as bands named in the
+//! legend, and a clear error when nothing can go on a log scale.
 
 use radiosity_eval::EvalError;
 use radiosity_eval::Rgb8;
@@ -222,4 +222,31 @@ fn nothing_positive_is_a_clear_error() {
     let flat = vec![Curve { label: "done".into(), spread: Vec::new(), points: vec![(0.0, 0.0), (1.0, f64::NAN)] }];
     let err = write_svg(&flat, &spec(), Vec::new()).unwrap_err();
     assert!(matches!(err, EvalError::Plot(_)) && err.to_string().contains("no positive e_rms"), "{err}");
+}
+
+#[test]
+fn a_standard_error_is_a_band_up_to_twice_it_named_in_the_legend() {
+    // e_rms 1e-3 throughout, its standard error 1e-2: the band's top, 2e-2, sets the top of
+    // the y axis, and the band is filled, lightly, in the curve's colour, under the line.
+    let flat = |v: f64| (0..=10).map(|k| (k as f64, v)).collect::<Vec<_>>();
+    let banded = vec![Curve { label: "stochastic-jacobi".into(), points: flat(1e-3), spread: flat(1e-2) }];
+    let mut out = Vec::new();
+    write_svg(&banded, &spec(), &mut out).unwrap();
+    let texts = svg_texts(&String::from_utf8(out).unwrap());
+    assert!(texts.iter().any(|t| t == radiosity_eval::BAND_LABEL), "{texts:?}");
+    assert!(texts.iter().any(|t| t == "2e-2"), "the band's top is on the axis: {texts:?}");
+    let colour = style_of("stochastic-jacobi").colour;
+    // The colour at 15% over white, as the band is filled, give or take rounding.
+    let blend = |c: usize| 255.0 - 0.15 * (255.0 - f64::from(colour[c]));
+    let tint = |p: [u8; 3]| (0..3).all(|c| (f64::from(p[c]) - blend(c)).abs() <= 3.0);
+    let img = png(&banded, &spec());
+    let tinted = img.enumerate().filter(|(_, _, p)| tint(*p)).count();
+    assert!(tinted > 5000, "{tinted} pixels of the band");
+    // Without a standard error, no band and no legend entry for one.
+    let plain = vec![Curve::new("stochastic-jacobi", flat(1e-3))];
+    let mut out = Vec::new();
+    write_svg(&plain, &spec(), &mut out).unwrap();
+    assert!(!svg_texts(&String::from_utf8(out).unwrap()).iter().any(|t| t == radiosity_eval::BAND_LABEL));
+    let tinted = png(&plain, &spec()).enumerate().filter(|(_, _, p)| tint(*p)).count();
+    assert!(tinted < 500, "{tinted} pixels tinted without a band");
 }

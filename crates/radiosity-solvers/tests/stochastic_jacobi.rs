@@ -217,3 +217,16 @@ fn the_error_against_rays_follows_the_first_order_variance_formula() {
         assert!((ratio - 1.0).abs() < 0.3, "{budget} rays: e_rms {} against {} predicted", e2.sqrt(), predicted.sqrt());
     }
 }
+
+#[test]
+fn a_problem_without_form_factors_runs_only_the_solvers_that_sample() {
+    let (system, f) = twelve();
+    let transport = ColumnTransport::new(&f, system.areas()).unwrap();
+    let problem = Problem::sampled(&system, &transport).unwrap();
+    let mut sampled = solver_by_name("stochastic-jacobi").unwrap();
+    let run = Executor::new(sampled.as_mut(), StopRules::parse("steps=5").unwrap()).run(&problem).unwrap();
+    assert!(run.state.rays > 0 && run.state.radiosity.iter().all(|b| b.is_finite()));
+    let mut formed = solver_by_name("gauss-seidel").unwrap();
+    let e = Executor::new(formed.as_mut(), StopRules::parse("steps=5").unwrap()).run(&problem).unwrap_err();
+    assert!(e.to_string().contains("only samples transport"), "{e}");
+}

@@ -18,6 +18,9 @@
 //!
 //! Every backend clamps its entries into `[0, 1]` and counts what it clamped ([`guard`]).
 //!
+//! Beside the backends, [`SceneTransport`] ([`scene_transport`]) samples transport with rays in
+//! the scene for the solvers that never form `F` ([`radiosity_core::TransportSampler`]).
+//!
 //! ```
 //! use radiosity_core::ColumnSource;
 //! use radiosity_ff::{BackendSpec, FormFactorInput};
@@ -53,6 +56,7 @@ pub mod rays;
 pub mod registry;
 pub mod row_comparison;
 pub mod row_diagnosis;
+pub mod scene_transport;
 pub mod sobol;
 pub mod solid_angle;
 pub mod spec;
@@ -75,5 +79,6 @@ pub use matrix::StoredMatrix;
 pub use montecarlo::{MonteCarloColumns, MonteCarloParams, RayTally};
 pub use rays::{HitRay, ShadowSegment, TracedRays};
 pub use registry::BackendRegistry;
+pub use scene_transport::SceneTransport;
 pub use spec::{BackendArgument, BackendParams, BackendSpec};
 pub use traced::ColumnRays;

@@ -131,15 +131,16 @@ enum Outcome {
     Escaped,
 }
 
-/// Uniform sampling by area over a patch's fan triangles.
-struct AreaSampler {
+/// Uniform sampling by area over a patch's fan triangles (also the scene sampler's origins,
+/// [`crate::scene_transport`]).
+pub(crate) struct AreaSampler {
     triangles: [[Vec3; 3]; 2],
     /// The fraction of the area in the first triangle (1 for a triangle patch).
     split: Real,
 }
 
 impl AreaSampler {
-    fn new(patch: &Patch) -> AreaSampler {
+    pub(crate) fn new(patch: &Patch) -> AreaSampler {
         let mut triangles = [[Vec3::ZERO; 3]; 2];
         let mut areas = [0.0; 2];
         for (k, tri) in patch.triangles().take(2).enumerate() {
@@ -152,7 +153,7 @@ impl AreaSampler {
     }
 
     /// The point at `(s, t)` in the unit square; uniform `(s, t)` give points uniform by area.
-    fn point(&self, s: Real, t: Real) -> Vec3 {
+    pub(crate) fn point(&self, s: Real, t: Real) -> Vec3 {
         let (tri, s) = if s < self.split || self.split >= 1.0 {
             (&self.triangles[0], s / self.split)
         } else {

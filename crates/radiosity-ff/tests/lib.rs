@@ -10,4 +10,5 @@ mod matrix;
 mod montecarlo;
 mod pair_visibility;
 mod scale;
+mod scene_transport;
 mod shared_checks;

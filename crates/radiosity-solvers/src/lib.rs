@@ -28,7 +28,11 @@
 //!   ([`GroupAcceleratedParams`]);
 //! - Krylov methods, the numerical analyst's comparators, whose step is one product by `F`:
 //!   `cg` on the symmetrized system ([`CgParams`]), `gmres-K` ([`GmresParams`]) and
-//!   `bicgstab` ([`BicgstabParams`]).
+//!   `bicgstab` ([`BicgstabParams`]);
+//! - stochastic relaxation, which samples transport with rays and never forms `F`
+//!   ([`Problem::with_transport`], [`Problem::cast`]): `stochastic-jacobi`
+//!   ([`StochasticJacobiParams`]), with a standard error from independent replicates
+//!   ([`Solver::standard_error`], [`StandardError`]).
 //!
 //! A researcher's own solver goes beside them, typed ([`SolverRegistry::register`]) or as a
 //! closure ([`SolverRegistry::register_fn`]).
@@ -121,6 +125,7 @@ pub use shooting::progressive::ProgressiveRefinement;
 pub use shooting::rule::unshot_power;
 pub use shooting::southwell::Southwell;
 pub use stochastic::sequence::{PointStream, Sequence};
+pub use stochastic::stochastic_jacobi::{Batch, JacobiForm, StochasticJacobi, StochasticJacobiParams};
 
 /// The point solvers, by canonical name: every one of them is run by the scene-level tests
 /// and snapshots.

@@ -10,6 +10,7 @@ mod clock;
 mod krylov;
 mod residual_bound;
 mod sampled;
+mod stochastic_jacobi;
 
 /// Howell's form factors between unit squares: directly opposed at distance 1, and
 /// perpendicular sharing an edge (C-11 and C-14, evaluated in f64).

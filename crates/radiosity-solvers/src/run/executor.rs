@@ -347,6 +347,13 @@ impl<'a> Executor<'a> {
         let n = problem.n();
         let mut state = State::from_emission(problem.system().emissions(), problem.channels());
         let start_ff = Spent::of(problem);
+        if !problem.forms_columns() && self.solver.step_kind() != StepKind::Sampled {
+            return Err(SolverError::NotApplicable {
+                solver: self.solver.name(),
+                reason: "it needs form factors, and this problem only samples transport with rays (Problem::sampled)"
+                    .into(),
+            });
+        }
         self.solver.applicable(problem)?;
         let start = Instant::now();
         self.solver.init(problem, &mut state)?;

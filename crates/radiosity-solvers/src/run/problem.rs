@@ -44,7 +44,7 @@ use std::time::Instant;
 /// A system and its form factors.
 pub struct Problem<'a> {
     system: &'a LinearSystem,
-    columns: &'a dyn ColumnSource,
+    columns: Columns<'a>,
     fetched: Cell<u64>,
     products: Cell<u64>,
     reused: Cell<u64>,
@@ -58,6 +58,40 @@ pub struct Problem<'a> {
     /// Seconds spent casting rays, measured (also in `ff_seconds`): on a charged clock they
     /// are added to the charge, since no source charges for them.
     ray_seconds: Cell<f64>,
+}
+
+/// Where a problem's columns come from.
+enum Columns<'a> {
+    /// A column source.
+    Source(&'a dyn ColumnSource),
+    /// None: the problem samples transport only ([`Problem::sampled`]).
+    Unformed(Unformed),
+}
+
+/// The column source of a problem that has none ([`Problem::sampled`]): `F` is never formed.
+/// Every entry it gives is NaN, which no solver gets to see: the executor refuses, before any
+/// work, a solver that does not sample transport on such a problem.
+struct Unformed {
+    n: usize,
+}
+
+impl ColumnSource for Unformed {
+    fn patch_count(&self) -> usize {
+        self.n
+    }
+
+    fn fill_column(&self, _j: usize, column: &mut [Real]) {
+        column.fill(Real::NAN);
+    }
+}
+
+impl Columns<'_> {
+    fn source(&self) -> &dyn ColumnSource {
+        match self {
+            Columns::Source(source) => *source,
+            Columns::Unformed(unformed) => unformed,
+        }
+    }
 }
 
 /// A problem's [`TransportSampler`] while a solver casts ([`Problem::cast`]): every ray it
@@ -107,19 +141,37 @@ impl<'a> Problem<'a> {
         if columns.patch_count() != system.len() {
             return Err(SolverError::SizeMismatch { columns: columns.patch_count(), system: system.len() });
         }
-        Ok(Problem {
+        Ok(Problem::over(system, Columns::Source(columns)))
+    }
+
+    /// A problem over `system` whose columns, of the system's size, come from `columns`.
+    fn over(system: &'a LinearSystem, columns: Columns<'a>) -> Problem<'a> {
+        let charged_from = columns.source().charged_seconds();
+        Problem {
             system,
             columns,
             fetched: Cell::new(0),
             products: Cell::new(0),
             reused: Cell::new(0),
             ff_seconds: Cell::new(0.0),
-            charged_from: columns.charged_seconds(),
+            charged_from,
             order: None,
             transport: None,
             rays: AtomicU64::new(0),
             ray_seconds: Cell::new(0.0),
-        })
+        }
+    }
+
+    /// A problem with transport sampled by `sampler` and no form factors at all: only the
+    /// solvers that sample transport run on it (the executor refuses the others before any
+    /// work, [`Problem::forms_columns`]).
+    pub fn sampled(system: &'a LinearSystem, sampler: &'a dyn TransportSampler) -> Result<Problem<'a>, SolverError> {
+        Problem::over(system, Columns::Unformed(Unformed { n: system.len() })).with_transport(sampler)
+    }
+
+    /// Whether the problem has form factors to give (every problem but [`Problem::sampled`]'s).
+    pub fn forms_columns(&self) -> bool {
+        matches!(self.columns, Columns::Source(_))
     }
 
     /// The problem with transport sampled by `sampler` (module doc), which must have the
@@ -214,7 +266,7 @@ impl<'a> Problem<'a> {
     /// Column `j` of F (`F_ij` for every `i`) into `out`: one column computed.
     pub fn column(&self, j: usize, out: &mut [Real]) {
         let start = Instant::now();
-        self.columns.fill_column(j, out);
+        self.columns.source().fill_column(j, out);
         self.ff_seconds.set(self.ff_seconds.get() + start.elapsed().as_secs_f64());
         self.fetched.set(self.fetched.get() + 1);
     }
@@ -224,7 +276,7 @@ impl<'a> Problem<'a> {
     /// column `i` by reciprocity, which is exact only as far as the source is reciprocal.
     pub fn row(&self, i: usize, out: &mut [Real]) {
         let start = Instant::now();
-        let exact = self.columns.fill_row(i, out);
+        let exact = self.columns.source().fill_row(i, out);
         if exact {
             self.ff_seconds.set(self.ff_seconds.get() + start.elapsed().as_secs_f64());
             self.fetched.set(self.fetched.get() + 1);
@@ -239,7 +291,7 @@ impl<'a> Problem<'a> {
     /// `column` is scratch space of `n` values for the second case.
     pub fn multiply(&self, x: &[Real], out: &mut [Real], column: &mut Vec<Real>) -> Product {
         let start = Instant::now();
-        if self.columns.multiply(x, self.channels(), out) {
+        if self.columns.source().multiply(x, self.channels(), out) {
             self.ff_seconds.set(self.ff_seconds.get() + start.elapsed().as_secs_f64());
             self.products.set(self.products.get() + 1);
             return Product::native();
@@ -259,7 +311,7 @@ impl<'a> Problem<'a> {
     /// ([`ColumnSource::reciprocity_bound`]), if any: what conjugate gradients on the
     /// symmetrized system need ([`crate::ConjugateGradients`]).
     pub fn reciprocity_bound(&self) -> Option<Real> {
-        self.columns.reciprocity_bound()
+        self.columns.source().reciprocity_bound()
     }
 
     /// Columns computed so far.
@@ -292,7 +344,7 @@ impl<'a> Problem<'a> {
     /// ([`Problem::clock`]): charged by the source, or measured; rays cast are measured on
     /// either clock (no source charges for them).
     pub fn ff_seconds(&self) -> f64 {
-        match (self.charged_from, self.columns.charged_seconds()) {
+        match (self.charged_from, self.columns.source().charged_seconds()) {
             (Some(from), Some(now)) => (now - from).max(0.0) + self.ray_seconds.get(),
             _ => self.ff_seconds.get(),
         }

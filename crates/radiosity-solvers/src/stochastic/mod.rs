@@ -2,4 +2,6 @@
 //! random walks, docs/stochastic.md), over [`crate::Problem::cast`], and the random numbers
 //! they share.
 
+pub(crate) mod estimate;
 pub(crate) mod sequence;
+pub(crate) mod stochastic_jacobi;

@@ -1,0 +1,212 @@
+//! Tests of `SceneTransport`, rays in the scene as a transport sampler: landing frequencies
+//! against Howell's closed forms, closed boxes, back faces, uniform origins on any patch shape,
+//! and determinism.
+//!
+//! Statistical tolerances: a landing count over `N` independent rays is binomial, so its
+//! frequency has standard error `√(p (1 − p) / N)` with `p` the exact probability; each check
+//! allows 4 of them, which a correct sampler exceeds with probability about `6e-5` (normal
+//! approximation; the counts here are in the thousands). The rays are drawn from fixed seeds,
+//! so a test gives the same numbers on every run.
+
+use super::closed_forms::*;
+use radiosity_core::{Material, Real, Scene, Spectrum, TransportSampler, Vec3};
+use radiosity_ff::SceneTransport;
+use radiosity_ff::ff_point_polygon::point_to_polygon;
+use radiosity_geom::mesh::{BoxFace, Facing};
+use radiosity_geom::{SceneBuilder, Visibility, load_scene};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+/// `count` points of `[0, 1)^4` from the stream `seed`.
+fn points(seed: u64, count: usize) -> Vec<[Real; 4]> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..count).map(|_| [rng.random(), rng.random(), rng.random(), rng.random()]).collect()
+}
+
+/// The landings of `rays` rays cast from `from`.
+fn landings(sampler: &SceneTransport<'_>, from: usize, rays: usize, seed: u64) -> Vec<Option<usize>> {
+    points(seed, rays).into_iter().map(|u| sampler.cast(from, u)).collect()
+}
+
+/// Asserts that `hits` of `rays` lie within 4 binomial standard errors of probability `p`.
+fn assert_binomial(hits: usize, rays: usize, p: Real, what: &str) {
+    let frequency = hits as Real / rays as Real;
+    let sigma = (p * (1.0 - p) / rays as Real).sqrt();
+    assert!((frequency - p).abs() < 4.0 * sigma, "{what}: {frequency} vs {p} (σ {sigma})");
+}
+
+#[test]
+fn landing_frequencies_match_howells_closed_forms() {
+    // One patch per unit square, both directions: a ray from either square lands on the other
+    // with probability F (equal areas), else escapes. 10^5 rays: σ ≈ 1.26e-3 (F = 0.1998
+    // parallel, 0.2000 perpendicular).
+    let rays = 100_000;
+    for (scene, exact) in
+        [(opposed_squares(1), parallel(1.0, 1.0, 1.0)), (corner(1.0, 1.0, 1.0, 1), perpendicular(1.0, 1.0, 1.0))]
+    {
+        let vis = Visibility::new(&scene);
+        let sampler = SceneTransport::new(&scene, &vis, false);
+        assert_eq!(sampler.patch_count(), 2);
+        for (from, to) in [(0, 1), (1, 0)] {
+            let landed = landings(&sampler, from, rays, from as u64);
+            let hits = landed.iter().filter(|&&l| l == Some(to)).count();
+            assert_eq!(hits + landed.iter().filter(|l| l.is_none()).count(), rays, "a ray landed on its own patch");
+            assert_binomial(hits, rays, exact, scene.name());
+        }
+        assert_eq!(sampler.row_sum(0), None);
+    }
+}
+
+#[test]
+fn meshed_rectangles_aggregate_to_howells_value() {
+    // 3 × 3 patches each (unequal rays per patch area do not matter: equal areas). From a
+    // uniformly chosen patch of the first square, the landing frequency on the second is F.
+    let m = 3;
+    let rays = 90_000;
+    let scene = opposed(1.0, 2.0, 0.5, m);
+    let vis = Visibility::new(&scene);
+    let sampler = SceneTransport::new(&scene, &vis, false);
+    let per_patch = rays / (m * m);
+    let hits: usize = (0..m * m)
+        .map(|from| {
+            landings(&sampler, from, per_patch, 10 + from as u64)
+                .iter()
+                .filter(|l| l.is_some_and(|i| i >= m * m))
+                .count()
+        })
+        .sum();
+    // Stratified by patch, the variance is at most that of the binomial with the pooled p.
+    assert_binomial(hits, rays, parallel(1.0, 2.0, 0.5), "3 × 3 rectangles");
+}
+
+#[test]
+fn no_ray_escapes_a_closed_box_and_every_landing_is_a_front_face() {
+    // Every wall faces inwards: a ray from a wall meets another wall's front, never its back,
+    // so every cast lands, and never on its own patch. The block's faces point outwards.
+    for arg in ["furnace:res=2", "furnace:res=2:block=true"] {
+        let scene = load_scene(arg).unwrap().scene;
+        let vis = Visibility::new(&scene);
+        let sampler = SceneTransport::new(&scene, &vis, true);
+        for from in 0..scene.len() {
+            for (k, u) in points(from as u64, 500).into_iter().enumerate() {
+                let landed = sampler.cast(from, u);
+                let Some(to) = landed else { panic!("{arg}: ray {k} from {from} was lost") };
+                assert_ne!(to, from);
+                // The landing is the first hit, on its front side (an independent, brute-force
+                // trace of the same ray).
+                let (origin, direction) = sampler.ray(from, u);
+                let hit = vis.first_hit_brute_force(origin, direction, Some(from)).unwrap();
+                assert!(hit.front && hit.patch == to, "{arg}: ray {k} from {from}");
+                assert!(scene.patches()[to].normal().dot(direction) < 0.0);
+            }
+            assert_eq!(sampler.row_sum(from), Some(1.0));
+        }
+    }
+}
+
+/// The unit box facing inwards with a block `[0.3, 0.7]³` whose faces point into it: the
+/// walls see the block's back.
+fn box_with_inverted_block() -> Scene {
+    let mut b = SceneBuilder::new("inverted block");
+    let grey = b.material(Material::new("grey", Spectrum::grey(0.5), Spectrum::grey(1.0))).unwrap();
+    let walls = b.object("walls");
+    b.axis_box([Vec3::ZERO, Vec3::ONE], &BoxFace::ALL, Facing::Inward, 0.5, grey, walls).unwrap();
+    let block = b.object("block");
+    b.axis_box([Vec3::splat(0.3), Vec3::splat(0.7)], &BoxFace::ALL, Facing::Inward, 0.5, grey, block).unwrap();
+    b.build().unwrap()
+}
+
+#[test]
+fn a_back_facing_patch_is_never_landed_on() {
+    // The walls' rays that meet the block arrive on its back and are absorbed: they land
+    // nowhere (the box is closed, so nothing escapes), and never on the block.
+    let scene = box_with_inverted_block();
+    let walls = 24;
+    let vis = Visibility::new(&scene);
+    let sampler = SceneTransport::new(&scene, &vis, false);
+    for from in 0..walls {
+        let landed = landings(&sampler, from, 1_000, from as u64);
+        assert!(landed.iter().all(|l| l.is_none_or(|to| to < walls)), "wall {from} lit the block");
+        assert!(landed.iter().any(|l| l.is_none()), "wall {from} never met the block");
+    }
+    // The block's faces face into it and see only each other's fronts.
+    for from in walls..scene.len() {
+        assert!(landings(&sampler, from, 1_000, from as u64).iter().all(|l| l.is_some_and(|to| to >= walls)));
+    }
+
+    // Opposed squares turned away from each other: nothing lands.
+    let flipped = two_rectangles([Vec3::ZERO, Vec3::X, Vec3::Y], [Vec3::new(0.0, 0.0, 1.0), Vec3::X, Vec3::Y], 1);
+    let vis = Visibility::new(&flipped);
+    let sampler = SceneTransport::new(&flipped, &vis, false);
+    assert!(landings(&sampler, 0, 5_000, 0).iter().all(|l| l.is_none()));
+    // From the second, rays run away from the first: nothing lands either.
+    assert!(landings(&sampler, 1, 5_000, 1).iter().all(|l| l.is_none()));
+}
+
+#[test]
+fn origins_are_uniform_by_area_on_a_trapezoid() {
+    // A trapezoid at z = 0 (facing up) and a unit square at z = 0.5 over its narrow end (facing
+    // down). The probability of landing on the square is F_trapezoid→square =
+    // (A_square / A_trapezoid) F_square→trapezoid, the latter by a 200 × 200 midpoint rule of
+    // Lambert's formula over the square. A bilinear map of the trapezoid would put too many
+    // origins at its narrow end, under the square (frequency 0.259 against 0.193). 2·10^5 rays:
+    // σ ≈ 8.8e-4.
+    let p = |x: Real, y: Real| Vec3::new(x, y, 0.0);
+    let trapezoid = [p(0.0, -1.0), p(2.0, -0.2), p(2.0, 0.2), p(0.0, 1.0)];
+    let mut b = SceneBuilder::new("trapezoid");
+    let grey = b.material(Material::new("grey", Spectrum::grey(0.5), Spectrum::grey(1.0))).unwrap();
+    let object = b.object("shapes");
+    b.polygon(&trapezoid, grey, object).unwrap();
+    let q = |x: Real, y: Real| Vec3::new(x, y, 0.5);
+    b.polygon(&[q(1.0, -0.5), q(1.0, 0.5), q(2.0, 0.5), q(2.0, -0.5)], grey, object).unwrap();
+    let scene = b.build().unwrap();
+    let (shooter, square) = (&scene.patches()[0], &scene.patches()[1]);
+    let k = 200;
+    let mut square_to_shooter = 0.0;
+    for a in 0..k {
+        for c in 0..k {
+            let x = square.point_at((a as Real + 0.5) / k as Real, (c as Real + 0.5) / k as Real);
+            square_to_shooter += point_to_polygon(x, square.normal(), shooter.vertices());
+        }
+    }
+    square_to_shooter /= (k * k) as Real;
+    let exact = square.area() / shooter.area() * square_to_shooter;
+    let vis = Visibility::new(&scene);
+    let sampler = SceneTransport::new(&scene, &vis, false);
+    let rays = 200_000;
+    let hits = landings(&sampler, 0, rays, 7).iter().filter(|&&l| l == Some(1)).count();
+    assert_binomial(hits, rays, exact, "trapezoid");
+}
+
+#[test]
+fn the_same_point_gives_the_same_landing_whatever_the_threads() {
+    let scene = load_scene("furnace:res=2:block=true").unwrap().scene;
+    let vis = Visibility::new(&scene);
+    let sampler = SceneTransport::new(&scene, &vis, true);
+    let u = points(3, 20_000);
+    let cast = |threads: usize| -> Vec<Option<usize>> {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| u.par_iter().enumerate().map(|(k, &u)| sampler.cast(k % scene.len(), u)).collect())
+    };
+    let one = cast(1);
+    assert_eq!(one, cast(2));
+    assert_eq!(one, cast(1));
+    let mut batch = vec![None; 100];
+    sampler.cast_batch(5, &u[..100], &mut batch);
+    assert_eq!(batch, u[..100].iter().map(|&u| sampler.cast(5, u)).collect::<Vec<_>>());
+    // Different points land elsewhere.
+    assert_ne!(
+        one,
+        points(4, 20_000).into_iter().enumerate().map(|(k, u)| sampler.cast(k % scene.len(), u)).collect::<Vec<_>>()
+    );
+}
+
+#[test]
+fn the_cost_names_the_bvh() {
+    let scene = load_scene("furnace:res=2").unwrap().scene;
+    let vis = Visibility::new(&scene);
+    let cost = SceneTransport::new(&scene, &vis, true).cost();
+    assert_eq!(cost.ray, format!("one ray through a BVH of {} triangles (exact f64 tests)", vis.triangle_count()));
+    assert!(!cost.constant);
+}

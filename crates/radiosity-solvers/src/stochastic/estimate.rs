@@ -1,0 +1,233 @@
+//! One stochastic Jacobi iteration's transport, estimated by rays: the power a vector shoots,
+//! the radiosity patches gather, or both along global lines ([`Estimator`]).
+//!
+//! Each estimator is unbiased for the quantity it names, with the landing probabilities of
+//! [`radiosity_core::transport`] (`T_ij = A_i F_ij / A_j` for a ray from `j`):
+//!
+//! - [`shoot`]: `in_i = Σ_j T_ij x_j`, the power landing on `i` when every patch `j` sends out
+//!   power `x_j`. Patch `j` casts rays in proportion to `|x_j|` (summed over channels):
+//!   `m_j = N |x_j| / Σ|x|` expected, rounded at random to `⌊m_j⌋` or `⌈m_j⌉` so that their
+//!   expectation is `m_j`, and each ray carries `w_j x_j / m_j` (`w_j` the sampler's ray
+//!   weight). The expected power landed on `i` is then `Σ_j m_j (T_ij / w_j) w_j x_j / m_j`.
+//! - [`gather`]: `g_i = Σ_j F_ij b_j` for the patches that reflect: patch `i` casts
+//!   `max(1, ⌈N A_i / Σ A⌉)` rays and averages `b` where they land (0 when they escape), times
+//!   its ray weight. A ray from `i` lands on `j` with probability `T_ji`, which is `F_ij` where
+//!   `F` is reciprocal (rays in a scene); for a stored matrix that is not, this gathers the
+//!   reciprocal row, as gathering by columns does ([`crate::Problem::row`]). With a constant
+//!   control variate `β` (per channel), `g_i = β r_i + mean(b_land − β)`, unbiased when the
+//!   sampler knows the row sum `r_i` exactly.
+//! - [`lines`]: `in_b = Σ_a A_a F_ab b_a` by `N` global lines: every transfer from `a` to `b`
+//!   adds `b_a W / N` to `in_b`, `W` the area a transfer stands for.
+//!
+//! Rays are cast in parallel over fixed blocks of patches, each patch's rays from its own
+//! stream keyed by `(seed, key, patch)`, and landings are summed in patch order afterwards:
+//! the same seed gives the same numbers whatever the thread count.
+//!
+//! ## References
+//!
+//! - Bekaert 1999, *Hierarchical and stochastic algorithms for radiosity*, PhD thesis, KU
+//!   Leuven, ch. 5 (stochastic Jacobi, its variance, the constant control variate).
+//! - Sbert 1993, "An integral geometry based method for fast form-factor computation",
+//!   Computer Graphics Forum 12(3) (global lines).
+
+use crate::run::problem::Rays;
+use crate::stochastic::sequence::Sequence;
+use radiosity_core::{LineTransfers, Real};
+use rayon::prelude::*;
+
+/// Patches per parallel block: fixed, so that no result depends on the thread count.
+const BLOCK: usize = 64;
+
+/// One global line found: the area a transfer stands for, its transfers, its rays.
+type Line = (Real, Vec<(usize, usize)>, u64);
+
+/// Lines per parallel block.
+const LINE_BLOCK: usize = 1024;
+
+/// How a stream is keyed: the run's seed and sequence, and what the rays are for (replicate,
+/// iteration); the patch is added per patch.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Streams {
+    pub sequence: Sequence,
+    pub seed: u64,
+    pub replicate: u64,
+    pub iteration: u64,
+}
+
+impl Streams {
+    fn of(&self, patch: u64) -> crate::stochastic::sequence::PointStream {
+        self.sequence.stream(self.seed, [self.replicate, self.iteration, patch])
+    }
+}
+
+/// What an estimate cost and found.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Cast {
+    /// Rays cast (a global line counts its segments).
+    pub rays: u64,
+}
+
+/// The rays from each patch in `0..n`, cast in parallel blocks: `count(j, stream)` says how
+/// many rays patch `j` casts (drawing any rounding from its stream), and the landings are
+/// handed to `land(j, landing)` in patch order, then ray order.
+fn cast_per_patch(
+    rays: &Rays<'_>,
+    n: usize,
+    streams: Streams,
+    count: &(dyn Fn(usize, &mut crate::stochastic::sequence::PointStream) -> usize + Sync),
+    mut land: impl FnMut(usize, Option<usize>),
+) -> Cast {
+    let blocks: Vec<Vec<(usize, Vec<Option<usize>>)>> = (0..n.div_ceil(BLOCK))
+        .into_par_iter()
+        .map(|b| {
+            let mut out = Vec::new();
+            let mut points = Vec::new();
+            for j in b * BLOCK..((b + 1) * BLOCK).min(n) {
+                let mut stream = streams.of(j as u64);
+                let k = count(j, &mut stream);
+                if k == 0 {
+                    continue;
+                }
+                points.clear();
+                points.extend((0..k).map(|_| stream.next_point()));
+                let mut landings = vec![None; k];
+                rays.cast_batch(j, &points, &mut landings);
+                out.push((j, landings));
+            }
+            out
+        })
+        .collect();
+    let mut cast = Cast::default();
+    for (j, landings) in blocks.into_iter().flatten() {
+        cast.rays += landings.len() as u64;
+        for landing in landings {
+            land(j, landing);
+        }
+    }
+    cast
+}
+
+/// `⌊m⌋` or `⌈m⌉`, with expectation `m`, from `u` uniform in `[0, 1)`.
+fn round_at_random(m: Real, u: Real) -> usize {
+    let floor = m.floor();
+    floor as usize + usize::from(u < m - floor)
+}
+
+/// `in_i = Σ_j T_ij x_j` by about `n_rays` rays (module doc); `x` and `incoming` patch-major
+/// with `k` channels; `incoming` is overwritten.
+pub(crate) fn shoot(
+    rays: &Rays<'_>,
+    x: &[Real],
+    k: usize,
+    n_rays: u64,
+    streams: Streams,
+    incoming: &mut [Real],
+) -> Cast {
+    let n = x.len() / k;
+    let norm = |j: usize| x[j * k..(j + 1) * k].iter().map(|v| v.abs()).sum::<Real>();
+    let total: Real = (0..n).map(norm).sum();
+    incoming.fill(0.0);
+    if total.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) || n_rays == 0 {
+        return Cast::default();
+    }
+    let expected = |j: usize| n_rays as Real * norm(j) / total;
+    let count = |j: usize, stream: &mut crate::stochastic::sequence::PointStream| {
+        let m = expected(j);
+        if m > 0.0 { round_at_random(m, stream.uniform()) } else { 0 }
+    };
+    cast_per_patch(rays, n, streams, &count, |j, landing| {
+        if let Some(i) = landing {
+            let scale = rays.ray_weight(j) / expected(j);
+            for c in 0..k {
+                incoming[i * k + c] += x[j * k + c] * scale;
+            }
+        }
+    })
+}
+
+/// `g_i = Σ_j F_ij b_j` for every patch where `reflects(i)`, by about `n_rays` rays in
+/// proportion to area (module doc), with the constant control variate `beta` (per channel)
+/// when given; `gathered` is overwritten (0 where a patch does not reflect).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn gather(
+    rays: &Rays<'_>,
+    b: &[Real],
+    k: usize,
+    areas: &[Real],
+    reflects: &(dyn Fn(usize) -> bool + Sync),
+    beta: Option<&[Real]>,
+    n_rays: u64,
+    streams: Streams,
+    gathered: &mut [Real],
+) -> Cast {
+    let n = areas.len();
+    let area: Real = (0..n).filter(|&i| reflects(i)).map(|i| areas[i]).sum();
+    gathered.fill(0.0);
+    if area.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return Cast::default();
+    }
+    let count = |i: usize, _: &mut crate::stochastic::sequence::PointStream| {
+        if reflects(i) { ((n_rays as Real * areas[i] / area).ceil() as usize).max(1) } else { 0 }
+    };
+    let mut cast_from = vec![0usize; n];
+    let cast = cast_per_patch(rays, n, streams, &count, |i, landing| {
+        cast_from[i] += 1;
+        // A ray that escapes gathers nothing, also against the control variate.
+        if let Some(j) = landing {
+            for c in 0..k {
+                gathered[i * k + c] += b[j * k + c] - beta.map_or(0.0, |beta| beta[c]);
+            }
+        }
+    });
+    for i in (0..n).filter(|&i| cast_from[i] > 0) {
+        let weight = rays.ray_weight(i);
+        let row = beta.map_or(0.0, |_| rays.row_sum(i).unwrap_or(0.0));
+        for c in 0..k {
+            let base = beta.map_or(0.0, |beta| beta[c] * row);
+            gathered[i * k + c] = base + weight * gathered[i * k + c] / cast_from[i] as Real;
+        }
+    }
+    cast
+}
+
+/// `in_b = Σ_a A_a F_ab b_a` by `n_lines` global lines (module doc); `false` (and nothing
+/// cast) when the sampler has no lines; `incoming` is overwritten.
+pub(crate) fn lines(
+    rays: &Rays<'_>,
+    b: &[Real],
+    k: usize,
+    n_lines: u64,
+    streams: Streams,
+    incoming: &mut [Real],
+) -> Option<Cast> {
+    incoming.fill(0.0);
+    let blocks = n_lines.div_ceil(LINE_BLOCK as u64);
+    let found: Vec<Option<Vec<Line>>> = (0..blocks)
+        .into_par_iter()
+        .map(|block| {
+            let mut stream = streams.of(block);
+            let mut line = LineTransfers::default();
+            let mut out = Vec::new();
+            let first = block * LINE_BLOCK as u64;
+            for _ in first..(first + LINE_BLOCK as u64).min(n_lines) {
+                if !rays.global_line(stream.next_point(), &mut line) {
+                    return None;
+                }
+                out.push((line.area, line.transfers.clone(), line.rays));
+            }
+            Some(out)
+        })
+        .collect();
+    let mut cast = Cast::default();
+    for block in found {
+        for (area, transfers, line_rays) in block? {
+            cast.rays += line_rays;
+            for (from, to) in transfers {
+                for c in 0..k {
+                    incoming[to * k + c] += b[from * k + c] * area / n_lines as Real;
+                }
+            }
+        }
+    }
+    Some(cast)
+}

@@ -1,0 +1,495 @@
+//! `stochastic-jacobi`: stochastic relaxation, Jacobi iterations whose transport is estimated
+//! with rays (Neumann's stochastic ray method, Bekaert's stochastic Jacobi); `F` is never
+//! formed.
+//!
+//! ## The method
+//!
+//! Written in power, `P_i = A_i B_i`, the system is `P = Φ + R T P` with `Φ_i = A_i E_i`,
+//! `R = diag(ρ)` and `T_ij = A_i F_ij / A_j` the fraction of `j`'s power that lands on `i`,
+//! which a ray estimates ([`radiosity_core::transport`]).
+//!
+//! 1. **Incremental shooting.** The unshot power `ΔP^0 = Φ` is shot: `ΔP^{k+1} = R T̂ ΔP^k`
+//!    with `N_k = ⌈N · |ΔP^k| / |Φ|⌉` rays, `N` the step's batch, so that every ray carries
+//!    the same power; `P ← P + ΔP^{k+1}`. It stops once the unshot power is spent,
+//!    `|ΔP^k| ≤ spent · |Φ|` (`spent=1e-4` by default); what is left is an underestimate of at
+//!    most that fraction, which the regular iterations then remove.
+//! 2. **Regular iterations.** Each shoots the whole estimate `P̄` once more with `N` rays,
+//!    `P' = Φ + R T̂ P̄`, an unbiased estimate of the solution when `P̄` is one (`E[P'] = Φ +
+//!    R T E[P̄]`, by linearity), and combines it with the estimates so far, weighted by the
+//!    inverse of their variance: to first order (Bekaert 1999, §5.3),
+//!    `V[P̂_i] ≈ ρ_i P_T (P_i − Φ_i) / N` for `N` rays shooting total power `P_T`, and the
+//!    incremental phase's `N_1` rays give the same variance as a regular iteration of `N_1`
+//!    rays, so every estimate is weighted by the rays it cast.
+//!
+//! Options:
+//! - `form=gathering`: the regular iterations gather, `B'_i = E_i + ρ_i Σ_j F_ij B̄_j`, every
+//!   patch that reflects casting rays in proportion to its area ([`crate::stochastic::estimate`]);
+//!   with `cv=true`, against a constant control variate `β` (the area-weighted mean of `B̄`,
+//!   per channel): `Σ_j F_ij B̄_j = β r_i + Σ_j F_ij (B̄_j − β)`, which needs the row sums
+//!   `r_i` from the sampler (a stored matrix; a closed scene, where they are 1).
+//! - `lines=global`: every iteration's transport by global lines instead of rays from patches.
+//! - `seq=random|sobol|halton`: the rays' sequence ([`crate::Sequence`]).
+//! - `replicates=R` (4 by default, at least 2): `R` independent chains, each with `N / R` rays
+//!   a step; the solver displays their mean and its standard error
+//!   ([`crate::StandardError`]), the error bar that needs no reference.
+//! - `batch=N` (`10n` by default, at least 1000): the rays of a step, over all replicates;
+//!   `seed=S` (1 by default).
+//!
+//! One step is one iteration of every replicate ([`StepKind::Sampled`]); its cost is the rays
+//! cast ([`crate::State::rays`]). The residual power reported is the unshot power during the
+//! incremental phase (its mean over replicates, relative to `|Φ|`), and none afterwards: no
+//! residual is known without `F`.
+//!
+//! ## References
+//!
+//! - Neumann, Feda, Kopp & Tobler 1995, "A new stochastic radiosity method for highly complex
+//!   scenes", Photorealistic Rendering Techniques (Eurographics Rendering Workshop 1994).
+//! - Bekaert 1999, *Hierarchical and stochastic algorithms for radiosity*, PhD thesis, KU
+//!   Leuven, ch. 5 (stochastic Jacobi iterations, their variance, control variates).
+//! - Sbert 1993, "An integral geometry based method for fast form-factor computation",
+//!   Computer Graphics Forum 12(3) (global lines).
+
+use crate::error::SolverError;
+use crate::naming::{ParseSolverError, SolverParams, split_params, validated};
+use crate::run::executor::{Solver, StepKind};
+use crate::run::problem::Problem;
+use crate::run::record::Record;
+use crate::run::standard_error::StandardError;
+use crate::run::state::State;
+use crate::stochastic::estimate::{Streams, gather, lines, shoot};
+use crate::stochastic::sequence::Sequence;
+use radiosity_core::Real;
+use std::str::FromStr;
+
+/// Where the regular iterations take their transport from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum JacobiForm {
+    /// Shooting the estimate's power (the default).
+    #[default]
+    Shooting,
+    /// Gathering radiosity at every patch.
+    Gathering,
+}
+
+/// The name `stochastic-jacobi[:form=…][:cv=true][:lines=global][:seq=…][:replicates=R]
+/// [:batch=N][:seed=S][:spent=ε]` (module doc).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StochasticJacobiParams {
+    /// Shooting or gathering regular iterations.
+    pub form: JacobiForm,
+    /// The constant control variate (gathering only).
+    pub control_variate: bool,
+    /// Global lines instead of rays from patches.
+    pub global_lines: bool,
+    /// The rays' sequence.
+    pub sequence: Sequence,
+    /// Independent chains (at least 2).
+    pub replicates: usize,
+    /// Rays a step over all replicates, absolute or per patch.
+    pub batch: Batch,
+    /// The seed.
+    pub seed: u64,
+    /// The unshot power, relative to the emitted, at which incremental shooting ends.
+    pub spent: Real,
+}
+
+/// A step's rays: absolute, or a multiple of the patch count.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Batch {
+    /// So many rays.
+    Rays(u64),
+    /// So many rays per patch.
+    PerPatch(Real),
+}
+
+impl Default for StochasticJacobiParams {
+    fn default() -> Self {
+        StochasticJacobiParams {
+            form: JacobiForm::Shooting,
+            control_variate: false,
+            global_lines: false,
+            sequence: Sequence::Random,
+            replicates: 4,
+            batch: Batch::PerPatch(10.0),
+            seed: 1,
+            spent: 1e-4,
+        }
+    }
+}
+
+/// The smallest batch.
+const MIN_BATCH: u64 = 1000;
+
+fn refuse(reason: String) -> ParseSolverError {
+    SolverError::BadParams(format!("solver 'stochastic-jacobi': {reason}")).into()
+}
+
+/// A whole number, also in exponent form (`1e5`).
+fn whole(value: &str) -> Option<u64> {
+    value.parse::<u64>().ok().or_else(|| {
+        let v = value.parse::<f64>().ok()?;
+        (v.is_finite() && v >= 0.0 && v.fract() == 0.0 && v < 1.8e19).then_some(v as u64)
+    })
+}
+
+impl FromStr for StochasticJacobiParams {
+    type Err = ParseSolverError;
+
+    fn from_str(name: &str) -> Result<StochasticJacobiParams, ParseSolverError> {
+        let (head, params) = split_params(name);
+        if head != "stochastic-jacobi" {
+            return Err(ParseSolverError::OtherFamily);
+        }
+        let mut p = StochasticJacobiParams::default();
+        for item in params.split(':').filter(|s| !s.is_empty()) {
+            let (key, value) =
+                item.split_once('=').ok_or_else(|| refuse(format!("expected key=value, not '{item}'")))?;
+            match key {
+                "form" => {
+                    p.form = match value {
+                        "shooting" => JacobiForm::Shooting,
+                        "gathering" => JacobiForm::Gathering,
+                        _ => return Err(refuse(format!("form is shooting or gathering, not '{value}'"))),
+                    }
+                }
+                "cv" => {
+                    p.control_variate = match value {
+                        "true" => true,
+                        "false" => false,
+                        _ => return Err(refuse(format!("cv is true or false, not '{value}'"))),
+                    }
+                }
+                "lines" => {
+                    p.global_lines = match value {
+                        "global" => true,
+                        "local" => false,
+                        _ => return Err(refuse(format!("lines is global or local, not '{value}'"))),
+                    }
+                }
+                "seq" => {
+                    p.sequence = Sequence::parse(value)
+                        .ok_or_else(|| refuse(format!("seq is random, sobol or halton, not '{value}'")))?
+                }
+                "replicates" => {
+                    p.replicates = whole(value)
+                        .filter(|&r| (2..=1024).contains(&r))
+                        .ok_or_else(|| refuse(format!("replicates is a whole number from 2 to 1024, not '{value}'")))?
+                        as usize
+                }
+                "batch" => {
+                    p.batch = if let Some(m) = value.strip_suffix('n') {
+                        let m = if m.is_empty() { Ok(1.0) } else { m.parse::<Real>() };
+                        Batch::PerPatch(m.ok().filter(|m| m.is_finite() && *m > 0.0).ok_or_else(|| {
+                            refuse(format!("batch is a number of rays or a multiple of n, not '{value}'"))
+                        })?)
+                    } else {
+                        Batch::Rays(whole(value).filter(|&b| b >= 1).ok_or_else(|| {
+                            refuse(format!("batch is a number of rays or a multiple of n, not '{value}'"))
+                        })?)
+                    }
+                }
+                "seed" => {
+                    p.seed = whole(value).ok_or_else(|| refuse(format!("seed is a whole number, not '{value}'")))?
+                }
+                "spent" => {
+                    p.spent = value
+                        .parse::<Real>()
+                        .ok()
+                        .filter(|s| *s > 0.0 && *s < 1.0)
+                        .ok_or_else(|| refuse(format!("spent is a number between 0 and 1, not '{value}'")))?
+                }
+                _ => {
+                    return Err(refuse(format!(
+                        "unknown parameter '{key}'; it takes form, cv, lines, seq, replicates, batch, seed and spent"
+                    )));
+                }
+            }
+        }
+        validated(name, p)
+    }
+}
+
+impl SolverParams for StochasticJacobiParams {
+    const SYNTAX: &'static str = "stochastic-jacobi[:form=shooting|gathering][:cv=true][:lines=global][:seq=random|sobol|halton][:replicates=R][:batch=N][:seed=S]";
+    const HELP: &'static str = "stochastic relaxation: Jacobi iterations whose transport is estimated with rays (incremental shooting, then regular iterations averaged); never forms F; a standard error from R replicates";
+    const EXAMPLES: &'static [&'static str] =
+        &["stochastic-jacobi", "stochastic-jacobi:seq=sobol", "stochastic-jacobi:form=gathering:cv=true"];
+
+    fn build(&self) -> Result<Box<dyn Solver>, SolverError> {
+        if self.control_variate && self.form != JacobiForm::Gathering {
+            return Err(SolverError::BadParams(
+                "the constant control variate (cv=true) applies to the gathering form: add form=gathering".into(),
+            ));
+        }
+        if self.control_variate && self.global_lines {
+            return Err(SolverError::BadParams(
+                "the constant control variate (cv=true) gathers along rays from patches, not global lines".into(),
+            ));
+        }
+        Ok(Box::new(StochasticJacobi {
+            params: self.clone(),
+            chains: Vec::new(),
+            emitted: 0.0,
+            rays: 0,
+            mean_shown: Vec::new(),
+        }))
+    }
+}
+
+/// One replicate's chain.
+#[derive(Clone, Debug)]
+struct Chain {
+    /// The combined estimate `B̄`, patch-major.
+    estimate: Vec<Real>,
+    /// The unshot radiosity `ΔB` of the incremental phase.
+    unshot: Vec<Real>,
+    /// Rays behind `estimate` (its weight in the combination).
+    weight: Real,
+    /// Whether the incremental phase is over.
+    regular: bool,
+    /// Iterations taken.
+    iteration: u64,
+}
+
+/// Stochastic Jacobi (module doc).
+#[derive(Debug)]
+pub struct StochasticJacobi {
+    params: StochasticJacobiParams,
+    chains: Vec<Chain>,
+    /// `|Φ| = Σ_ic A_i |E_ic|`.
+    emitted: Real,
+    /// Rays cast so far.
+    rays: u64,
+    /// The mean of the chains, as last displayed.
+    mean_shown: Vec<Real>,
+}
+
+impl StochasticJacobi {
+    /// The rays of a step for one replicate, for `n` patches.
+    fn batch(&self, n: usize) -> u64 {
+        let total = match self.params.batch {
+            Batch::Rays(b) => b,
+            Batch::PerPatch(m) => (m * n as Real).ceil() as u64,
+        };
+        (total.max(MIN_BATCH) / self.params.replicates as u64).max(1)
+    }
+
+    /// `Σ_ic A_i |v_ic|`.
+    fn power(problem: &Problem<'_>, v: &[Real]) -> Real {
+        let k = problem.channels();
+        v.iter().enumerate().map(|(idx, x)| problem.system().areas()[idx / k] * x.abs()).sum()
+    }
+
+    /// One iteration of chain `r`.
+    fn advance(&mut self, problem: &Problem<'_>, r: usize) -> Result<(), SolverError> {
+        let (n, k) = (problem.n(), problem.channels());
+        let system = problem.system();
+        let areas = system.areas();
+        let batch = self.batch(n);
+        let name = self.name();
+        let params = self.params.clone();
+        let emitted = self.emitted;
+        let chain = &mut self.chains[r];
+        let streams =
+            Streams { sequence: params.sequence, seed: params.seed, replicate: r as u64, iteration: chain.iteration };
+        chain.iteration += 1;
+        if !chain.regular {
+            let unshot = Self::power(problem, &chain.unshot);
+            if unshot <= params.spent * emitted {
+                chain.regular = true;
+                chain.unshot.fill(0.0);
+            } else {
+                let n_rays = ((batch as Real * unshot / emitted).ceil() as u64).max(1);
+                // Power shot: A_j ΔB_j.
+                let x: Vec<Real> = chain.unshot.iter().enumerate().map(|(idx, b)| areas[idx / k] * b).collect();
+                let mut incoming = vec![0.0; n * k];
+                let cast = if params.global_lines {
+                    problem
+                        .cast(&name, |rays| lines(rays, &chain.unshot, k, n_rays, streams, &mut incoming))?
+                        .ok_or_else(|| no_lines(&name))?
+                } else {
+                    problem.cast(&name, |rays| shoot(rays, &x, k, n_rays, streams, &mut incoming))?
+                };
+                for (idx, power) in incoming.iter().enumerate() {
+                    let (i, c) = (idx / k, idx % k);
+                    let delta = system.rho(i, c) * power / areas[i];
+                    chain.unshot[idx] = delta;
+                    chain.estimate[idx] += delta;
+                }
+                chain.weight += cast.rays as Real;
+                return Ok(());
+            }
+        }
+        // A regular iteration from the estimate.
+        let mut fresh = vec![0.0; n * k];
+        let cast = match (params.form, params.global_lines) {
+            (JacobiForm::Gathering, false) => {
+                let beta: Option<Vec<Real>> = params.control_variate.then(|| {
+                    let total: Real = areas.iter().sum();
+                    (0..k).map(|c| (0..n).map(|i| areas[i] * chain.estimate[i * k + c]).sum::<Real>() / total).collect()
+                });
+                let reflects = |i: usize| (0..k).any(|c| system.rho(i, c) > 0.0);
+                let mut gathered = vec![0.0; n * k];
+                let cast = problem.cast(&name, |rays| {
+                    if beta.is_some() && (0..n).any(|i| rays.row_sum(i).is_none()) {
+                        return None;
+                    }
+                    Some(gather(
+                        rays,
+                        &chain.estimate,
+                        k,
+                        areas,
+                        &reflects,
+                        beta.as_deref(),
+                        batch,
+                        streams,
+                        &mut gathered,
+                    ))
+                })?;
+                let cast = cast.ok_or_else(|| SolverError::NotApplicable {
+                    solver: name.clone(),
+                    reason: "its control variate needs the row sums of F exactly, which this transport sampler does not know (rays in a scene that is not closed)".into(),
+                })?;
+                for (idx, g) in gathered.iter().enumerate() {
+                    let (i, c) = (idx / k, idx % k);
+                    fresh[idx] = system.e(i, c) + system.rho(i, c) * g;
+                }
+                cast
+            }
+            (_, lines_too) => {
+                let mut incoming = vec![0.0; n * k];
+                let cast = if lines_too {
+                    problem
+                        .cast(&name, |rays| lines(rays, &chain.estimate, k, batch, streams, &mut incoming))?
+                        .ok_or_else(|| no_lines(&name))?
+                } else {
+                    let x: Vec<Real> = chain.estimate.iter().enumerate().map(|(idx, b)| areas[idx / k] * b).collect();
+                    problem.cast(&name, |rays| shoot(rays, &x, k, batch, streams, &mut incoming))?
+                };
+                for (idx, power) in incoming.iter().enumerate() {
+                    let (i, c) = (idx / k, idx % k);
+                    fresh[idx] = system.e(i, c) + system.rho(i, c) * power / areas[i];
+                }
+                cast
+            }
+        };
+        let w = cast.rays as Real;
+        if w > 0.0 {
+            let total = chain.weight + w;
+            for (b, f) in chain.estimate.iter_mut().zip(&fresh) {
+                *b = (chain.weight * *b + w * f) / total;
+            }
+            chain.weight = total;
+        }
+        Ok(())
+    }
+}
+
+fn no_lines(name: &str) -> SolverError {
+    SolverError::NotApplicable {
+        solver: name.to_string(),
+        reason: "it casts global lines (lines=global), which this transport sampler cannot give".into(),
+    }
+}
+
+impl Solver for StochasticJacobi {
+    fn name(&self) -> String {
+        let p = &self.params;
+        let mut name = "stochastic-jacobi".to_string();
+        let d = StochasticJacobiParams::default();
+        if p.form == JacobiForm::Gathering {
+            name.push_str(":form=gathering");
+        }
+        if p.control_variate {
+            name.push_str(":cv=true");
+        }
+        if p.global_lines {
+            name.push_str(":lines=global");
+        }
+        if p.sequence != d.sequence {
+            name.push_str(&format!(":seq={}", p.sequence.name()));
+        }
+        if p.replicates != d.replicates {
+            name.push_str(&format!(":replicates={}", p.replicates));
+        }
+        match p.batch {
+            Batch::PerPatch(m) if Batch::PerPatch(m) == d.batch => {}
+            Batch::PerPatch(m) => name.push_str(&format!(":batch={m}n")),
+            Batch::Rays(b) => name.push_str(&format!(":batch={b}")),
+        }
+        if p.seed != d.seed {
+            name.push_str(&format!(":seed={}", p.seed));
+        }
+        if p.spent != d.spent {
+            name.push_str(&format!(":spent={}", p.spent));
+        }
+        name
+    }
+
+    fn applicable(&self, problem: &Problem<'_>) -> Result<(), SolverError> {
+        let name = self.name();
+        problem.cast(&name, |_| ())
+    }
+
+    fn init(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
+        let emission = problem.system().emissions().to_vec();
+        self.emitted = Self::power(problem, &emission);
+        self.rays = 0;
+        let chain = Chain { estimate: emission.clone(), unshot: emission, weight: 0.0, regular: false, iteration: 0 };
+        self.chains = vec![chain; self.params.replicates];
+        self.mean_shown = state.radiosity.clone();
+        Ok(())
+    }
+
+    fn next_step(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<Record, SolverError> {
+        if self.emitted == 0.0 {
+            return Ok(Record::new());
+        }
+        for r in 0..self.chains.len() {
+            self.advance(problem, r)?;
+        }
+        let r = self.chains.len() as Real;
+        for (idx, b) in state.radiosity.iter_mut().enumerate() {
+            let mean = self.chains.iter().map(|c| c.estimate[idx]).sum::<Real>() / r;
+            let unshot = self.chains.iter().map(|c| c.unshot[idx]).sum::<Real>() / r;
+            if !mean.is_finite() {
+                let k = state.channels;
+                return Err(SolverError::NonFinite { step: state.step + 1, patch: idx / k, value: mean });
+            }
+            state.unshot[idx] = unshot;
+            *b = mean;
+        }
+        self.mean_shown.clone_from(&state.radiosity);
+        Ok(Record::new())
+    }
+
+    fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real> {
+        if self.emitted == 0.0 {
+            return Some(0.0);
+        }
+        if self.chains.iter().any(|c| c.regular) {
+            return None;
+        }
+        Some(Self::power(problem, &state.unshot) / self.emitted)
+    }
+
+    fn standard_error(&self, _problem: &Problem<'_>, state: &State) -> Option<StandardError> {
+        if self.chains.len() < 2 || state.step == 0 {
+            return None;
+        }
+        let replicates: Vec<&[Real]> = self.chains.iter().map(|c| c.estimate.as_slice()).collect();
+        let mut mean = vec![0.0; state.radiosity.len()];
+        Some(StandardError::of_replicates(&replicates, &mut mean))
+    }
+
+    fn step_kind(&self) -> StepKind {
+        StepKind::Sampled
+    }
+
+    fn record(&self) -> Record {
+        let mut record = Record::new();
+        record.set("replicates", self.chains.len());
+        record.set("regular_iterations", self.chains.iter().filter(|c| c.regular).count());
+        record
+    }
+}

@@ -179,7 +179,7 @@ fn the_sampler_is_built_only_for_runs_that_sample_transport() {
     // No reference, so no stored matrix to sample.
     let lab = lab(&scene, ReferenceKind::None, Transport::Matrix).unwrap();
     let registry = SolverRegistry::builtin();
-    let rules = StopRules::parse("columns=n").unwrap();
+    let rules = StopRules::parse("columns=n,steps=2n").unwrap();
     lab.run(registry.build("pr").unwrap().as_mut(), &rules, &RecordPlan::default(), &NoProgress).unwrap();
     let sampled = lab.run(&mut DirectByRays::new(10, 1), &rules, &RecordPlan::default(), &NoProgress);
     let message = sampled.expect_err("no matrix to sample").to_string();
@@ -246,4 +246,28 @@ fn a_comparison_mixing_deterministic_and_sampled_solvers_gives_one_table_and_one
     let summary = comparison.summary();
     assert!(summary.lines().next().unwrap().contains("std error"), "{summary}");
     std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn stochastic_jacobi_casts_its_rays_in_the_scene_by_default() {
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let lab = Lab::new(&scene, &BackendSpec::parse("analytic").unwrap(), LabOptions::default(), &NoProgress).unwrap();
+    assert_eq!(lab.transport(), Transport::Scene);
+    let registry = SolverRegistry::builtin();
+    let solvers = || vec![registry.build("pr").unwrap(), registry.build("stochastic-jacobi:seed=2").unwrap()];
+    // Rules that only count columns would never stop it: refused before anything runs.
+    let only_columns = StopRules::parse("columns=n").unwrap();
+    let message = lab.compare(solvers(), &only_columns, &NoProgress).unwrap_err().to_string();
+    assert!(message.starts_with("stochastic-jacobi") && message.contains("rays="), "{message}");
+    let rules = StopRules::parse("columns=n,rays=2e4").unwrap();
+    let comparison = lab.compare(solvers(), &rules, &NoProgress).unwrap();
+    let transport = comparison.transport.as_deref().unwrap();
+    assert!(transport.starts_with("`scene`, one ray through"), "{transport}");
+    let o = &comparison.outcomes[1];
+    assert!(o.state.rays >= 20_000 && o.state.columns == 0, "{} rays, {} columns", o.state.rays, o.state.columns);
+    assert_eq!(o.last.replicates, Some(4));
+    let (e_rms, spread) = (o.last.e_rms.unwrap(), o.last.standard_error.unwrap());
+    // The rays see the exact geometry, the reference the analytic backend's F: e_rms holds
+    // both the noise and their difference, which on 53 patches is far below 1.
+    assert!(e_rms < 0.5 && spread > 0.0 && spread < 0.5, "e_rms {e_rms}, standard error {spread}");
 }

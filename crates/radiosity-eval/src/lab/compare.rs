@@ -10,6 +10,7 @@ use crate::error::LabError;
 use crate::lab::options::ColumnCharge;
 use crate::lab::outcome::Outcome;
 use crate::lab::recorder::{Point, RecordPlan};
+use crate::lab::run::check_rules;
 use crate::lab::setup::{ChosenReference, Lab, ReferenceOrigin};
 use crate::lab::transport::TransportBuilt;
 use crate::progress::Progress;
@@ -43,6 +44,7 @@ impl Lab<'_> {
             problem = problem.with_transport(sampler)?;
         }
         for solver in &solvers {
+            check_rules(solver.as_ref(), rules)?;
             solver.applicable(&problem)?;
         }
         let mut outcomes = Vec::with_capacity(solvers.len());

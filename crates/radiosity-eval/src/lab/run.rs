@@ -55,6 +55,7 @@ impl Lab<'_> {
         progress: &dyn Progress,
         watch: &mut dyn FnMut(&Point, &State) -> ControlFlow<()>,
     ) -> Result<Outcome, LabError> {
+        check_rules(solver, rules)?;
         // Built before the run (set-up, not the run's time), only for a run that casts rays.
         let built = match solver.step_kind() {
             StepKind::Sampled => Some(self.transport_sampler()?),
@@ -74,6 +75,7 @@ impl Lab<'_> {
         watch: &mut dyn FnMut(&Point, &State) -> ControlFlow<()>,
         sampler: Option<&dyn TransportSampler>,
     ) -> Result<Outcome, LabError> {
+        check_rules(solver, rules)?;
         if let Some(w) = self.row_warning(solver) {
             progress.warn(&w);
         }
@@ -251,6 +253,22 @@ fn no_reference() -> LabError {
 pub fn rgb(state: &State) -> Vec<[Real; 3]> {
     let k = state.channels;
     state.radiosity.chunks_exact(k).map(|b| if k == 1 { [b[0]; 3] } else { [b[0], b[1], b[2]] }).collect()
+}
+
+/// Refuses, before any work, a solver that samples transport under rules that only count
+/// columns: it computes none, so they could never stop it, and its step cap (`20n` steps of
+/// rays over every patch) is far off.
+pub(crate) fn check_rules(solver: &dyn Solver, rules: &StopRules) -> Result<(), LabError> {
+    if solver.step_kind() == StepKind::Sampled && rules.rules.iter().all(|r| matches!(r, StopRule::Columns(_))) {
+        let written: Vec<String> = rules.rules.iter().map(ToString::to_string).collect();
+        return Err(LabError::Invalid(format!(
+            "{} casts rays and computes no columns, so {} would never stop it: add a rays=, steps=, time= or rms= \
+             rule (e.g. rays=1e7)",
+            solver.name(),
+            written.join(",")
+        )));
+    }
+    Ok(())
 }
 
 /// The count a run's progress is measured against, and its unit: for a solver that samples

@@ -13,7 +13,7 @@ use crate::error::LabError;
 use crate::lab::options::Transport;
 use crate::lab::setup::Lab;
 use radiosity_core::{ColumnTransport, SampleCost, TransportSampler};
-use radiosity_geom::PreparedScene;
+use radiosity_ff::SceneTransport;
 use std::time::Instant;
 
 /// A lab's transport sampler, built ([`Lab::transport_sampler`]).
@@ -50,7 +50,9 @@ impl<'p> Lab<'p> {
     pub fn transport_sampler(&self) -> Result<TransportBuilt<'p>, LabError> {
         let start = Instant::now();
         let sampler: Box<dyn TransportSampler + Send + 'p> = match self.transport {
-            Transport::Scene => scene_sampler(self.prepared)?,
+            // Declared closed (rows of F summing to 1) only where the scene analysis finds the
+            // scene closed.
+            Transport::Scene => Box::new(SceneTransport::from_prepared(self.prepared)),
             Transport::Matrix => {
                 let matrix = self.matrix.as_deref().ok_or_else(|| {
                     LabError::Invalid(format!(
@@ -66,15 +68,4 @@ impl<'p> Lab<'p> {
         };
         Ok(TransportBuilt { sampler, transport: self.transport, seconds: start.elapsed().as_secs_f64() })
     }
-}
-
-/// Rays in the scene, declared closed (rows of F summing to 1) only where the scene analysis
-/// finds the scene closed.
-fn scene_sampler<'p>(prepared: &'p PreparedScene) -> Result<Box<dyn TransportSampler + Send + 'p>, LabError> {
-    let _closed = prepared.analysis.closure.value.is_closed();
-    Err(LabError::Invalid(
-        "--transport scene is not available in this build: rays in the scene need radiosity_ff::SceneTransport; use \
-         --transport matrix"
-            .into(),
-    ))
 }

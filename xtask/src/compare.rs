@@ -1,15 +1,17 @@
-//! `cargo xtask compare [--scene SCENE] [--solvers S1,S2,…] [--ff BACKEND] [--until RULES]
-//! [--reference KIND] [--out DIR]`: runs several solvers on one scene against its reference,
-//! and writes what a researcher reads and shows ([`radiosity_eval::Comparison`]):
+//! `cargo xtask compare [--scene SCENE] [--solvers S1,S2,…] [--ff BACKEND] [--transport WHERE]
+//! [--until RULES] [--reference KIND] [--out DIR]`: runs several solvers on one scene against
+//! its reference, and writes what a researcher reads and shows ([`radiosity_eval::Comparison`]):
 //! `convergence.csv`, `report.md` and plots of e_rms (with `--reference none`, of the
-//! certified bound) against steps, columns and seconds, under `results/<scene>-<date-time>/`
-//! or `--out`. A summary table ends the output.
+//! certified bound) against steps, columns, rays (when a solver samples transport) and
+//! seconds, under `results/<scene>-<date-time>/` or `--out`. A summary table ends the output.
+//! Deterministic solvers and solvers that sample transport go in one comparison, each stopped
+//! by the rules that count what it spends (`--until columns=2n,rays=1e7`).
 
 use crate::bars::Bars;
 use crate::experiment::{ReferenceArg, check_measurable, check_out_dir, default_out, lab, prepare};
 use anyhow::{Result, bail};
 use radiosity_eval::ReferenceKind;
-use radiosity_eval::{ColumnCost, Comparison};
+use radiosity_eval::{ColumnCost, Comparison, Transport};
 use radiosity_ff::BackendSpec;
 use radiosity_solvers::{Solver, SolverRegistry, StopRules};
 use std::path::{Path, PathBuf};
@@ -29,7 +31,10 @@ pub struct Args {
     /// The form-factor backend, with `:key=value` parameters.
     #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic", long_help = crate::experiment::backend_help())]
     ff: String,
-    /// Stop rules for every solver.
+    #[command(flatten)]
+    transport: crate::experiment::TransportArg,
+    /// Stop rules for every solver (a solver that samples transport computes no columns: give
+    /// it a rays=, steps=, time= or rms= rule too, e.g. columns=2n,rays=1e7).
     #[arg(long, value_name = "RULES", default_value = "columns=2n")]
     until: String,
     #[command(flatten)]
@@ -55,6 +60,7 @@ pub struct Plan {
     rules: StopRules,
     kind: ReferenceKind,
     columns: ColumnCost,
+    transport: Transport,
 }
 
 impl Plan {
@@ -73,12 +79,29 @@ impl Plan {
         }
         let rules = StopRules::parse(until)?;
         check_measurable(&rules, kind)?;
-        Ok(Plan { scene: scene.to_string(), solvers, spec, rules, kind, columns: ColumnCost::default() })
+        for solver in &solvers {
+            radiosity_eval::check_rules(solver.as_ref(), &rules)?;
+        }
+        Ok(Plan {
+            scene: scene.to_string(),
+            solvers,
+            spec,
+            rules,
+            kind,
+            columns: ColumnCost::default(),
+            transport: Transport::default(),
+        })
     }
 
     /// Sets how solvers pay for their columns ([`ColumnCost`]).
     pub fn with_columns(mut self, columns: ColumnCost) -> Plan {
         self.columns = columns;
+        self
+    }
+
+    /// Sets where the solvers that sample transport cast their rays ([`Transport`]).
+    pub fn with_transport(mut self, transport: Transport) -> Plan {
+        self.transport = transport;
         self
     }
 
@@ -93,7 +116,7 @@ impl Plan {
         radiosity_eval::require_emitters(&prepared)?;
         let report = prepared.report();
         eprintln!("{}: {} patches; left out: {}", report.scene, report.patches, report.left_out_phrase());
-        let lab = lab(&prepared, &self.spec, true, self.kind, self.columns)?;
+        let lab = lab(&prepared, &self.spec, true, self.kind, self.columns, self.transport)?;
         let comparison = lab.compare(self.solvers, &self.rules, &Bars::new())?;
         comparison.write(out)?;
         Ok(comparison)
@@ -108,7 +131,8 @@ fn parse_columns(value: &str) -> Result<ColumnCost, String> {
 /// Runs `compare`.
 pub fn run(args: &Args) -> Result<()> {
     let plan = Plan::new(&args.scene, &args.solvers, &args.ff, &args.until, args.reference.parse()?)?
-        .with_columns(args.columns);
+        .with_columns(args.columns)
+        .with_transport(args.transport.transport);
     let out = args.out.clone().unwrap_or_else(|| default_out(&args.scene));
     check_out_dir(&out)?;
     let comparison = plan.execute(&out)?;

@@ -1,11 +1,11 @@
-//! What the subcommands share: the `--scene --solver --ff --until` arguments of `solve`,
-//! `render` and `export`, checked before any geometry is built; loading a scene with its
-//! warnings printed; the cache directory; and the checks on output paths.
+//! What the subcommands share: the `--scene --solver --ff --transport --until` arguments of
+//! `solve`, `render` and `export`, checked before any geometry is built; loading a scene with
+//! its warnings printed; the cache directory; and the checks on output paths.
 
 use crate::bars::Bars;
 use anyhow::{Result, bail};
 use radiosity_eval::ReferenceKind;
-use radiosity_eval::{Cache, ColumnCost, FinalMetrics, Lab, LabOptions, Progress};
+use radiosity_eval::{Cache, ColumnCost, FinalMetrics, Lab, LabOptions, Progress, Transport};
 use radiosity_ff::{BackendRegistry, BackendSpec};
 use radiosity_geom::PreparedScene;
 use radiosity_solvers::{Solver, SolverError, SolverRegistry, StopRules};
@@ -26,12 +26,30 @@ pub struct SolveArgs {
     /// The form-factor backend, with `:key=value` parameters.
     #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic", long_help = backend_help())]
     pub ff: String,
-    /// Stop rules, the first to hold stops the run: columns=N, columns=2n, steps=N, rms=1e-3,
-    /// residual=1e-4, time=30s.
+    #[command(flatten)]
+    pub transport: TransportArg,
+    /// Stop rules, the first to hold stops the run: columns=N, columns=2n, steps=N, rays=1e7,
+    /// rms=1e-3, residual=1e-4, time=30s.
     #[arg(long, value_name = "RULES", default_value = "columns=2n")]
     pub until: String,
     #[command(flatten)]
     pub reference: ReferenceArg,
+}
+
+/// `--transport scene|matrix`, shared by every command that takes `--ff` and runs solvers.
+#[derive(Debug, clap::Args)]
+pub struct TransportArg {
+    /// Where the solvers that sample transport (stochastic-jacobi, random-walk) cast their
+    /// rays: scene (through the scene's BVH, the exact geometry) or matrix (the stored matrix
+    /// of a matrix reference, sampled exactly: the very system the reference solves). The
+    /// other solvers ignore it.
+    #[arg(long = "transport", value_name = "WHERE", default_value_t = Transport::default(), value_parser = parse_transport)]
+    pub transport: Transport,
+}
+
+/// Reads `--transport` ([`Transport::name`]).
+fn parse_transport(value: &str) -> Result<Transport, String> {
+    value.parse().map_err(|e: radiosity_eval::EvalError| e.to_string())
 }
 
 /// `--reference auto|matrix|shooting|none`, shared by every command that measures.
@@ -83,6 +101,9 @@ impl SolveArgs {
         }
         let rules = StopRules::parse(&self.until)?;
         check_measurable(&rules, kind)?;
+        if let Some(solver) = &solver {
+            radiosity_eval::check_rules(solver.as_ref(), &rules)?;
+        }
         Ok((spec, solver, rules, kind))
     }
 }
@@ -118,20 +139,22 @@ pub fn cache() -> Cache {
     Cache::from_env(Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap_or(Path::new(".")).join("target/ff-cache"))
 }
 
-/// A lab on `prepared` with the backend `spec`, the cache, the reference `kind`, and F kept
-/// when `residuals`.
+/// A lab on `prepared` with the backend `spec`, the cache, the reference `kind`, F kept when
+/// `residuals`, columns paid for as `columns` says and rays cast as `transport` says.
 pub fn lab<'p>(
     prepared: &'p PreparedScene,
     spec: &BackendSpec,
     residuals: bool,
     kind: ReferenceKind,
     columns: ColumnCost,
+    transport: Transport,
 ) -> Result<Lab<'p>> {
     let options = LabOptions::default()
         .with_residuals(residuals)
         .with_cache(Some(cache()))
         .with_reference(kind)
-        .with_columns(columns);
+        .with_columns(columns)
+        .with_transport(transport);
     let lab = Lab::new(prepared, spec, options, &Bars::new())?;
     let chosen = lab.chosen();
     // Only the choice that costs a long run is announced; reports say which was used.
@@ -196,21 +219,28 @@ pub fn solved_rgb(
     rules: &StopRules,
     kind: ReferenceKind,
 ) -> Result<(Vec<[radiosity_core::Real; 3]>, String)> {
-    // A picture needs no reference unless it is the reference or an rms= rule measures
-    // against it: `auto` then computes none, which on a large scene saves the long shooting
-    // run that would stand in for a matrix that does not fit.
+    // A picture needs no reference unless it is the reference, an rms= rule measures against
+    // it or rays sample its matrix: `auto` then computes none, which on a large scene saves
+    // the long shooting run that would stand in for a matrix that does not fit.
+    let transport = args.transport.transport;
     let kind = match kind {
-        ReferenceKind::Auto if solver.is_some() && !rules.needs_error() => ReferenceKind::None,
+        ReferenceKind::Auto if solver.is_some() && !rules.needs_error() && transport != Transport::Matrix => {
+            ReferenceKind::None
+        }
         kind => kind,
     };
     // One solver's run: its columns are computed, whether or not the reference was cached.
-    let lab = lab(prepared, spec, false, kind, ColumnCost::Computed)?;
+    let lab = lab(prepared, spec, false, kind, ColumnCost::Computed, transport)?;
     let rgb = match solver {
         None => lab.radiosity_rgb(None, rules, &Bars::new())?,
         Some(mut solver) => {
             let o = lab.run(solver.as_mut(), rules, &radiosity_eval::RecordPlan::errors_only(), &Bars::new())?;
+            let rays = match o.state.rays {
+                0 => String::new(),
+                r => format!(", {r} rays"),
+            };
             eprintln!(
-                "{} stopped: {}; {} steps, {} columns, {:.3} s, {}",
+                "{} stopped: {}; {} steps, {} columns{rays}, {:.3} s, {}",
                 args.solver,
                 o.termination,
                 o.state.step,
@@ -224,8 +254,8 @@ pub fn solved_rgb(
     Ok((rgb, lab.backend().to_string()))
 }
 
-/// The final error of a run in words: e_rms where there is a reference, and the certified
-/// bound where the solver knows one.
+/// The final error of a run in words: e_rms where there is a reference, the certified bound
+/// where the solver knows one, and the standard error where the solver has one.
 pub fn error_phrase(last: &FinalMetrics) -> String {
     let mut parts = Vec::new();
     if let Some(e) = last.e_rms {
@@ -234,6 +264,10 @@ pub fn error_phrase(last: &FinalMetrics) -> String {
     match last.bound {
         Some(b) => parts.push(format!("certified relative L1 bound {b:.3e}")),
         None => parts.push("no certified bound".into()),
+    }
+    if let Some(s) = last.standard_error {
+        let replicates = last.replicates.map_or(String::new(), |r| format!(" of {r} replicates"));
+        parts.push(format!("standard error {s:.3e}{replicates}"));
     }
     parts.join(", ")
 }

@@ -1,6 +1,7 @@
-//! `cargo xtask solve --scene SCENE --solver SOLVER [--ff BACKEND] [--until RULES]
-//! [--reference KIND] [--json | --out FILE]`: runs one solver and reports its error against
-//! the reference solution of the same discrete system, and its certified bound (docs/cli.md).
+//! `cargo xtask solve --scene SCENE --solver SOLVER [--ff BACKEND] [--transport WHERE]
+//! [--until RULES] [--reference KIND] [--json | --out FILE]`: runs one solver and reports its
+//! error against the reference solution of the same discrete system, its certified bound, and
+//! for a solver whose answer is an estimate its rays and standard error (docs/cli.md).
 //!
 //! Every argument is parsed before any geometry is built, so a typo fails at once. The
 //! reference comes from the cache when it is there (then F is not assembled and the residual
@@ -40,6 +41,7 @@ struct ReachedJson {
     e_rms: Real,
     steps: u64,
     columns: u64,
+    rays: u64,
     seconds: Real,
 }
 
@@ -65,6 +67,8 @@ struct StatsJson {
     /// operator's), beside the columns.
     products: u64,
     steps: u64,
+    /// Rays cast by a solver that samples transport.
+    rays: u64,
     seconds: Real,
     ff_seconds: Real,
     group_seconds: Real,
@@ -79,6 +83,14 @@ struct StatsJson {
     /// The certified bound on the area-weighted L1 error of the displayed radiosity, relative
     /// to the reference's (null when the solver knows none and F is not kept).
     bound: Option<Real>,
+    /// The solver's standard error of the displayed radiosity, relative as e_rms is (null when
+    /// the solver has none): a spread of independent replicates, not a promise.
+    standard_error: Option<Real>,
+    /// The replicates the standard error rests on (null without one).
+    replicates: Option<usize>,
+    /// Where the rays were cast (`scene` or `matrix`), when the solver samples transport.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    transport: Option<&'static str>,
     termination: String,
     /// With an `rms=` rule: the first step at which `e_rms` fell to each power of ten.
     reached: Vec<ReachedJson>,
@@ -139,7 +151,8 @@ pub fn run(args: &Args) -> Result<()> {
     let prepared = prepare(&args.run.scene)?;
     // One solver's run: its columns are computed (and timed), whether or not the reference
     // was cached and the matrix assembled.
-    let lab = lab(&prepared, &spec, false, kind, radiosity_eval::ColumnCost::Computed)?;
+    let transport = args.run.transport.transport;
+    let lab = lab(&prepared, &spec, false, kind, radiosity_eval::ColumnCost::Computed, transport)?;
     let outcome = match solver {
         // `reference` is the exact solution itself: its cost is assembling F and solving it.
         None => Outcome {
@@ -159,7 +172,13 @@ pub fn run(args: &Args) -> Result<()> {
             let reached = if rules.needs_error() {
                 o.reached_powers()
                     .into_iter()
-                    .map(|(e_rms, p)| ReachedJson { e_rms, steps: p.step, columns: p.columns, seconds: p.seconds })
+                    .map(|(e_rms, p)| ReachedJson {
+                        e_rms,
+                        steps: p.step,
+                        columns: p.columns,
+                        rays: p.rays,
+                        seconds: p.seconds,
+                    })
                     .collect()
             } else {
                 Vec::new()
@@ -199,6 +218,7 @@ pub fn run(args: &Args) -> Result<()> {
         columns_reused: s.columns_reused,
         products: s.products,
         steps: s.step,
+        rays: s.rays,
         seconds: s.ff_seconds + s.solve_seconds,
         ff_seconds: s.ff_seconds,
         group_seconds: s.group_seconds,
@@ -207,6 +227,9 @@ pub fn run(args: &Args) -> Result<()> {
         residual,
         residual_of,
         bound: outcome.last.bound,
+        standard_error: outcome.last.standard_error,
+        replicates: outcome.last.replicates,
+        transport: (s.rays > 0).then(|| lab.transport().name()),
         termination: outcome.termination.clone(),
         reached: outcome.reached,
         record: outcome.record.iter().map(|(k, v)| (k.to_string(), json_value(v))).collect(),
@@ -225,8 +248,12 @@ pub fn run(args: &Args) -> Result<()> {
             0 => String::new(),
             k => format!(", {k} products"),
         };
+        let (rays, in_ff) = match (stats.rays, stats.transport) {
+            (0, _) => (String::new(), "in form factors"),
+            (r, transport) => (format!(", {r} rays ({})", transport.unwrap_or_default()), "in form factors and rays"),
+        };
         println!(
-            "work         {} steps, {} columns{reused}{products}, {:.3} s ({:.3} s in form factors; {} seconds)",
+            "work         {} steps, {} columns{reused}{products}{rays}, {:.3} s ({:.3} s {in_ff}; {} seconds)",
             stats.steps, stats.columns, stats.seconds, stats.ff_seconds, stats.clock
         );
         if stats.group_seconds > 0.0 {
@@ -251,6 +278,10 @@ pub fn run(args: &Args) -> Result<()> {
         match stats.bound {
             Some(b) => println!("bound        certified relative L1 error ≤ {b:.4e}"),
             None => println!("bound        none: the solver knows no bound on its residual"),
+        }
+        if let Some(s) = stats.standard_error {
+            let replicates = stats.replicates.map_or(String::new(), |r| format!(" of {r} independent replicates"));
+            println!("spread       standard error {s:.4e}, relative as e_rms is{replicates} (a spread, not a bound)");
         }
         for r in &stats.reached {
             println!(

@@ -9,6 +9,7 @@ mod bench;
 mod export;
 mod readme;
 mod render;
+mod sampled;
 mod stress;
 
 /// The cache every test run shares: its own folder, so that tests never read what an

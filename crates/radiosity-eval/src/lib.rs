@@ -85,7 +85,7 @@ pub use lab::compare::Comparison;
 pub use lab::options::{ColumnCharge, ColumnCost, LabOptions, Transport};
 pub use lab::outcome::{FinalMetrics, Outcome};
 pub use lab::recorder::{Point, RecordPlan, Recorder, TableRow};
-pub use lab::run::rgb;
+pub use lab::run::{check_rules, rgb};
 pub use lab::setup::{ChosenReference, Lab, ReferenceOrigin, require_emitters};
 pub use lab::transport::TransportBuilt;
 pub use progress::{NoProgress, Progress};

@@ -258,7 +258,7 @@ pub fn rgb(state: &State) -> Vec<[Real; 3]> {
 /// Refuses, before any work, a solver that samples transport under rules that only count
 /// columns: it computes none, so they could never stop it, and its step cap (`20n` steps of
 /// rays over every patch) is far off.
-pub(crate) fn check_rules(solver: &dyn Solver, rules: &StopRules) -> Result<(), LabError> {
+pub fn check_rules(solver: &dyn Solver, rules: &StopRules) -> Result<(), LabError> {
     if solver.step_kind() == StepKind::Sampled && rules.rules.iter().all(|r| matches!(r, StopRule::Columns(_))) {
         let written: Vec<String> = rules.rules.iter().map(ToString::to_string).collect();
         return Err(LabError::Invalid(format!(

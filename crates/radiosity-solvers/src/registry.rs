@@ -18,8 +18,8 @@
 //!
 //! The built-in families ([`SolverRegistry::builtin`]), in this order: [`JacobiParams`],
 //! [`GaussSeidelParams`], [`PointShootingParams`], [`GroupGatheringParams`],
-//! [`GroupShootingParams`], [`GroupAcceleratedParams`], [`CgParams`], [`GmresParams`] and
-//! [`BicgstabParams`]. Library users add their own,
+//! [`GroupShootingParams`], [`GroupAcceleratedParams`], [`CgParams`], [`GmresParams`],
+//! [`BicgstabParams`] and [`RandomWalkParams`]. Library users add their own,
 //! typed ([`SolverRegistry::register`]) or as a closure ([`SolverRegistry::register_fn`]);
 //! built-in families come first, so a new family cannot change what a built-in name means
 //! unless the user starts from [`SolverRegistry::empty`].
@@ -46,6 +46,7 @@ use crate::krylov::gmres::GmresParams;
 use crate::naming::{ParseSolverError, SolverParams, named, split_params};
 use crate::run::executor::Solver;
 use crate::shooting::overshooting::step::PointShootingParams;
+use crate::stochastic::random_walk::RandomWalkParams;
 use std::fmt;
 use std::sync::{Arc, OnceLock};
 
@@ -113,7 +114,7 @@ impl SolverRegistry {
         SolverRegistry::default()
     }
 
-    /// The built-in families (module doc). Cheap: nine entries.
+    /// The built-in families (module doc). Cheap: ten entries.
     pub fn builtin() -> SolverRegistry {
         let mut registry = SolverRegistry::empty();
         registry
@@ -125,7 +126,8 @@ impl SolverRegistry {
             .register::<GroupAcceleratedParams>()
             .register::<CgParams>()
             .register::<GmresParams>()
-            .register::<BicgstabParams>();
+            .register::<BicgstabParams>()
+            .register::<RandomWalkParams>();
         registry
     }
 

@@ -2,4 +2,5 @@
 //! random walks, docs/stochastic.md), over [`crate::Problem::cast`], and the random numbers
 //! they share.
 
+pub(crate) mod random_walk;
 pub(crate) mod sequence;

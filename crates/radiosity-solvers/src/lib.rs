@@ -126,9 +126,7 @@ pub use shooting::overshooting::xu::XuParts;
 pub use shooting::progressive::ProgressiveRefinement;
 pub use shooting::rule::unshot_power;
 pub use shooting::southwell::Southwell;
-pub use stochastic::random_walk::{
-    BATCH, DEFAULT_REPLICATES, MAX_REPLICATES, RandomWalk, RandomWalkParams, Scoring, WalkForm,
-};
+pub use stochastic::random_walk::{RandomWalk, RandomWalkParams, WalkForm, WalkScore};
 pub use stochastic::sequence::{PointStream, Sequence};
 
 /// The point solvers, by canonical name: every one of them is run by the scene-level tests

@@ -181,6 +181,7 @@ fn the_standard_error_covers_at_the_rate_it_claims() {
 fn the_same_seed_gives_the_same_numbers_whatever_the_thread_count() {
     let (system, f) = twelve();
     // 600 walks a step: three batches of shooting walks in each of four replicates.
+    assert_eq!(RandomWalk::WALKS_PER_BATCH, 256);
     for name in [
         "random-walk:walks=600",
         "random-walk:walks=600:seq=sobol:score=absorption",
@@ -212,7 +213,7 @@ fn names_parse_to_typed_parameters_and_keep_their_canonical_form() {
         p,
         RandomWalkParams {
             form: WalkForm::Gathering,
-            score: Scoring::Absorption,
+            score: WalkScore::Absorption,
             walks: Count::PerPatch(2.0),
             replicates: 8,
             seed: 7,

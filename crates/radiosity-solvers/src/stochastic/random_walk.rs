@@ -83,7 +83,7 @@
 //! walk's bounces are independent even where the points of one stream are not
 //! (`seq=sobol|halton`: the walks of one depth are stratified across each other, and every
 //! point is uniform, so the estimates stay unbiased); the survival decisions draw from the
-//! same stream's pseudo-random part. Shooting walks go in batches of [`BATCH`] walks, cast in
+//! same stream's pseudo-random part. Shooting walks go in batches of [`RandomWalk::WALKS_PER_BATCH`] walks, cast in
 //! parallel and added to the replicate in batch order; gathering walks of each patch add to
 //! that patch alone. Nothing depends on the thread that ran it: the same seed gives the same
 //! numbers whatever the thread count.
@@ -129,22 +129,13 @@ pub enum WalkForm {
 
 /// What a walk scores ([`RandomWalkParams::score`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum Scoring {
+pub enum WalkScore {
     /// At every landing (the default).
     #[default]
     Collision,
     /// Only where the walk is absorbed, divided by the probability of absorption.
     Absorption,
 }
-
-/// Replicates by default.
-pub const DEFAULT_REPLICATES: usize = 4;
-
-/// The most replicates a name may ask for: each holds two vectors of the system's size.
-pub const MAX_REPLICATES: usize = 1024;
-
-/// Shooting walks per batch (module doc): one stream per depth, one task.
-pub const BATCH: u64 = 256;
 
 /// Batches cast in parallel at once, their scores then added in order: bounds the scores held.
 const WAVE: usize = 64;
@@ -155,7 +146,7 @@ pub struct RandomWalkParams {
     /// Shooting or gathering.
     pub form: WalkForm,
     /// Collision or absorption.
-    pub score: Scoring,
+    pub score: WalkScore,
     /// Walks of each replicate a step (module doc).
     pub walks: Count,
     /// Independent replicates, at least 2.
@@ -170,9 +161,9 @@ impl Default for RandomWalkParams {
     fn default() -> RandomWalkParams {
         RandomWalkParams {
             form: WalkForm::Shooting,
-            score: Scoring::Collision,
+            score: WalkScore::Collision,
             walks: Count::PerPatch(1.0),
-            replicates: DEFAULT_REPLICATES,
+            replicates: RandomWalkParams::DEFAULT_REPLICATES,
             seed: 1,
             seq: Sequence::Random,
         }
@@ -180,6 +171,12 @@ impl Default for RandomWalkParams {
 }
 
 impl RandomWalkParams {
+    /// Replicates by default.
+    pub const DEFAULT_REPLICATES: usize = 4;
+
+    /// The most replicates a name may ask for: each holds two vectors of the system's size.
+    pub const MAX_REPLICATES: usize = 1024;
+
     /// The name, with the parameters that differ from the defaults in the syntax's order.
     pub fn canonical_name(&self) -> String {
         let default = RandomWalkParams::default();
@@ -221,18 +218,19 @@ impl FromStr for RandomWalkParams {
                 Some(("form", "shooting")) => out.form = WalkForm::Shooting,
                 Some(("form", "gathering")) => out.form = WalkForm::Gathering,
                 Some(("form", _)) => return Err(bad("needs form=shooting or form=gathering").into()),
-                Some(("score", "collision")) => out.score = Scoring::Collision,
-                Some(("score", "absorption")) => out.score = Scoring::Absorption,
+                Some(("score", "collision")) => out.score = WalkScore::Collision,
+                Some(("score", "absorption")) => out.score = WalkScore::Absorption,
                 Some(("score", _)) => return Err(bad("needs score=collision or score=absorption").into()),
                 Some(("walks", v)) => {
                     out.walks = Count::parse(v)
                         .map_err(|_| bad("needs a positive number of walks, such as walks=1000 or walks=2n"))?;
                 }
                 Some(("replicates", v)) => {
-                    let r = v.parse::<usize>().ok().filter(|r| (2..=MAX_REPLICATES).contains(r));
+                    let r = v.parse::<usize>().ok().filter(|r| (2..=RandomWalkParams::MAX_REPLICATES).contains(r));
                     out.replicates = r.ok_or_else(|| {
                         bad(&format!(
-                            "needs a whole number from 2 to {MAX_REPLICATES}, since the error bar is the spread between replicates"
+                            "needs a whole number from 2 to {}, since the error bar is the spread between replicates",
+                            RandomWalkParams::MAX_REPLICATES
                         ))
                     })?;
                 }
@@ -373,9 +371,9 @@ impl Walker<'_> {
                 let weights = &mut weight[w..w + k];
                 weights.iter_mut().for_each(|x| *x *= carried);
                 match params.score {
-                    Scoring::Collision => score(i, weights, 1.0),
-                    Scoring::Absorption if !survives => score(i, weights, 1.0 / (1.0 - survival)),
-                    Scoring::Absorption => {}
+                    WalkScore::Collision => score(i, weights, 1.0),
+                    WalkScore::Absorption if !survives => score(i, weights, 1.0 / (1.0 - survival)),
+                    WalkScore::Absorption => {}
                 }
                 if survives {
                     for (x, r) in weights.iter_mut().zip(rho) {
@@ -455,6 +453,9 @@ pub struct RandomWalk {
 }
 
 impl RandomWalk {
+    /// Shooting walks per batch (module doc): one stream per depth, one parallel task.
+    pub const WALKS_PER_BATCH: u64 = 256;
+
     /// The solver `params` designate.
     pub fn new(params: RandomWalkParams) -> RandomWalk {
         RandomWalk {
@@ -475,14 +476,15 @@ impl RandomWalk {
         let (name, system, params) = (self.name(), problem.system(), self.params);
         let (n, k) = (problem.n(), problem.channels());
         let (per_step, step, emitters) = (self.per_step, self.steps, &self.emitters);
-        let batches = per_step.div_ceil(BATCH);
+        let batches = per_step.div_ceil(RandomWalk::WALKS_PER_BATCH);
         let tasks: Vec<(usize, u64)> = (0..params.replicates).flat_map(|r| (0..batches).map(move |b| (r, b))).collect();
         for wave in tasks.chunks(WAVE) {
             let tallies: Vec<Tally> = problem.cast(&name, |rays| {
                 let walker = Walker { rays, system, params: &params };
                 wave.par_iter()
                     .map(|&(replicate, id)| {
-                        let count = BATCH.min(per_step - id * BATCH);
+                        let batch = RandomWalk::WALKS_PER_BATCH;
+                        let count = batch.min(per_step - id * batch);
                         walker.shoot(emitters, Batch { replicate, step, id }, count)
                     })
                     .collect()

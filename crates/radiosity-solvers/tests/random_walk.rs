@@ -234,6 +234,17 @@ fn names_parse_to_typed_parameters_and_keep_their_canonical_form() {
         assert_eq!(registry.build(example).unwrap().step_kind(), StepKind::Sampled);
     }
     assert_eq!(registry.suggest("random-wlak"), Some("random-walk".into()));
+    // Parameters built by hand are checked as names are, in one sentence.
+    let one = RandomWalkParams { replicates: 1, ..RandomWalkParams::default() };
+    assert_eq!(
+        one.build().err().unwrap().to_string(),
+        "random-walk needs 2 to 1024 replicates, not 1, since the error bar is the spread between replicates"
+    );
+    let none = RandomWalkParams { walks: Count::Absolute(0), ..RandomWalkParams::default() };
+    assert_eq!(
+        none.build().err().unwrap().to_string(),
+        "random-walk needs a positive number of walks a step, not walks=0"
+    );
 }
 
 #[test]

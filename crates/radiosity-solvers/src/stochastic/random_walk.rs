@@ -62,8 +62,8 @@
 //! where walks escape or end away from what they score (a score of `0` or of
 //! `W / (1 − ρ̄)`, rare and large as `ρ̄ → 1`), and where emission is concentrated on a few
 //! patches that gathering walks rarely end on; collision spreads each walk's score over every
-//! landing. As `ρ̄ → 0` the two coincide (every landing absorbs). Sbert 1997 gives the variances
-//! of both, and a third estimator, in closed form.
+//! landing. As `ρ̄ → 0` the two coincide (every landing absorbs). Sbert 1997 compares three
+//! unbiased estimators of each form, with closed forms and bounds for their variances.
 //!
 //! ## Steps, replicates and random numbers
 //!
@@ -83,10 +83,10 @@
 //! walk's bounces are independent even where the points of one stream are not
 //! (`seq=sobol|halton`: the walks of one depth are stratified across each other, and every
 //! point is uniform, so the estimates stay unbiased); the survival decisions draw from the
-//! same stream's pseudo-random part. Shooting walks go in batches of [`RandomWalk::WALKS_PER_BATCH`] walks, cast in
-//! parallel and added to the replicate in batch order; gathering walks of each patch add to
-//! that patch alone. Nothing depends on the thread that ran it: the same seed gives the same
-//! numbers whatever the thread count.
+//! same stream's pseudo-random part. Shooting walks go in batches of
+//! [`RandomWalk::WALKS_PER_BATCH`], cast in parallel and added to the replicate in batch
+//! order; the gathering walks of each patch add to that patch alone. Nothing depends on the
+//! thread that ran it: the same seed gives the same numbers whatever the thread count.
 //!
 //! The solver knows no residual without `F` ([`Solver::residual_power`] is `None`), except on a
 //! system that emits nothing, whose answer `B = E = 0` it knows exactly (residual 0). Its
@@ -262,7 +262,26 @@ impl SolverParams for RandomWalkParams {
     const EXAMPLES: &'static [&'static str] =
         &["random-walk", "random-walk:form=gathering", "random-walk:score=absorption:seq=sobol"];
 
+    /// Refuses, for parameters built by hand, what a name could not say: fewer than two
+    /// replicates or more than [`RandomWalkParams::MAX_REPLICATES`], and no walks.
     fn build(&self) -> Result<Box<dyn Solver>, SolverError> {
+        let max = RandomWalkParams::MAX_REPLICATES;
+        if !(2..=max).contains(&self.replicates) {
+            return Err(SolverError::BadParams(format!(
+                "random-walk needs 2 to {max} replicates, not {}, since the error bar is the spread between replicates",
+                self.replicates
+            )));
+        }
+        let walks = match self.walks {
+            Count::Absolute(k) => k > 0,
+            Count::PerPatch(m) => m.is_finite() && m > 0.0,
+        };
+        if !walks {
+            return Err(SolverError::BadParams(format!(
+                "random-walk needs a positive number of walks a step, not walks={}",
+                self.walks
+            )));
+        }
         Ok(Box::new(RandomWalk::new(*self)))
     }
 }

@@ -56,9 +56,9 @@ fn over_seeds(name: &str, system: &LinearSystem, f: &DenseColumns, rules: &str, 
 /// is why every run takes 16 to 40 steps (with 10, the rare large scores of gathering by
 /// absorption left the seeds' means skewed); beyond 4 with probability 1.6e-4, so over the
 /// 36 patch channels of the 7 cases on `twelve` about a 4% chance of one false alarm, which
-/// the fixed seeds make a fixed outcome either way. A bias of `4 · power` of `B*` at the
-/// worst-sampled entry, and of a few percent at most, would be caught; a bias anywhere also
-/// shifts the coverage of the error bar, tested apart.
+/// the fixed seeds make a fixed outcome either way. A bias is caught where it exceeds 4
+/// standard errors: at most `4 · power` of `B*` at the worst-sampled entry, a few percent at
+/// most entries; a bias anywhere also shifts the coverage of the error bar, tested apart.
 fn assert_unbiased(label: &str, mean: &[Real], se: &[Real], star: &[Real], power: Real) {
     for (idx, ((m, s), b)) in mean.iter().zip(se).zip(star).enumerate() {
         assert!((m - b).abs() <= 4.0 * s + 1e-12 * b, "{label}: entry {idx}: mean {m} against {b}, standard error {s}");
@@ -86,7 +86,8 @@ fn every_form_and_scoring_is_unbiased_on_a_stored_system() {
 #[test]
 fn the_closed_furnace_gives_e_over_one_minus_rho() {
     // Rows F_ij = A_j / ΣA sum to 1 (patches see themselves), ρ = 0.9, E = 1: B = 10 at every
-    // patch. Its columns sum to 1 up to round-off, so rays never escape.
+    // patch. Its columns sum to 1 up to round-off, so rays escape only with the probability
+    // that round-off leaves.
     let area: Vec<Real> = (0..6).map(|i| 1.0 + i as Real).collect();
     let total: Real = area.iter().sum();
     let (system, f) = furnace(area.clone(), 0.9, |_, j| area[j] / total);
@@ -143,10 +144,13 @@ fn the_standard_error_covers_at_the_rate_it_claims() {
     // Tolerance: the 36 patch channels of one seed share its walks, so the fraction covered is
     // taken per seed, and its mean over independent seeds has a standard error from their
     // spread (a binomial spread where the 36 were independent, wider where they are not);
-    // the mean lies within 3 of those standard errors, plus 0.02 for non-normality: each
-    // replicate averages hundreds of walks, and a symmetric interval's coverage error from
-    // skewed estimates falls as 1/walks, not 1/√walks (Hall 1992, The Bootstrap and
-    // Edgeworth Expansion, §3.5).
+    // the mean lies within 3 of those standard errors, plus 0.02 for non-normality. Each
+    // replicate's estimate is a mean over m ≈ 500 walks (40 steps of 12, or of 36 with
+    // R = 16), so its skewness falls as 1/√m and its excess kurtosis as 1/m; a symmetric
+    // interval covers as often whichever way the estimate is skewed, so its coverage moves
+    // only by terms in the skewness squared and the excess kurtosis, both O(1/m): with a
+    // walk's score 0 most of the time (skewness about 3, excess kurtosis about 10 where a
+    // patch is hit one walk in ten), about 0.02.
     let (system, f) = twelve();
     let star = exact(&system, &f);
     let cases: Vec<(String, u64)> = FORMS

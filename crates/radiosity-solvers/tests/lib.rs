@@ -1,12 +1,14 @@
 //! Tests of radiosity-solvers on small in-memory systems with exact answers: the furnace
 //! identity, the two-patch closed form, the unit cube, and the accounting and stop rules (and
-//! the clock they read, `clock`).
+//! the clock they read, `clock`); the random walks over the stored matrix sampled exactly
+//! (`random_walk`).
 
 use radiosity_core::{Channels, DenseColumns, LinearSystem, Real};
 use radiosity_solvers::*;
 
 mod clock;
 mod krylov;
+mod random_walk;
 mod residual_bound;
 mod stochastic_jacobi;
 

@@ -72,9 +72,10 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 
 /// The sections, in report order.
-const SECTIONS: [&str; 5] = ["columns", "assembly", "lu", "e2e", "scale"];
+const SECTIONS: [&str; 6] = ["columns", "assembly", "lu", "e2e", "scale", "stochastic"];
 
-/// The sections a plain `cargo xtask bench` runs (`scale` is asked for by name).
+/// The sections a plain `cargo xtask bench` runs (`scale` and `stochastic` are asked for by
+/// name).
 const DEFAULT_SECTIONS: [&str; 4] = ["columns", "assembly", "lu", "e2e"];
 
 /// Arguments of `bench`.
@@ -92,7 +93,8 @@ pub struct Args {
     #[arg(long)]
     quick: bool,
     /// Only these sections, comma-separated: columns, assembly, lu, e2e (e2e includes memory),
-    /// scale (not run by default: about two hours).
+    /// scale (not run by default: about two hours), stochastic (not run by default: the
+    /// stochastic solvers on RenderPark's classroom, from the scenes folder).
     #[arg(long, value_name = "SECTIONS")]
     only: Option<String>,
     /// Runs per measurement (default 5 for columns and lu, 3 for assembly and e2e; with
@@ -124,6 +126,9 @@ pub struct Args {
     /// Internal: run one scale case in this process and print its figures as JSON.
     #[arg(long, hide = true, value_name = "SOLVER")]
     child_scale: Option<String>,
+    /// Internal: run one stochastic case (rays in the scene) and print its figures as JSON.
+    #[arg(long, hide = true, value_name = "SOLVER")]
+    child_sampled: Option<String>,
 }
 
 /// What every section is run with.
@@ -148,6 +153,12 @@ pub(crate) struct Config {
     max_seconds: f64,
     /// Solver-time cap of one scale run.
     scale_seconds: f64,
+    /// The scene of the stochastic section.
+    stochastic_scene: String,
+    /// The solvers of the stochastic section.
+    stochastic_solvers: Vec<String>,
+    /// Solver-time cap of one stochastic run.
+    sampled_seconds: f64,
     /// The shortest timed measurement in section 1: shorter ones are repeated.
     min_seconds: f64,
 }
@@ -195,9 +206,17 @@ impl Config {
             backends: backends.iter().map(|s| s.to_string()).collect(),
             assembly_rays: vec![1, 4],
             group_sizes: if quick { vec![20, 50] } else { vec![20, 50, 100, 200, 500] },
-            solvers,
+            solvers: solvers.clone(),
             max_seconds: args.max_seconds.unwrap_or(if quick { 60.0 } else { 300.0 }),
             scale_seconds: args.max_seconds.unwrap_or(if quick { 5.0 } else { 120.0 }),
+            stochastic_scene: args.scene.clone().unwrap_or_else(|| {
+                if quick { "cornell:res=4" } else { radiosity_eval::bench::stochastic::SCENE }.to_string()
+            }),
+            stochastic_solvers: match &args.solvers {
+                Some(_) => solvers.clone(),
+                None => radiosity_eval::bench::stochastic::SOLVERS.iter().map(|s| s.to_string()).collect(),
+            },
+            sampled_seconds: args.max_seconds.unwrap_or(if quick { 5.0 } else { 60.0 }),
             min_seconds: if quick { 0.05 } else { 0.2 },
         })
     }
@@ -246,6 +265,12 @@ pub fn run(args: &Args) -> Result<()> {
         let ff = args.child_ff.as_deref().unwrap_or("analytic");
         return children::scale_child(scene, solver, ff, args.max_seconds.unwrap_or(120.0));
     }
+    if let Some(solver) = &args.child_sampled {
+        let (Some(reference), Some(scene)) = (&args.child_reference, &args.scene) else {
+            bail!("a stochastic child run needs --scene and --child-reference");
+        };
+        return children::sampled_child(scene, solver, reference, args.max_seconds.unwrap_or(60.0));
+    }
     if let Some(solver) = &args.child_solver {
         let (Some(ff), Some(reference), Some(scene)) = (&args.child_ff, &args.child_reference, &args.scene) else {
             bail!("an end-to-end child run needs --scene, --child-ff and --child-reference");
@@ -273,6 +298,7 @@ pub fn run(args: &Args) -> Result<()> {
                 lu::report(&lu::measure(&params, &Bars::new())?)
             }
             "scale" => children::scale(&config)?,
+            "stochastic" => children::stochastic(&config, &mut findings)?,
             on_scene => {
                 let scene = match prepared {
                     Some(ref scene) => scene,

@@ -4,15 +4,17 @@
 //! Built after argmin: a [`Solver`] defines one step, the [`Executor`] loops until a stop
 //! rule ([`StopRules`]) holds and calls [`Observer`]s on the initial state, between steps and
 //! on the finished run, outside the timed region, each as its [`ObserverMode`] says; the
-//! `rms=` rule asks a separate [`ErrorMonitor`]. Each solver
-//! lives in its own module, in a folder by family (`run`, `gathering`, `shooting`, `group`,
-//! `krylov`), whose documentation gives its update rule and references; the modules are
-//! private (`cargo doc --document-private-items` shows them) and everything public is
-//! re-exported at the crate root. What a solver alone knows (its group steps, their condition
-//! numbers and fallbacks) comes back in the run's [`Record`]. Every built-in solver also
+//! `rms=` rule asks a separate [`ErrorMonitor`]. Each solver lives in its own module, in a
+//! folder by family (`run`, `gathering`, `shooting`, `group`, `krylov`, `stochastic`), whose
+//! documentation gives its update rule and references; the modules are private (`cargo doc
+//! --document-private-items` shows them) and everything public is re-exported at the crate
+//! root. What a solver alone knows (its group steps, their condition numbers and fallbacks)
+//! comes back in the run's [`Record`]. Every built-in solver that works through `F` also
 //! bounds, at no extra column, the residual of the radiosity it displays
-//! ([`Solver::residual_bound`], [`ResidualBound`]). This crate depends on `radiosity-core`
-//! only and is tested on small in-memory matrices.
+//! ([`Solver::residual_bound`], [`ResidualBound`]); one that samples transport by rays gives
+//! the standard error of its estimate instead ([`Solver::standard_error`]). This crate
+//! depends on `radiosity-core` (and on `rayon`, to cast rays in parallel) and is tested on
+//! small in-memory matrices.
 //!
 //! Solvers are built from their command-line names by a [`SolverRegistry`], which tries its
 //! families of names in order; each family is a parameter struct ([`SolverParams`]:
@@ -32,7 +34,11 @@
 //! - stochastic relaxation, which samples transport with rays and never forms `F`
 //!   ([`Problem::with_transport`], [`Problem::cast`]): `stochastic-jacobi`
 //!   ([`StochasticJacobiParams`]), with a standard error from independent replicates
-//!   ([`Solver::standard_error`], [`StandardError`]).
+//!   ([`Solver::standard_error`], [`StandardError`]);
+//! - random walks over rays, which never form `F` and need a problem that samples transport
+//!   ([`Problem::with_transport`]): `random-walk`, shooting from the emitters or gathering
+//!   from every patch, scored by collision or absorption, its error bar the spread of
+//!   independent replicates ([`RandomWalkParams`], [`Solver::standard_error`]).
 //!
 //! A researcher's own solver goes beside them, typed ([`SolverRegistry::register`]) or as a
 //! closure ([`SolverRegistry::register_fn`]).
@@ -124,6 +130,7 @@ pub use shooting::overshooting::xu::XuParts;
 pub use shooting::progressive::ProgressiveRefinement;
 pub use shooting::rule::unshot_power;
 pub use shooting::southwell::Southwell;
+pub use stochastic::random_walk::{RandomWalk, RandomWalkParams, WalkForm, WalkScore};
 pub use stochastic::sequence::{PointStream, Sequence};
 pub use stochastic::stochastic_jacobi::{Batch, JacobiForm, StochasticJacobi, StochasticJacobiParams};
 

@@ -19,7 +19,7 @@
 //! The built-in families ([`SolverRegistry::builtin`]), in this order: [`JacobiParams`],
 //! [`GaussSeidelParams`], [`PointShootingParams`], [`GroupGatheringParams`],
 //! [`GroupShootingParams`], [`GroupAcceleratedParams`], [`CgParams`], [`GmresParams`],
-//! [`BicgstabParams`] and [`StochasticJacobiParams`]. Library users add their own,
+//! [`BicgstabParams`], [`StochasticJacobiParams`] and [`RandomWalkParams`]. Library users add their own,
 //! typed ([`SolverRegistry::register`]) or as a closure ([`SolverRegistry::register_fn`]);
 //! built-in families come first, so a new family cannot change what a built-in name means
 //! unless the user starts from [`SolverRegistry::empty`].
@@ -46,6 +46,7 @@ use crate::krylov::gmres::GmresParams;
 use crate::naming::{ParseSolverError, SolverParams, named, split_params};
 use crate::run::executor::Solver;
 use crate::shooting::overshooting::step::PointShootingParams;
+use crate::stochastic::random_walk::RandomWalkParams;
 use crate::stochastic::stochastic_jacobi::StochasticJacobiParams;
 use std::fmt;
 use std::sync::{Arc, OnceLock};
@@ -114,7 +115,7 @@ impl SolverRegistry {
         SolverRegistry::default()
     }
 
-    /// The built-in families (module doc). Cheap: nine entries.
+    /// The built-in families (module doc). Cheap: ten entries.
     pub fn builtin() -> SolverRegistry {
         let mut registry = SolverRegistry::empty();
         registry
@@ -127,7 +128,8 @@ impl SolverRegistry {
             .register::<CgParams>()
             .register::<GmresParams>()
             .register::<BicgstabParams>()
-            .register::<StochasticJacobiParams>();
+            .register::<StochasticJacobiParams>()
+            .register::<RandomWalkParams>();
         registry
     }
 

@@ -9,7 +9,7 @@ use radiosity_core::{
 use radiosity_solvers::*;
 
 /// `B*` of every channel by dense LU.
-fn exact(system: &LinearSystem, f: &DenseColumns) -> Vec<Real> {
+pub(super) fn exact(system: &LinearSystem, f: &DenseColumns) -> Vec<Real> {
     let (n, k) = (system.len(), system.channels().count());
     let mut b = vec![0.0; n * k];
     for c in 0..k {

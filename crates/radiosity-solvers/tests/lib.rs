@@ -1,13 +1,15 @@
 //! Tests of radiosity-solvers on small in-memory systems with exact answers: the furnace
 //! identity, the two-patch closed form, the unit cube, and the accounting and stop rules (and
-//! the clock they read, `clock`), and what the executor hands the observers of a solver that
-//! samples transport (`sampled`).
+//! the clock they read, `clock`); the random walks over the stored matrix sampled exactly
+//! (`random_walk`); and what the executor hands the observers of a solver that samples
+//! transport (`sampled`).
 
 use radiosity_core::{Channels, DenseColumns, LinearSystem, Real};
 use radiosity_solvers::*;
 
 mod clock;
 mod krylov;
+mod random_walk;
 mod residual_bound;
 mod sampled;
 mod stochastic_jacobi;

@@ -11,6 +11,7 @@ use anyhow::{Context, Result, bail};
 use radiosity_core::Real;
 use radiosity_eval::bench::e2e::{self, EndToEndReport, ReferenceNote};
 use radiosity_eval::bench::scale::{self, ScaleReport};
+use radiosity_eval::bench::stochastic;
 use radiosity_eval::{Lab, LabOptions};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
@@ -38,15 +39,32 @@ fn run_child<T: serde::de::DeserializeOwned>(args: &[String], what: &str) -> Res
 pub(crate) fn e2e_child(scene: &str, solver: &str, ff: &str, reference: &Path, max_seconds: Real) -> Result<()> {
     let spec = BackendSpec::parse(ff)?;
     let mut solver = SolverRegistry::builtin().build(solver)?;
-    let bytes = std::fs::read(reference).with_context(|| format!("cannot read {}", reference.display()))?;
-    let star: Vec<Real> =
-        bytes.chunks_exact(8).map(|c| Real::from_le_bytes(c.try_into().expect("chunks of 8 bytes"))).collect();
+    let star = read_reference(reference)?;
     let start = Instant::now();
     let prepared = prepare(scene)?;
     let scene_seconds = start.elapsed().as_secs_f64();
     let report = e2e::time_to_accuracy(&prepared, start, scene_seconds, solver.as_mut(), &spec, &star, max_seconds)?;
     println!("{}", serde_json::to_string(&report)?);
     Ok(())
+}
+
+/// The child of a stochastic case: loads the scene on the clock and runs `solver` with rays
+/// in it.
+pub(crate) fn sampled_child(scene: &str, solver: &str, reference: &Path, max_seconds: Real) -> Result<()> {
+    let mut solver = SolverRegistry::builtin().build(solver)?;
+    let star = read_reference(reference)?;
+    let start = Instant::now();
+    let prepared = prepare(scene)?;
+    let scene_seconds = start.elapsed().as_secs_f64();
+    let report = stochastic::sampled_run(&prepared, start, scene_seconds, solver.as_mut(), &star, max_seconds)?;
+    println!("{}", serde_json::to_string(&report)?);
+    Ok(())
+}
+
+/// A reference solution written by [`write_reference`].
+fn read_reference(path: &Path) -> Result<Vec<Real>> {
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    Ok(bytes.chunks_exact(8).map(|c| Real::from_le_bytes(c.try_into().expect("chunks of 8 bytes"))).collect())
 }
 
 /// The child of a scale case: `solver` over the backend `ff`.
@@ -70,15 +88,15 @@ impl Drop for TempFile {
     }
 }
 
-/// Runs the end-to-end section: the reference once, outside every timed run, then every case
-/// `--runs` times in its own process.
-pub(crate) fn e2e(config: &Config, prepared: &PreparedScene, findings: &mut Findings) -> Result<String> {
+/// The analytic reference of `prepared`, solved (or read from the cache) once, outside every
+/// timed run, written to a file the children read, with how it was solved.
+fn write_reference(prepared: &PreparedScene) -> Result<(TempFile, ReferenceNote)> {
     let spinner = progress(1, "reference");
     spinner.set_message("solved once, outside every timed run");
     let start = Instant::now();
     let experiment = Lab::new(prepared, &BackendSpec::parse("analytic")?, LabOptions::default(), &Bars::new())?;
     let seconds = start.elapsed().as_secs_f64();
-    let reference = experiment.reference().context("the end-to-end runs need a reference")?;
+    let reference = experiment.reference().context("the timed runs need a reference")?;
     let note = ReferenceNote {
         method: reference.method().to_string(),
         certificate: reference.certificate().to_string(),
@@ -90,6 +108,13 @@ pub(crate) fn e2e(config: &Config, prepared: &PreparedScene, findings: &mut Find
     // The stored reference matrix is not kept while the runs are timed.
     drop(experiment);
     spinner.finish_and_clear();
+    Ok((file, note))
+}
+
+/// Runs the end-to-end section: the reference once, outside every timed run, then every case
+/// `--runs` times in its own process.
+pub(crate) fn e2e(config: &Config, prepared: &PreparedScene, findings: &mut Findings) -> Result<String> {
+    let (file, note) = write_reference(prepared)?;
 
     let mut cases: Vec<(String, String)> = config.solvers.iter().map(|s| (s.clone(), "analytic".to_string())).collect();
     cases.push(("gauss-seidel".to_string(), "matrix".to_string()));
@@ -115,6 +140,46 @@ pub(crate) fn e2e(config: &Config, prepared: &PreparedScene, findings: &mut Find
     findings.fastest = section.fastest;
     findings.peak_memory = section.peak_memory;
     findings.json.e2e = section.json;
+    Ok(section.markdown)
+}
+
+/// Runs the stochastic section on RenderPark's classroom (`--scene` otherwise; with `--quick`
+/// a small Cornell box): the analytic reference once, then every solver (`--solvers`, or
+/// [`stochastic::SOLVERS`]) `--runs` times in its own process.
+pub(crate) fn stochastic(config: &Config, findings: &mut Findings) -> Result<String> {
+    let scene = config.stochastic_scene.clone();
+    let prepared = prepare(&scene)?;
+    let (file, note) = write_reference(&prepared)?;
+    let cases = config.stochastic_solvers.clone();
+    let bar = progress((cases.len() * config.runs_heavy) as u64, "stochastic");
+    let mut results: Vec<Vec<stochastic::SampledReport>> = Vec::new();
+    for solver in &cases {
+        let mut runs = Vec::new();
+        for r in 0..config.runs_heavy {
+            bar.set_message(format!("{solver}, run {}/{}", r + 1, config.runs_heavy));
+            let args: Vec<String> = [
+                "bench",
+                "--scene",
+                &scene,
+                "--child-sampled",
+                solver,
+                "--child-reference",
+                &file.0.display().to_string(),
+                "--max-seconds",
+                &config.sampled_seconds.to_string(),
+            ]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+            runs.push(run_child(&args, &format!("the stochastic run of {solver}"))?);
+            bar.inc(1);
+        }
+        results.push(runs);
+    }
+    bar.finish_and_clear();
+    let section =
+        stochastic::report(&scene, prepared.loaded.scene.len(), &cases, &results, &note, config.sampled_seconds);
+    findings.json.stochastic = section.json;
     Ok(section.markdown)
 }
 

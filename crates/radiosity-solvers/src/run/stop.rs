@@ -24,6 +24,26 @@ pub enum Count {
 }
 
 impl Count {
+    /// A count as written: a positive whole number (`480`, `1e7`) or a positive multiple of
+    /// `n` (`2n`, `n`, `0.5n`); otherwise why not, as a clause (`expected …`).
+    pub fn parse(value: &str) -> Result<Count, &'static str> {
+        if let Some(m) = value.strip_suffix('n') {
+            let m = if m.is_empty() { 1.0 } else { m.parse::<f64>().map_err(|_| "expected a number before n")? };
+            if !(m.is_finite() && m > 0.0) {
+                return Err("the multiple of n must be positive");
+            }
+            return Ok(Count::PerPatch(m));
+        }
+        // A whole number, also in exponent form (`1e7`).
+        match value.parse::<u64>().ok().or_else(|| {
+            let v = value.parse::<f64>().ok()?;
+            (v.is_finite() && v >= 1.0 && v.fract() == 0.0 && v < 1.8e19).then_some(v as u64)
+        }) {
+            Some(k) if k > 0 => Ok(Count::Absolute(k)),
+            _ => Err("expected a positive integer (such as 480 or 1e7) or a multiple of n such as 2n"),
+        }
+    }
+
     /// The count for a system of `n` patches.
     pub fn resolve(self, n: usize) -> u64 {
         match self {
@@ -103,22 +123,7 @@ fn bad(rule: &str, reason: &str) -> SolverError {
 }
 
 fn parse_count(rule: &str, value: &str) -> Result<Count, SolverError> {
-    if let Some(m) = value.strip_suffix('n') {
-        let m =
-            if m.is_empty() { 1.0 } else { m.parse::<f64>().map_err(|_| bad(rule, "expected a number before n"))? };
-        if !(m.is_finite() && m > 0.0) {
-            return Err(bad(rule, "the multiple of n must be positive"));
-        }
-        return Ok(Count::PerPatch(m));
-    }
-    // A whole number, also in exponent form (`1e7`).
-    match value.parse::<u64>().ok().or_else(|| {
-        let v = value.parse::<f64>().ok()?;
-        (v.is_finite() && v >= 1.0 && v.fract() == 0.0 && v < 1.8e19).then_some(v as u64)
-    }) {
-        Some(k) if k > 0 => Ok(Count::Absolute(k)),
-        _ => Err(bad(rule, "expected a positive integer (such as 480 or 1e7) or a multiple of n such as 2n")),
-    }
+    Count::parse(value).map_err(|reason| bad(rule, reason))
 }
 
 fn parse_positive(rule: &str, value: &str) -> Result<Real, SolverError> {

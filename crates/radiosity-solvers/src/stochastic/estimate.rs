@@ -5,10 +5,13 @@
 //! [`radiosity_core::transport`] (`T_ij = A_i F_ij / A_j` for a ray from `j`):
 //!
 //! - [`shoot`]: `in_i = Σ_j T_ij x_j`, the power landing on `i` when every patch `j` sends out
-//!   power `x_j`. Patch `j` casts rays in proportion to `|x_j|` (summed over channels):
-//!   `m_j = N |x_j| / Σ|x|` expected, rounded at random to `⌊m_j⌋` or `⌈m_j⌉` so that their
-//!   expectation is `m_j`, and each ray carries `w_j x_j / m_j` (`w_j` the sampler's ray
-//!   weight). The expected power landed on `i` is then `Σ_j m_j (T_ij / w_j) w_j x_j / m_j`.
+//!   power `x_j`. Patch `j` is due `m_j = N |x_j| / Σ|x|` rays (`|x_j|` summed over channels).
+//!   Where `m_j ≥ 1` it casts `N_j = round(m_j)` rays, each carrying `w_j x_j / N_j` (`w_j` the
+//!   sampler's ray weight), so that the power it shoots is exactly `x_j` and only where it
+//!   lands is random; where `m_j < 1` it casts one ray with probability `m_j`, carrying
+//!   `w_j x_j / m_j`. Either way the expected power landed on `i` is `Σ_j T_ij x_j`. Rounding
+//!   at random where `m_j ≥ 1` too would also be unbiased, but would add the noise of how much
+//!   each patch shoots, which no quasi-random sequence removes.
 //! - [`gather`]: `g_i = Σ_j F_ij b_j` for the patches that reflect: patch `i` casts
 //!   `max(1, ⌈N A_i / Σ A⌉)` rays and averages `b` where they land (0 when they escape), times
 //!   its ray weight. A ray from `i` lands on `j` with probability `T_ji`, which is `F_ij` where
@@ -20,8 +23,14 @@
 //!   adds `b_a W / N` to `in_b`, `W` the area a transfer stands for.
 //!
 //! Rays are cast in parallel over fixed blocks of patches, each patch's rays from its own
-//! stream keyed by `(seed, key, patch)`, and landings are summed in patch order afterwards:
-//! the same seed gives the same numbers whatever the thread count.
+//! stream, and landings are summed in patch order afterwards: the same seed gives the same
+//! numbers whatever the thread count. A patch's stream is keyed by the seed, the replicate and
+//! the patch, and continues from one iteration to the next ([`Streams::drawn`] counts the
+//! points each patch used): with a quasi-random sequence, the rays a patch casts over a whole
+//! run are one low-discrepancy sequence, not a short one each iteration (where a patch casts
+//! a few rays an iteration, as most do, there would be nothing to stratify). The landing of
+//! the `k`-th ray is the same function of its point in every iteration; only the power it
+//! carries changes (Keller 1996). A pseudo-random stream is keyed by the iteration too.
 //!
 //! ## References
 //!
@@ -44,19 +53,29 @@ type Line = (Real, Vec<(usize, usize)>, u64);
 /// Lines per parallel block.
 const LINE_BLOCK: usize = 1024;
 
-/// How a stream is keyed: the run's seed and sequence, and what the rays are for (replicate,
-/// iteration); the patch is added per patch.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Streams {
+/// How a chain's streams are keyed (module doc): the run's seed and sequence, the replicate,
+/// and the points each patch has drawn so far.
+#[derive(Debug)]
+pub(crate) struct Streams<'c> {
     pub sequence: Sequence,
     pub seed: u64,
     pub replicate: u64,
+    /// The iteration (keys the lines, and the pseudo-random streams with the points drawn).
     pub iteration: u64,
+    /// Points drawn so far by each patch in this chain; advanced by each estimate.
+    pub drawn: &'c mut [u64],
 }
 
-impl Streams {
-    fn of(&self, patch: u64) -> crate::stochastic::sequence::PointStream {
-        self.sequence.stream(self.seed, [self.replicate, self.iteration, patch])
+impl Streams<'_> {
+    /// Patch `patch`'s stream from its next point on.
+    fn of(&self, patch: usize) -> crate::stochastic::sequence::PointStream {
+        let stream = self.sequence.stream(self.seed, [self.replicate, 0, patch as u64]);
+        stream.from_index(self.drawn[patch]).rekeyed(self.iteration)
+    }
+
+    /// Global lines' stream for block `block` of this iteration.
+    fn lines(&self, block: u64) -> crate::stochastic::sequence::PointStream {
+        self.sequence.stream(self.seed, [self.replicate, 1 + self.iteration, u64::MAX - block])
     }
 }
 
@@ -73,7 +92,7 @@ pub(crate) struct Cast {
 fn cast_per_patch(
     rays: &Rays<'_>,
     n: usize,
-    streams: Streams,
+    streams: &mut Streams<'_>,
     count: &(dyn Fn(usize, &mut crate::stochastic::sequence::PointStream) -> usize + Sync),
     mut land: impl FnMut(usize, Option<usize>),
 ) -> Cast {
@@ -83,7 +102,7 @@ fn cast_per_patch(
             let mut out = Vec::new();
             let mut points = Vec::new();
             for j in b * BLOCK..((b + 1) * BLOCK).min(n) {
-                let mut stream = streams.of(j as u64);
+                let mut stream = streams.of(j);
                 let k = count(j, &mut stream);
                 if k == 0 {
                     continue;
@@ -100,6 +119,8 @@ fn cast_per_patch(
     let mut cast = Cast::default();
     for (j, landings) in blocks.into_iter().flatten() {
         cast.rays += landings.len() as u64;
+        // The next iteration's rays go on from the next point.
+        streams.drawn[j] += landings.len() as u64;
         for landing in landings {
             land(j, landing);
         }
@@ -120,7 +141,7 @@ pub(crate) fn shoot(
     x: &[Real],
     k: usize,
     n_rays: u64,
-    streams: Streams,
+    streams: &mut Streams<'_>,
     incoming: &mut [Real],
 ) -> Cast {
     let n = x.len() / k;
@@ -131,13 +152,20 @@ pub(crate) fn shoot(
         return Cast::default();
     }
     let expected = |j: usize| n_rays as Real * norm(j) / total;
+    // Rays due at least one are cast in their rounded number, carrying the patch's power
+    // between them; the others one at a time, at random.
+    let cast_count = |m: Real| if m >= 1.0 { m.round() } else { m };
     let count = |j: usize, stream: &mut crate::stochastic::sequence::PointStream| {
         let m = expected(j);
-        if m > 0.0 { round_at_random(m, stream.uniform()) } else { 0 }
+        match m {
+            m if m >= 1.0 => m.round() as usize,
+            m if m > 0.0 => round_at_random(m, stream.uniform()),
+            _ => 0,
+        }
     };
     cast_per_patch(rays, n, streams, &count, |j, landing| {
         if let Some(i) = landing {
-            let scale = rays.ray_weight(j) / expected(j);
+            let scale = rays.ray_weight(j) / cast_count(expected(j));
             for c in 0..k {
                 incoming[i * k + c] += x[j * k + c] * scale;
             }
@@ -157,7 +185,7 @@ pub(crate) fn gather(
     reflects: &(dyn Fn(usize) -> bool + Sync),
     beta: Option<&[Real]>,
     n_rays: u64,
-    streams: Streams,
+    streams: &mut Streams<'_>,
     gathered: &mut [Real],
 ) -> Cast {
     let n = areas.len();
@@ -197,7 +225,7 @@ pub(crate) fn lines(
     b: &[Real],
     k: usize,
     n_lines: u64,
-    streams: Streams,
+    streams: &Streams<'_>,
     incoming: &mut [Real],
 ) -> Option<Cast> {
     incoming.fill(0.0);
@@ -205,7 +233,7 @@ pub(crate) fn lines(
     let found: Vec<Option<Vec<Line>>> = (0..blocks)
         .into_par_iter()
         .map(|block| {
-            let mut stream = streams.of(block);
+            let mut stream = streams.lines(block);
             let mut line = LineTransfers::default();
             let mut out = Vec::new();
             let first = block * LINE_BLOCK as u64;

@@ -3,5 +3,6 @@
 //! they share.
 
 pub(crate) mod estimate;
+pub(crate) mod random_walk;
 pub(crate) mod sequence;
 pub(crate) mod stochastic_jacobi;

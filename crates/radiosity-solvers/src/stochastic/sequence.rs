@@ -101,6 +101,24 @@ impl PointStream {
         }
     }
 
+    /// The stream from its point `index` on: for the quasi-random sequences, the same points
+    /// as after drawing `index` of them, so that streams drawn one after another continue one
+    /// low-discrepancy sequence; for `random`, an independent stream keyed by `index` too.
+    pub fn from_index(mut self, index: u64) -> PointStream {
+        match self.scramble {
+            Scramble::None => self.random = SplitMix(mix(self.random.0 ^ mix(index))),
+            _ => self.index = index,
+        }
+        self
+    }
+
+    /// The stream with its pseudo-random part ([`PointStream::uniform`], and the points of
+    /// `random`) keyed by `key` too, its quasi-random points unchanged.
+    pub fn rekeyed(mut self, key: u64) -> PointStream {
+        self.random = SplitMix(mix(self.random.0 ^ mix(key.wrapping_add(0x5851_f42d_4c95_7f2d))));
+        self
+    }
+
     /// A uniform number in `[0, 1)` from the stream's pseudo-random part, whatever the sequence
     /// (for choices beside the rays: rounding a ray count).
     pub fn uniform(&mut self) -> Real {

@@ -36,9 +36,9 @@
 //!   `seed=S` (1 by default).
 //!
 //! One step is one iteration of every replicate ([`StepKind::Sampled`]); its cost is the rays
-//! cast ([`crate::State::rays`]). The residual power reported is the unshot power during the
-//! incremental phase (its mean over replicates, relative to `|Φ|`), and none afterwards: no
-//! residual is known without `F`.
+//! cast ([`crate::State::rays`]). No residual is known without `F`, so none is reported
+//! ([`Solver::residual_power`]), and a run ends by its stop rules or the step cap; the state's
+//! unshot radiosity is the replicates' mean during the incremental phase, 0 afterwards.
 //!
 //! ## References
 //!
@@ -210,8 +210,8 @@ impl FromStr for StochasticJacobiParams {
 }
 
 impl SolverParams for StochasticJacobiParams {
-    const SYNTAX: &'static str = "stochastic-jacobi[:form=shooting|gathering][:cv=true][:lines=global][:seq=random|sobol|halton][:replicates=R][:batch=N][:seed=S]";
-    const HELP: &'static str = "stochastic relaxation: Jacobi iterations whose transport is estimated with rays (incremental shooting, then regular iterations averaged); never forms F; a standard error from R replicates";
+    const SYNTAX: &'static str = "stochastic-jacobi[:form=…][:cv=true][:lines=global][:seq=…][:replicates=R][:batch=N][:seed=S]";
+    const HELP: &'static str = "stochastic relaxation: Jacobi iterations whose transport is estimated with rays (incremental shooting, then regular iterations averaged; form=shooting|gathering, seq=random|sobol|halton); never forms F; a standard error from R replicates";
     const EXAMPLES: &'static [&'static str] =
         &["stochastic-jacobi", "stochastic-jacobi:seq=sobol", "stochastic-jacobi:form=gathering:cv=true"];
 
@@ -249,6 +249,8 @@ struct Chain {
     regular: bool,
     /// Iterations taken.
     iteration: u64,
+    /// Points each patch has drawn from its stream ([`crate::stochastic::estimate`]).
+    drawn: Vec<u64>,
 }
 
 /// Stochastic Jacobi (module doc).
@@ -290,8 +292,13 @@ impl StochasticJacobi {
         let params = self.params.clone();
         let emitted = self.emitted;
         let chain = &mut self.chains[r];
-        let streams =
-            Streams { sequence: params.sequence, seed: params.seed, replicate: r as u64, iteration: chain.iteration };
+        let mut streams = Streams {
+            sequence: params.sequence,
+            seed: params.seed,
+            replicate: r as u64,
+            iteration: chain.iteration,
+            drawn: &mut chain.drawn,
+        };
         chain.iteration += 1;
         if !chain.regular {
             let unshot = Self::power(problem, &chain.unshot);
@@ -305,10 +312,10 @@ impl StochasticJacobi {
                 let mut incoming = vec![0.0; n * k];
                 let cast = if params.global_lines {
                     problem
-                        .cast(&name, |rays| lines(rays, &chain.unshot, k, n_rays, streams, &mut incoming))?
+                        .cast(&name, |rays| lines(rays, &chain.unshot, k, n_rays, &streams, &mut incoming))?
                         .ok_or_else(|| no_lines(&name))?
                 } else {
-                    problem.cast(&name, |rays| shoot(rays, &x, k, n_rays, streams, &mut incoming))?
+                    problem.cast(&name, |rays| shoot(rays, &x, k, n_rays, &mut streams, &mut incoming))?
                 };
                 for (idx, power) in incoming.iter().enumerate() {
                     let (i, c) = (idx / k, idx % k);
@@ -342,7 +349,7 @@ impl StochasticJacobi {
                         &reflects,
                         beta.as_deref(),
                         batch,
-                        streams,
+                        &mut streams,
                         &mut gathered,
                     ))
                 })?;
@@ -360,11 +367,11 @@ impl StochasticJacobi {
                 let mut incoming = vec![0.0; n * k];
                 let cast = if lines_too {
                     problem
-                        .cast(&name, |rays| lines(rays, &chain.estimate, k, batch, streams, &mut incoming))?
+                        .cast(&name, |rays| lines(rays, &chain.estimate, k, batch, &streams, &mut incoming))?
                         .ok_or_else(|| no_lines(&name))?
                 } else {
                     let x: Vec<Real> = chain.estimate.iter().enumerate().map(|(idx, b)| areas[idx / k] * b).collect();
-                    problem.cast(&name, |rays| shoot(rays, &x, k, batch, streams, &mut incoming))?
+                    problem.cast(&name, |rays| shoot(rays, &x, k, batch, &mut streams, &mut incoming))?
                 };
                 for (idx, power) in incoming.iter().enumerate() {
                     let (i, c) = (idx / k, idx % k);
@@ -435,7 +442,15 @@ impl Solver for StochasticJacobi {
         let emission = problem.system().emissions().to_vec();
         self.emitted = Self::power(problem, &emission);
         self.rays = 0;
-        let chain = Chain { estimate: emission.clone(), unshot: emission, weight: 0.0, regular: false, iteration: 0 };
+        let n = problem.n();
+        let chain = Chain {
+            estimate: emission.clone(),
+            unshot: emission,
+            weight: 0.0,
+            regular: false,
+            iteration: 0,
+            drawn: vec![0; n],
+        };
         self.chains = vec![chain; self.params.replicates];
         self.mean_shown = state.radiosity.clone();
         Ok(())
@@ -463,14 +478,12 @@ impl Solver for StochasticJacobi {
         Ok(Record::new())
     }
 
-    fn residual_power(&self, problem: &Problem<'_>, state: &State) -> Option<Real> {
-        if self.emitted == 0.0 {
-            return Some(0.0);
-        }
-        if self.chains.iter().any(|c| c.regular) {
-            return None;
-        }
-        Some(Self::power(problem, &state.unshot) / self.emitted)
+    /// None, but on a system that emits nothing (0: `B = 0` is exact). The unshot power of the
+    /// incremental phase is no residual: it is an estimate, which is 0 whenever every ray of
+    /// an iteration escapes, and a run that took it for one would stop at round-off with its
+    /// series cut short.
+    fn residual_power(&self, _problem: &Problem<'_>, _state: &State) -> Option<Real> {
+        (self.emitted == 0.0).then_some(0.0)
     }
 
     fn standard_error(&self, _problem: &Problem<'_>, state: &State) -> Option<StandardError> {

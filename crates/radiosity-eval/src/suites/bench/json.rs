@@ -17,6 +17,9 @@ pub struct BenchJson {
     pub columns: Vec<ColumnsJson>,
     /// Time to accuracy, one entry per method and backend.
     pub e2e: Vec<E2eJson>,
+    /// Stochastic relaxation from scene load, one entry per solver.
+    #[serde(default)]
+    pub stochastic: Vec<crate::bench::stochastic::StochasticJson>,
 }
 
 /// The machine the figures were taken on.

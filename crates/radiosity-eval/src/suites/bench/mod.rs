@@ -16,6 +16,8 @@
 //! - [`e2e`]: wall time from scene load (load, BVH, analysis, form-factor setup, solve) to
 //!   e_rms ≤ 1e-1, 1e-2 and 1e-3 for any [`Solver`](radiosity_solvers::Solver), with the
 //!   time spent measuring e_rms taken out, and the peak resident memory.
+//! - [`stochastic`]: wall time and rays from scene load to e_rms ≤ 1e-2, 3e-3 and 1e-3 for
+//!   the solvers that sample transport with rays in a real scene.
 //! - [`scale`]: the same without a reference or a matrix, to a certified bound, with the growth
 //!   exponent of the time per column in `n`.
 //!
@@ -33,6 +35,7 @@ pub mod lu;
 mod memory;
 pub mod report_text;
 pub mod scale;
+pub mod stochastic;
 
 pub use crate::lab::timing::median;
 pub use json::{BenchJson, ColumnsJson, E2eJson, Machine, SceneJson};

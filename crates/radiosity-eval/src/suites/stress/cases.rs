@@ -12,6 +12,22 @@ pub const RESIDUAL_TARGET: Real = 1e-13;
 /// The certified relative L1 error bound below which a run counts as converged.
 pub const CONVERGED: Real = 1e-6;
 
+/// Rays allowed to a run of a solver that samples transport, per patch (the rule
+/// `rays=20000n`): its budget, in place of the residual target it cannot reach. At `ρ = 0.999`
+/// incremental shooting spends about half of it before its first regular iteration (the
+/// unshot power falls by `ρ` an iteration): a smaller budget ends runs on a truncated series,
+/// whose bias no standard error shows.
+pub const STOCHASTIC_RAYS_PER_PATCH: Real = 20_000.0;
+/// The standard error (relative, as e_rms is) at or below which a run of a solver that
+/// samples transport may count as converged: a few percent, what its budget reaches at
+/// `ρ = 0.999`, since what the suite asks of an estimate is to be unbiased.
+pub const STOCHASTIC_TOLERANCE: Real = 5e-2;
+/// How many of its standard errors a converged stochastic run's e_rms may be from the
+/// reference of the system it sampled.
+pub const STOCHASTIC_SPREADS: Real = 3.0;
+/// The solvers that sample transport the suite runs by default.
+pub const STOCHASTIC_SOLVERS: [&str; 2] = ["stochastic-jacobi", "random-walk"];
+
 /// One scene of the suite.
 #[derive(Clone, Copy, Debug)]
 pub struct Case {
@@ -96,14 +112,15 @@ pub fn select<T: Copy>(
     Ok(chosen)
 }
 
-/// Every point, group, beyond-the-paper and Krylov solver, by name: the suite's default
-/// solvers.
+/// Every point, group, beyond-the-paper, Krylov and stochastic solver, by name: the suite's
+/// default solvers.
 pub fn all_solvers() -> Vec<String> {
     POINT_SOLVERS
         .iter()
         .chain(&GROUP_SOLVERS)
         .chain(&BEYOND_PAPER_SOLVERS)
         .chain(&KRYLOV_SOLVERS)
+        .chain(&STOCHASTIC_SOLVERS)
         .map(|s| s.to_string())
         .collect()
 }

@@ -1,6 +1,9 @@
 //! How a run is judged (module doc of [`crate::stress`]): F assembled once per scene and
 //! backend, its row sums, contraction and condition, the reference and the furnace identity,
 //! then every solver run on it and measured, and what the suite measured ([`StressReport`]).
+//! The solvers that sample transport cast their rays on the same F, sampled exactly
+//! ([`ColumnTransport`], built once per scene and backend when one of them runs), so that the
+//! reference is the exact answer of the system they estimate.
 
 use crate::error::LabError;
 use crate::lab::backends::fresh_backend;
@@ -10,13 +13,17 @@ use crate::reference::certificate::{Contraction, Residual};
 use crate::reference::matrix::FormFactors;
 use crate::reference::metrics::errors_against;
 use crate::reference::solution::{ReferenceParams, ReferenceSolution};
-use crate::suites::stress::cases::{CONVERGED, Case, RESIDUAL_TARGET, STEP_CAP, SuiteBackend};
+use crate::suites::stress::cases::{
+    CONVERGED, Case, RESIDUAL_TARGET, STEP_CAP, STOCHASTIC_RAYS_PER_PATCH, STOCHASTIC_SPREADS, STOCHASTIC_TOLERANCE,
+    SuiteBackend,
+};
 use radiosity_core::dense_lu::solve_m_matrix;
-use radiosity_core::{LinearSystem, Real};
+use radiosity_core::{ColumnTransport, LinearSystem, Real, TransportSampler};
 use radiosity_ff::BackendRegistry;
 use radiosity_geom::PreparedScene;
 use radiosity_solvers::{
-    Executor, ObserverMode, Problem, Record, SolverRegistry, State, StopRule, StopRules, TerminationReason,
+    Count, Executor, ObserverMode, Problem, Record, SolverRegistry, State, StepKind, StopRule, StopRules,
+    TerminationReason,
 };
 use rayon::prelude::*;
 use std::time::Instant;
@@ -93,11 +100,44 @@ pub(super) struct Ended {
     pub(super) negative: usize,
     /// `Σ A·B / Σ A·B_exact − 1`.
     pub(super) energy: Option<Real>,
+    /// Whether the solver samples transport (judged by its standard error).
+    pub(super) sampled: bool,
+    /// The solver's standard error of its final radiosity, relative as e_rms is, and the
+    /// replicates it rests on, when it has one.
+    pub(super) spread: Option<(Real, usize)>,
+}
+
+/// Why a stochastic run did not converge, when it did not (module doc of [`crate::stress`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Unsettled {
+    /// No standard error, or no reference to measure against.
+    Unmeasured,
+    /// The standard error is above [`STOCHASTIC_TOLERANCE`].
+    Noisy(Real),
+    /// e_rms against the reference is more than [`STOCHASTIC_SPREADS`] standard errors.
+    Off { e_rms: Real, spread: Real },
 }
 
 impl Ended {
     pub(super) fn converged(&self) -> bool {
-        self.bound <= CONVERGED
+        if self.sampled { self.unsettled().is_none() } else { self.bound <= CONVERGED }
+    }
+
+    /// For a stochastic run, why it did not converge (`None` when it did): its standard error
+    /// must be at most [`STOCHASTIC_TOLERANCE`] and its e_rms against the reference at most
+    /// [`STOCHASTIC_SPREADS`] standard errors.
+    pub(super) fn unsettled(&self) -> Option<Unsettled> {
+        let (Some((spread, _)), Some(e_rms)) = (self.spread, self.e_reference) else {
+            return Some(Unsettled::Unmeasured);
+        };
+        // A NaN fails both tests.
+        let precise = spread <= STOCHASTIC_TOLERANCE;
+        let unbiased = e_rms <= STOCHASTIC_SPREADS * spread;
+        match (precise, unbiased) {
+            (false, _) => Some(Unsettled::Noisy(spread)),
+            (true, false) => Some(Unsettled::Off { e_rms, spread }),
+            (true, true) => None,
+        }
     }
 }
 
@@ -152,11 +192,18 @@ pub(super) fn run_backend(
     }
     let reference = result.reference.as_ref().ok().map(|r| r.values.as_slice());
     let exact = result.exact.as_deref();
+    // The stored matrix sampled exactly, once, when some solver samples transport.
+    let sampled = solvers.iter().any(|name| registry.build(name).is_ok_and(|s| s.step_kind() == StepKind::Sampled));
+    let transport = match sampled {
+        true => Some(ColumnTransport::new(&matrix, system.areas()).map_err(|e| e.to_string())),
+        false => None,
+    };
+    let truth = Truth { reference, exact, transport: transport.as_ref() };
     result.solvers = solvers
         .par_iter()
         .map(|name| SolverResult {
             solver: name.clone(),
-            outcome: run_solver(&system, &matrix, name, registry, reference, exact)
+            outcome: run_solver(&system, &matrix, name, registry, &truth)
                 .unwrap_or_else(|e| Outcome::Failed(e.to_string())),
         })
         .collect();
@@ -196,18 +243,42 @@ fn condition(system: &LinearSystem, matrix: &FormFactors) -> Option<Real> {
     Some(worst)
 }
 
-/// Runs one solver on the stored matrix and measures its final state.
+/// What a run is measured against, and the sampler of the stored matrix (or why it could not
+/// be built) when some solver samples transport.
+struct Truth<'t> {
+    reference: Option<&'t [Real]>,
+    exact: Option<&'t [Real]>,
+    transport: Option<&'t Result<ColumnTransport, String>>,
+}
+
+/// Runs one solver on the stored matrix and measures its final state. A solver that samples
+/// transport casts its rays on the matrix sampled exactly, and runs to its rays budget
+/// ([`STOCHASTIC_RAYS_PER_PATCH`]) rather than to the residual target.
 fn run_solver(
     system: &LinearSystem,
     matrix: &FormFactors,
     name: &str,
     registry: &SolverRegistry,
-    reference: Option<&[Real]>,
-    exact: Option<&[Real]>,
+    truth: &Truth<'_>,
 ) -> Result<Outcome, LabError> {
+    let (reference, exact) = (truth.reference, truth.exact);
     let mut solver = registry.build(name)?;
-    let problem = Problem::new(system, matrix)?;
-    let rules = StopRules { rules: vec![StopRule::Residual(RESIDUAL_TARGET)], step_cap: STEP_CAP };
+    let sampled = solver.step_kind() == StepKind::Sampled;
+    let (problem, rules) = if sampled {
+        let sampler: &dyn TransportSampler = match truth.transport {
+            Some(Ok(sampler)) => sampler,
+            Some(Err(why)) => return Ok(Outcome::Failed(format!("the stored matrix cannot be sampled: {why}"))),
+            None => return Err(LabError::Invalid(format!("{name} samples transport and no sampler was built"))),
+        };
+        // The rays budget ends the run; the step cap only guards it.
+        let rays = StopRule::Rays(Count::PerPatch(STOCHASTIC_RAYS_PER_PATCH));
+        (Problem::sampled(system, sampler)?, StopRules { rules: vec![rays], step_cap: 1e6 })
+    } else {
+        (
+            Problem::new(system, matrix)?,
+            StopRules { rules: vec![StopRule::Residual(RESIDUAL_TARGET)], step_cap: STEP_CAP },
+        )
+    };
     // e_rms after every step against the reference, when there is one.
     let mut recorder = reference.map(|r| Recorder::errors(system, r, Instant::now()));
     let mut executor = Executor::new(solver.as_mut(), rules);
@@ -218,6 +289,9 @@ fn run_solver(
         Ok(run) => run,
         Err(e) => return Ok(Outcome::Failed(e.to_string())),
     };
+    let spread = solver
+        .standard_error(&problem, &run.state)
+        .map(|s| (s.relative_rms(system, &run.state.radiosity), s.replicates));
     let b = &run.state.radiosity;
     let residual = Residual::from_matrix(system, matrix, b)?;
     let k = system.channels().count();
@@ -244,6 +318,8 @@ fn run_solver(
         non_finite: b.iter().filter(|v| !v.is_finite()).count(),
         negative: b.iter().filter(|v| **v < 0.0).count(),
         energy,
+        sampled,
+        spread,
         state: run.state,
         record: run.record,
     })))

@@ -12,9 +12,10 @@
 //! [`BACKENDS`]: `analytic`, the same with every row rescaled to sum to 1 in `f64` (closed
 //! scenes only, see [`FormFactors::close_rows`]), `hemicube`, `montecarlo`,
 //! `matrix:rebalance=true` and `hierarchical` (its defaults; its rows sum to 1 only to its
-//! `eps`, so at `ρ = 0.999` it may amplify light, and then nothing is certified). Every solver of `POINT_SOLVERS`, `GROUP_SOLVERS`,
-//! `BEYOND_PAPER_SOLVERS` and `KRYLOV_SOLVERS` runs on each (`cg` refuses, in one sentence,
-//! the backends that state no reciprocity bound or one above its limit).
+//! `eps`, so at `ρ = 0.999` it may amplify light, and then nothing is certified). Every solver
+//! of `POINT_SOLVERS`, `GROUP_SOLVERS`, `BEYOND_PAPER_SOLVERS` and `KRYLOV_SOLVERS` runs on each
+//! (`cg` refuses, in one sentence, the backends that state no reciprocity bound or one above
+//! its limit), and so do the solvers that sample transport, [`STOCHASTIC_SOLVERS`].
 //!
 //! ## How a run is judged
 //!
@@ -37,6 +38,34 @@
 //!   shots; the whole system's `κ_∞ = ‖Φ‖_∞ ‖Φ⁻¹‖_∞` is in each case's header, where
 //!   `‖Φ⁻¹‖_∞ = max (Φ⁻¹ 1)` because `Φ⁻¹ ≥ 0` for an M-matrix (one extra solve).
 //!
+//! ## Solvers that sample transport
+//!
+//! They cast their rays on the same F, each column sampled exactly
+//! ([`radiosity_core::ColumnTransport`], built once per scene and backend), on a problem with
+//! no columns to read (`Problem::sampled`): the reference is then the exact answer of the very
+//! system they estimate, which the occluded and `ρ` near 1 cases test for bias. A run stops
+//! at [`STOCHASTIC_RAYS_PER_PATCH`]` · n` rays (a budget, as the residual target cannot be
+//! reached by an estimate). No bound is certified for an estimate, so such a run is judged by
+//! its own error bar, its standard error `s` (the spread of its replicates, relative as e_rms
+//! is, [`radiosity_solvers::StandardError::relative_rms`]): it has **converged** when
+//!
+//! - `s ≤` [`STOCHASTIC_TOLERANCE`] (`5e-2`): the estimate is as precise as asked, a few
+//!   percent, which the budget reaches at `ρ = 0.999`; and
+//! - its e_rms against the reference `≤` [`STOCHASTIC_SPREADS`]` · s` (3): it is unbiased as
+//!   far as its noise can show. The squared e_rms of an unbiased mean and its squared
+//!   standard error have the same expectation. Where the errors of the patches are
+//!   independent, both are sums over many patches and their ratio stays near 1; where they
+//!   move together (a closed furnace, whose noise is mostly its level of energy), `e_rms / s`
+//!   is at worst a Student's `t` with `R − 1` degrees of freedom, beyond 3 about 6% of the
+//!   time for the default `R = 4`. So an unbiased solver is flagged now and then on such a
+//!   case (every run's seed is fixed, so a verdict is reproducible, and a flag is worth
+//!   rerunning with other seeds), while a bias of several standard errors, or a bar several
+//!   times too narrow, is flagged.
+//!
+//! The furnace identity is not used for them: where F's rows do not sum exactly to 1, it is
+//! not the answer of the system they sample. Their cells show e_rms against the reference
+//! and `±s`; `stress.csv` gives their rays, standard error and replicates.
+//!
 //! Everything written is deterministic (no timings), so the report is snapshot-tested.
 //!
 //! [`FormFactors::close_rows`]: crate::FormFactors::close_rows
@@ -46,6 +75,9 @@ mod judge;
 mod report;
 mod suite;
 
-pub use cases::{BACKENDS, CASES, CONVERGED, Case, RESIDUAL_TARGET, STEP_CAP, SuiteBackend, all_solvers, select};
+pub use cases::{
+    BACKENDS, CASES, CONVERGED, Case, RESIDUAL_TARGET, STEP_CAP, STOCHASTIC_RAYS_PER_PATCH, STOCHASTIC_SOLVERS,
+    STOCHASTIC_SPREADS, STOCHASTIC_TOLERANCE, SuiteBackend, all_solvers, select,
+};
 pub use judge::StressReport;
 pub use suite::StressSuite;

@@ -4,8 +4,10 @@
 
 use crate::error::LabError;
 use crate::reports::table::round_significant;
-use crate::suites::stress::cases::{CONVERGED, RESIDUAL_TARGET, STEP_CAP};
-use crate::suites::stress::judge::{BackendResult, CaseResult, Outcome, StressReport};
+use crate::suites::stress::cases::{
+    CONVERGED, RESIDUAL_TARGET, STEP_CAP, STOCHASTIC_RAYS_PER_PATCH, STOCHASTIC_SPREADS, STOCHASTIC_TOLERANCE,
+};
+use crate::suites::stress::judge::{BackendResult, CaseResult, Outcome, StressReport, Unsettled};
 use radiosity_core::Real;
 use radiosity_solvers::TerminationReason;
 use std::fmt::Write as _;
@@ -90,8 +92,13 @@ fn cell(outcome: &Outcome) -> String {
                     _ => "✗",
                 }
             };
-            let error = e.e_exact.or(e.e_reference);
+            // A stochastic run is judged against the reference of the system it sampled, with
+            // its standard error beside.
+            let error = if e.sampled { e.e_reference } else { e.e_exact.or(e.e_reference) };
             let mut s = format!("{status} {}", error.map_or_else(|| "—".into(), |v| small(v, 1)));
+            if let Some((spread, _)) = e.spread.filter(|_| e.sampled) {
+                write!(s, " ±{}", small(spread, 1)).ok();
+            }
             if e.negative > 0 {
                 s.push_str(" neg");
             }
@@ -112,6 +119,28 @@ fn why(result: &BackendResult, outcome: &Outcome) -> Option<(String, Option<Real
         Outcome::Ended(e) => e,
     };
     let mut why = e.termination.to_string();
+    match e.unsettled().filter(|_| e.sampled) {
+        Some(Unsettled::Unmeasured) => why.push_str("; no standard error or no reference to judge it by"),
+        Some(Unsettled::Noisy(spread)) => {
+            write!(
+                why,
+                "; standard error {} above the tolerance {STOCHASTIC_TOLERANCE:e}",
+                round_significant(spread, 2)
+            )
+            .ok();
+        }
+        Some(Unsettled::Off { e_rms, spread }) => {
+            write!(
+                why,
+                "; e_rms {} against the reference is more than {STOCHASTIC_SPREADS} standard errors ({}): biased, \
+                 or its bar too narrow",
+                round_significant(e_rms, 2),
+                round_significant(spread, 2)
+            )
+            .ok();
+        }
+        None => {}
+    }
     if result.contraction >= 1.0 {
         write!(
             why,
@@ -124,7 +153,8 @@ fn why(result: &BackendResult, outcome: &Outcome) -> Option<(String, Option<Real
     if e.negative > 0 {
         write!(why, "; {} negative radiosities", e.negative).ok();
     }
-    Some((why, (result.contraction < 1.0).then_some(e.bound)))
+    // A stochastic run is judged by its spread, not by a certified bound.
+    Some((why, (result.contraction < 1.0 && !e.sampled).then_some(e.bound)))
 }
 
 /// The runs of one case that did not converge, one line per solver and reason, naming the
@@ -164,6 +194,14 @@ fn failures(case: &CaseResult, solvers: &[String]) -> Vec<String> {
     lines
 }
 
+/// Whether some run of `results` sampled transport.
+fn any_sampled(results: &[CaseResult]) -> bool {
+    results.iter().flat_map(|c| &c.runs).flat_map(|b| &b.solvers).any(|r| match &r.outcome {
+        Outcome::Ended(e) => e.sampled,
+        Outcome::Failed(_) => false,
+    })
+}
+
 fn report_markdown(results: &[CaseResult], solvers: &[String]) -> String {
     let mut md = String::new();
     writeln!(md, "# Stress suite: stiff and extreme scenes\n").ok();
@@ -181,6 +219,18 @@ fn report_markdown(results: &[CaseResult], solvers: &[String]) -> String {
          distance from the furnace identity. Details of every run are in `stress.csv`.\n"
     )
     .ok();
+    if any_sampled(results) {
+        writeln!(
+            md,
+            "Solvers that sample transport cast their rays on the same F, each column sampled exactly, for \
+             {STOCHASTIC_RAYS_PER_PATCH} rays per patch. No bound is certified for an estimate: such a run is `✓` when \
+             its standard error (the spread of its replicates, relative as e_rms is, shown after `±`) is at most \
+             {STOCHASTIC_TOLERANCE:e} and its e_rms against the reference of the system it sampled (its exact answer) \
+             is at most {STOCHASTIC_SPREADS} standard errors: unbiased as far as its noise shows, and as precise as \
+             asked.\n"
+        )
+        .ok();
+    }
     for case in results {
         writeln!(md, "## `{}`: {}\n", case.case.key, case.case.what).ok();
         writeln!(md, "`{}`, {} patches.\n", case.case.scene, case.patches).ok();
@@ -263,6 +313,9 @@ fn write_csv(path: &Path, results: &[CaseResult]) -> Result<(), csv::Error> {
         "energy",
         "group_condition",
         "group_fallbacks",
+        "rays",
+        "standard_error",
+        "replicates",
     ])?;
     for case in results {
         for b in case.runs.iter().filter(|b| b.left_out.is_none()) {
@@ -272,7 +325,7 @@ fn write_csv(path: &Path, results: &[CaseResult]) -> Result<(), csv::Error> {
                     Outcome::Failed(message) => {
                         let mut v: Vec<String> = head.iter().map(|s| s.to_string()).collect();
                         v.extend(["failed".to_string(), message.clone()]);
-                        v.resize(19, String::new());
+                        v.resize(22, String::new());
                         v
                     }
                     Outcome::Ended(e) => {
@@ -293,6 +346,9 @@ fn write_csv(path: &Path, results: &[CaseResult]) -> Result<(), csv::Error> {
                             raw(e.energy),
                             raw(e.record.real("group_condition").or(Some(0.0))),
                             e.record.count("group_fallbacks").unwrap_or(0).to_string(),
+                            e.state.rays.to_string(),
+                            raw(e.spread.map(|(s, _)| s)),
+                            e.spread.map_or_else(String::new, |(_, r)| r.to_string()),
                         ]);
                         v
                     }

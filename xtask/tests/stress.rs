@@ -50,19 +50,30 @@ fn the_stress_table_is_stable_and_the_stiff_furnace_is_solved_exactly() {
 
     // Scale invariance, through the whole pipeline: the two scaled scenes converge in the
     // same runs to the same answers. (Paths may differ: the scene is symmetric, so shooting
-    // methods meet ties that round-off breaks either way.)
-    let outcomes = |case: &str| -> Vec<(String, String, String, f64)> {
+    // methods meet ties that round-off breaks either way.) A solver that samples transport
+    // draws its rays from alias tables whose entries differ in their last bits between the
+    // scales, so a few rays land elsewhere and the two runs are two realizations of the same
+    // estimator: their errors agree within 3 of their standard errors (each e_rms is of the
+    // size of its standard error), and their verdicts may differ.
+    let outcomes = |case: &str| -> Vec<(String, String, String, f64, f64)> {
         rows.iter()
             .filter(|r| r.get("case") == case)
             .map(|r| {
-                (r.get("backend").into(), r.get("solver").into(), r.get("converged").into(), r.number("e_rms_exact"))
+                let (backend, solver, converged) = (r.get("backend"), r.get("solver"), r.get("converged"));
+                (backend.into(), solver.into(), converged.into(), r.number("e_rms_exact"), r.number("standard_error"))
             })
             .collect()
     };
     let (small, large) = (outcomes("scale-1e-4"), outcomes("scale-1e4"));
     assert_eq!(small.len(), large.len());
     for (a, b) in small.iter().zip(&large) {
-        assert_eq!((&a.0, &a.1, &a.2), (&b.0, &b.1, &b.2));
+        assert_eq!((&a.0, &a.1), (&b.0, &b.1));
+        let spread = a.4.max(b.4);
+        if spread.is_finite() {
+            assert!((a.3 - b.3).abs() <= 3.0 * spread, "{a:?} against {b:?}");
+            continue;
+        }
+        assert_eq!(a.2, b.2, "{a:?} against {b:?}");
         let scale = a.3.max(b.3);
         let same = (a.3.is_nan() && b.3.is_nan()) || scale < 1e-10 || (a.3 - b.3).abs() <= 0.1 * scale;
         assert!(same, "{a:?} against {b:?}");

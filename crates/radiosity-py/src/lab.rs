@@ -28,7 +28,7 @@ use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use radiosity_core::Real;
-use radiosity_eval::{ColumnCost, Comparison, Lab, LabOptions, NoProgress, ReferenceKind};
+use radiosity_eval::{ColumnCost, Comparison, Lab, LabOptions, NoProgress, ReferenceKind, Transport};
 use radiosity_ff::BackendSpec;
 use radiosity_solvers::{
     Problem, Record, ResidualBound, Solver, SolverError, SolverRegistry, State, StepKind, StopRules,
@@ -397,9 +397,14 @@ fn residual_bound(result: &Bound<'_, PyAny>, areas: &[Real], k: usize) -> PyResu
 
 /// Runs `solvers` (built-in names and Python solver objects) on `scene` over the backend `ff`
 /// under `until`, measured against `reference`, their columns paid for as `columns` says
-/// (`computed` or `charged`; by default as `cargo xtask compare`, computed); the comparison.
+/// (`computed` or `charged`; by default as `cargo xtask compare`, computed), the rays of the
+/// solvers that sample transport cast as `transport` says (`scene`, the default, or
+/// `matrix`); the comparison.
 #[pyfunction]
-#[pyo3(signature = (scene, solvers, ff = "analytic", until = "columns=2n", reference = "auto", columns = None))]
+#[pyo3(signature = (
+    scene, solvers, ff = "analytic", until = "columns=2n", reference = "auto", columns = None, transport = None
+))]
+#[allow(clippy::too_many_arguments)]
 pub fn compare(
     py: Python<'_>,
     scene: &Scene,
@@ -408,9 +413,11 @@ pub fn compare(
     until: &str,
     reference: &str,
     columns: Option<&str>,
+    transport: Option<&str>,
 ) -> PyResult<PyComparison> {
     let spec = BackendSpec::parse(ff).map_err(value_error)?;
     let columns: ColumnCost = columns.map_or(Ok(ColumnCost::default()), str::parse).map_err(value_error)?;
+    let transport: Transport = transport.map_or(Ok(Transport::default()), str::parse).map_err(value_error)?;
     let rules = StopRules::parse(until).map_err(value_error)?;
     let kind: ReferenceKind = reference.parse().map_err(value_error)?;
     check_measurable(&rules, kind)?;
@@ -419,7 +426,8 @@ pub fn compare(
     let mut objects = Vec::new();
     for item in solvers.iter() {
         if let Ok(name) = item.extract::<String>() {
-            registry.build(&name).map_err(value_error)?;
+            let solver = registry.build(&name).map_err(value_error)?;
+            radiosity_eval::check_rules(solver.as_ref(), &rules).map_err(value_error)?;
             entries.push(Entry::Builtin(name));
             continue;
         }
@@ -467,7 +475,11 @@ pub fn compare(
     let worker_to_main = to_main.clone();
     let worker = std::thread::spawn(move || {
         let run = || -> Result<Box<Comparison>, String> {
-            let options = LabOptions::default().with_cache(cache()).with_reference(kind).with_columns(columns);
+            let options = LabOptions::default()
+                .with_cache(cache())
+                .with_reference(kind)
+                .with_columns(columns)
+                .with_transport(transport);
             let lab = Lab::new(&prepared, &spec, options, &NoProgress).map_err(|e| e.to_string())?;
             let registry = SolverRegistry::builtin();
             let mut built: Vec<Box<dyn Solver>> = Vec::new();
@@ -555,8 +567,9 @@ impl PyComparison {
 
     /// Every recorded row of every run, as `convergence.csv` holds them: a dict of `solver`
     /// (a list of names), `clock` (the clock of the seconds, `measured` or `charged`) and numpy
-    /// arrays `step`, `columns`, `products`, `seconds`, `ff_seconds`, `e_rms`, `e_max`,
-    /// `residual` and `bound`.
+    /// arrays `step`, `columns`, `products`, `rays`, `seconds`, `ff_seconds`, `e_rms`, `e_max`,
+    /// `residual`, `bound` and `std_error` (the standard error of a solver whose answer is an
+    /// estimate, NaN for the others).
     fn table<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let rows: Vec<_> = self.comparison.outcomes.iter().flat_map(|o| &o.rows).collect();
         let d = PyDict::new(py);
@@ -567,12 +580,14 @@ impl PyComparison {
         d.set_item("step", column(&|r| r.step as Real))?;
         d.set_item("columns", column(&|r| r.columns as Real))?;
         d.set_item("products", column(&|r| r.products as Real))?;
+        d.set_item("rays", column(&|r| r.rays as Real))?;
         d.set_item("seconds", column(&|r| r.seconds))?;
         d.set_item("ff_seconds", column(&|r| r.ff_seconds))?;
         d.set_item("e_rms", column(&|r| r.e_rms))?;
         d.set_item("e_max", column(&|r| r.e_max))?;
         d.set_item("residual", column(&|r| r.residual))?;
         d.set_item("bound", column(&|r| r.bound))?;
+        d.set_item("std_error", column(&|r| r.std_error))?;
         Ok(d)
     }
 }

@@ -1,6 +1,7 @@
 //! `radiosity.solve(scene, solver, ...)`: one run of a built-in solver (or the reference) over
 //! a backend, measured as `cargo xtask solve` measures it: its radiosity, its figures
-//! (`stats`, the keys of the command's JSON `stats`) and its recorded points.
+//! (`stats`, the keys of the command's JSON `stats`) and its recorded points; for a solver
+//! that samples transport, its rays and standard error too.
 
 use crate::arrays::patch_major;
 use crate::errors::{check_measurable, value_error};
@@ -10,7 +11,9 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use radiosity_core::Real;
-use radiosity_eval::{Clock, ColumnCost, FinalMetrics, Lab, LabOptions, NoProgress, Point, RecordPlan, ReferenceKind};
+use radiosity_eval::{
+    Clock, ColumnCost, FinalMetrics, Lab, LabOptions, NoProgress, Point, RecordPlan, ReferenceKind, Transport,
+};
 use radiosity_ff::BackendSpec;
 use radiosity_solvers::{SolverError, SolverRegistry, State, StopRules, Value};
 use std::ops::ControlFlow;
@@ -33,6 +36,8 @@ pub struct Run {
     reference: (String, String),
     /// The clock of every seconds figure.
     clock: Clock,
+    /// Where the rays went, when the solver samples transport.
+    transport: Option<Transport>,
 }
 
 /// Runs `solver` (a built-in name, or `reference` for the exact solution) on `scene` over the
@@ -42,16 +47,21 @@ pub struct Run {
 /// says how the run pays for its columns, and so which clock its seconds, its `time=` rule and
 /// its timed group frequencies read (`stats["clock"]`): `computed` (the default, as `cargo
 /// xtask solve`: every column computed, `measured` seconds) or `charged` (read from the stored
-/// matrix of a `matrix` reference and each charged the backend's measured cost).
+/// matrix of a `matrix` reference and each charged the backend's measured cost). `transport`
+/// says where a solver that samples transport (`stochastic-jacobi`, `random-walk`) casts its
+/// rays: `scene` (the default, through the scene's BVH) or `matrix` (the stored matrix of a
+/// `matrix` reference, sampled exactly); such a solver stops on a `rays=`, `steps=`, `time=`
+/// or `rms=` rule (`until="rays=1e7"`).
 ///
 /// `callback(point)`, when given, is called with every recorded point, after every step and
-/// on the initial state: a dict of `step`, `columns`, `products`, `seconds`, `e_rms`,
-/// `bound` (NaN where not known) and `radiosity` (`n × channels`). A true return value ends
+/// on the initial state: a dict of `step`, `columns`, `products`, `rays`, `seconds`, `e_rms`,
+/// `bound`, `std_error` (NaN where not known) and `radiosity` (`n × channels`). A true return value ends
 /// the run there (`stats["termination"]` says so); an exception ends it and is raised again
 /// from `solve`. Its time is not the run's.
 #[pyfunction]
 #[pyo3(signature = (
-    scene, solver, ff = "analytic", until = "columns=2n", reference = "auto", callback = None, columns = None
+    scene, solver, ff = "analytic", until = "columns=2n", reference = "auto", callback = None, columns = None,
+    transport = None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn solve(
@@ -63,9 +73,11 @@ pub fn solve(
     reference: &str,
     callback: Option<Py<PyAny>>,
     columns: Option<&str>,
+    transport: Option<&str>,
 ) -> PyResult<Run> {
     let spec = BackendSpec::parse(ff).map_err(value_error)?;
     let columns: ColumnCost = columns.map_or(Ok(ONE_RUN), str::parse).map_err(value_error)?;
+    let transport: Transport = transport.map_or(Ok(Transport::default()), str::parse).map_err(value_error)?;
     // Built here to refuse a bad name before any work, and again inside the run: a solver
     // is not `Send`.
     let build = |name: &str| {
@@ -74,7 +86,8 @@ pub fn solve(
             e => value_error(e),
         })
     };
-    let named = (solver != "reference").then(|| build(solver).map(|s| s.name())).transpose()?;
+    let built = (solver != "reference").then(|| build(solver)).transpose()?;
+    let named = built.as_ref().map(|s| s.name());
     let kind: ReferenceKind = reference.parse().map_err(value_error)?;
     if named.is_none() && kind == ReferenceKind::None {
         return Err(value_error(
@@ -83,6 +96,10 @@ pub fn solve(
     }
     let rules = StopRules::parse(until).map_err(value_error)?;
     check_measurable(&rules, kind)?;
+    if let Some(solver) = &built {
+        radiosity_eval::check_rules(solver.as_ref(), &rules).map_err(value_error)?;
+    }
+    drop(built);
     let prepared = scene.prepared.clone();
     let solver = solver.to_string();
     let mut failure = None;
@@ -99,7 +116,11 @@ pub fn solve(
     };
     let run = py.detach(|| {
         let mut built = named.map(|_| SolverRegistry::builtin().build(&solver)).transpose()?;
-        let options = LabOptions::default().with_cache(cache()).with_reference(kind).with_columns(columns);
+        let options = LabOptions::default()
+            .with_cache(cache())
+            .with_reference(kind)
+            .with_columns(columns)
+            .with_transport(transport);
         let lab = Lab::new(&prepared, &spec, options, &NoProgress)?;
         let chosen = (lab.chosen().kind.to_string(), lab.chosen().why.clone());
         let clock = lab.clock();
@@ -118,6 +139,7 @@ pub fn solve(
                     reached: Vec::new(),
                     reference: chosen,
                     clock,
+                    transport: None,
                 }
             }
             Some(solver) => {
@@ -127,6 +149,7 @@ pub fn solve(
                 Run {
                     record: o.record.iter().map(|(k, v)| (k.to_string(), v.clone())).collect(),
                     reached,
+                    transport: (o.state.rays > 0).then(|| lab.transport()),
                     state: o.state,
                     solver: o.solver,
                     backend: lab.backend().into(),
@@ -152,9 +175,11 @@ fn call_back(py: Python<'_>, callback: &Py<PyAny>, point: &Point, state: &State)
     d.set_item("step", point.step)?;
     d.set_item("columns", point.columns)?;
     d.set_item("products", point.products)?;
+    d.set_item("rays", point.rays)?;
     d.set_item("seconds", point.seconds)?;
     d.set_item("e_rms", point.e_rms)?;
     d.set_item("bound", point.bound)?;
+    d.set_item("std_error", point.std_error)?;
     d.set_item("radiosity", radiosity_array(py, state))?;
     callback.call1(py, (d,))?.is_truthy(py)
 }
@@ -191,11 +216,26 @@ impl Run {
         self.clock.name()
     }
 
+    /// The rays the run cast (0 for a solver that does not sample transport).
+    #[getter]
+    fn rays(&self) -> u64 {
+        self.state.rays
+    }
+
+    /// The solver's standard error of the final radiosity, relative as e_rms is (the spread of
+    /// its independent replicates: a spread, not a bound), or `None` when the solver has none.
+    #[getter]
+    fn standard_error(&self) -> Option<Real> {
+        self.last.standard_error
+    }
+
     /// The run's figures, with the keys of `cargo xtask solve --json`'s `stats`: `clock` (of
     /// every seconds figure: `measured` or `charged`), `columns`,
-    /// `columns_reused`, `products`, `steps`, `seconds`, `ff_seconds`, `group_seconds`,
+    /// `columns_reused`, `products`, `steps`, `rays`, `seconds`, `ff_seconds`, `group_seconds`,
     /// `e_rms`, `e_max`, `residual` and `residual_of` (which vector it is the residual of),
-    /// `bound`, `termination`, `reached` (with an `rms=` rule, where `e_rms` first fell to
+    /// `bound`, `standard_error` and `replicates` (a solver's error bar from its replicates),
+    /// `transport` (where its rays went: `scene` or `matrix`, `None` without rays),
+    /// `termination`, `reached` (with an `rms=` rule, where `e_rms` first fell to
     /// each power of ten), `record` (the solver's own figures) and `reference` (`kind`,
     /// `why`). Figures not known are `None`.
     #[getter]
@@ -207,6 +247,7 @@ impl Run {
         d.set_item("columns_reused", s.columns_reused)?;
         d.set_item("products", s.products)?;
         d.set_item("steps", s.step)?;
+        d.set_item("rays", s.rays)?;
         d.set_item("seconds", s.ff_seconds + s.solve_seconds)?;
         d.set_item("ff_seconds", s.ff_seconds)?;
         d.set_item("group_seconds", s.group_seconds)?;
@@ -220,6 +261,9 @@ impl Run {
         d.set_item("residual", residual)?;
         d.set_item("residual_of", residual_of)?;
         d.set_item("bound", self.last.bound)?;
+        d.set_item("standard_error", self.last.standard_error)?;
+        d.set_item("replicates", self.last.replicates)?;
+        d.set_item("transport", self.transport.map(|t| t.name()))?;
         d.set_item("termination", &self.termination)?;
         let reached = PyList::empty(py);
         for (e_rms, p) in &self.reached {
@@ -227,6 +271,7 @@ impl Run {
             r.set_item("e_rms", e_rms)?;
             r.set_item("steps", p.step)?;
             r.set_item("columns", p.columns)?;
+            r.set_item("rays", p.rays)?;
             r.set_item("seconds", p.seconds)?;
             reached.append(r)?;
         }
@@ -247,8 +292,8 @@ impl Run {
         Ok(d)
     }
 
-    /// The recorded points as a dict of arrays: `step`, `columns`, `products`, `seconds`,
-    /// `e_rms` and `bound` (NaN where not known).
+    /// The recorded points as a dict of arrays: `step`, `columns`, `products`, `rays`,
+    /// `seconds`, `e_rms`, `bound` and `std_error` (NaN where not known).
     #[getter]
     fn points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
@@ -257,9 +302,11 @@ impl Run {
             ("step", (|p: &Point| p.step as Real) as fn(&Point) -> Real),
             ("columns", |p| p.columns as Real),
             ("products", |p| p.products as Real),
+            ("rays", |p| p.rays as Real),
             ("seconds", |p| p.seconds),
             ("e_rms", |p| p.e_rms),
             ("bound", |p| p.bound),
+            ("std_error", |p| p.std_error),
         ] {
             d.set_item(name, PyArray1::from_vec(py, column(f)))?;
         }

@@ -31,6 +31,15 @@
 //! matrix is kept, e_max and the residual power of the displayed radiosity (a product with F,
 //! `O(nnz)`). Its own time is reported apart, as measurement.
 //!
+//! **Solvers that sample transport** (`StepKind::Sampled`: `stochastic-jacobi`, `random-walk`)
+//! get a transport sampler on their problem, as [`LabOptions::transport`] says: rays in the
+//! scene (the default) or the lab's stored matrix sampled exactly ([`Lab::transport_sampler`],
+//! built only for them, once per comparison, outside every run). Their cost is counted in rays,
+//! every step of theirs is recorded, and the recorder also takes their standard error, the
+//! error bar that needs no reference, beside the certified bound (which, for them, only F
+//! gives). A run whose rules only count columns, which such a solver never computes, is
+//! refused before any work ([`check_rules`]).
+//!
 //! **The bound's hypothesis.** With a stored matrix the contraction `κ_c` is measured on it;
 //! over a source that multiplies natively and states its reciprocity (the hierarchical
 //! operator), it is bounded by two products ([`Contraction::from_products`]); otherwise it is
@@ -61,6 +70,9 @@
 //! [`Cache`]: crate::Cache
 //! [`LabOptions::residuals`]: crate::LabOptions::residuals
 //! [`FinalMetrics`]: crate::FinalMetrics
+//! [`LabOptions::transport`]: crate::LabOptions::transport
+//! [`Lab::transport_sampler`]: crate::Lab::transport_sampler
+//! [`check_rules`]: crate::check_rules
 
 pub(crate) mod backends;
 pub(crate) mod charged;

@@ -26,18 +26,30 @@ class Lab:
     computed when asked for, ``measured`` seconds) or ``"charged"`` (read from the stored
     matrix of a ``matrix`` reference, each charged the backend's measured cost); ``None``,
     the default, is ``cargo xtask compare``'s default, ``"computed"``. ``Comparison.clock``
-    names the clock.
+    names the clock. ``transport`` says where the solvers that sample transport
+    (``stochastic-jacobi``, ``random-walk``) cast their rays: ``"scene"`` (``None``, the
+    default: through the scene's BVH) or ``"matrix"`` (the stored matrix of a ``matrix``
+    reference, sampled exactly); they stop on a ``rays=``, ``steps=``, ``time=`` or ``rms=``
+    rule, so a comparison mixing them with deterministic solvers gives both kinds of rule
+    (``until="columns=2n,rays=1e6"``).
     """
 
-    def __init__(self, scene, ff="analytic", reference="auto", columns=None):
+    def __init__(self, scene, ff="analytic", reference="auto", columns=None, transport=None):
         self.scene = scene
         self.ff = ff
         self.reference = reference
         self.columns = columns
+        self.transport = transport
 
     def compare(self, solvers, until="columns=2n"):
         """Runs ``solvers`` (names and Python solver objects) under the stop rules ``until``;
         a ``Comparison`` with ``clock``, ``table()``, ``summary()`` and ``write(dir)``."""
         return _radiosity.compare(
-            self.scene, list(solvers), ff=self.ff, until=until, reference=self.reference, columns=self.columns
+            self.scene,
+            list(solvers),
+            ff=self.ff,
+            until=until,
+            reference=self.reference,
+            columns=self.columns,
+            transport=self.transport,
         )

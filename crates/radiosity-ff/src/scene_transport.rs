@@ -28,6 +28,31 @@
 //! of the `montecarlo` and `hemicube` backends and of the scene analysis' closure test, which
 //! trace the same rays.
 //!
+//! ## Global lines
+//!
+//! [`TransportSampler::global_line`] reads `u[0]`, `u[1]` as a direction uniform on the unit
+//! sphere (`z = 1 − 2u₀`, azimuth `2π u₁`) and `u[2]`, `u[3]` as a point uniform on the disc of
+//! radius `R` through the centre `c` of the scene's bounding sphere, perpendicular to that
+//! direction (radius `R √u₂`, angle `2π u₃`). The line starts on the sphere, at `c + p − R d`,
+//! and every crossing along it is found by repeated [`Visibility::first_hit`]s, each from the
+//! last crossing and skipping that patch. Two consecutive crossings `a`, `b` (in the order of
+//! `d`) face each other when the line meets `a` from behind (`a`'s front faces `d`) and `b`
+//! from the front; then both `(a, b)` and `(b, a)` are pushed. Each `first_hit` is a ray,
+//! the last one (which meets nothing) included.
+//!
+//! **The area each transfer stands for**, `W = 2π R²`. Oriented lines, measured by
+//! `dL = dω dA⊥` (direction on the sphere, point on the plane perpendicular to it), are what
+//! this samples: the lines meeting the bounding sphere have measure `4π · π R²`, and each is
+//! drawn with density `1 / (4π² R²)`. The lines that leave `a`'s front and first reach `b`'s
+//! front, in that direction, have measure `∫_{A_a} ∫ [first hit b's front] cos θ_a dω dA_a =
+//! π A_a F_ab` (the integrand of `F_ab`; Santaló 1976, Sbert 1993). So a line gives the
+//! transfer `(a, b)` with probability `π A_a F_ab / (4π² R²)` from the segment oriented `a → b`
+//! and `π A_b F_ba / (4π² R²)` from the segment oriented `b → a` (which pushes `(a, b)` too):
+//! with reciprocity, `E[#(a, b)] = 2π A_a F_ab / (4π² R²) = A_a F_ab / (2π R²)`, and
+//! `E[#(a, b)] · W = A_a F_ab`. A check: in a closed convex box every line that meets it gives
+//! two transfers, and with Cauchy's formula (mean projected area `S/4`) the expected
+//! transfers times `W` sum to the box's area `S`, the sum of `A_a Σ_b F_ab` over `a`.
+//!
 //! ## Row sums and cost
 //!
 //! [`TransportSampler::row_sum`] is 1 only when the caller declares the scene closed
@@ -39,14 +64,18 @@
 //!
 //! ## References
 //!
+//! - M. Sbert, "An integral geometry based method for fast form-factor computation",
+//!   Computer Graphics Forum 12(3) (Eurographics '93), 1993 (global lines).
+//! - L. A. Santaló, *Integral Geometry and Geometric Probability*, Addison-Wesley, 1976 (the
+//!   measure of lines, Cauchy's formula).
 //! - P. Bekaert, *Hierarchical and Stochastic Algorithms for Radiosity*, PhD thesis,
-//!   KU Leuven, 1999 (local lines in stochastic relaxation).
+//!   KU Leuven, 1999 (local and global lines in stochastic relaxation).
 //! - G. Turk, "Generating random points in triangles", *Graphics Gems*, 1990.
 
 use crate::montecarlo::AreaSampler;
 use radiosity_core::math::cosine_direction;
-use radiosity_core::{Patch, Real, SampleCost, Scene, TransportSampler, Vec3};
-use radiosity_geom::{PreparedScene, Visibility};
+use radiosity_core::{LineTransfers, Patch, Real, SampleCost, Scene, TransportSampler, Vec3};
+use radiosity_geom::{PreparedScene, RayHit, Visibility};
 
 /// Rays in a scene as a [`TransportSampler`] (module doc): the patches and the BVH borrowed.
 #[derive(Debug)]
@@ -54,6 +83,10 @@ pub struct SceneTransport<'s> {
     patches: &'s [Patch],
     visibility: &'s Visibility,
     closed: bool,
+    /// The centre of the bounding sphere of global lines: the centre of the scene's box.
+    centre: Vec3,
+    /// Its radius: half the box's diagonal.
+    radius: Real,
 }
 
 impl<'s> SceneTransport<'s> {
@@ -61,7 +94,14 @@ impl<'s> SceneTransport<'s> {
     /// declares that no ray escapes or meets a back face, so that every row of `F` sums to 1
     /// ([`TransportSampler::row_sum`]); pass `false` when that is not known.
     pub fn new(scene: &'s Scene, visibility: &'s Visibility, closed: bool) -> SceneTransport<'s> {
-        SceneTransport { patches: scene.patches(), visibility, closed }
+        let (lo, hi) = scene.bounds();
+        SceneTransport {
+            patches: scene.patches(),
+            visibility,
+            closed,
+            centre: (lo + hi) * 0.5,
+            radius: 0.5 * (hi - lo).length(),
+        }
     }
 
     /// Rays in a prepared scene, closed when its analysis found it closed.
@@ -80,6 +120,24 @@ impl<'s> SceneTransport<'s> {
         let patch = &self.patches[from];
         let origin = AreaSampler::new(patch).point(u[0], u[1]);
         (origin, cosine_direction(patch.normal(), u[2], u[3]))
+    }
+
+    /// The global line `u` of [`TransportSampler::global_line`]: where it starts, on the
+    /// bounding sphere, and its unit direction.
+    pub fn line(&self, u: [Real; 4]) -> (Vec3, Vec3) {
+        let z = 1.0 - 2.0 * u[0];
+        let (sin, cos) = (std::f64::consts::TAU * u[1]).sin_cos();
+        let across = (1.0 - z * z).max(0.0).sqrt();
+        let direction = Vec3::new(across * cos, across * sin, z);
+        let (e1, e2) = direction.any_orthonormal_pair();
+        let r = self.radius * u[2].sqrt();
+        let (sin, cos) = (std::f64::consts::TAU * u[3]).sin_cos();
+        (self.centre + e1 * (r * cos) + e2 * (r * sin) - direction * self.radius, direction)
+    }
+
+    /// The area each transfer of a global line stands for, `2π R²` (module doc).
+    pub fn line_area(&self) -> Real {
+        std::f64::consts::TAU * self.radius * self.radius
     }
 }
 
@@ -108,6 +166,30 @@ impl TransportSampler for SceneTransport<'_> {
 
     fn row_sum(&self, i: usize) -> Option<Real> {
         (self.closed && i < self.patches.len()).then_some(1.0)
+    }
+
+    fn global_line(&self, u: [Real; 4], line: &mut LineTransfers) -> bool {
+        line.transfers.clear();
+        line.area = self.line_area();
+        line.rays = 0;
+        let (mut origin, direction) = self.line(u);
+        let mut last: Option<RayHit> = None;
+        // A line crosses a planar patch at most once (unless it lies in the patch's plane, a
+        // set of lines of measure zero), so it has at most n crossings: the bound only makes
+        // termination certain.
+        for _ in 0..=self.patches.len() {
+            line.rays += 1;
+            let Some(hit) = self.visibility.first_hit(origin, direction, last.map(|h| h.patch)) else { break };
+            // The line leaves the last crossing's front (met from behind) and reaches this
+            // one's front: they face each other.
+            if let Some(a) = last.filter(|a| !a.front && hit.front) {
+                line.transfers.push((a.patch, hit.patch));
+                line.transfers.push((hit.patch, a.patch));
+            }
+            origin += direction * hit.t;
+            last = Some(hit);
+        }
+        true
     }
 
     fn cost(&self) -> SampleCost {

@@ -9,7 +9,7 @@
 //! so a test gives the same numbers on every run.
 
 use super::closed_forms::*;
-use radiosity_core::{Material, Real, Scene, Spectrum, TransportSampler, Vec3};
+use radiosity_core::{LineTransfers, Material, Real, Scene, Spectrum, TransportSampler, Vec3};
 use radiosity_ff::SceneTransport;
 use radiosity_ff::ff_point_polygon::point_to_polygon;
 use radiosity_geom::mesh::{BoxFace, Facing};
@@ -209,4 +209,154 @@ fn the_cost_names_the_bvh() {
     let cost = SceneTransport::new(&scene, &vis, true).cost();
     assert_eq!(cost.ray, format!("one ray through a BVH of {} triangles (exact f64 tests)", vis.triangle_count()));
     assert!(!cost.constant);
+}
+
+/// The transfers of `lines` global lines drawn from the stream `seed`, line by line, with the
+/// rays each cost.
+fn global_lines(sampler: &SceneTransport<'_>, lines: usize, seed: u64) -> Vec<LineTransfers> {
+    points(seed, lines)
+        .into_iter()
+        .map(|u| {
+            let mut line = LineTransfers::default();
+            assert!(sampler.global_line(u, &mut line));
+            line
+        })
+        .collect()
+}
+
+/// Asserts that the lines' transfers from `from` to `to` (patch sets), times the area each
+/// stands for, per line, lie within 4 standard errors of `exact`, when each line gives at most
+/// one such transfer (the count per line is then a Bernoulli draw).
+fn assert_line_estimate(lines: &[LineTransfers], from: &[usize], to: &[usize], exact: Real, what: &str) {
+    let w = lines[0].area;
+    let counts: Vec<usize> = lines
+        .iter()
+        .map(|line| line.transfers.iter().filter(|(a, b)| from.contains(a) && to.contains(b)).count())
+        .collect();
+    assert!(counts.iter().all(|&c| c <= 1), "{what}: a line crossed a set twice");
+    let hits = counts.iter().sum::<usize>();
+    let p = exact / w;
+    assert!(p < 1.0, "{what}: W = {w} is below A F = {exact}");
+    let l = lines.len() as Real;
+    let estimate = w * hits as Real / l;
+    let sigma = w * (p * (1.0 - p) / l).sqrt();
+    assert!((estimate - exact).abs() < 4.0 * sigma, "{what}: {estimate} vs {exact} (σ {sigma})");
+}
+
+#[test]
+fn global_lines_match_howells_closed_forms() {
+    // Each transfer stands for W = 2π R² (R: half the box's diagonal); over L lines, the
+    // transfers from a to b times W / L estimate A_a F_ab. Unit squares (R² = 3/4): a line
+    // gives the transfer with probability A F / W ≈ 0.042; 2·10^5 lines: σ ≈ 1.1% of A F.
+    let lines = 200_000;
+    for (scene, exact) in
+        [(opposed_squares(1), parallel(1.0, 1.0, 1.0)), (corner(1.0, 1.0, 1.0, 1), perpendicular(1.0, 1.0, 1.0))]
+    {
+        let vis = Visibility::new(&scene);
+        let sampler = SceneTransport::new(&scene, &vis, false);
+        let (lo, hi) = scene.bounds();
+        assert!((sampler.line_area() - std::f64::consts::TAU * (hi - lo).length_squared() / 4.0).abs() < 1e-12);
+        let drawn = global_lines(&sampler, lines, 21);
+        assert_line_estimate(&drawn, &[0], &[1], exact, scene.name());
+        assert_line_estimate(&drawn, &[1], &[0], exact, scene.name());
+        // A line gives both directions or neither; its rays are its crossings and one miss.
+        for line in &drawn {
+            assert_eq!(line.area, sampler.line_area());
+            assert!(
+                line.transfers.is_empty() || line.transfers == [(0, 1), (1, 0)] || line.transfers == [(1, 0), (0, 1)]
+            );
+            assert!((1..=3).contains(&line.rays));
+        }
+    }
+    // 3 × 3 patches on rectangles 1 × 2 at distance 0.5: the sets exchange A F = 2 F(1, 2, 0.5).
+    let m = 3;
+    let scene = opposed(1.0, 2.0, 0.5, m);
+    let vis = Visibility::new(&scene);
+    let sampler = SceneTransport::new(&scene, &vis, false);
+    let drawn = global_lines(&sampler, lines, 22);
+    let (first, second): (Vec<usize>, Vec<usize>) = (0..2 * m * m).partition(|&i| i < m * m);
+    assert_line_estimate(&drawn, &first, &second, 2.0 * parallel(1.0, 2.0, 0.5), "3 × 3 rectangles");
+}
+
+#[test]
+fn global_lines_through_a_closed_box_give_its_area() {
+    // Every line that meets the box (convex, facing inwards) enters through a wall's back and
+    // leaves through another's front: two transfers, three rays; a line that misses it costs
+    // one ray. By Cauchy's formula a line meets the box with probability q = (S/4) / (π R²),
+    // so 2 q W = S, the total area (Σ_a A_a Σ_b F_ab with closed rows). The count of lines
+    // that meet it is binomial: 10^5 lines, 4 standard errors 2 W √(q (1 − q) / L).
+    let scene = load_scene("furnace:res=2").unwrap().scene;
+    let vis = Visibility::new(&scene);
+    let sampler = SceneTransport::new(&scene, &vis, true);
+    let lines = 100_000;
+    let drawn = global_lines(&sampler, lines, 23);
+    let mut met = 0;
+    for line in &drawn {
+        match line.transfers.len() {
+            0 => assert_eq!(line.rays, 1),
+            2 => {
+                assert_eq!(line.rays, 3);
+                met += 1;
+            }
+            other => panic!("{other} transfers on one line"),
+        }
+    }
+    let (w, area, l) = (sampler.line_area(), scene.total_area(), lines as Real);
+    let q = area / (2.0 * w);
+    let estimate = 2.0 * w * met as Real / l;
+    let sigma = 2.0 * w * (q * (1.0 - q) / l).sqrt();
+    assert!((estimate - area).abs() < 4.0 * sigma, "{estimate} vs {area} (σ {sigma})");
+}
+
+#[test]
+fn global_lines_join_only_fronts_that_face_each_other() {
+    // Furnace with a block facing outwards: every transfer (a, b) pushed first runs along the
+    // line from a's front to b's front, and the transfers come in pairs.
+    let scene = load_scene("furnace:res=2:block=true").unwrap().scene;
+    let vis = Visibility::new(&scene);
+    let sampler = SceneTransport::new(&scene, &vis, true);
+    let normal = |i: usize| scene.patches()[i].normal();
+    let mut block = 0;
+    for u in points(24, 20_000) {
+        let mut line = LineTransfers::default();
+        sampler.global_line(u, &mut line);
+        let (_, d) = sampler.line(u);
+        assert_eq!(line.transfers.len() % 2, 0);
+        assert!(line.rays as usize > line.transfers.len() / 2);
+        for pair in line.transfers.chunks(2) {
+            let [(a, b), back] = [pair[0], pair[1]];
+            assert_eq!(back, (b, a));
+            assert!(normal(a).dot(d) > 0.0 && normal(b).dot(d) < 0.0, "{a} → {b} along {d}");
+        }
+        block += usize::from(line.transfers.len() == 4);
+    }
+    assert!(block > 0, "no line met the block");
+
+    // The walls see the back of an inverted block: no line joins a wall and the block.
+    let scene = box_with_inverted_block();
+    let walls = 24;
+    let vis = Visibility::new(&scene);
+    let sampler = SceneTransport::new(&scene, &vis, false);
+    let drawn = global_lines(&sampler, 20_000, 25);
+    assert!(drawn.iter().flat_map(|l| &l.transfers).all(|&(a, b)| (a < walls) == (b < walls)));
+    assert!(drawn.iter().flat_map(|l| &l.transfers).any(|&(a, _)| a >= walls), "no line joined the block's faces");
+    // Squares turned away from each other: no line joins them.
+    let flipped = two_rectangles([Vec3::ZERO, Vec3::X, Vec3::Y], [Vec3::new(0.0, 0.0, 1.0), Vec3::X, Vec3::Y], 1);
+    let vis = Visibility::new(&flipped);
+    let sampler = SceneTransport::new(&flipped, &vis, false);
+    assert!(global_lines(&sampler, 20_000, 26).iter().all(|l| l.transfers.is_empty()));
+}
+
+#[test]
+fn the_same_point_gives_the_same_line() {
+    let scene = load_scene("furnace:res=2:block=true").unwrap().scene;
+    let vis = Visibility::new(&scene);
+    let sampler = SceneTransport::new(&scene, &vis, true);
+    let mut line = LineTransfers { transfers: vec![(7, 7)], area: 0.0, rays: 99 };
+    let drawn = global_lines(&sampler, 2_000, 27);
+    for (u, expected) in points(27, 2_000).into_iter().zip(&drawn) {
+        sampler.global_line(u, &mut line);
+        assert_eq!(&line, expected);
+    }
+    assert_ne!(drawn, global_lines(&sampler, 2_000, 28));
 }

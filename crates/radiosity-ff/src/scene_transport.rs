@@ -28,17 +28,29 @@
 //! of the `montecarlo` and `hemicube` backends and of the scene analysis' closure test, which
 //! trace the same rays.
 //!
+//! **Thin walls**: a wall modelled as two coincident faces back to back (the scene analysis
+//! keeps both, each seeing the room) is met by a ray at two parameters equal up to rounding,
+//! and `first_hit` returns whichever rounding put first. A ray that meets a back face first is
+//! therefore traced once more, from `2m` before that hit (`m` the margin,
+//! [`Visibility::ray_margin`]), skipping it: when the next hit is a front within `3m` of that
+//! start, within `m` of the back face, the ray lands on that front. So light arriving on the
+//! room side of a thin wall is received whichever face rounding put first, as the `analytic`
+//! backend counts it (its segments end on the receiver and ignore hits within `1e-9` of the
+//! end); the extra ray is spent only on back hits.
+//!
 //! ## Global lines
 //!
 //! [`TransportSampler::global_line`] reads `u[0]`, `u[1]` as a direction uniform on the unit
 //! sphere (`z = 1 − 2u₀`, azimuth `2π u₁`) and `u[2]`, `u[3]` as a point uniform on the disc of
 //! radius `R` through the centre `c` of the scene's bounding sphere, perpendicular to that
 //! direction (radius `R √u₂`, angle `2π u₃`). The line starts on the sphere, at `c + p − R d`,
-//! and every crossing along it is found by repeated [`Visibility::first_hit`]s, each from the
-//! last crossing and skipping that patch. Two consecutive crossings `a`, `b` (in the order of
-//! `d`) face each other when the line meets `a` from behind (`a`'s front faces `d`) and `b`
-//! from the front; then both `(a, b)` and `(b, a)` are pushed. Each `first_hit` is a ray,
-//! the last one (which meets nothing) included.
+//! and every crossing along it is found by repeated [`Visibility::first_hit`]s, each from `2m`
+//! before the last crossing and skipping its patch, so that a thin wall's second face, within
+//! the margin of the first, joins the same crossing (the query after it starts at the second
+//! face, without stepping back). Two consecutive crossings `a`, `b` (in the order of `d`)
+//! face each other when the line meets a patch of `a` from behind (its front faces `d`) and a
+//! patch of `b` on its front; then both transfers between those two patches are pushed. Each
+//! `first_hit` is a ray, the last one (which meets nothing) included.
 //!
 //! **The area each transfer stands for**, `W = 2π R²`. Oriented lines, measured by
 //! `dL = dω dA⊥` (direction on the sphere, point on the plane perpendicular to it), are what
@@ -144,6 +156,47 @@ impl<'s> SceneTransport<'s> {
     pub fn line_area(&self) -> Real {
         std::f64::consts::TAU * self.radius * self.radius
     }
+
+    /// The front of the other face of a thin wall, when the ray `origin + t · direction` met
+    /// the back of one face first (`hit`) and a front lies within the margin of it (module
+    /// doc).
+    fn front_twin(&self, origin: Vec3, direction: Vec3, hit: RayHit) -> Option<usize> {
+        let margin = self.visibility.ray_margin(direction);
+        let start = origin + direction * (hit.t - 2.0 * margin);
+        let twin = self.visibility.first_hit(start, direction, Some(hit.patch))?;
+        (twin.front && twin.t <= 3.0 * margin).then_some(twin.patch)
+    }
+}
+
+/// One crossing of a global line: the patch met on its front (which receives what arrives
+/// along the line) and the one met from behind (which sends on along it); both where a thin
+/// wall's two faces lie back to back.
+#[derive(Clone, Copy, Debug, Default)]
+struct Crossing {
+    receiver: Option<usize>,
+    emitter: Option<usize>,
+}
+
+impl Crossing {
+    fn with(mut self, hit: RayHit) -> Crossing {
+        self.add(hit);
+        self
+    }
+
+    fn add(&mut self, hit: RayHit) {
+        let side = if hit.front { &mut self.receiver } else { &mut self.emitter };
+        side.get_or_insert(hit.patch);
+    }
+
+    /// Pushes the transfers between the last crossing's `emitter` and this crossing's
+    /// receiver, both ways, and leaves this crossing's emitter in `emitter`.
+    fn complete(self, emitter: &mut Option<usize>, transfers: &mut Vec<(usize, usize)>) {
+        if let (Some(a), Some(b)) = (*emitter, self.receiver) {
+            transfers.push((a, b));
+            transfers.push((b, a));
+        }
+        *emitter = self.emitter;
+    }
 }
 
 /// `n` with a comma between groups of three digits (`12,345`).
@@ -166,7 +219,8 @@ impl TransportSampler for SceneTransport<'_> {
 
     fn cast(&self, from: usize, u: [Real; 4]) -> Option<usize> {
         let (origin, direction) = self.ray(from, u);
-        self.visibility.first_hit(origin, direction, Some(from)).filter(|hit| hit.front).map(|hit| hit.patch)
+        let hit = self.visibility.first_hit(origin, direction, Some(from))?;
+        if hit.front { Some(hit.patch) } else { self.front_twin(origin, direction, hit) }
     }
 
     fn row_sum(&self, i: usize) -> Option<Real> {
@@ -178,21 +232,37 @@ impl TransportSampler for SceneTransport<'_> {
         line.area = self.line_area();
         line.rays = 0;
         let (mut origin, direction) = self.line(u);
-        let mut last: Option<RayHit> = None;
-        // A line crosses a planar patch at most once (unless it lies in the patch's plane, a
-        // set of lines of measure zero), so it has at most n crossings: the bound only makes
-        // termination certain.
-        for _ in 0..=self.patches.len() {
+        let margin = self.visibility.ray_margin(direction);
+        // The emitter of the last crossing completed, and the crossing being gathered.
+        let (mut emitter, mut crossing): (Option<usize>, Option<Crossing>) = (None, None);
+        let (mut skip, mut back_off) = (None, 0.0);
+        // Each query passes at least one patch, and a line crosses a planar patch at most once
+        // (unless it lies in the patch's plane, a set of lines of measure zero): the bound only
+        // makes termination certain.
+        for _ in 0..=2 * self.patches.len() {
             line.rays += 1;
-            let Some(hit) = self.visibility.first_hit(origin, direction, last.map(|h| h.patch)) else { break };
-            // The line leaves the last crossing's front (met from behind) and reaches this
-            // one's front: they face each other.
-            if let Some(a) = last.filter(|a| !a.front && hit.front) {
-                line.transfers.push((a.patch, hit.patch));
-                line.transfers.push((hit.patch, a.patch));
+            let start = origin - direction * back_off;
+            let Some(hit) = self.visibility.first_hit(start, direction, skip) else { break };
+            origin = start + direction * hit.t;
+            skip = Some(hit.patch);
+            match crossing.as_mut() {
+                // Within the margin of the last crossing's patch: its twin, the other face of
+                // a thin wall. The next query starts from here, where the first face lies
+                // within the margin, so neither is met again.
+                Some(current) if back_off > 0.0 && hit.t <= 3.0 * margin => {
+                    current.add(hit);
+                    back_off = 0.0;
+                }
+                _ => {
+                    if let Some(done) = crossing.replace(Crossing::default().with(hit)) {
+                        done.complete(&mut emitter, &mut line.transfers);
+                    }
+                    back_off = 2.0 * margin;
+                }
             }
-            origin += direction * hit.t;
-            last = Some(hit);
+        }
+        if let Some(done) = crossing {
+            done.complete(&mut emitter, &mut line.transfers);
         }
         true
     }

@@ -210,8 +210,9 @@ impl Visibility {
         })
     }
 
-    /// The smallest ray parameter that counts as a hit: `1e-9` scene diagonals along `direction`.
-    fn ray_margin(&self, direction: Vec3) -> Real {
+    /// The smallest ray parameter that counts as a hit in [`Visibility::first_hit`] and
+    /// [`Visibility::escapes`]: `1e-9` scene diagonals along `direction`.
+    pub fn ray_margin(&self, direction: Vec3) -> Real {
         T_MARGIN * self.diagonal / direction.length()
     }
 

@@ -138,7 +138,10 @@ fn main() -> Result<(), Box<dyn Error>> {
     let (exact_landed, exact) = timed(|| {
         ray_list.iter().filter(|(from, (o, d))| vis.first_hit(*o, *d, Some(*from)).is_some_and(|h| h.front)).count()
     });
-    assert_eq!(exact_landed, landed);
+    // A cast also lands the rays whose first hit is a thin wall's back face with its front
+    // face within the margin (SceneTransport's module doc).
+    assert!(exact_landed <= landed);
+    println!("rays landed on a thin wall's other face: {} of {rays}", landed - exact_landed);
     let raw_tracer = vis.raw_tracer();
     let (_, raw) = timed(|| {
         ray_list.iter().filter(|(from, (o, d))| raw_tracer.first_hit_patch(*o, *d, Some(*from)).is_some()).count()

@@ -13,7 +13,7 @@ use radiosity_core::{LineTransfers, Material, Real, Scene, Spectrum, TransportSa
 use radiosity_ff::SceneTransport;
 use radiosity_ff::ff_point_polygon::point_to_polygon;
 use radiosity_geom::mesh::{BoxFace, Facing};
-use radiosity_geom::{SceneBuilder, Visibility, load_scene};
+use radiosity_geom::{PreparedScene, SceneBuilder, Visibility, load_scene};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -200,6 +200,19 @@ fn the_same_point_gives_the_same_landing_whatever_the_threads() {
         one,
         points(4, 20_000).into_iter().enumerate().map(|(k, u)| sampler.cast(k % scene.len(), u)).collect::<Vec<_>>()
     );
+}
+
+#[test]
+fn a_prepared_scene_is_closed_when_its_analysis_says_so() {
+    // The furnace is closed; the Cornell box is open at the front.
+    for (arg, closed) in [("furnace:res=2", true), ("cornell:res=2", false)] {
+        let prepared = PreparedScene::load(arg).unwrap();
+        assert_eq!(prepared.analysis.closure.value.is_closed(), closed, "{arg}");
+        let sampler = SceneTransport::from_prepared(&prepared);
+        assert_eq!(sampler.is_closed(), closed);
+        assert_eq!(sampler.patch_count(), prepared.scene().len());
+        assert_eq!(sampler.row_sum(0), closed.then_some(1.0), "{arg}");
+    }
 }
 
 #[test]

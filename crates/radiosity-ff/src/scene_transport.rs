@@ -36,7 +36,8 @@
 //! start, within `m` of the back face, the ray lands on that front. So light arriving on the
 //! room side of a thin wall is received whichever face rounding put first, as the `analytic`
 //! backend counts it (its segments end on the receiver and ignore hits within `1e-9` of the
-//! end); the extra ray is spent only on back hits.
+//! end), where the `montecarlo` and `hemicube` backends lose such rays; the extra ray is
+//! spent only on back hits.
 //!
 //! ## Global lines
 //!

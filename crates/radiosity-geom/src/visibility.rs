@@ -155,6 +155,7 @@ impl Visibility {
     }
 
     /// Exact ray-triangle test in `f64`: the parameter `t` and whether the front side was hit.
+    #[inline(always)]
     fn intersect(&self, tri: usize, origin: Vec3, direction: Vec3) -> Option<(Real, bool)> {
         let [a, b, c] = self.triangles[tri];
         let e1 = b - a;

@@ -166,6 +166,7 @@ pub(crate) fn stochastic(config: &Config, findings: &mut Findings) -> Result<Str
     cases.extend(stochastic::COMPARATORS.iter().map(|(s, ff)| (s.to_string(), Some(ff.to_string()))));
     let bar = progress((cases.len() * config.runs_heavy) as u64, "stochastic");
     let mut results: Vec<Vec<stochastic::SampledReport>> = Vec::new();
+    let mut inapplicable: Vec<(String, String)> = Vec::new();
     for (solver, ff) in &cases {
         let mut runs = Vec::new();
         for r in 0..config.runs_heavy {
@@ -187,14 +188,33 @@ pub(crate) fn stochastic(config: &Config, findings: &mut Findings) -> Result<Str
             if let Some(ff) = ff {
                 args.extend(["--child-ff".to_string(), ff.clone()]);
             }
-            runs.push(run_child(&args, &format!("the stochastic section's run of {solver}"))?);
+            match run_child(&args, &format!("the stochastic section's run of {solver}")) {
+                Ok(run) => runs.push(run),
+                // A method that does not apply to this scene (a control variate on an open one)
+                // is reported as such, not as a failed bench.
+                Err(e) if e.to_string().contains("cannot solve this system") => {
+                    let why = e.to_string();
+                    let why = why.split(": ").last().unwrap_or_default().to_string();
+                    inapplicable.push((solver.clone(), why));
+                    bar.inc((config.runs_heavy - r) as u64);
+                    break;
+                }
+                Err(e) => return Err(e),
+            }
             bar.inc(1);
         }
         results.push(runs);
     }
     bar.finish_and_clear();
-    let section =
-        stochastic::report(&scene, prepared.loaded.scene.len(), &cases, &results, &note, config.sampled_seconds);
+    let section = stochastic::report(
+        &scene,
+        prepared.loaded.scene.len(),
+        &cases,
+        &results,
+        &inapplicable,
+        &note,
+        config.sampled_seconds,
+    );
     findings.json.stochastic = section.json;
     Ok(section.markdown)
 }

@@ -44,11 +44,13 @@ pub const THRESHOLDS: [Real; 3] = [1e-2, 3e-3, 1e-3];
 pub const RENDERPARK_SECONDS: Real = 1.7;
 
 /// The solvers of the section by default.
-pub const SOLVERS: [&str; 5] = [
+pub const SOLVERS: [&str; 7] = [
     "stochastic-jacobi",
     "stochastic-jacobi:seq=sobol",
     "stochastic-jacobi:seq=halton",
+    "stochastic-jacobi:lines=global",
     "stochastic-jacobi:form=gathering",
+    "stochastic-jacobi:form=gathering:cv=true",
     "random-walk",
 ];
 
@@ -179,9 +181,8 @@ pub fn sampled_run(
             Some(ReachedRays { e_rms: t, seconds, rays, columns, products })
         })
         .collect();
-    let standard_error = solver
-        .standard_error(&problem, &run.state)
-        .map(|s| s.relative_rms(&system, &run.state.radiosity));
+    let standard_error =
+        solver.standard_error(&problem, &run.state).map(|s| s.relative_rms(&system, &run.state.radiosity));
     Ok(SampledReport {
         setup: Setup { scene: scene_seconds, backend: setup_seconds },
         reached,
@@ -233,6 +234,7 @@ pub fn report(
     patches: usize,
     cases: &[(String, Option<String>)],
     results: &[Vec<SampledReport>],
+    inapplicable: &[(String, String)],
     reference: &ReferenceNote,
     max_seconds: Real,
 ) -> StochasticSection {
@@ -254,6 +256,10 @@ pub fn report(
             standard error | peak memory |\n|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
     let mut json = Vec::new();
     for ((solver, over), runs) in cases.iter().zip(results) {
+        if runs.is_empty() {
+            let _ = writeln!(out, "| `{solver}` | not applicable here (below) | | | | | | | | | |");
+            continue;
+        }
         let cell = |k: usize| match median_to(runs, k, |r| r.seconds) {
             Some(s) => duration(s),
             None => "not reached".to_string(),
@@ -295,6 +301,9 @@ pub fn report(
                 .map(|(k, t)| (format!("{t:.0e}"), median_to(runs, k, |r| r.rays as Real)))
                 .collect(),
         });
+    }
+    for (solver, why) in inapplicable {
+        let _ = writeln!(out, "\n`{solver}` does not apply to this scene: {why}.");
     }
     // Quasi-random against pseudo-random, at the same e_rms.
     let random = cases.iter().position(|(c, over)| c == "stochastic-jacobi" && over.is_none());

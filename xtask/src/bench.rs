@@ -269,7 +269,13 @@ pub fn run(args: &Args) -> Result<()> {
         let (Some(reference), Some(scene)) = (&args.child_reference, &args.scene) else {
             bail!("a stochastic child run needs --scene and --child-reference");
         };
-        return children::sampled_child(scene, solver, reference, args.max_seconds.unwrap_or(60.0));
+        return children::sampled_child(
+            scene,
+            solver,
+            args.child_ff.as_deref(),
+            reference,
+            args.max_seconds.unwrap_or(60.0),
+        );
     }
     if let Some(solver) = &args.child_solver {
         let (Some(ff), Some(reference), Some(scene)) = (&args.child_ff, &args.child_reference, &args.scene) else {

@@ -133,6 +133,7 @@ enum Outcome {
 
 /// Uniform sampling by area over a patch's fan triangles (also the scene sampler's origins,
 /// [`crate::scene_transport`]).
+#[derive(Clone, Debug)]
 pub(crate) struct AreaSampler {
     triangles: [[Vec3; 3]; 2],
     /// The fraction of the area in the first triangle (1 for a triangle patch).

@@ -155,6 +155,7 @@ impl Visibility {
     }
 
     /// Exact ray-triangle test in `f64`: the parameter `t` and whether the front side was hit.
+    #[inline(always)]
     fn intersect(&self, tri: usize, origin: Vec3, direction: Vec3) -> Option<(Real, bool)> {
         let [a, b, c] = self.triangles[tri];
         let e1 = b - a;
@@ -210,8 +211,9 @@ impl Visibility {
         })
     }
 
-    /// The smallest ray parameter that counts as a hit: `1e-9` scene diagonals along `direction`.
-    fn ray_margin(&self, direction: Vec3) -> Real {
+    /// The smallest ray parameter that counts as a hit in [`Visibility::first_hit`] and
+    /// [`Visibility::escapes`]: `1e-9` scene diagonals along `direction`.
+    pub fn ray_margin(&self, direction: Vec3) -> Real {
         T_MARGIN * self.diagonal / direction.length()
     }
 

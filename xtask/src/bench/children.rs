@@ -49,14 +49,24 @@ pub(crate) fn e2e_child(scene: &str, solver: &str, ff: &str, reference: &Path, m
 }
 
 /// The child of a stochastic case: loads the scene on the clock and runs `solver` with rays
-/// in it.
-pub(crate) fn sampled_child(scene: &str, solver: &str, reference: &Path, max_seconds: Real) -> Result<()> {
+/// in it, or over the backend `ff`.
+pub(crate) fn sampled_child(
+    scene: &str,
+    solver: &str,
+    ff: Option<&str>,
+    reference: &Path,
+    max_seconds: Real,
+) -> Result<()> {
     let mut solver = SolverRegistry::builtin().build(solver)?;
+    let case = match ff {
+        None => stochastic::Case::Rays,
+        Some(ff) => stochastic::Case::Backend(BackendSpec::parse(ff)?),
+    };
     let star = read_reference(reference)?;
     let start = Instant::now();
     let prepared = prepare(scene)?;
     let scene_seconds = start.elapsed().as_secs_f64();
-    let report = stochastic::sampled_run(&prepared, start, scene_seconds, solver.as_mut(), &star, max_seconds)?;
+    let report = stochastic::sampled_run(&prepared, start, scene_seconds, solver.as_mut(), &case, &star, max_seconds)?;
     println!("{}", serde_json::to_string(&report)?);
     Ok(())
 }
@@ -145,19 +155,23 @@ pub(crate) fn e2e(config: &Config, prepared: &PreparedScene, findings: &mut Find
 
 /// Runs the stochastic section on RenderPark's classroom (`--scene` otherwise; with `--quick`
 /// a small Cornell box): the analytic reference once, then every solver (`--solvers`, or
-/// [`stochastic::SOLVERS`]) `--runs` times in its own process.
+/// [`stochastic::SOLVERS`]) with rays in the scene and every comparator
+/// ([`stochastic::COMPARATORS`]) `--runs` times in its own process.
 pub(crate) fn stochastic(config: &Config, findings: &mut Findings) -> Result<String> {
     let scene = config.stochastic_scene.clone();
     let prepared = prepare(&scene)?;
     let (file, note) = write_reference(&prepared)?;
-    let cases = config.stochastic_solvers.clone();
+    let mut cases: Vec<(String, Option<String>)> =
+        config.stochastic_solvers.iter().map(|s| (s.clone(), None)).collect();
+    cases.extend(stochastic::COMPARATORS.iter().map(|(s, ff)| (s.to_string(), Some(ff.to_string()))));
     let bar = progress((cases.len() * config.runs_heavy) as u64, "stochastic");
     let mut results: Vec<Vec<stochastic::SampledReport>> = Vec::new();
-    for solver in &cases {
+    let mut inapplicable: Vec<(String, String)> = Vec::new();
+    for (solver, ff) in &cases {
         let mut runs = Vec::new();
         for r in 0..config.runs_heavy {
             bar.set_message(format!("{solver}, run {}/{}", r + 1, config.runs_heavy));
-            let args: Vec<String> = [
+            let mut args: Vec<String> = [
                 "bench",
                 "--scene",
                 &scene,
@@ -171,14 +185,36 @@ pub(crate) fn stochastic(config: &Config, findings: &mut Findings) -> Result<Str
             .iter()
             .map(|s| s.to_string())
             .collect();
-            runs.push(run_child(&args, &format!("the stochastic run of {solver}"))?);
+            if let Some(ff) = ff {
+                args.extend(["--child-ff".to_string(), ff.clone()]);
+            }
+            match run_child(&args, &format!("the stochastic section's run of {solver}")) {
+                Ok(run) => runs.push(run),
+                // A method that does not apply to this scene (a control variate on an open one)
+                // is reported as such, not as a failed bench.
+                Err(e) if e.to_string().contains("cannot solve this system") => {
+                    let why = e.to_string();
+                    let why = why.split(": ").last().unwrap_or_default().to_string();
+                    inapplicable.push((solver.clone(), why));
+                    bar.inc((config.runs_heavy - r) as u64);
+                    break;
+                }
+                Err(e) => return Err(e),
+            }
             bar.inc(1);
         }
         results.push(runs);
     }
     bar.finish_and_clear();
-    let section =
-        stochastic::report(&scene, prepared.loaded.scene.len(), &cases, &results, &note, config.sampled_seconds);
+    let section = stochastic::report(
+        &scene,
+        prepared.loaded.scene.len(),
+        &cases,
+        &results,
+        &inapplicable,
+        &note,
+        config.sampled_seconds,
+    );
     findings.json.stochastic = section.json;
     Ok(section.markdown)
 }

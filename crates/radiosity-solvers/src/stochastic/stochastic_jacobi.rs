@@ -210,7 +210,8 @@ impl FromStr for StochasticJacobiParams {
 }
 
 impl SolverParams for StochasticJacobiParams {
-    const SYNTAX: &'static str = "stochastic-jacobi[:form=…][:cv=true][:lines=global][:seq=…][:replicates=R][:batch=N][:seed=S]";
+    const SYNTAX: &'static str =
+        "stochastic-jacobi[:form=…][:cv=true][:lines=global][:seq=…][:replicates=R][:batch=N][:seed=S]";
     const HELP: &'static str = "stochastic relaxation: Jacobi iterations whose transport is estimated with rays (incremental shooting, then regular iterations averaged; form=shooting|gathering, seq=random|sobol|halton); never forms F; a standard error from R replicates";
     const EXAMPLES: &'static [&'static str] =
         &["stochastic-jacobi", "stochastic-jacobi:seq=sobol", "stochastic-jacobi:form=gathering:cv=true"];

@@ -3,7 +3,10 @@
 //! analytic reference.
 //!
 //! [`sampled_run`] runs one case: the clock starts before the scene is loaded and counts what
-//! a user waits for (load, BVH, analysis, the sampler's setup and the solve). After every step
+//! a user waits for (load, BVH, analysis, the sampler's or the backend's setup and the solve).
+//! A case is a solver with rays in the scene, or a deterministic comparator over a backend
+//! ([`Case`]: `xu` over the analytic columns, `gmres-30` over the hierarchical operator), timed
+//! the same way to the same thresholds. After every step
 //! an observer measures e_rms against a reference solved beforehand and takes that time out
 //! of the wall clock, as [`crate::bench::e2e`] does for the deterministic solvers. The report
 //! ([`report`]) gives, per solver, the median wall seconds and rays to each threshold, and for
@@ -15,13 +18,15 @@
 //! process (load and solve); it is not rerun here (docs/stochastic.md says why).
 
 use crate::error::LabError;
+use crate::lab::backends::fresh_backend;
 use crate::lab::timing::median;
+use crate::progress::NoProgress;
 use crate::reference::metrics::errors_against;
 use crate::suites::bench::e2e::{ReferenceNote, Setup};
 use crate::suites::bench::memory::peak_rss;
 use crate::suites::bench::report_text::{duration, human_bytes, sig};
 use radiosity_core::{LinearSystem, Real};
-use radiosity_ff::SceneTransport;
+use radiosity_ff::{BackendSpec, SceneTransport};
 use radiosity_geom::PreparedScene;
 use radiosity_solvers::{Executor, Observer, ObserverMode, Problem, Record, Solver, State, StopRules};
 use serde::{Deserialize, Serialize};
@@ -39,13 +44,27 @@ pub const THRESHOLDS: [Real; 3] = [1e-2, 3e-3, 1e-3];
 pub const RENDERPARK_SECONDS: Real = 1.7;
 
 /// The solvers of the section by default.
-pub const SOLVERS: [&str; 5] = [
+pub const SOLVERS: [&str; 7] = [
     "stochastic-jacobi",
     "stochastic-jacobi:seq=sobol",
     "stochastic-jacobi:seq=halton",
-    "stochastic-jacobi:form=gathering:cv=true",
     "stochastic-jacobi:lines=global",
+    "stochastic-jacobi:form=gathering",
+    "stochastic-jacobi:form=gathering:cv=true",
+    "random-walk",
 ];
+
+/// The deterministic comparators of the section by default: (solver, backend).
+pub const COMPARATORS: [(&str, &str); 2] = [("xu", "analytic"), ("gmres-30", "hierarchical")];
+
+/// What a case runs over.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Case {
+    /// Rays in the scene ([`SceneTransport`]).
+    Rays,
+    /// A backend's form factors, built fresh on the clock.
+    Backend(BackendSpec),
+}
 
 /// When a run's e_rms first fell to a threshold.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -56,6 +75,12 @@ pub struct ReachedRays {
     pub seconds: Real,
     /// Rays cast by then.
     pub rays: u64,
+    /// Columns computed by then (a comparator's).
+    #[serde(default)]
+    pub columns: u64,
+    /// Products by then (a comparator's).
+    #[serde(default)]
+    pub products: u64,
 }
 
 /// What one run reports.
@@ -67,10 +92,16 @@ pub struct SampledReport {
     pub reached: Vec<ReachedRays>,
     /// e_rms at the end.
     pub e_rms: Real,
-    /// The solver's standard error at the end, in the form of e_rms (NaN without one).
-    pub standard_error: Real,
+    /// The solver's standard error at the end, in the form of e_rms (`None` without one).
+    pub standard_error: Option<Real>,
     /// Rays cast in all.
     pub rays: u64,
+    /// Columns computed in all (a comparator's cost).
+    #[serde(default)]
+    pub columns: u64,
+    /// Products by the operator in all.
+    #[serde(default)]
+    pub products: u64,
     /// Steps taken.
     pub steps: u64,
     /// Why the run stopped.
@@ -90,7 +121,8 @@ struct Curve<'a> {
     start: Instant,
     overhead: Real,
     latest: Option<Real>,
-    points: Vec<(Real, u64, Real)>,
+    /// After every step: wall seconds, the state's rays, columns and products, and e_rms.
+    points: Vec<(Real, [u64; 3], Real)>,
 }
 
 impl Observer for Curve<'_> {
@@ -98,7 +130,7 @@ impl Observer for Curve<'_> {
         let at = Instant::now();
         let e = errors_against(self.system, self.star, &state.radiosity).map_or(Real::NAN, |e| e.e_rms);
         let wall = (at - self.start).as_secs_f64() - self.overhead;
-        self.points.push((wall, state.rays, e));
+        self.points.push((wall, [state.rays, state.columns, state.products], e));
         self.latest = Some(e);
         self.overhead += at.elapsed().as_secs_f64();
     }
@@ -108,7 +140,7 @@ impl Observer for Curve<'_> {
     }
 }
 
-/// Runs `solver` with rays in `prepared` until e_rms ≤ 1e-3 against `star` or for
+/// Runs `solver` over `case` in `prepared` until e_rms ≤ 1e-3 against `star` or for
 /// `max_seconds` of solver time, timing from `start`, the instant the caller began loading the
 /// scene, which took `scene_seconds`.
 pub fn sampled_run(
@@ -116,6 +148,7 @@ pub fn sampled_run(
     start: Instant,
     scene_seconds: Real,
     solver: &mut dyn Solver,
+    case: &Case,
     star: &[Real],
     max_seconds: Real,
 ) -> Result<SampledReport, LabError> {
@@ -128,8 +161,15 @@ pub fn sampled_run(
         )));
     }
     let transport = SceneTransport::from_prepared(prepared);
-    let sampler_seconds = start.elapsed().as_secs_f64() - scene_seconds;
-    let problem = Problem::sampled(&system, &transport)?;
+    let backend = match case {
+        Case::Rays => None,
+        Case::Backend(spec) => Some(fresh_backend(prepared, spec, &NoProgress)?),
+    };
+    let setup_seconds = start.elapsed().as_secs_f64() - scene_seconds;
+    let problem = match &backend {
+        None => Problem::sampled(&system, &transport)?,
+        Some(backend) => Problem::new(&system, &**backend)?,
+    };
     let rules = StopRules::parse(&format!("time={}ms", (max_seconds * 1e3).ceil() as u64))?;
     let mut curve = Curve { system: &system, star, start, overhead: 0.0, latest: None, points: Vec::new() };
     let run = Executor::new(solver, rules).add_observer(&mut curve, ObserverMode::Always).run(&problem)?;
@@ -137,19 +177,20 @@ pub fn sampled_run(
     let reached = THRESHOLDS
         .iter()
         .map_while(|&t| {
-            let &(seconds, rays, _) = curve.points.iter().find(|p| p.2 <= t)?;
-            Some(ReachedRays { e_rms: t, seconds, rays })
+            let &(seconds, [rays, columns, products], _) = curve.points.iter().find(|p| p.2 <= t)?;
+            Some(ReachedRays { e_rms: t, seconds, rays, columns, products })
         })
         .collect();
-    let standard_error = solver
-        .standard_error(&problem, &run.state)
-        .map_or(Real::NAN, |s| s.relative_rms(&system, &run.state.radiosity));
+    let standard_error =
+        solver.standard_error(&problem, &run.state).map(|s| s.relative_rms(&system, &run.state.radiosity));
     Ok(SampledReport {
-        setup: Setup { scene: scene_seconds, backend: sampler_seconds },
+        setup: Setup { scene: scene_seconds, backend: setup_seconds },
         reached,
         e_rms: errors_against(&system, star, &run.state.radiosity)?.e_rms,
         standard_error,
         rays: run.state.rays,
+        columns: run.state.columns,
+        products: run.state.products,
         steps: run.state.step,
         termination: run.termination.to_string(),
         seconds,
@@ -163,9 +204,11 @@ pub fn sampled_run(
 pub struct StochasticJson {
     /// The solver.
     pub method: String,
+    /// The backend, for a deterministic comparator (`null`: rays in the scene).
+    pub over: Option<String>,
     /// Median wall seconds from scene load to each threshold (`null`: not reached in every run).
     pub seconds_to: std::collections::BTreeMap<String, Option<Real>>,
-    /// Median rays to each threshold.
+    /// Median rays to each threshold (0 for a comparator, which counts columns and products).
     pub rays_to: std::collections::BTreeMap<String, Option<Real>>,
 }
 
@@ -184,12 +227,14 @@ fn median_to(runs: &[SampledReport], k: usize, figure: impl Fn(&ReachedRays) -> 
     (values.len() == runs.len() && !runs.is_empty()).then(|| median(&values))
 }
 
-/// The section from the runs of each solver on `scene` (`patches` patches).
+/// The section from the runs of each case on `scene` (`patches` patches): a solver with rays
+/// in the scene (`None`), or over the backend named.
 pub fn report(
     scene: &str,
     patches: usize,
-    cases: &[String],
+    cases: &[(String, Option<String>)],
     results: &[Vec<SampledReport>],
+    inapplicable: &[(String, String)],
     reference: &ReferenceNote,
     max_seconds: Real,
 ) -> StochasticSection {
@@ -207,33 +252,44 @@ pub fn report(
         sig(max_seconds, 3),
         duration(RENDERPARK_SECONDS),
     );
-    out += "| solver | to 1e-2 | to 3e-3 | to 1e-3 | rays to 3e-3 | rays to 1e-3 | setup | last e_rms | last standard \
-            error | peak memory |\n|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+    out += "| solver | over | to 1e-2 | to 3e-3 | to 1e-3 | cost to 3e-3 | cost to 1e-3 | setup | last e_rms | last \
+            standard error | peak memory |\n|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
     let mut json = Vec::new();
-    for (solver, runs) in cases.iter().zip(results) {
+    for ((solver, over), runs) in cases.iter().zip(results) {
+        if runs.is_empty() {
+            let _ = writeln!(out, "| `{solver}` | not applicable here (below) | | | | | | | | | |");
+            continue;
+        }
         let cell = |k: usize| match median_to(runs, k, |r| r.seconds) {
             Some(s) => duration(s),
             None => "not reached".to_string(),
         };
-        let rays =
-            |k: usize| median_to(runs, k, |r| r.rays as Real).map_or("—".to_string(), |r| format!("{:.3e}", r));
+        let cost = |k: usize| match over {
+            None => median_to(runs, k, |r| r.rays as Real).map_or("—".to_string(), |r| format!("{r:.3e} rays")),
+            Some(_) => median_to(runs, k, |r| r.columns as Real).map_or("—".to_string(), |c| {
+                let products = median_to(runs, k, |r| r.products as Real).unwrap_or(0.0);
+                if products > 0.0 { format!("{products:.0} products") } else { format!("{c:.0} columns") }
+            }),
+        };
         let setup = median(&runs.iter().map(|r| r.setup.scene + r.setup.backend).collect::<Vec<_>>());
         let last = runs.last();
         let _ = writeln!(
             out,
-            "| `{solver}` | {} | {} | {} | {} | {} | {} | {:.2e} | {:.2e} | {} |",
+            "| `{solver}` | {} | {} | {} | {} | {} | {} | {} | {:.2e} | {} | {} |",
+            over.as_deref().map_or("rays in the scene".to_string(), |ff| format!("`{ff}`")),
             cell(0),
             cell(1),
             cell(2),
-            rays(1),
-            rays(2),
+            cost(1),
+            cost(2),
             duration(setup),
             last.map_or(Real::NAN, |r| r.e_rms),
-            last.map_or(Real::NAN, |r| r.standard_error),
+            last.and_then(|r| r.standard_error).map_or("—".to_string(), |s| format!("{s:.2e}")),
             runs.iter().filter_map(|r| r.peak_rss).max().map_or("n/a".to_string(), human_bytes),
         );
         json.push(StochasticJson {
             method: solver.clone(),
+            over: over.clone(),
             seconds_to: THRESHOLDS
                 .iter()
                 .enumerate()
@@ -246,11 +302,14 @@ pub fn report(
                 .collect(),
         });
     }
+    for (solver, why) in inapplicable {
+        let _ = writeln!(out, "\n`{solver}` does not apply to this scene: {why}.");
+    }
     // Quasi-random against pseudo-random, at the same e_rms.
-    let random = cases.iter().position(|c| c == "stochastic-jacobi");
+    let random = cases.iter().position(|(c, over)| c == "stochastic-jacobi" && over.is_none());
     if let Some(random) = random {
         out += "\nRays against `stochastic-jacobi` (pseudo-random) at the same e_rms:\n\n";
-        for (solver, runs) in cases.iter().zip(results).filter(|(c, _)| c.contains("seq=")) {
+        for ((solver, _), runs) in cases.iter().zip(results).filter(|((c, _), _)| c.contains("seq=")) {
             let ratios: Vec<String> = (0..THRESHOLDS.len())
                 .map(|k| {
                     match (median_to(runs, k, |r| r.rays as Real), median_to(&results[random], k, |r| r.rays as Real)) {

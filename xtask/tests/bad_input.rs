@@ -177,12 +177,14 @@ fn a_scene_that_emits_nothing_is_refused_before_any_form_factor() {
 fn bad_stop_rules_are_refused() {
     // (rule, what the sentence says is wrong with it)
     let cases = [
-        ("columns=0", "a positive integer or a multiple of n"),
-        ("columns=-3", "a positive integer or a multiple of n"),
-        ("columns=2x", "a positive integer or a multiple of n"),
-        ("columns=1e3", "a positive integer or a multiple of n"),
-        ("steps=", "a positive integer or a multiple of n"),
-        ("steps=0", "a positive integer or a multiple of n"),
+        ("columns=0", "a positive integer (such as 480 or 1e7) or a multiple of n"),
+        ("columns=-3", "a positive integer (such as 480 or 1e7) or a multiple of n"),
+        ("columns=2x", "a positive integer (such as 480 or 1e7) or a multiple of n"),
+        ("columns=2.5", "a positive integer (such as 480 or 1e7) or a multiple of n"),
+        ("rays=0", "a positive integer (such as 480 or 1e7) or a multiple of n"),
+        ("rays=1e-3", "a positive integer (such as 480 or 1e7) or a multiple of n"),
+        ("steps=", "a positive integer (such as 480 or 1e7) or a multiple of n"),
+        ("steps=0", "a positive integer (such as 480 or 1e7) or a multiple of n"),
         ("rms=0", "a positive number"),
         ("rms=-1", "a positive number"),
         ("rms=abc", "a positive number"),

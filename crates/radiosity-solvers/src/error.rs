@@ -26,7 +26,7 @@ pub enum SolverError {
     },
     /// A stop rule that does not parse.
     #[error(
-        "invalid stop rule '{rule}': {reason}; rules are columns=N, columns=2n, steps=N, rms=1e-3, residual=1e-4, time=30s"
+        "invalid stop rule '{rule}': {reason}; rules are columns=N, columns=2n, steps=N, rays=1e7, rms=1e-3, residual=1e-4, time=30s"
     )]
     BadRule {
         /// The rule as written.

@@ -13,7 +13,7 @@
 //! e_rms squared of the mean, as far as the replicates are unbiased (what they are not, a
 //! truncated series, no spread can see). Per patch, `(B̄ − B*) / s` follows Student's `t` with
 //! `R − 1` degrees of freedom where the estimates are close to normal (many rays): within 2
-//! standard errors about 86% of the time for `R = 4`, 93% for `R = 16`, 95% as `R` grows
+//! standard errors about 86% of the time for `R = 4`, 94% for `R = 16`, 95% as `R` grows
 //! ([`t_coverage_of_two`]).
 //!
 //! A certified bound (a deterministic solver's, docs/design.md §5) is a promise that holds every

@@ -51,16 +51,16 @@
 //!
 //! - `s ≤` [`STOCHASTIC_TOLERANCE`] (`5e-2`): the estimate is as precise as asked, a few
 //!   percent, which the budget reaches at `ρ = 0.999`; and
-//! - its e_rms against the reference `≤` [`STOCHASTIC_SPREADS`]` · s` (3): it is unbiased as
+//! - its e_rms against the reference `≤` [`STOCHASTIC_SPREADS`]` · s` (4): it is unbiased as
 //!   far as its noise can show. The squared e_rms of an unbiased mean and its squared
 //!   standard error have the same expectation. Where the errors of the patches are
 //!   independent, both are sums over many patches and their ratio stays near 1; where they
 //!   move together (a closed furnace, whose noise is mostly its level of energy), `e_rms / s`
-//!   is at worst a Student's `t` with `R − 1` degrees of freedom, beyond 3 about 6% of the
-//!   time for the default `R = 4`. So an unbiased solver is flagged now and then on such a
-//!   case (every run's seed is fixed, so a verdict is reproducible, and a flag is worth
-//!   rerunning with other seeds), while a bias of several standard errors, or a bar several
-//!   times too narrow, is flagged.
+//!   is at worst a Student's `t` with `R − 1` degrees of freedom: with the suite's `R = 16`,
+//!   beyond 4 about 0.1% of the time (beyond 3 it would be 0.9%, and 5.8% with 4 replicates,
+//!   which flagged unbiased runs at ρ = 0.99). Every run's seed is fixed, so a verdict is
+//!   reproducible, and a flag is worth rerunning with other seeds; a bias of several standard
+//!   errors, or a bar several times too narrow, is flagged.
 //!
 //! The furnace identity is not used for them: where F's rows do not sum exactly to 1, it is
 //! not the answer of the system they sample. Their cells show e_rms against the reference

@@ -132,7 +132,7 @@ pub use shooting::rule::unshot_power;
 pub use shooting::southwell::Southwell;
 pub use stochastic::random_walk::{RandomWalk, RandomWalkParams, WalkForm, WalkScore};
 pub use stochastic::sequence::{PointStream, Sequence};
-pub use stochastic::stochastic_jacobi::{Batch, JacobiForm, StochasticJacobi, StochasticJacobiParams};
+pub use stochastic::stochastic_jacobi::{JacobiForm, StochasticJacobi, StochasticJacobiParams};
 
 /// The point solvers, by canonical name: every one of them is run by the scene-level tests
 /// and snapshots.

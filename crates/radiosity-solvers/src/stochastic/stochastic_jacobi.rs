@@ -56,6 +56,7 @@ use crate::run::problem::Problem;
 use crate::run::record::Record;
 use crate::run::standard_error::StandardError;
 use crate::run::state::State;
+use crate::run::stop::Count;
 use crate::stochastic::estimate::{Streams, gather, lines, shoot};
 use crate::stochastic::sequence::Sequence;
 use radiosity_core::Real;
@@ -85,21 +86,12 @@ pub struct StochasticJacobiParams {
     pub sequence: Sequence,
     /// Independent chains (at least 2).
     pub replicates: usize,
-    /// Rays a step over all replicates, absolute or per patch.
-    pub batch: Batch,
+    /// Rays a step over all replicates, absolute or per patch (`batch=1e5`, `batch=10n`).
+    pub batch: Count,
     /// The seed.
     pub seed: u64,
     /// The unshot power, relative to the emitted, at which incremental shooting ends.
     pub spent: Real,
-}
-
-/// A step's rays: absolute, or a multiple of the patch count.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Batch {
-    /// So many rays.
-    Rays(u64),
-    /// So many rays per patch.
-    PerPatch(Real),
 }
 
 impl Default for StochasticJacobiParams {
@@ -110,7 +102,7 @@ impl Default for StochasticJacobiParams {
             global_lines: false,
             sequence: Sequence::Random,
             replicates: 4,
-            batch: Batch::PerPatch(10.0),
+            batch: Count::PerPatch(10.0),
             seed: 1,
             spent: 1e-4,
         }
@@ -122,14 +114,6 @@ const MIN_BATCH: u64 = 1000;
 
 fn refuse(reason: String) -> ParseSolverError {
     SolverError::BadParams(format!("solver 'stochastic-jacobi': {reason}")).into()
-}
-
-/// A whole number, also in exponent form (`1e5`).
-fn whole(value: &str) -> Option<u64> {
-    value.parse::<u64>().ok().or_else(|| {
-        let v = value.parse::<f64>().ok()?;
-        (v.is_finite() && v >= 0.0 && v.fract() == 0.0 && v < 1.8e19).then_some(v as u64)
-    })
 }
 
 impl FromStr for StochasticJacobiParams {
@@ -171,25 +155,20 @@ impl FromStr for StochasticJacobiParams {
                         .ok_or_else(|| refuse(format!("seq is random, sobol or halton, not '{value}'")))?
                 }
                 "replicates" => {
-                    p.replicates = whole(value)
-                        .filter(|&r| (2..=1024).contains(&r))
-                        .ok_or_else(|| refuse(format!("replicates is a whole number from 2 to 1024, not '{value}'")))?
-                        as usize
+                    p.replicates =
+                        value.parse::<usize>().ok().filter(|r| (2..=1024).contains(r)).ok_or_else(|| {
+                            refuse(format!("replicates is a whole number from 2 to 1024, not '{value}'"))
+                        })?
                 }
                 "batch" => {
-                    p.batch = if let Some(m) = value.strip_suffix('n') {
-                        let m = if m.is_empty() { Ok(1.0) } else { m.parse::<Real>() };
-                        Batch::PerPatch(m.ok().filter(|m| m.is_finite() && *m > 0.0).ok_or_else(|| {
-                            refuse(format!("batch is a number of rays or a multiple of n, not '{value}'"))
-                        })?)
-                    } else {
-                        Batch::Rays(whole(value).filter(|&b| b >= 1).ok_or_else(|| {
-                            refuse(format!("batch is a number of rays or a multiple of n, not '{value}'"))
-                        })?)
-                    }
+                    p.batch = Count::parse(value).map_err(|_| {
+                        refuse(format!(
+                            "batch is a number of rays or a multiple of n, such as 1e5 or 10n, not '{value}'"
+                        ))
+                    })?
                 }
                 "seed" => {
-                    p.seed = whole(value).ok_or_else(|| refuse(format!("seed is a whole number, not '{value}'")))?
+                    p.seed = value.parse().map_err(|_| refuse(format!("seed is a whole number, not '{value}'")))?
                 }
                 "spent" => {
                     p.spent = value
@@ -270,10 +249,7 @@ pub struct StochasticJacobi {
 impl StochasticJacobi {
     /// The rays of a step for one replicate, for `n` patches.
     fn batch(&self, n: usize) -> u64 {
-        let total = match self.params.batch {
-            Batch::Rays(b) => b,
-            Batch::PerPatch(m) => (m * n as Real).ceil() as u64,
-        };
+        let total = self.params.batch.resolve(n);
         (total.max(MIN_BATCH) / self.params.replicates as u64).max(1)
     }
 
@@ -420,10 +396,8 @@ impl Solver for StochasticJacobi {
         if p.replicates != d.replicates {
             name.push_str(&format!(":replicates={}", p.replicates));
         }
-        match p.batch {
-            Batch::PerPatch(m) if Batch::PerPatch(m) == d.batch => {}
-            Batch::PerPatch(m) => name.push_str(&format!(":batch={m}n")),
-            Batch::Rays(b) => name.push_str(&format!(":batch={b}")),
+        if p.batch != d.batch {
+            name.push_str(&format!(":batch={}", p.batch));
         }
         if p.seed != d.seed {
             name.push_str(&format!(":seed={}", p.seed));

@@ -35,7 +35,7 @@
 //! ## References
 //!
 //! - Bekaert 1999, *Hierarchical and stochastic algorithms for radiosity*, PhD thesis, KU
-//!   Leuven, ch. 5 (stochastic Jacobi, its variance, the constant control variate).
+//!   Leuven (stochastic Jacobi, its variance, the constant control variate).
 //! - Sbert 1993, "An integral geometry based method for fast form-factor computation",
 //!   Computer Graphics Forum 12(3) (global lines).
 

@@ -16,7 +16,7 @@
 //! 2. **Regular iterations.** Each shoots the whole estimate `P̄` once more with `N` rays,
 //!    `P' = Φ + R T̂ P̄`, an unbiased estimate of the solution when `P̄` is one (`E[P'] = Φ +
 //!    R T E[P̄]`, by linearity), and combines it with the estimates so far, weighted by the
-//!    inverse of their variance: to first order (Bekaert 1999, §5.3),
+//!    inverse of their variance: to first order (Dutré, Bekaert & Bala, Appendix C),
 //!    `V[P̂_i] ≈ ρ_i P_T (P_i − Φ_i) / N` for `N` rays shooting total power `P_T`, and the
 //!    incremental phase's `N_1` rays give the same variance as a regular iteration of `N_1`
 //!    rays, so every estimate is weighted by the rays it cast.
@@ -45,7 +45,9 @@
 //! - Neumann, Feda, Kopp & Tobler 1995, "A new stochastic radiosity method for highly complex
 //!   scenes", Photorealistic Rendering Techniques (Eurographics Rendering Workshop 1994).
 //! - Bekaert 1999, *Hierarchical and stochastic algorithms for radiosity*, PhD thesis, KU
-//!   Leuven, ch. 5 (stochastic Jacobi iterations, their variance, control variates).
+//!   Leuven (stochastic Jacobi iterations, their variance, control variates).
+//! - Dutré, Bekaert & Bala 2006, *Advanced Global Illumination*, 2nd ed., A K Peters: §6.3
+//!   (stochastic relaxation radiosity) and Appendix C (the variance of incremental shooting).
 //! - Sbert 1993, "An integral geometry based method for fast form-factor computation",
 //!   Computer Graphics Forum 12(3) (global lines).
 

@@ -238,7 +238,15 @@ pub fn run(args: &Args) -> Result<()> {
     let scene = prepared.scene();
     if !args.json && args.out.is_none() {
         println!("scene        {}: {} patches", args.run.scene, scene.len());
-        println!("solver       {} with {}", outcome.solver, lab.backend());
+        match stats.transport {
+            // A solver that samples transport casts rays; the backend only serves the reference.
+            Some(transport) => println!(
+                "solver       {} with rays ({transport}; the reference over {})",
+                outcome.solver,
+                lab.backend()
+            ),
+            None => println!("solver       {} with {}", outcome.solver, lab.backend()),
+        }
         println!("stopped      {}", stats.termination);
         let reused = match stats.columns_reused {
             0 => String::new(),

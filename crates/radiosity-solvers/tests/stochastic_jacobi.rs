@@ -230,3 +230,35 @@ fn a_problem_without_form_factors_runs_only_the_solvers_that_sample() {
     let e = Executor::new(formed.as_mut(), StopRules::parse("steps=5").unwrap()).run(&problem).unwrap_err();
     assert!(e.to_string().contains("only samples transport"), "{e}");
 }
+
+/// A sampler that lands rays as `ColumnTransport` does but knows no row sum (as rays in a
+/// scene that is not closed).
+struct WithoutRowSums(ColumnTransport);
+
+impl radiosity_core::TransportSampler for WithoutRowSums {
+    fn patch_count(&self) -> usize {
+        self.0.patch_count()
+    }
+
+    fn cast(&self, from: usize, u: [Real; 4]) -> Option<usize> {
+        self.0.cast(from, u)
+    }
+
+    fn cost(&self) -> radiosity_core::SampleCost {
+        self.0.cost()
+    }
+}
+
+#[test]
+fn the_control_variate_is_refused_before_any_ray_where_row_sums_are_unknown() {
+    let (system, f) = twelve();
+    let transport = WithoutRowSums(ColumnTransport::new(&f, system.areas()).unwrap());
+    let problem = Problem::sampled(&system, &transport).unwrap();
+    let mut solver = solver_by_name("stochastic-jacobi:form=gathering:cv=true").unwrap();
+    let e = Executor::new(solver.as_mut(), StopRules::parse("steps=5").unwrap()).run(&problem).unwrap_err();
+    assert!(matches!(e, SolverError::NotApplicable { .. }) && e.to_string().contains("row sums"), "{e}");
+    assert_eq!(problem.rays_cast(), 0);
+    // Without the control variate, the same sampler serves the gathering form.
+    let mut plain = solver_by_name("stochastic-jacobi:form=gathering").unwrap();
+    assert!(Executor::new(plain.as_mut(), StopRules::parse("steps=5").unwrap()).run(&problem).is_ok());
+}

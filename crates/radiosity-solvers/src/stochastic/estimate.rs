@@ -47,8 +47,9 @@ use rayon::prelude::*;
 /// Patches per parallel block: fixed, so that no result depends on the thread count.
 const BLOCK: usize = 64;
 
-/// One global line found: the area a transfer stands for, its transfers, its rays.
-type Line = (Real, Vec<(usize, usize)>, u64);
+/// A block of global lines: every transfer `(from, to, area it stands for)` in line order,
+/// and the rays they cost.
+type LineBlock = (Vec<(usize, usize, Real)>, u64);
 
 /// Lines per parallel block.
 const LINE_BLOCK: usize = 1024;
@@ -230,30 +231,30 @@ pub(crate) fn lines(
 ) -> Option<Cast> {
     incoming.fill(0.0);
     let blocks = n_lines.div_ceil(LINE_BLOCK as u64);
-    let found: Vec<Option<Vec<Line>>> = (0..blocks)
+    let found: Vec<Option<LineBlock>> = (0..blocks)
         .into_par_iter()
         .map(|block| {
             let mut stream = streams.lines(block);
             let mut line = LineTransfers::default();
-            let mut out = Vec::new();
+            let (mut transfers, mut block_rays) = (Vec::new(), 0);
             let first = block * LINE_BLOCK as u64;
             for _ in first..(first + LINE_BLOCK as u64).min(n_lines) {
                 if !rays.global_line(stream.next_point(), &mut line) {
                     return None;
                 }
-                out.push((line.area, line.transfers.clone(), line.rays));
+                transfers.extend(line.transfers.iter().map(|&(from, to)| (from, to, line.area)));
+                block_rays += line.rays;
             }
-            Some(out)
+            Some((transfers, block_rays))
         })
         .collect();
     let mut cast = Cast::default();
     for block in found {
-        for (area, transfers, line_rays) in block? {
-            cast.rays += line_rays;
-            for (from, to) in transfers {
-                for c in 0..k {
-                    incoming[to * k + c] += b[from * k + c] * area / n_lines as Real;
-                }
+        let (transfers, block_rays) = block?;
+        cast.rays += block_rays;
+        for (from, to, area) in transfers {
+            for c in 0..k {
+                incoming[to * k + c] += b[from * k + c] * area / n_lines as Real;
             }
         }
     }

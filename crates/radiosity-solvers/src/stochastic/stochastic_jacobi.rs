@@ -208,13 +208,7 @@ impl SolverParams for StochasticJacobiParams {
                 "the constant control variate (cv=true) gathers along rays from patches, not global lines".into(),
             ));
         }
-        Ok(Box::new(StochasticJacobi {
-            params: self.clone(),
-            chains: Vec::new(),
-            emitted: 0.0,
-            rays: 0,
-            mean_shown: Vec::new(),
-        }))
+        Ok(Box::new(StochasticJacobi { params: self.clone(), chains: Vec::new(), emitted: 0.0 }))
     }
 }
 
@@ -242,10 +236,6 @@ pub struct StochasticJacobi {
     chains: Vec<Chain>,
     /// `|Φ| = Σ_ic A_i |E_ic|`.
     emitted: Real,
-    /// Rays cast so far.
-    rays: u64,
-    /// The mean of the chains, as last displayed.
-    mean_shown: Vec<Real>,
 }
 
 impl StochasticJacobi {
@@ -317,10 +307,7 @@ impl StochasticJacobi {
                 let reflects = |i: usize| (0..k).any(|c| system.rho(i, c) > 0.0);
                 let mut gathered = vec![0.0; n * k];
                 let cast = problem.cast(&name, |rays| {
-                    if beta.is_some() && (0..n).any(|i| rays.row_sum(i).is_none()) {
-                        return None;
-                    }
-                    Some(gather(
+                    gather(
                         rays,
                         &chain.estimate,
                         k,
@@ -330,11 +317,7 @@ impl StochasticJacobi {
                         batch,
                         &mut streams,
                         &mut gathered,
-                    ))
-                })?;
-                let cast = cast.ok_or_else(|| SolverError::NotApplicable {
-                    solver: name.clone(),
-                    reason: "its control variate needs the row sums of F exactly, which this transport sampler does not know (rays in a scene that is not closed)".into(),
+                    )
                 })?;
                 for (idx, g) in gathered.iter().enumerate() {
                     let (i, c) = (idx / k, idx % k);
@@ -410,15 +393,25 @@ impl Solver for StochasticJacobi {
         name
     }
 
+    /// Refuses a problem without a transport sampler, and, with the control variate, one whose
+    /// sampler does not know every row sum of F (rays in a scene that is not closed).
     fn applicable(&self, problem: &Problem<'_>) -> Result<(), SolverError> {
         let name = self.name();
-        problem.cast(&name, |_| ())
+        let rows_known = problem.cast(&name, |rays| (0..problem.n()).all(|i| rays.row_sum(i).is_some()))?;
+        if self.params.control_variate && !rows_known {
+            return Err(SolverError::NotApplicable {
+                solver: name,
+                reason: "its control variate needs the row sums of F exactly, which this transport sampler does not \
+                         know (rays in a scene that is not closed)"
+                    .into(),
+            });
+        }
+        Ok(())
     }
 
-    fn init(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
+    fn init(&mut self, problem: &Problem<'_>, _state: &mut State) -> Result<(), SolverError> {
         let emission = problem.system().emissions().to_vec();
         self.emitted = Self::power(problem, &emission);
-        self.rays = 0;
         let n = problem.n();
         let chain = Chain {
             estimate: emission.clone(),
@@ -429,7 +422,6 @@ impl Solver for StochasticJacobi {
             drawn: vec![0; n],
         };
         self.chains = vec![chain; self.params.replicates];
-        self.mean_shown = state.radiosity.clone();
         Ok(())
     }
 
@@ -451,7 +443,6 @@ impl Solver for StochasticJacobi {
             state.unshot[idx] = unshot;
             *b = mean;
         }
-        self.mean_shown.clone_from(&state.radiosity);
         Ok(Record::new())
     }
 

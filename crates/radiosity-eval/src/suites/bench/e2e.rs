@@ -140,7 +140,7 @@ pub fn time_to_accuracy_over(
 }
 
 /// Refuses a reference that is not one of `system`'s.
-fn check_reference(system: &LinearSystem, star: &[Real]) -> Result<(), LabError> {
+pub(crate) fn check_reference(system: &LinearSystem, star: &[Real]) -> Result<(), LabError> {
     let expected = system.len() * system.channels().count();
     if star.len() == expected {
         Ok(())

@@ -19,16 +19,17 @@
 
 use crate::error::LabError;
 use crate::lab::backends::fresh_backend;
+use crate::lab::recorder::Recorder;
 use crate::lab::timing::median;
 use crate::progress::NoProgress;
 use crate::reference::metrics::errors_against;
-use crate::suites::bench::e2e::{ReferenceNote, Setup};
+use crate::suites::bench::e2e::{ReferenceNote, Setup, check_reference};
 use crate::suites::bench::memory::peak_rss;
 use crate::suites::bench::report_text::{duration, human_bytes, sig};
 use radiosity_core::{LinearSystem, Real};
 use radiosity_ff::{BackendSpec, SceneTransport};
 use radiosity_geom::PreparedScene;
-use radiosity_solvers::{Executor, Observer, ObserverMode, Problem, Record, Solver, State, StopRules};
+use radiosity_solvers::{Executor, ObserverMode, Problem, Solver, SolverError, StopRules};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -114,30 +115,17 @@ pub struct SampledReport {
     pub peak_rss: Option<u64>,
 }
 
-/// Measures e_rms after every step, its own time kept apart.
-struct Curve<'a> {
-    system: &'a LinearSystem,
-    star: &'a [Real],
-    start: Instant,
-    overhead: Real,
-    latest: Option<Real>,
-    /// After every step: wall seconds, the state's rays, columns and products, and e_rms.
-    points: Vec<(Real, [u64; 3], Real)>,
-}
-
-impl Observer for Curve<'_> {
-    fn observe_step(&mut self, state: &State, _figures: &Record) {
-        let at = Instant::now();
-        let e = errors_against(self.system, self.star, &state.radiosity).map_or(Real::NAN, |e| e.e_rms);
-        let wall = (at - self.start).as_secs_f64() - self.overhead;
-        self.points.push((wall, [state.rays, state.columns, state.products], e));
-        self.latest = Some(e);
-        self.overhead += at.elapsed().as_secs_f64();
-    }
-
-    fn wants_stop(&self) -> bool {
-        self.latest.is_some_and(|e| e <= THRESHOLDS[THRESHOLDS.len() - 1])
-    }
+/// Why `solver` cannot run with rays in `prepared`, if it cannot (a control variate in a scene
+/// that is not closed): its own refusal, asked before any ray ([`Solver::applicable`]).
+pub fn refusal(prepared: &PreparedScene, solver: &dyn Solver) -> Result<Option<String>, LabError> {
+    let system = LinearSystem::from_scene(&prepared.loaded.scene);
+    let transport = SceneTransport::from_prepared(prepared);
+    let problem = Problem::sampled(&system, &transport)?;
+    Ok(match solver.applicable(&problem) {
+        Ok(()) => None,
+        Err(SolverError::NotApplicable { reason, .. }) => Some(reason),
+        Err(e) => return Err(e.into()),
+    })
 }
 
 /// Runs `solver` over `case` in `prepared` until e_rms ≤ 1e-3 against `star` or for
@@ -153,13 +141,7 @@ pub fn sampled_run(
     max_seconds: Real,
 ) -> Result<SampledReport, LabError> {
     let system = LinearSystem::from_scene(&prepared.loaded.scene);
-    if star.len() != system.len() * system.channels().count() {
-        return Err(LabError::Invalid(format!(
-            "the reference has {} values, not the {} of this scene's system",
-            star.len(),
-            system.len() * system.channels().count()
-        )));
-    }
+    check_reference(&system, star)?;
     let transport = SceneTransport::from_prepared(prepared);
     let backend = match case {
         Case::Rays => None,
@@ -170,15 +152,21 @@ pub fn sampled_run(
         None => Problem::sampled(&system, &transport)?,
         Some(backend) => Problem::new(&system, &**backend)?,
     };
-    let rules = StopRules::parse(&format!("time={}ms", (max_seconds * 1e3).ceil() as u64))?;
-    let mut curve = Curve { system: &system, star, start, overhead: 0.0, latest: None, points: Vec::new() };
-    let run = Executor::new(solver, rules).add_observer(&mut curve, ObserverMode::Always).run(&problem)?;
-    let seconds = start.elapsed().as_secs_f64() - curve.overhead;
+    let last = THRESHOLDS[THRESHOLDS.len() - 1];
+    let rules = StopRules::parse(&format!("rms={last},time={}ms", (max_seconds * 1e3).ceil() as u64))?;
+    let mut recorder = Recorder::errors(&system, star, start);
+    let mut monitor = recorder.monitor().expect("a recorder of errors has a reference");
+    let run = Executor::new(solver, rules)
+        .monitor(&mut monitor)
+        .add_observer(&mut recorder, ObserverMode::Always)
+        .run(&problem)?;
+    let measurement = recorder.overhead();
+    let seconds = start.elapsed().as_secs_f64() - measurement;
     let reached = THRESHOLDS
         .iter()
         .map_while(|&t| {
-            let &(seconds, [rays, columns, products], _) = curve.points.iter().find(|p| p.2 <= t)?;
-            Some(ReachedRays { e_rms: t, seconds, rays, columns, products })
+            let p = recorder.points().iter().find(|p| p.e_rms <= t)?;
+            Some(ReachedRays { e_rms: t, seconds: p.wall, rays: p.rays, columns: p.columns, products: p.products })
         })
         .collect();
     let standard_error =
@@ -194,7 +182,7 @@ pub fn sampled_run(
         steps: run.state.step,
         termination: run.termination.to_string(),
         seconds,
-        measurement: curve.overhead,
+        measurement,
         peak_rss: peak_rss(),
     })
 }
@@ -307,7 +295,8 @@ pub fn report(
     }
     // Quasi-random against pseudo-random, at the same e_rms.
     let random = cases.iter().position(|(c, over)| c == "stochastic-jacobi" && over.is_none());
-    if let Some(random) = random {
+    let quasi_random = cases.iter().any(|(c, over)| c.contains("seq=") && over.is_none());
+    if let (Some(random), true) = (random, quasi_random) {
         out += "\nRays against `stochastic-jacobi` (pseudo-random) at the same e_rms:\n\n";
         for ((solver, _), runs) in cases.iter().zip(results).filter(|((c, _), _)| c.contains("seq=")) {
             let ratios: Vec<String> = (0..THRESHOLDS.len())

@@ -129,7 +129,7 @@ fn rows_sum_to_one_in_a_closed_furnace() {
 
 /// The unit box facing inwards with a block `[0.3, 0.7]³` whose faces point into it: the
 /// walls see the block's back.
-fn box_with_inverted_block() -> Scene {
+pub(super) fn box_with_inverted_block() -> Scene {
     let mut b = SceneBuilder::new("inverted block");
     let grey = b.material(Material::new("grey", Spectrum::grey(0.5), Spectrum::grey(1.0))).unwrap();
     let walls = b.object("walls");

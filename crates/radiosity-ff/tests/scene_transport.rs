@@ -9,10 +9,10 @@
 //! so a test gives the same numbers on every run.
 
 use super::closed_forms::*;
+use super::montecarlo::box_with_inverted_block;
 use radiosity_core::{LineTransfers, Material, Real, Scene, Spectrum, TransportSampler, Vec3};
 use radiosity_ff::SceneTransport;
 use radiosity_ff::ff_point_polygon::point_to_polygon;
-use radiosity_geom::mesh::{BoxFace, Facing};
 use radiosity_geom::{PreparedScene, SceneBuilder, Visibility, load_scene};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -103,18 +103,6 @@ fn no_ray_escapes_a_closed_box_and_every_landing_is_a_front_face() {
             assert_eq!(sampler.row_sum(from), Some(1.0));
         }
     }
-}
-
-/// The unit box facing inwards with a block `[0.3, 0.7]³` whose faces point into it: the
-/// walls see the block's back.
-fn box_with_inverted_block() -> Scene {
-    let mut b = SceneBuilder::new("inverted block");
-    let grey = b.material(Material::new("grey", Spectrum::grey(0.5), Spectrum::grey(1.0))).unwrap();
-    let walls = b.object("walls");
-    b.axis_box([Vec3::ZERO, Vec3::ONE], &BoxFace::ALL, Facing::Inward, 0.5, grey, walls).unwrap();
-    let block = b.object("block");
-    b.axis_box([Vec3::splat(0.3), Vec3::splat(0.7)], &BoxFace::ALL, Facing::Inward, 0.5, grey, block).unwrap();
-    b.build().unwrap()
 }
 
 #[test]

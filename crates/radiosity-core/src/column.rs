@@ -29,6 +29,7 @@
 //! memory (for tests and small systems), and [`CountingColumns`], a wrapper that counts the
 //! columns computed and the time spent computing them.
 
+use crate::collective::Collective;
 use crate::error::CoreError;
 use crate::math::Real;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -80,6 +81,14 @@ pub trait ColumnSource: Sync {
     /// to the order of summation, and deterministic whatever the thread count.
     fn multiply(&self, _x: &[Real], _channels: usize, _out: &mut [Real]) -> bool {
         false
+    }
+
+    /// The ranks the source is split over, when it is distributed ([`crate::Collective`]):
+    /// every rank then serves the same columns, rows and products in the same order, each a
+    /// collective sum, and callers take any decision that may differ between ranks (one that
+    /// reads a clock) through [`Collective::agree`]. `None` (the default): one process.
+    fn collective(&self) -> Option<&dyn Collective> {
+        None
     }
 }
 
@@ -157,6 +166,10 @@ impl<T: ColumnSource + ?Sized> ColumnSource for &T {
     fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
         (**self).multiply(x, channels, out)
     }
+
+    fn collective(&self) -> Option<&dyn Collective> {
+        (**self).collective()
+    }
 }
 
 impl<T: ColumnSource + ?Sized> ColumnSource for Box<T> {
@@ -187,6 +200,10 @@ impl<T: ColumnSource + ?Sized> ColumnSource for Box<T> {
     fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
         (**self).multiply(x, channels, out)
     }
+
+    fn collective(&self) -> Option<&dyn Collective> {
+        (**self).collective()
+    }
 }
 
 impl<T: ColumnSource + ?Sized + Send> ColumnSource for std::sync::Arc<T> {
@@ -216,6 +233,10 @@ impl<T: ColumnSource + ?Sized + Send> ColumnSource for std::sync::Arc<T> {
 
     fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
         (**self).multiply(x, channels, out)
+    }
+
+    fn collective(&self) -> Option<&dyn Collective> {
+        (**self).collective()
     }
 }
 
@@ -386,5 +407,8 @@ impl<S: ColumnSource> ColumnSource for CountingColumns<S> {
         let nanos = start.elapsed().as_nanos().min(u64::MAX as u128) as u64;
         self.nanos.fetch_add(nanos, Ordering::Relaxed);
         done
+    }
+    fn collective(&self) -> Option<&dyn Collective> {
+        self.inner.collective()
     }
 }

@@ -13,6 +13,8 @@
 //! - [`TransportSampler`]: "where does a ray leaving patch j land?", the seam of the solvers
 //!   that estimate transport with rays and never form F; [`ColumnTransport`] samples any
 //!   column source's matrix exactly;
+//! - [`Collective`]: ranks that sum vectors in rank order, the seam of a computation split
+//!   over processes (MPI) or threads ([`InProcessRanks`]);
 //! - [`Clock`]: whether a run's seconds are measured or charged by its source;
 //! - [`RadiosityOperator`]: `F·x`, `(I − diag(ρ) F)·x` and the residual over any source, also
 //!   as faer's `LinOp` (scipy's `LinearOperator`, in Rust).
@@ -30,6 +32,7 @@
 //! ```
 
 pub mod clock;
+pub mod collective;
 pub mod column;
 pub mod column_transport;
 pub mod dense_lu;
@@ -46,6 +49,7 @@ pub mod system;
 pub mod transport;
 
 pub use clock::Clock;
+pub use collective::{Collective, InProcessRanks, Traffic};
 pub use column::{ColumnSource, ColumnStats, CountingColumns, DenseColumns, measured_reciprocity};
 pub use column_transport::{AliasTable, ColumnTransport};
 pub use error::CoreError;

@@ -235,6 +235,9 @@ impl<S: ColumnSource> ColumnSource for F32Columns<S> {
     fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
         self.0.multiply(x, channels, out)
     }
+    fn collective(&self) -> Option<&dyn radiosity_core::Collective> {
+        self.0.collective()
+    }
 }
 
 fn assemble_dyn(f: &dyn ColumnSource, max_bytes: usize) -> Result<FormFactors, EvalError> {

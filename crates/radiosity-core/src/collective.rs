@@ -122,8 +122,10 @@ struct Round {
 
 impl InProcessRanks {
     /// Runs `f` on `ranks` threads, each with its rank's [`Collective`], and returns what each
-    /// returned, in rank order. Panics (on every thread) when one of them panics.
-    pub fn run<T: Send>(ranks: usize, f: impl Fn(&InProcessRanks) -> T + Sync) -> Vec<T> {
+    /// returned, in rank order. Panics (on every thread) when one of them panics. A rank ends
+    /// when the last clone of its `Arc` is dropped: a sum another rank enters after that
+    /// panics.
+    pub fn run<T: Send>(ranks: usize, f: impl Fn(Arc<InProcessRanks>) -> T + Sync) -> Vec<T> {
         assert!(ranks >= 1, "a distributed computation needs at least one rank");
         let shared = Arc::new(Meeting {
             ranks,
@@ -135,7 +137,7 @@ impl InProcessRanks {
                 .map(|rank| {
                     let me = InProcessRanks { rank, shared: shared.clone(), traffic: Mutex::new(Traffic::default()) };
                     let f = &f;
-                    scope.spawn(move || f(&me))
+                    scope.spawn(move || f(Arc::new(me)))
                 })
                 .collect();
             handles.into_iter().map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e))).collect()

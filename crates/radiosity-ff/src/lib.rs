@@ -74,7 +74,10 @@ pub use backend::{BackendFigures, BuildObserver, FormFactorBackend, FormFactorIn
 pub use builtins::MatrixParams;
 pub use error::FfError;
 pub use hemicube::{HemicubeColumns, HemicubeParams};
-pub use hierarchical::{BuildProgress, HierarchicalColumns, HierarchicalParams, HierarchyFigures, Oracle};
+pub use hierarchical::{
+    BuildProgress, Distribution, HierarchicalColumns, HierarchicalParams, HierarchyFigures, HierarchyLink, Oracle,
+    RankFigures, TASKS_PER_RANK,
+};
 pub use matrix::StoredMatrix;
 pub use montecarlo::{MonteCarloColumns, MonteCarloParams, RayTally};
 pub use rays::{HitRay, ShadowSegment, TracedRays};

@@ -4,6 +4,7 @@
 mod allocation;
 mod analytic;
 mod closed_forms;
+mod distributed;
 mod hemicube;
 mod hierarchical;
 mod matrix;

@@ -63,6 +63,16 @@ impl<T: Copy + Default + Send> Adjacency<T> {
         self.other[at.clone()].iter().zip(&self.value[at])
     }
 
+    /// Each link once: its ends, the lower first.
+    pub(super) fn ends(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+        (0..self.start.len() - 1).flat_map(move |k| {
+            self.other[self.start[k]..self.start[k + 1]]
+                .iter()
+                .filter(move |&&o| o as usize > k)
+                .map(move |&o| (k as u32, o))
+        })
+    }
+
     /// The bytes the lists hold.
     pub(super) fn bytes(&self) -> usize {
         self.start.len() * size_of::<usize>() + self.other.len() * (size_of::<u32>() + size_of::<T>())

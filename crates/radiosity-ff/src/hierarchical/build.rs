@@ -11,15 +11,17 @@
 use super::HierarchicalColumns;
 use super::adjacency::{Adjacency, Lists};
 use super::brightness::Brightness;
+use super::distribution::{Distribution, RankFigures, totals};
 use super::links::{self, BuildProgress, Links, Refiner, Watch};
 use super::params::HierarchicalParams;
 use super::shaft::ShaftTree;
 use super::tree::{self, ClusterTree};
 use crate::analytic::{AnalyticColumns, AnalyticParams};
 use crate::backend::BackendFigures;
-use radiosity_core::{ColumnSource, Real, Scene};
+use radiosity_core::{Collective, ColumnSource, Real, Scene};
 use radiosity_geom::{SceneAnalysis, Visibility};
 use rayon::prelude::*;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// What building the operator found and cost (written with the links when they are cached).
@@ -124,7 +126,21 @@ impl HierarchicalColumns {
         params: HierarchicalParams,
         observe: &(dyn Fn(BuildProgress) + Sync),
     ) -> HierarchicalColumns {
+        HierarchicalColumns::build(scene, visibility, analysis, params, observe, None)
+    }
+
+    /// The operator, or with `split` (the ranks, and the tasks a rank) its rank's part
+    /// ([`Self::new_distributed`]).
+    pub(super) fn build(
+        scene: &Scene,
+        visibility: &Visibility,
+        analysis: &SceneAnalysis,
+        params: HierarchicalParams,
+        observe: &(dyn Fn(BuildProgress) + Sync),
+        split: Option<(Arc<dyn Collective>, usize)>,
+    ) -> HierarchicalColumns {
         let start = Instant::now();
+        let collective = split.as_ref().map(|(c, _)| c.clone());
         let tree = ClusterTree::new(scene);
         let near_params = AnalyticParams {
             order: params.order,
@@ -155,10 +171,25 @@ impl HierarchicalColumns {
             cumulative,
             watch: Watch::new(scene.len(), observe),
         };
-        let mut links = refiner.refine_all();
+        // Split over ranks, each rank refines its share of the tasks; one rank refines all.
+        let (mut links, tasks, estimated) = match split.as_ref().filter(|(c, _)| c.ranks() > 1) {
+            None => (refiner.refine_all(), 1, 1.0),
+            Some((c, tasks_per_rank)) => {
+                let share = refiner.refine_share((c.rank(), c.ranks()), *tasks_per_rank, observe);
+                (share.links, share.tasks.1, share.estimated)
+            }
+        };
+        let assemble = |links: &Links| {
+            let mut operator = HierarchicalColumns::assemble(scene, tree.clone(), links, start);
+            if let Some(c) = &collective {
+                let own = RankFigures::new(&operator.figures, tasks, estimated);
+                operator.distribution = Some(Distribution::new(c.clone(), own));
+            }
+            operator
+        };
         for _ in 1..params.passes {
             // Multigridding: the radiosity of this pass's operator weighs the next pass.
-            let b = HierarchicalColumns::assemble(scene, tree.clone(), &links, start).radiosity(scene, SWEEPS);
+            let b = assemble(&links).radiosity(scene, SWEEPS);
             let again = Refiner {
                 brightness: Brightness::from_radiosity(scene, &tree, &b, params.floor),
                 watch: Watch::new(scene.len(), &|_| {}),
@@ -173,13 +204,20 @@ impl HierarchicalColumns {
             (next.rays, next.occluded, next.clear) = (next.rays + rays, next.occluded + occluded, next.clear + clear);
             links = next;
         }
-        let mut operator = HierarchicalColumns::assemble(scene, tree, &links, start);
+        let mut operator = assemble(&links);
         let near = operator.near_sums();
         operator.figures.near_above = near.iter().filter(|&&s| s > 1.0).count();
         if params.closure {
             operator.close(&near);
         }
         operator.figures.seconds = start.elapsed().as_secs_f64();
+        if let Some(c) = collective {
+            // Every rank's figures, and the whole operator's from them.
+            let own = RankFigures::new(&operator.figures, tasks, estimated);
+            let distribution = Distribution::new(c, own);
+            operator.figures = totals(distribution.ranks(), &operator.figures);
+            operator.distribution = Some(distribution);
+        }
         operator
     }
 
@@ -228,6 +266,7 @@ impl HierarchicalColumns {
             centroids: scene.patches().iter().map(|p| p.centroid()).collect(),
             tree,
             figures,
+            distribution: None,
         }
     }
 
@@ -253,16 +292,30 @@ impl HierarchicalColumns {
         let near = self.near_sums();
         let mut estimated = vec![0.0; n];
         self.estimated_product(&vec![1.0; n], 1, &self.weights, &mut estimated);
+        self.summed(&mut estimated);
         estimated.iter_mut().zip(&self.weights).for_each(|(e, w)| *e *= w);
         (near, estimated)
     }
 
-    /// Each row's near part: the sum of its near links' entries.
+    /// Each row's near part: the sum of its near links' entries (over every rank's links).
     pub(super) fn near_sums(&self) -> Vec<Real> {
-        (0..self.areas.len())
+        let mut sums: Vec<Real> = (0..self.areas.len())
             .into_par_iter()
             .map(|i| self.near.of(i).map(|(_, &t)| t).sum::<Real>() / self.areas[i])
-            .collect()
+            .collect();
+        self.summed(&mut sums);
+        sums
+    }
+
+    /// The links this operator holds (a rank's part: its own), each once with its ends in
+    /// increasing order, sorted.
+    pub fn links(&self) -> Vec<HierarchyLink> {
+        let mut links: Vec<HierarchyLink> = (self.far.ends().map(|(a, b)| HierarchyLink::Far(a, b)))
+            .chain(self.near.ends().map(|(i, j)| HierarchyLink::Near(i, j)))
+            .chain(self.pairs.ends().map(|(i, j)| HierarchyLink::FarPair(i, j)))
+            .collect();
+        links.sort_unstable();
+        links
     }
 
     /// What building found and cost.
@@ -275,6 +328,17 @@ impl HierarchicalColumns {
     pub(super) fn bytes_of(tree: &ClusterTree, lists: &[usize], patches: usize) -> usize {
         tree.nodes.len() * (size_of::<tree::Node>() + 4) + lists.iter().sum::<usize>() + patches * 48
     }
+}
+
+/// A link of the operator by its ends, the lower first ([`HierarchicalColumns::links`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum HierarchyLink {
+    /// A far link between two nodes of the cluster tree.
+    Far(u32, u32),
+    /// A near link between two patches (the analytic backend's entry).
+    Near(u32, u32),
+    /// A far link between two patches, stored as its entry.
+    FarPair(u32, u32),
 }
 
 /// The parent of each node of `tree` (`u32::MAX` for the root).

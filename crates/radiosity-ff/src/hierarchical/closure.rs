@@ -47,7 +47,10 @@ impl HierarchicalColumns {
     /// `near` holds each row's near part ([`Self::near_sums`]).
     pub(super) fn close(&mut self, near: &[Real]) {
         let ones = vec![1.0; self.areas.len()];
-        let weights = capped_weights(near, |w, out| self.estimated_product(&ones, 1, w, out));
+        let weights = capped_weights(near, |w, out| {
+            self.estimated_product(&ones, 1, w, out);
+            self.summed(out);
+        });
         self.figures.capped = weights.iter().filter(|&&w| w < 1.0).count();
         self.figures.lowest_weight = weights.iter().copied().fold(1.0, Real::min);
         self.weights = weights;

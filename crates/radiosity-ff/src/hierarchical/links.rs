@@ -166,7 +166,7 @@ pub(crate) struct Links {
 }
 
 impl Links {
-    fn append(&mut self, mut other: Links) {
+    pub(super) fn append(&mut self, mut other: Links) {
         self.far.append(&mut other.far);
         self.near.append(&mut other.near);
         self.pairs.append(&mut other.pairs);
@@ -188,10 +188,17 @@ struct Sampled {
 /// the link's first node and on its second) and whether it was clear. A split link hands its
 /// segments to its children (module doc).
 #[derive(Clone, Copy, Debug)]
-struct Segment {
+pub(super) struct Segment {
     from: u32,
     to: u32,
     clear: bool,
+}
+
+/// A link split in two: each half's nodes and the segments it inherits, and where their
+/// shafts' patches may be ([`Refiner::step`]).
+pub(super) struct Split<'c> {
+    pub halves: [(u32, u32, Vec<Segment>); 2],
+    pub candidates: &'c [u32],
 }
 
 /// What a link's rays tell.
@@ -221,7 +228,12 @@ impl<'a> Watch<'a> {
     /// A watch over the pairs of `patches` patches.
     pub fn new(patches: usize, observe: &'a (dyn Fn(BuildProgress) + Sync)) -> Watch<'a> {
         let n = patches as u64;
-        Watch { pairs: AtomicU64::new(0), links: AtomicU64::new(0), total: n * n.saturating_sub(1) / 2, observe }
+        Watch::over(n * n.saturating_sub(1) / 2, observe)
+    }
+
+    /// A watch over `total` pairs of patches: a rank's share of them.
+    pub fn over(total: u64, observe: &'a (dyn Fn(BuildProgress) + Sync)) -> Watch<'a> {
+        Watch { pairs: AtomicU64::new(0), links: AtomicU64::new(0), total, observe }
     }
 
     /// The `pairs` pairs of a link settled into `out`, `linked` when a link was kept for them.
@@ -234,7 +246,7 @@ impl<'a> Watch<'a> {
 
     /// Adds what `out` has not reported to the shared counts, and reports each thousandth of
     /// the pairs crossed.
-    fn flush(&self, out: &mut Links) {
+    pub(super) fn flush(&self, out: &mut Links) {
         let (pairs, linked) = std::mem::take(&mut out.unreported);
         let links = self.links.fetch_add(linked, Ordering::Relaxed) + linked;
         let before = self.pairs.fetch_add(pairs, Ordering::Relaxed);
@@ -294,8 +306,19 @@ impl Refiner<'_> {
         links
     }
 
+    /// This refiner with another watch, for part of the refinement.
+    pub fn watched<'b>(&'b self, watch: Watch<'b>) -> Refiner<'b> {
+        Refiner {
+            brightness: self.brightness.clone(),
+            cumulative: self.cumulative.clone(),
+            strata: self.strata.clone(),
+            watch,
+            ..*self
+        }
+    }
+
     /// The links within node `k`.
-    fn refine_self(&self, k: u32, out: &mut Links) {
+    pub(super) fn refine_self(&self, k: u32, out: &mut Links) {
         let Some([a, b]) = self.tree.nodes[k as usize].children else { return };
         if self.tree.nodes[k as usize].count > PARALLEL_COUNT {
             let ((mut x, y), z) = rayon::join(
@@ -332,7 +355,47 @@ impl Refiner<'_> {
     /// The links between the disjoint nodes `a` and `b`, given the segments traced between
     /// them for links they were split from and the nodes that may hold patches in their shaft
     /// (`candidates`, nodes of the [`ShaftTree`]).
-    fn refine_pair(&self, a: u32, b: u32, mut traced: Vec<Segment>, candidates: &[u32], out: &mut Links) {
+    pub(super) fn refine_pair(&self, a: u32, b: u32, traced: Vec<Segment>, candidates: &[u32], out: &mut Links) {
+        let mut kept = Vec::new();
+        let Some(Split { halves: [(a0, b0, t0), (a1, b1, t1)], candidates }) =
+            self.step(a, b, traced, candidates, &mut kept, out)
+        else {
+            return;
+        };
+        let (na, nb) = (&self.tree.nodes[a as usize], &self.tree.nodes[b as usize]);
+        if na.count + nb.count > PARALLEL_COUNT {
+            let (mut x, y) = rayon::join(
+                || {
+                    let mut l = Links::default();
+                    self.refine_pair(a0, b0, t0, candidates, &mut l);
+                    l
+                },
+                || {
+                    let mut l = Links::default();
+                    self.refine_pair(a1, b1, t1, candidates, &mut l);
+                    l
+                },
+            );
+            x.append(y);
+            out.append(x);
+        } else {
+            self.refine_pair(a0, b0, t0, candidates, out);
+            self.refine_pair(a1, b1, t1, candidates, out);
+        }
+    }
+
+    /// The link between the disjoint nodes `a` and `b` settled into `out` (kept or dropped),
+    /// or, when it must be split, the two links it is split into ([`Split`]); `kept` holds
+    /// what a shaft search leaves for the children.
+    pub(super) fn step<'c>(
+        &self,
+        a: u32,
+        b: u32,
+        mut traced: Vec<Segment>,
+        candidates: &'c [u32],
+        kept: &'c mut Vec<u32>,
+        out: &mut Links,
+    ) -> Option<Split<'c>> {
         let (na, nb) = (&self.tree.nodes[a as usize], &self.tree.nodes[b as usize]);
         let between = nb.centre - na.centre;
         let r = between.length();
@@ -351,12 +414,11 @@ impl Refiner<'_> {
             || self.behind_plane(a, b)
             || self.behind_plane(b, a)
         {
-            return self.watch.settle(out, pairs, false);
+            return self.settled(out, pairs, false);
         }
         let (leaf_a, leaf_b) = (na.is_leaf(), nb.is_leaf());
         // The shaft is searched for links whose ends cannot block their own segments, once.
         let shafts = self.shafts.filter(|_| self.is_flat(a) && self.is_flat(b));
-        let mut kept = Vec::new();
         let mut clear = None;
         let mut shaft_clear = |kept: &mut Vec<u32>| match shafts {
             Some(shafts) => *clear.get_or_insert_with(|| self.search(shafts, a, b, candidates, kept) == Search::Clear),
@@ -364,10 +426,10 @@ impl Refiner<'_> {
         };
         if let Some((order, bound)) = self.far_order(a, b) {
             let small = bound <= self.shadows || (leaf_a && leaf_b);
-            let mut shaft = || shaft_clear(&mut kept);
+            let mut shaft = || shaft_clear(kept);
             let seen = self.visible_fraction(a, b, small, &mut traced, out, &mut shaft);
             let visible = match seen {
-                Seen::Occluded => return self.watch.settle(out, pairs, false),
+                Seen::Occluded => return self.settled(out, pairs, false),
                 Seen::Split => None,
                 Seen::Visible { clear, count } => Some((clear, count | order)),
             };
@@ -389,20 +451,20 @@ impl Refiner<'_> {
                     out.zeroth += u64::from(order == ZEROTH);
                     out.far.push(link);
                 }
-                return self.watch.settle(out, pairs, true);
+                return self.settled(out, pairs, true);
             }
         }
         if leaf_a && leaf_b {
             let (i, j) = (self.tree.order[na.first as usize], self.tree.order[nb.first as usize]);
             let f = self.analytic.pair_unless_clear(i as usize, j as usize, |rays| {
-                let clear = rays >= SEARCH_FROM && shaft_clear(&mut kept);
+                let clear = rays >= SEARCH_FROM && shaft_clear(kept);
                 out.clear += u64::from(clear);
                 clear
             });
             if f > 0.0 {
                 out.near.push(NearLink { i, j, transfer: self.scene.patches()[i as usize].area() * f });
             }
-            return self.watch.settle(out, 1, f > 0.0);
+            return self.settled(out, 1, f > 0.0);
         }
         // The children's candidates: what this link's search left, or its parent's.
         let candidates = if clear.is_some() { &kept[..] } else { candidates };
@@ -423,25 +485,14 @@ impl Refiner<'_> {
             let at = if split_a { segment.from } else { segment.to };
             if at < split.first + split.count { t0.push(segment) } else { t1.push(segment) }
         }
-        if na.count + nb.count > PARALLEL_COUNT {
-            let (mut x, y) = rayon::join(
-                || {
-                    let mut l = Links::default();
-                    self.refine_pair(p0.0, p0.1, t0, candidates, &mut l);
-                    l
-                },
-                || {
-                    let mut l = Links::default();
-                    self.refine_pair(p1.0, p1.1, t1, candidates, &mut l);
-                    l
-                },
-            );
-            x.append(y);
-            out.append(x);
-        } else {
-            self.refine_pair(p0.0, p0.1, t0, candidates, out);
-            self.refine_pair(p1.0, p1.1, t1, candidates, out);
-        }
+        Some(Split { halves: [(p0.0, p0.1, t0), (p1.0, p1.1, t1)], candidates })
+    }
+
+    /// The `pairs` pairs of a link settled into `out`, `linked` when a link was kept for them:
+    /// nothing left to split.
+    fn settled(&self, out: &mut Links, pairs: u64, linked: bool) -> Option<Split<'static>> {
+        self.watch.settle(out, pairs, linked);
+        None
     }
 
     /// The order a far link between `a` and `b` may take and its weighted transfer bound, or

@@ -31,6 +31,8 @@
 //!   refinement into links, shafts, and the build with its passes and figures (also as the
 //!   [`BackendFigures`](crate::BackendFigures) reports print);
 //! - `closure`: every row held to at most 1, reciprocity kept;
+//! - `share` and `distribution`: the refinement dealt to ranks, and the operator split over
+//!   them, each product, column and row one collective sum;
 //! - `adjacency`: the link lists (compressed sparse rows);
 //! - `product`: products, columns and rows, and what the operator can do as a
 //!   [`FormFactorBackend`](crate::FormFactorBackend);
@@ -51,19 +53,23 @@ mod adjacency;
 mod brightness;
 mod build;
 mod closure;
+mod distribution;
 mod links;
 mod params;
 mod product;
 mod shaft;
+mod share;
 mod stored;
 mod tree;
 
 use adjacency::Adjacency;
 pub use brightness::Oracle;
-pub use build::HierarchyFigures;
+pub use build::{HierarchyFigures, HierarchyLink};
+pub use distribution::{Distribution, RankFigures};
 pub use links::BuildProgress;
 pub use params::{HIERARCHICAL_PARAMS, HierarchicalParams};
 use radiosity_core::{Real, Vec3};
+pub use share::TASKS_PER_RANK;
 use tree::ClusterTree;
 
 /// The hierarchical operator over a scene.
@@ -86,4 +92,6 @@ pub struct HierarchicalColumns {
     normals: Vec<Vec3>,
     centroids: Vec<Vec3>,
     figures: HierarchyFigures,
+    /// The ranks the operator is split over, when it is (`distribution`).
+    distribution: Option<Distribution>,
 }

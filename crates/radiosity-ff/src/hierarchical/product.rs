@@ -11,10 +11,12 @@
 //! columns hold.
 
 use super::HierarchicalColumns;
+use super::distribution::Distribution;
 use super::links::{Span, kernel_factor};
 use crate::backend::{BackendFigures, FormFactorBackend};
-use radiosity_core::{ColumnSource, Real, Vec3};
+use radiosity_core::{Collective, ColumnSource, Real, Vec3};
 use rayon::prelude::*;
+use std::time::Instant;
 
 impl HierarchicalColumns {
     /// Calls `f(k)` for the leaf of `patch` and each of its ancestors.
@@ -57,6 +59,8 @@ impl HierarchicalColumns {
             let q = q as usize;
             line[q] = w[p] * w[q] * (transfer / if row { self.areas[p] } else { self.areas[q] });
         }
+        // Split over ranks, every entry is on one rank and zero on the others.
+        self.summed(line);
     }
 }
 
@@ -85,6 +89,7 @@ impl ColumnSource for HierarchicalColumns {
     /// whatever the thread count), the linear forms down the tree, and the pairs and near
     /// links: `O(links + n)` for all channels in one pass over the links (module doc).
     fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
+        let start = Instant::now();
         self.estimated_product(x, channels, &self.weights, out);
         out.par_chunks_mut(channels).enumerate().for_each(|(i, out)| {
             let w = self.weights[i];
@@ -96,7 +101,15 @@ impl ColumnSource for HierarchicalColumns {
                 }
             }
         });
+        if let Some(d) = &self.distribution {
+            d.count_product(start.elapsed().as_nanos() as u64);
+            d.collective().sum(out);
+        }
         true
+    }
+
+    fn collective(&self) -> Option<&dyn Collective> {
+        self.distribution.as_ref().map(Distribution::collective)
     }
 }
 
@@ -109,8 +122,9 @@ impl FormFactorBackend for HierarchicalColumns {
         Some(HierarchicalColumns::figures(self).into())
     }
 
+    /// One process's operator; a rank's part is not kept (its links are a share only).
     fn persist(&self, key: &str) -> Option<Vec<u8>> {
-        Some(HierarchicalColumns::to_bytes(self, key))
+        self.distribution.is_none().then(|| HierarchicalColumns::to_bytes(self, key))
     }
 }
 

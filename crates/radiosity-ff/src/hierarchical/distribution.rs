@@ -1,0 +1,206 @@
+//! The operator split over ranks ([`Collective`]): each rank holds the links it built (`share`),
+//! and every product, column and row is its rank's part followed by one collective sum.
+//!
+//! **What is replicated and what is split.** Every rank holds the scene, the cluster tree, the
+//! closure weights and the vectors of a solve (`O(n)` each); the links, almost all of the
+//! operator's memory, are split, each on one rank. A product is each rank's partial product over
+//! its own links (moments up the whole tree, its links' transfers, forms down), then one sum of
+//! `n · channels` values: the single process's product up to the order of summation. A column or
+//! a row is each rank's entries, zero elsewhere, then one sum: every entry comes from one rank,
+//! so it is the single process's entry (adding zeros is exact). Closure sums the rows' parts the
+//! same way, so every rank gets the same weights.
+//!
+//! Vectors stay replicated: a product's result is needed whole by every rank's moments in the
+//! next product, and the solvers' `O(n)` work is small beside the links' (docs/distributed.md).
+
+use super::HierarchicalColumns;
+use super::build::HierarchyFigures;
+use super::links::BuildProgress;
+use super::params::HierarchicalParams;
+use radiosity_core::{Collective, Real, Scene, Traffic};
+use radiosity_geom::{SceneAnalysis, Visibility};
+use std::fmt;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// What one rank built.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct RankFigures {
+    /// Far links with a cluster at one end at least ([`HierarchyFigures::far_links`]).
+    pub far_links: u64,
+    /// Of them, those to zeroth order.
+    pub zeroth_links: u64,
+    /// Near links, far pairs of patches included.
+    pub near_links: u64,
+    /// Of them, the far pairs.
+    pub far_pairs: u64,
+    /// Shadow rays traced for the rank's own links.
+    pub rays: u64,
+    /// Links dropped as occluded.
+    pub occluded: u64,
+    /// Links seen whole through clear shafts.
+    pub clear_shafts: u64,
+    /// Bytes held by the rank's operator: its links, and the tree and patch data every rank
+    /// holds.
+    pub bytes: u64,
+    /// Seconds the rank took to build its part, closure included.
+    pub seconds: f64,
+    /// Tasks of the refinement dealt to the rank.
+    pub tasks: u64,
+    /// The rank's share of the estimated cost of the refinement.
+    pub estimated_share: f64,
+}
+
+impl RankFigures {
+    /// A rank's figures from its part's `figures`, its `tasks` and its estimated share.
+    pub(super) fn new(figures: &HierarchyFigures, tasks: usize, estimated_share: f64) -> RankFigures {
+        RankFigures {
+            far_links: figures.far_links as u64,
+            zeroth_links: figures.zeroth_links as u64,
+            near_links: figures.near_links as u64,
+            far_pairs: figures.far_pairs,
+            rays: figures.rays,
+            occluded: figures.occluded,
+            clear_shafts: figures.clear_shafts,
+            bytes: figures.bytes as u64,
+            seconds: figures.seconds,
+            tasks: tasks as u64,
+            estimated_share,
+        }
+    }
+
+    fn to_values(self) -> [Real; 11] {
+        [
+            self.far_links as Real,
+            self.zeroth_links as Real,
+            self.near_links as Real,
+            self.far_pairs as Real,
+            self.rays as Real,
+            self.occluded as Real,
+            self.clear_shafts as Real,
+            self.bytes as Real,
+            self.seconds,
+            self.tasks as Real,
+            self.estimated_share,
+        ]
+    }
+
+    fn from_values(v: &[Real]) -> RankFigures {
+        RankFigures {
+            far_links: v[0] as u64,
+            zeroth_links: v[1] as u64,
+            near_links: v[2] as u64,
+            far_pairs: v[3] as u64,
+            rays: v[4] as u64,
+            occluded: v[5] as u64,
+            clear_shafts: v[6] as u64,
+            bytes: v[7] as u64,
+            seconds: v[8],
+            tasks: v[9] as u64,
+            estimated_share: v[10],
+        }
+    }
+}
+
+/// The ranks an operator is split over and what each built.
+pub struct Distribution {
+    collective: Arc<dyn Collective>,
+    ranks: Vec<RankFigures>,
+    /// Products served, and the nanoseconds this rank spent on its part of them (the sums
+    /// aside: [`Collective::traffic`]).
+    products: AtomicU64,
+    local_nanos: AtomicU64,
+}
+
+impl fmt::Debug for Distribution {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Distribution")
+            .field("rank", &self.collective.rank())
+            .field("ranks", &self.ranks)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Distribution {
+    /// The distribution over `collective` of an operator whose rank built what `own` says:
+    /// every rank's figures gathered.
+    pub(super) fn new(collective: Arc<dyn Collective>, own: RankFigures) -> Distribution {
+        let ranks = collective.gather(&own.to_values()).iter().map(|v| RankFigures::from_values(v)).collect();
+        Distribution { collective, ranks, products: AtomicU64::new(0), local_nanos: AtomicU64::new(0) }
+    }
+
+    /// The ranks the operator is split over.
+    pub fn collective(&self) -> &dyn Collective {
+        &*self.collective
+    }
+
+    /// What each rank built, in rank order (the same on every rank).
+    pub fn ranks(&self) -> &[RankFigures] {
+        &self.ranks
+    }
+
+    /// Products this rank served, and the seconds it spent on its own part of them.
+    pub fn local_products(&self) -> (u64, f64) {
+        (self.products.load(Ordering::Relaxed), self.local_nanos.load(Ordering::Relaxed) as f64 * 1e-9)
+    }
+
+    /// What this rank has sent and waited for in the operator's sums.
+    pub fn traffic(&self) -> Traffic {
+        self.collective.traffic()
+    }
+
+    /// Counts a product whose part took `nanos` on this rank.
+    pub(super) fn count_product(&self, nanos: u64) {
+        self.products.fetch_add(1, Ordering::Relaxed);
+        self.local_nanos.fetch_add(nanos, Ordering::Relaxed);
+    }
+}
+
+impl HierarchicalColumns {
+    /// Builds rank `collective.rank()`'s part of the operator split over `collective`'s ranks
+    /// (module doc), the refinement cut into about `tasks_per_rank` tasks a rank
+    /// ([`TASKS_PER_RANK`](super::TASKS_PER_RANK) by default), calling `observe` as its own
+    /// pairs of patches are settled. Every rank calls it with the same arguments. On one rank
+    /// it is the single process's operator.
+    pub fn new_distributed(
+        scene: &Scene,
+        visibility: &Visibility,
+        analysis: &SceneAnalysis,
+        params: HierarchicalParams,
+        observe: &(dyn Fn(BuildProgress) + Sync),
+        collective: Arc<dyn Collective>,
+        tasks_per_rank: usize,
+    ) -> HierarchicalColumns {
+        HierarchicalColumns::build(scene, visibility, analysis, params, observe, Some((collective, tasks_per_rank)))
+    }
+
+    /// The ranks the operator is split over and what each built; `None` for one process.
+    pub fn distribution(&self) -> Option<&Distribution> {
+        self.distribution.as_ref()
+    }
+
+    /// Sums `values` over the ranks, when the operator is split.
+    pub(super) fn summed(&self, values: &mut [Real]) {
+        if let Some(d) = &self.distribution {
+            d.collective.sum(values);
+        }
+    }
+}
+
+/// The figures of the whole operator from every rank's (`ranks`) and what closure found
+/// (`closed`, the same on every rank): counts added up, the build's seconds the slowest rank's.
+pub(super) fn totals(ranks: &[RankFigures], closed: &HierarchyFigures) -> HierarchyFigures {
+    let sum = |f: fn(&RankFigures) -> u64| ranks.iter().map(f).sum::<u64>();
+    HierarchyFigures {
+        far_links: sum(|r| r.far_links) as usize,
+        zeroth_links: sum(|r| r.zeroth_links) as usize,
+        near_links: sum(|r| r.near_links) as usize,
+        far_pairs: sum(|r| r.far_pairs),
+        rays: sum(|r| r.rays),
+        occluded: sum(|r| r.occluded),
+        clear_shafts: sum(|r| r.clear_shafts),
+        seconds: ranks.iter().map(|r| r.seconds).fold(0.0, f64::max),
+        bytes: sum(|r| r.bytes) as usize,
+        ..*closed
+    }
+}

@@ -51,9 +51,16 @@ pub trait Collective: Send + Sync {
     /// Rank 0's `flag`, on every rank: for decisions that may differ between ranks, such as
     /// one that reads a clock.
     fn agree(&self, flag: bool) -> bool {
-        let mut v = [if self.rank() == 0 && flag { 1.0 } else { 0.0 }];
+        let mut flags = [flag];
+        self.agree_all(&mut flags);
+        flags[0]
+    }
+
+    /// Rank 0's `flags`, on every rank, in one sum ([`Collective::agree`]).
+    fn agree_all(&self, flags: &mut [bool]) {
+        let mut v: Vec<Real> = flags.iter().map(|&f| if self.rank() == 0 && f { 1.0 } else { 0.0 }).collect();
         self.sum(&mut v);
-        v[0] > 0.0
+        flags.iter_mut().zip(v).for_each(|(f, v)| *f = v > 0.0);
     }
 
     /// Every rank's `values` (the same length on each), in rank order, on every rank.
@@ -85,6 +92,10 @@ impl<C: Collective + ?Sized> Collective for Arc<C> {
 
     fn agree(&self, flag: bool) -> bool {
         (**self).agree(flag)
+    }
+
+    fn agree_all(&self, flags: &mut [bool]) {
+        (**self).agree_all(flags)
     }
 
     fn gather(&self, values: &[Real]) -> Vec<Vec<Real>> {
@@ -143,7 +154,6 @@ impl InProcessRanks {
             handles.into_iter().map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e))).collect()
         })
     }
-
 }
 
 impl Drop for InProcessRanks {

@@ -25,7 +25,7 @@ pub use crate::montecarlo::{MONTECARLO_PARAMS, MonteCarloParams};
 use crate::registry::{BackendRegistry, owner};
 use crate::spec::{BackendArgument, BackendParams, BackendSpec};
 use crate::traced::ColumnRays;
-use radiosity_core::Real;
+use radiosity_core::{Collective, Real};
 use radiosity_geom::{KeyValueParams, ParamDoc};
 use std::sync::{Arc, OnceLock};
 
@@ -50,6 +50,82 @@ impl BackendRegistry {
                 Ok(Arc::new(MatrixParams::parse(items, registry)?))
             });
         registry
+    }
+}
+
+impl BackendRegistry {
+    /// The built-in backends with `hierarchical` split over the ranks of `collective`: on each
+    /// rank, that rank's part of the operator ([`HierarchicalColumns::new_distributed`], about
+    /// `tasks_per_rank` refinement tasks a rank). Every rank parses the same arguments and
+    /// builds the same sources in the same order; the parts are not kept in a cache.
+    pub fn builtin_split(collective: Arc<dyn Collective>, tasks_per_rank: usize) -> BackendRegistry {
+        let mut registry = BackendRegistry::empty();
+        let split = move |items: &[&str], _: &BackendRegistry| -> Result<Arc<dyn BackendArgument>, FfError> {
+            let name = HierarchicalParams::NAME;
+            let params = KeyValueParams::parse(&owner(name), items.iter().copied(), HierarchicalParams::PARAMS)?;
+            let params = HierarchicalParams::from_params(&params)?;
+            Ok(Arc::new(SplitHierarchical { params, collective: collective.clone(), tasks_per_rank }))
+        };
+        registry
+            .register::<AnalyticParams>()
+            .register::<HemicubeParams>()
+            .register::<MonteCarloParams>()
+            .register_fn(HierarchicalParams::NAME, HierarchicalParams::HELP, HierarchicalParams::PARAMS, split)
+            .register_fn(MatrixParams::NAME, MatrixParams::HELP, MatrixParams::PARAMS, |items, registry| {
+                Ok(Arc::new(MatrixParams::parse(items, registry)?))
+            });
+        registry
+    }
+}
+
+/// `hierarchical` split over ranks ([`BackendRegistry::builtin_split`]).
+struct SplitHierarchical {
+    params: HierarchicalParams,
+    collective: Arc<dyn Collective>,
+    tasks_per_rank: usize,
+}
+
+impl std::fmt::Debug for SplitHierarchical {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SplitHierarchical")
+            .field("params", &self.params)
+            .field("rank", &self.collective.rank())
+            .field("ranks", &self.collective.ranks())
+            .finish()
+    }
+}
+
+impl BackendArgument for SplitHierarchical {
+    /// The single process's: the same links, summed in another order.
+    fn canonical(&self) -> String {
+        self.params.canonical()
+    }
+
+    fn build<'a>(
+        &self,
+        input: FormFactorInput<'a>,
+        observer: &dyn BuildObserver,
+    ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
+        let ranks = self.collective.ranks();
+        observer.begin(
+            &format!("building this rank's part of the hierarchical operator ({ranks} ranks)"),
+            1000,
+            "‰ of its pairs settled",
+        );
+        let observe = |p: BuildProgress| {
+            observer.advance((p.settled * 1000.0) as u64, &format!("{} links", p.links));
+        };
+        let built = HierarchicalColumns::new_distributed(
+            input.scene,
+            input.visibility,
+            input.analysis,
+            self.params,
+            &observe,
+            self.collective.clone(),
+            self.tasks_per_rank,
+        );
+        observer.end();
+        Ok(Box::new(built))
     }
 }
 

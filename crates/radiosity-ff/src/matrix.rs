@@ -341,26 +341,29 @@ impl StoredMatrix {
         let done = AtomicUsize::new(0);
         // Blocks bound the memory of columns in flight; their size does not change the result.
         let block_len = (32 * rayon::current_num_threads()).max(256);
+        let column_of = |scratch: &mut Vec<Real>, j: usize| {
+            source.fill_column(j, scratch);
+            let nonzeros = scratch.iter().filter(|&&v| v as f32 != 0.0).count();
+            let mut column = Block {
+                ends: Vec::with_capacity(1),
+                rows: Vec::with_capacity(nonzeros),
+                values: Vec::with_capacity(nonzeros),
+            };
+            column.push_column(scratch.iter().map(|&v| v as f32).enumerate());
+            progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+            column
+        };
         let mut builder = Builder::new(n);
         for first in (0..n).step_by(block_len) {
-            let columns: Vec<Block> = (first..(first + block_len).min(n))
-                .into_par_iter()
-                .map_init(
-                    || vec![0.0; n],
-                    |scratch, j| {
-                        source.fill_column(j, scratch);
-                        let nonzeros = scratch.iter().filter(|&&v| v as f32 != 0.0).count();
-                        let mut column = Block {
-                            ends: Vec::with_capacity(1),
-                            rows: Vec::with_capacity(nonzeros),
-                            values: Vec::with_capacity(nonzeros),
-                        };
-                        column.push_column(scratch.iter().map(|&v| v as f32).enumerate());
-                        progress(done.fetch_add(1, Ordering::Relaxed) + 1);
-                        column
-                    },
-                )
-                .collect();
+            let block = first..(first + block_len).min(n);
+            // A source split over ranks serves one column at a time, in the same order on
+            // every rank (each column is a collective sum), on the calling thread.
+            let columns: Vec<Block> = if source.collective().is_some() {
+                let mut scratch = vec![0.0; n];
+                block.map(|j| column_of(&mut scratch, j)).collect()
+            } else {
+                block.into_par_iter().map_init(|| vec![0.0; n], column_of).collect()
+            };
             builder.push(Block::from_columns(columns));
         }
         let mut matrix = builder.finish();

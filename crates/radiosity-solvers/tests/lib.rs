@@ -2,7 +2,7 @@
 //! identity, the two-patch closed form, the unit cube, and the accounting and stop rules (and
 //! the clock they read, `clock`); the random walks over the stored matrix sampled exactly
 //! (`random_walk`); and what the executor hands the observers of a solver that samples
-//! transport (`sampled`).
+//! transport (`sampled`); and solvers over a source split over ranks (`split`).
 
 use radiosity_core::{Channels, DenseColumns, LinearSystem, Real};
 use radiosity_solvers::*;
@@ -12,6 +12,7 @@ mod krylov;
 mod random_walk;
 mod residual_bound;
 mod sampled;
+mod split;
 mod stochastic_jacobi;
 
 /// Howell's form factors between unit squares: directly opposed at distance 1, and

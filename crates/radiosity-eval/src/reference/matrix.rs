@@ -272,7 +272,13 @@ pub(crate) fn for_each_column_block(
     for j0 in (0..n).step_by(BLOCK) {
         let w = BLOCK.min(n - j0);
         let block = &mut buffer[..n * w];
-        block.par_chunks_mut(n).enumerate().for_each(|(dj, column)| f.fill_column(j0 + dj, column));
+        if f.collective().is_some() {
+            // A source split over ranks serves one column at a time, in the same order on
+            // every rank (each column is a collective sum), on the calling thread.
+            block.chunks_mut(n).enumerate().for_each(|(dj, column)| f.fill_column(j0 + dj, column));
+        } else {
+            block.par_chunks_mut(n).enumerate().for_each(|(dj, column)| f.fill_column(j0 + dj, column));
+        }
         if let Some(k) = block.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
             return Err(EvalError::InvalidFormFactor { i: k % n, j: j0 + k / n, value: block[k] });
         }

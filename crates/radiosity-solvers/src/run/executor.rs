@@ -372,10 +372,11 @@ impl<'a> Executor<'a> {
         let per_step = if self.solver.step_kind() == StepKind::Product { n.max(1) as f64 } else { 1.0 };
         let cap = explicit.fold((self.rules.step_cap * n as f64 / per_step).ceil() as u64, u64::max);
         let termination = loop {
-            if self.observers.iter().any(|(o, _)| o.wants_stop()) {
+            let clocked = self.clocked(problem, &state);
+            if clocked[0] {
                 break TerminationReason::Stopped { step: state.step };
             }
-            if let Some(reason) = self.check(problem, &state, error, n, &mut watch)? {
+            if let Some(reason) = self.check(problem, &state, error, n, &mut watch, &clocked[1..])? {
                 break reason;
             }
             if state.step >= cap {
@@ -458,8 +459,26 @@ impl<'a> Executor<'a> {
         state.solve_seconds += (wall - (now.measured - ff_before.measured)).max(0.0);
     }
 
+    /// The decisions that may read a clock: whether an observer wants the run stopped, then
+    /// whether each `time=` rule holds, in order. Over a source split over ranks they are rank
+    /// 0's on every rank ([`radiosity_core::Collective::agree_all`]), so that every rank stops
+    /// at the same step.
+    fn clocked(&self, problem: &Problem<'_>, state: &State) -> Vec<bool> {
+        let spent = Duration::from_secs_f64(state.ff_seconds + state.solve_seconds);
+        let mut flags = vec![self.observers.iter().any(|(o, _)| o.wants_stop())];
+        flags.extend(self.rules.rules.iter().filter_map(|r| match *r {
+            StopRule::Time(limit) => Some(spent >= limit),
+            _ => None,
+        }));
+        if let Some(c) = problem.collective() {
+            c.agree_all(&mut flags);
+        }
+        flags
+    }
+
     /// Why the run ends before the next step, if it does: a residual power that is not finite
-    /// (an error) or shows a divergence, then the stop rules in order, then round-off.
+    /// (an error) or shows a divergence, then the stop rules in order (`time_up` holds whether
+    /// each `time=` rule holds, [`Self::clocked`]), then round-off.
     fn check(
         &self,
         problem: &Problem<'_>,
@@ -467,7 +486,9 @@ impl<'a> Executor<'a> {
         error: Option<Real>,
         n: usize,
         watch: &mut Watch,
+        time_up: &[bool],
     ) -> Result<Option<TerminationReason>, SolverError> {
+        let mut time_up = time_up.iter();
         let residual = self.solver.residual_power(problem, state);
         if let Some(r) = residual {
             if !r.is_finite() {
@@ -486,9 +507,7 @@ impl<'a> Executor<'a> {
                 StopRule::Residual(target) if residual.is_some_and(|r| r <= target) => {
                     TerminationReason::Residual(residual.unwrap())
                 }
-                StopRule::Time(limit) if Duration::from_secs_f64(state.ff_seconds + state.solve_seconds) >= limit => {
-                    TerminationReason::Time(limit)
-                }
+                StopRule::Time(limit) if time_up.next() == Some(&true) => TerminationReason::Time(limit),
                 _ => continue,
             };
             return Ok(Some(reason));

@@ -248,6 +248,11 @@ impl<'a> Problem<'a> {
         self.order
     }
 
+    /// The ranks the problem's source is split over, when it is ([`ColumnSource::collective`]).
+    pub fn collective(&self) -> Option<&dyn radiosity_core::Collective> {
+        self.columns.source().collective()
+    }
+
     /// The system.
     pub fn system(&self) -> &LinearSystem {
         self.system

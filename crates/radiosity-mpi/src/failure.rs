@@ -81,7 +81,10 @@ fn after<'a>(text: &'a str, marker: &str) -> Option<&'a str> {
 /// The (possibly negative) whole number that `text` opens with, after blanks.
 fn leading_number(text: &str) -> Option<i32> {
     let text = text.trim_start();
-    let digits = text.char_indices().find(|&(i, c)| !(c.is_ascii_digit() || (i == 0 && c == '-'))).map_or(text.len(), |(i, _)| i);
+    let digits = text
+        .char_indices()
+        .find(|&(i, c)| !(c.is_ascii_digit() || (i == 0 && c == '-')))
+        .map_or(text.len(), |(i, _)| i);
     text[..digits].parse().ok()
 }
 

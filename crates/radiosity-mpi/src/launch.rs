@@ -77,7 +77,9 @@ pub fn launch(ranks: usize, program: &Path, args: &[OsString]) -> Result<(), Lau
         (None, None) => Ending::Improperly,
     };
     Err(match first_failure(&String::from_utf8_lossy(&kept)) {
-        Some((Some(rank), ending)) if rank < ranks => LaunchError::RankEnded { rank, ranks, ending: ending.to_string() },
+        Some((Some(rank), ending)) if rank < ranks => {
+            LaunchError::RankEnded { rank, ranks, ending: ending.to_string() }
+        }
         Some((_, ending)) => LaunchError::SomeRankEnded { ending: ending.to_string() },
         None => LaunchError::SomeRankEnded { ending: launcher_ending.to_string() },
     })

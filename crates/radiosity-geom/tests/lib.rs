@@ -8,6 +8,7 @@ mod gltf_input;
 mod hidden;
 mod mesh;
 mod mgf_input;
+mod office_storeys;
 mod scenes;
 mod spatial_order;
 mod visibility;

@@ -49,6 +49,8 @@ pub struct Args {
     /// seconds do not rank the default comparison's solvers as measured ones do).
     #[arg(long, value_name = "HOW", default_value_t = ColumnCost::default(), value_parser = parse_columns)]
     columns: ColumnCost,
+    #[command(flatten)]
+    pub ranks: crate::ranks::RanksArg,
 }
 
 /// A comparison whose arguments were all checked before any geometry is built.
@@ -66,7 +68,7 @@ pub struct Plan {
 impl Plan {
     /// Checks every argument, so a typo fails at once.
     pub fn new(scene: &str, solvers: &str, ff: &str, until: &str, kind: ReferenceKind) -> Result<Plan> {
-        let spec = BackendSpec::parse(ff)?;
+        let spec = crate::ranks::backend(ff)?;
         let registry = SolverRegistry::builtin();
         let solvers = solvers
             .split(',')
@@ -118,7 +120,10 @@ impl Plan {
         eprintln!("{}: {} patches; left out: {}", report.scene, report.patches, report.left_out_phrase());
         let lab = lab(&prepared, &self.spec, true, self.kind, self.columns, self.transport)?;
         let comparison = lab.compare(self.solvers, &self.rules, &Bars::new())?;
-        comparison.write(out)?;
+        // Distributed, rank 0 alone writes.
+        if crate::ranks::reports() {
+            comparison.write(out)?;
+        }
         Ok(comparison)
     }
 }
@@ -134,7 +139,9 @@ pub fn run(args: &Args) -> Result<()> {
         .with_columns(args.columns)
         .with_transport(args.transport.transport);
     let out = args.out.clone().unwrap_or_else(|| default_out(&args.scene));
-    check_out_dir(&out)?;
+    if crate::ranks::reports() {
+        check_out_dir(&out)?;
+    }
     let comparison = plan.execute(&out)?;
     print!("{}", comparison.summary());
     println!("{}: {}", comparison.clock.seconds_label(), comparison.seconds_phrase());

@@ -10,6 +10,7 @@ mod experiment;
 mod export;
 mod ff;
 mod paper;
+mod ranks;
 mod render;
 mod scenes;
 mod solve;
@@ -58,6 +59,30 @@ fn main() -> ExitCode {
         Ok(cli) => cli,
         Err(e) => return argument_error(e),
     };
+    let (name, distributed, ranks) = match &cli.command {
+        Command::Solve(args) => ("solve", true, args.ranks.ranks),
+        Command::Compare(args) => ("compare", true, args.ranks.ranks),
+        Command::Scenes(_) => ("scenes", false, None),
+        Command::Ff(_) => ("ff", false, None),
+        Command::Paper(_) => ("paper", false, None),
+        Command::Render(_) => ("render", false, None),
+        Command::Export(_) => ("export", false, None),
+        Command::Stress(_) => ("stress", false, None),
+        Command::Validate(_) => ("validate", false, None),
+        Command::Bench(_) => ("bench", false, None),
+    };
+    // `--ranks K`: this command again, as K ranks under mpirun.
+    match ranks.map(ranks::launch).transpose() {
+        Ok(Some(true)) => return ExitCode::SUCCESS,
+        Ok(_) => {}
+        // Rank 0 failed as this command fails, and has said why.
+        Err(e) if ranks::reported(&e) => return ExitCode::FAILURE,
+        Err(e) => return failure(&e),
+    }
+    let world = match ranks::Ranks::start(name, distributed) {
+        Ok(world) => world,
+        Err(e) => return failure(&e),
+    };
     let result = match cli.command {
         Command::Scenes(args) => scenes::run(&args),
         Command::Ff(args) => ff::run(&args),
@@ -70,13 +95,18 @@ fn main() -> ExitCode {
         Command::Validate(args) => validate::run(&args),
         Command::Bench(args) => bench::run(&args),
     };
-    match result {
+    let code = match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
+        Err(e) => failure(&e),
+    };
+    drop(world);
+    code
+}
+
+/// An error as one sentence on stderr, and the failing exit code.
+fn failure(e: &anyhow::Error) -> ExitCode {
+    eprintln!("error: {e:#}");
+    ExitCode::FAILURE
 }
 
 /// Help and version go to stdout as clap writes them; an argument error becomes one sentence

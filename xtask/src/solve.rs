@@ -14,9 +14,10 @@ use crate::bars::Bars;
 use crate::experiment::{SolveArgs, check_output_file, lab, prepare};
 use anyhow::{Context, Result};
 use radiosity_core::Real;
+use radiosity_eval::bench::report_text::human_bytes;
 use radiosity_eval::rgb;
 use radiosity_eval::value_cell;
-use radiosity_eval::{FinalMetrics, RecordPlan};
+use radiosity_eval::{FinalMetrics, RankReport, RecordPlan};
 use radiosity_solvers::State;
 use radiosity_solvers::{Record, Value};
 use serde::Serialize;
@@ -26,7 +27,9 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    run: SolveArgs,
+    pub run: SolveArgs,
+    #[command(flatten)]
+    pub ranks: crate::ranks::RanksArg,
     /// Print the patches and the run's figures as JSON.
     #[arg(long, conflicts_with = "out")]
     json: bool,
@@ -97,6 +100,9 @@ struct StatsJson {
     /// The solver's own figures (group steps, sizes, condition numbers, fallbacks).
     record: serde_json::Map<String, serde_json::Value>,
     reference: ReferenceJson,
+    /// Each rank's part, when the run was distributed over MPI ranks.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    ranks: Option<Vec<RankReport>>,
 }
 
 /// The reference a run was measured against.
@@ -153,6 +159,7 @@ pub fn run(args: &Args) -> Result<()> {
     // was cached and the matrix assembled.
     let transport = args.run.transport.transport;
     let lab = lab(&prepared, &spec, false, kind, radiosity_eval::ColumnCost::Computed, transport)?;
+    let traffic = lab.traffic();
     let outcome = match solver {
         // `reference` is the exact solution itself: its cost is assembling F and solving it.
         None => Outcome {
@@ -234,6 +241,7 @@ pub fn run(args: &Args) -> Result<()> {
         reached: outcome.reached,
         record: outcome.record.iter().map(|(k, v)| (k.to_string(), json_value(v))).collect(),
         reference,
+        ranks: traffic.and_then(|before| lab.rank_reports(before, s.ff_seconds)),
     };
     let scene = prepared.scene();
     if !args.json && args.out.is_none() {
@@ -301,6 +309,23 @@ pub fn run(args: &Args) -> Result<()> {
             let items: Vec<String> = outcome.record.iter().map(|(k, v)| format!("{k} {}", value_cell(v))).collect();
             println!("recorded     {}", items.join(", "));
         }
+        for r in stats.ranks.iter().flatten() {
+            println!(
+                "rank {:<7} {} links ({} tasks, {:.1}% of the estimated cost), {} operator built in {:.2} s; peak \
+                 memory {}; the run: {:.3} s in the operator, {:.3} s in {} sums, {} sent",
+                r.rank,
+                r.links,
+                r.tasks,
+                100.0 * r.estimated_share,
+                human_bytes(r.operator_bytes),
+                r.build_seconds,
+                r.peak_rss.map_or("n/a".into(), human_bytes),
+                r.run_operator_seconds,
+                r.run_sum_seconds,
+                r.run_sums,
+                human_bytes(r.run_bytes_sent)
+            );
+        }
         let r = &stats.reference;
         match (&r.method, &r.certificate) {
             (Some(method), Some(certificate)) => {
@@ -329,7 +354,11 @@ pub fn run(args: &Args) -> Result<()> {
         SolveJson { scene: &args.run.scene, solver: outcome.solver, ff: lab.backend().to_string(), patches, stats };
     let text = serde_json::to_string(&json)?;
     match &args.out {
-        Some(path) => std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))?,
+        // Distributed, rank 0 alone writes.
+        Some(path) if crate::ranks::reports() => {
+            std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))?
+        }
+        Some(_) => {}
         None => println!("{text}"),
     }
     Ok(())

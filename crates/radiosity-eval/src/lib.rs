@@ -84,6 +84,7 @@ pub use lab::backends::{
 pub use lab::compare::Comparison;
 pub use lab::options::{ColumnCharge, ColumnCost, LabOptions, Transport};
 pub use lab::outcome::{FinalMetrics, Outcome};
+pub use lab::ranks::RankReport;
 pub use lab::recorder::{Point, RecordPlan, Recorder, TableRow};
 pub use lab::run::{check_rules, rgb};
 pub use lab::setup::{ChosenReference, Lab, ReferenceOrigin, require_emitters};

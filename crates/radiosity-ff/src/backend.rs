@@ -115,6 +115,9 @@ pub struct BackendFigures {
     pub counts: Vec<(String, f64)>,
     /// One line, as `cargo xtask ff --against` prints it (without the bytes).
     pub summary: String,
+    /// Each rank's part, in rank order, when the source is split over ranks (its `seconds`,
+    /// `bytes` and `counts` the rank's own); empty for one process.
+    pub ranks: Vec<BackendFigures>,
 }
 
 impl BackendFigures {

@@ -4,7 +4,8 @@
 //! The ranks' standard output passes straight through. Their standard error, and the
 //! launcher's, is forwarded line by line as it comes and also kept, so that a failed run can say
 //! which rank ended it (module `failure`): "rank 1 of 3 ended with exit status 3 before the
-//! distributed run finished".
+//! distributed run finished". The launcher's own boxed reports (Open MPI frames them between
+//! lines of dashes) are kept but not forwarded: that sentence says what they say.
 
 use crate::failure::{Ending, first_failure};
 use crate::launcher::Launcher;
@@ -85,17 +86,24 @@ pub fn launch(ranks: usize, program: &Path, args: &[OsString]) -> Result<(), Lau
     })
 }
 
-/// Copies `from` to this process's standard error a line at a time, as the lines come, keeping
-/// a copy in `kept`; ends at the end of `from` or when it cannot be read.
+/// Copies `from` to this process's standard error a line at a time, as the lines come, but for
+/// the launcher's boxed reports (module doc), keeping a copy of every line in `kept`; ends at
+/// the end of `from` or when it cannot be read.
 fn forward_lines(mut from: impl BufRead, kept: &mut Vec<u8>) {
     let mut line = Vec::new();
+    // Within one of the launcher's boxed reports.
+    let mut boxed = false;
     loop {
         line.clear();
         match from.read_until(b'\n', &mut line) {
             Ok(0) | Err(_) => break,
             Ok(_) => {
-                // Our own standard error failing (closed) must not stop the ranks' run.
-                let _ = std::io::stderr().lock().write_all(&line);
+                let frame = line.len() > 20 && line.trim_ascii().iter().all(|&b| b == b'-');
+                boxed ^= frame;
+                if !(frame || boxed) {
+                    // Our own standard error failing (closed) must not stop the ranks' run.
+                    let _ = std::io::stderr().lock().write_all(&line);
+                }
                 kept.extend_from_slice(&line);
             }
         }

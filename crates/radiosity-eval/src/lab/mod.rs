@@ -79,6 +79,7 @@ pub(crate) mod charged;
 pub(crate) mod compare;
 pub(crate) mod options;
 pub(crate) mod outcome;
+pub(crate) mod ranks;
 pub(crate) mod recorder;
 pub(crate) mod run;
 pub(crate) mod setup;

@@ -420,10 +420,16 @@ fn choose(source: &dyn ColumnSource, stored: bool, options: &LabOptions) -> Resu
         }
         _ => {}
     }
-    let budget = match &options.memory {
+    let mut budget = match &options.memory {
         Some(b) => b.clone(),
         None => MemoryBudget::from_env()?,
     };
+    if let Some(ranks) = source.collective() {
+        // Over a source split over ranks, every rank decides by rank 0's budget (ranks may
+        // run on machines of different memory): the columns the estimate samples, and the
+        // reference chosen, are then the same on every rank.
+        budget.bytes = ranks.gather(&[budget.bytes as Real])[0][0] as u64;
+    }
     let (bytes, _) = matrix_bytes(source, budget.bytes);
     let fits = bytes <= budget.bytes;
     let n = source.patch_count();

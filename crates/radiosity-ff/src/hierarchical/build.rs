@@ -101,6 +101,7 @@ impl From<HierarchyFigures> for BackendFigures {
             loaded: h.loaded,
             counts: counts.into_iter().map(|(l, v)| (l.to_string(), v)).collect(),
             summary,
+            ranks: Vec::new(),
         }
     }
 }

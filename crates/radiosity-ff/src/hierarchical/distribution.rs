@@ -17,6 +17,7 @@ use super::HierarchicalColumns;
 use super::build::HierarchyFigures;
 use super::links::BuildProgress;
 use super::params::HierarchicalParams;
+use crate::backend::BackendFigures;
 use radiosity_core::{Collective, Real, Scene, Traffic};
 use radiosity_geom::{SceneAnalysis, Visibility};
 use std::fmt;
@@ -98,6 +99,33 @@ impl RankFigures {
             seconds: v[8],
             tasks: v[9] as u64,
             estimated_share: v[10],
+        }
+    }
+}
+
+impl From<&RankFigures> for BackendFigures {
+    fn from(r: &RankFigures) -> BackendFigures {
+        let counts = [
+            ("far links", r.far_links as f64),
+            ("near links", r.near_links as f64),
+            ("shadow rays", r.rays as f64),
+            ("tasks", r.tasks as f64),
+            ("estimated share", r.estimated_share),
+        ];
+        BackendFigures {
+            seconds: r.seconds,
+            bytes: r.bytes as usize,
+            loaded: false,
+            counts: counts.into_iter().map(|(l, v)| (l.to_string(), v)).collect(),
+            summary: format!(
+                "{} far links, {} near links, {} shadow rays; {} tasks, {:.1}% of the estimated cost",
+                r.far_links,
+                r.near_links,
+                r.rays,
+                r.tasks,
+                100.0 * r.estimated_share
+            ),
+            ranks: Vec::new(),
         }
     }
 }

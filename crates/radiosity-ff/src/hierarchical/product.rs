@@ -119,7 +119,12 @@ impl FormFactorBackend for HierarchicalColumns {
     }
 
     fn figures(&self) -> Option<BackendFigures> {
-        Some(HierarchicalColumns::figures(self).into())
+        let mut figures: BackendFigures = HierarchicalColumns::figures(self).into();
+        if let Some(d) = &self.distribution {
+            figures.summary = format!("{} over {} ranks", figures.summary, d.ranks().len());
+            figures.ranks = d.ranks().iter().map(|r| r.into()).collect();
+        }
+        Some(figures)
     }
 
     /// One process's operator; a rank's part is not kept (its links are a share only).

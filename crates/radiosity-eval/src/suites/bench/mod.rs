@@ -32,7 +32,7 @@ pub mod columns;
 pub mod e2e;
 mod json;
 pub mod lu;
-mod memory;
+pub(crate) mod memory;
 pub mod report_text;
 pub mod scale;
 pub mod stochastic;

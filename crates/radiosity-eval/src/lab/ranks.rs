@@ -1,0 +1,82 @@
+//! What each rank of a distributed run built and spent ([`Lab::rank_reports`]): the figures of
+//! its part of the operator, its peak memory, and the time and bytes of its collective sums.
+
+use super::setup::Lab;
+use crate::suites::bench::memory::peak_rss;
+use radiosity_core::{Real, Traffic};
+use serde::Serialize;
+
+/// One rank's part of a distributed run.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RankReport {
+    /// The rank.
+    pub rank: usize,
+    /// Seconds it took to build its part of the operator.
+    pub build_seconds: Real,
+    /// Bytes its part of the operator holds (its links, and what every rank holds).
+    pub operator_bytes: u64,
+    /// Its links: far links, near links and far pairs.
+    pub links: u64,
+    /// Shadow rays it traced for its links.
+    pub rays: u64,
+    /// Refinement tasks dealt to it.
+    pub tasks: u64,
+    /// Its share of the refinement's estimated cost.
+    pub estimated_share: Real,
+    /// The high-water mark of its resident memory, in bytes (`None` without `/proc`).
+    pub peak_rss: Option<u64>,
+    /// Seconds the run spent in the operator on this rank (products, columns, rows), its sums
+    /// included.
+    pub run_operator_seconds: Real,
+    /// Collective sums during the run.
+    pub run_sums: u64,
+    /// Seconds in those sums, waiting for the other ranks included.
+    pub run_sum_seconds: Real,
+    /// Bytes this rank sent in those sums.
+    pub run_bytes_sent: u64,
+}
+
+impl Lab<'_> {
+    /// What this rank's sums have cost so far, when the lab's source is split over ranks: take
+    /// it before a run, for [`Lab::rank_reports`].
+    pub fn traffic(&self) -> Option<Traffic> {
+        self.source.collective().map(|c| c.traffic())
+    }
+
+    /// Every rank's report, in rank order, on every rank, when the lab's source is split over
+    /// ranks: a collective call, which every rank makes after the same run, with the traffic
+    /// taken before it (`before`) and the run's operator seconds on this rank.
+    pub fn rank_reports(&self, before: Traffic, run_operator_seconds: Real) -> Option<Vec<RankReport>> {
+        let ranks = self.source.collective()?;
+        let now = ranks.traffic();
+        let own = [
+            peak_rss().map_or(-1.0, |b| b as Real),
+            run_operator_seconds,
+            (now.sums - before.sums) as Real,
+            now.seconds - before.seconds,
+            (now.bytes_sent - before.bytes_sent) as Real,
+        ];
+        let runs = ranks.gather(&own);
+        let parts = self.figures.as_ref().map(|f| f.ranks.as_slice()).unwrap_or_default();
+        let count = |k: usize, label: &str| parts.get(k).and_then(|p| p.count(label)).unwrap_or(0.0);
+        Some(
+            runs.iter()
+                .enumerate()
+                .map(|(k, run)| RankReport {
+                    rank: k,
+                    build_seconds: parts.get(k).map_or(0.0, |p| p.seconds),
+                    operator_bytes: parts.get(k).map_or(0, |p| p.bytes as u64),
+                    links: (count(k, "far links") + count(k, "near links")) as u64,
+                    rays: count(k, "shadow rays") as u64,
+                    tasks: count(k, "tasks") as u64,
+                    estimated_share: count(k, "estimated share"),
+                    peak_rss: (run[0] >= 0.0).then_some(run[0] as u64),
+                    run_operator_seconds: run[1],
+                    run_sums: run[2] as u64,
+                    run_sum_seconds: run[3],
+                    run_bytes_sent: run[4] as u64,
+                })
+                .collect(),
+        )
+    }
+}

@@ -100,9 +100,22 @@ struct StatsJson {
     /// The solver's own figures (group steps, sizes, condition numbers, fallbacks).
     record: serde_json::Map<String, serde_json::Value>,
     reference: ReferenceJson,
+    /// What building the backend cost, when it says (the hierarchical operator): seconds,
+    /// bytes held, and its summary; distributed, the slowest rank's seconds and the bytes of
+    /// all ranks.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    operator: Option<OperatorJson>,
     /// Each rank's part, when the run was distributed over MPI ranks.
     #[serde(skip_serializing_if = "Option::is_none")]
     ranks: Option<Vec<RankReport>>,
+}
+
+/// What building the backend cost ([`radiosity_ff::BackendFigures`]).
+#[derive(Serialize)]
+struct OperatorJson {
+    build_seconds: Real,
+    bytes: usize,
+    summary: String,
 }
 
 /// The reference a run was measured against.
@@ -241,6 +254,11 @@ pub fn run(args: &Args) -> Result<()> {
         reached: outcome.reached,
         record: outcome.record.iter().map(|(k, v)| (k.to_string(), json_value(v))).collect(),
         reference,
+        operator: lab.backend_figures().map(|f| OperatorJson {
+            build_seconds: f.seconds,
+            bytes: f.bytes,
+            summary: f.summary.clone(),
+        }),
         ranks: traffic.and_then(|before| lab.rank_reports(before, s.ff_seconds)),
     };
     let scene = prepared.scene();

@@ -6,6 +6,7 @@ use serde_json::Value;
 
 mod bad_input;
 mod bench;
+mod distributed;
 mod export;
 mod readme;
 mod render;

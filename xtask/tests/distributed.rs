@@ -1,0 +1,68 @@
+//! `solve --ranks K` (an xtask built with `--features mpi`): the same answer as one process to
+//! 1e-12, printed once, with every rank's part reported; and, without MPI, `--ranks` refused
+//! in one sentence.
+
+use super::xtask;
+
+/// `solve` of gmres-30 over the hierarchical operator of the Cornell box, with `extra`
+/// arguments.
+fn solve(extra: &[&str]) -> assert_cmd::assert::Assert {
+    let mut args = vec![
+        "solve",
+        "--scene",
+        "cornell:res=8",
+        "--ff",
+        "hierarchical:eps=0.05",
+        "--solver",
+        "gmres-30",
+        "--until",
+        "steps=40",
+        "--reference",
+        "none",
+    ];
+    args.extend(extra);
+    xtask(&args)
+}
+
+#[cfg(feature = "mpi")]
+#[test]
+fn solve_over_two_and_three_ranks_gives_the_single_process_answer_once() {
+    use serde_json::Value;
+    let json = |extra: &[&str]| -> Value {
+        let out = solve(&[extra, &["--json"]].concat()).success().get_output().stdout.clone();
+        serde_json::from_slice(&out).unwrap()
+    };
+    let radiosity = |v: &Value| -> Vec<f64> {
+        v["patches"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|p| p["radiosity"].as_array().unwrap().iter().map(|c| c.as_f64().unwrap()))
+            .collect()
+    };
+    let one = json(&[]);
+    assert!(one["stats"].get("ranks").is_none(), "one process reports no ranks");
+    let b1 = radiosity(&one);
+    let scale = b1.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for k in ["2", "3"] {
+        let split = json(&["--ranks", k]);
+        let gap = radiosity(&split).iter().zip(&b1).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+        assert!(gap <= 1e-12 * scale, "{k} ranks: {gap:e} from one process");
+        let ranks = split["stats"]["ranks"].as_array().unwrap();
+        assert_eq!(ranks.len(), k.parse::<usize>().unwrap());
+        assert!(ranks.iter().all(|r| r["links"].as_u64().unwrap() > 0 && r["run_sums"].as_u64().unwrap() >= 40));
+    }
+    // The summary is printed once, by rank 0, with a line for each rank.
+    let text = String::from_utf8(solve(&["--ranks", "2"]).success().get_output().stdout.clone()).unwrap();
+    assert_eq!(text.matches("scene        ").count(), 1, "{text}");
+    assert_eq!(text.matches("\nrank ").count(), 2, "{text}");
+}
+
+#[cfg(not(feature = "mpi"))]
+#[test]
+fn ranks_without_mpi_are_refused_in_one_sentence() {
+    let err = solve(&["--ranks", "2"]).failure().get_output().stderr.clone();
+    let err = String::from_utf8(err).unwrap();
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("--ranks needs an xtask built with MPI"), "{err}");
+}

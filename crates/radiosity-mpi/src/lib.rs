@@ -35,6 +35,7 @@
 mod failure;
 mod launch;
 mod launcher;
+pub mod projection;
 mod rank_env;
 #[cfg(feature = "mpi")]
 pub mod world;

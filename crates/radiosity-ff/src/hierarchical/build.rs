@@ -180,8 +180,8 @@ impl HierarchicalColumns {
                 (share.links, share.tasks.1, share.estimated)
             }
         };
-        let assemble = |links: &Links| {
-            let mut operator = HierarchicalColumns::assemble(scene, tree.clone(), links, start);
+        let assemble = |tree: ClusterTree, links: &Links| {
+            let mut operator = HierarchicalColumns::assemble(scene, tree, links, start);
             if let Some(c) = &collective {
                 let own = RankFigures::new(&operator.figures, tasks, estimated);
                 operator.distribution = Some(Distribution::new(c.clone(), own));
@@ -190,7 +190,7 @@ impl HierarchicalColumns {
         };
         for _ in 1..params.passes {
             // Multigridding: the radiosity of this pass's operator weighs the next pass.
-            let b = assemble(&links).radiosity(scene, SWEEPS);
+            let b = assemble(tree.clone(), &links).radiosity(scene, SWEEPS);
             let again = Refiner {
                 brightness: Brightness::from_radiosity(scene, &tree, &b, params.floor),
                 watch: Watch::new(scene.len(), &|_| {}),
@@ -205,7 +205,8 @@ impl HierarchicalColumns {
             (next.rays, next.occluded, next.clear) = (next.rays + rays, next.occluded + occluded, next.clear + clear);
             links = next;
         }
-        let mut operator = assemble(&links);
+        // The tree moves into the operator: a copy would double its memory at the peak.
+        let mut operator = assemble(tree, &links);
         let near = operator.near_sums();
         operator.figures.near_above = near.iter().filter(|&&s| s > 1.0).count();
         if params.closure {

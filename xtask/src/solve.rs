@@ -115,6 +115,9 @@ struct StatsJson {
 struct OperatorJson {
     build_seconds: Real,
     bytes: usize,
+    /// Of them, the links' (the hierarchical operator's `link bytes`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    link_bytes: Option<Real>,
     summary: String,
 }
 
@@ -257,6 +260,7 @@ pub fn run(args: &Args) -> Result<()> {
         operator: lab.backend_figures().map(|f| OperatorJson {
             build_seconds: f.seconds,
             bytes: f.bytes,
+            link_bytes: f.count("link bytes"),
             summary: f.summary.clone(),
         }),
         ranks: traffic.and_then(|before| lab.rank_reports(before, s.ff_seconds)),
@@ -329,13 +333,14 @@ pub fn run(args: &Args) -> Result<()> {
         }
         for r in stats.ranks.iter().flatten() {
             println!(
-                "rank {:<7} {} links ({} tasks, {:.1}% of the estimated cost), {} operator built in {:.2} s; peak \
-                 memory {}; the run: {:.3} s in the operator, {:.3} s in {} sums, {} sent",
+                "rank {:<7} {} links ({} tasks, {:.1}% of the estimated cost), {} operator ({} of links) built in \
+                 {:.2} s; peak memory {}; the run: {:.3} s in the operator, {:.3} s in {} sums, {} sent",
                 r.rank,
                 r.links,
                 r.tasks,
                 100.0 * r.estimated_share,
                 human_bytes(r.operator_bytes),
+                human_bytes(r.link_bytes),
                 r.build_seconds,
                 r.peak_rss.map_or("n/a".into(), human_bytes),
                 r.run_operator_seconds,

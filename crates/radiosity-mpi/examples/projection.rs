@@ -2,7 +2,8 @@
 //! `radiosity_mpi::projection` to measured runs (`patches`, `products`, `single_load`,
 //! `single_build`, `single_product`, `single_peak`, the same four `split_…`,
 //! `small_build_1`, `small_build_2`, `small_product_1`, `small_product_2`) and prints
-//! its projection for 10 and 100 million patches on 1, 8 and 64 nodes of 32 cores, over an
+//! its projection for 10 and 100 million patches on 1, 8 and 64 nodes of 32 cores (or
+//! `cores=C`), over an
 //! InfiniBand-class network (2 µs, 12.5 GB/s) and 10 Gb Ethernet (20 µs, 1.25 GB/s), and the
 //! number of nodes from which the products' sums take longer than their own work.
 //! docs/distributed.md gives the command with the values it measured.
@@ -24,6 +25,7 @@ fn run() -> Result<(), String> {
         values.insert(key.to_string(), value);
     }
     let get = |key: &str| values.get(key).copied().ok_or(format!("{key}= is missing"));
+    println!("nodes of {} cores", values.get("cores").copied().unwrap_or(32.0));
     let run = |prefix: &str| -> Result<Run, String> {
         Ok(Run {
             load: get(&format!("{prefix}_load"))?,
@@ -46,13 +48,14 @@ fn run() -> Result<(), String> {
         ("InfiniBand (2 µs, 12.5 GB/s)", Network { latency: 2e-6, bandwidth: 12.5e9 }),
         ("10 Gb Ethernet (20 µs, 1.25 GB/s)", Network { latency: 2e-5, bandwidth: 1.25e9 }),
     ];
-    const CORES: f64 = 32.0;
+    // Cores a node: `cores=` (default 32; 2 is this machine).
+    let cores = values.get("cores").copied().unwrap_or(32.0);
     println!("| patches | nodes | network | memory per node | load | build | products | sums | total | efficiency |");
     println!("|--:|--:|---|--:|--:|--:|--:|--:|--:|--:|");
     for patches in [1e7, 1e8] {
         for (name, network) in &networks {
             for nodes in [1.0, 8.0, 64.0] {
-                let p = model.project(patches, nodes, CORES, network);
+                let p = model.project(patches, nodes, cores, network);
                 println!(
                     "| {:.0e} | {nodes} | {name} | {:.1} GB | {:.0} s | {:.0} s | {:.1} s | {:.1} s | {:.0} s | {:.0}% |",
                     patches,
@@ -70,7 +73,7 @@ fn run() -> Result<(), String> {
     for (name, network) in &networks {
         for patches in [1e7, 1e8] {
             let dominates = (1..=16).map(|k| f64::from(1u32 << k)).find(|&nodes| {
-                let p = model.project(patches, nodes, CORES, network);
+                let p = model.project(patches, nodes, cores, network);
                 p.communication > p.products
             });
             match dominates {

@@ -15,6 +15,8 @@ pub struct RankReport {
     pub build_seconds: Real,
     /// Bytes its part of the operator holds (its links, and what every rank holds).
     pub operator_bytes: u64,
+    /// Of them, its links' bytes.
+    pub link_bytes: u64,
     /// Its links: far links, near links and far pairs.
     pub links: u64,
     /// Shadow rays it traced for its links.
@@ -66,6 +68,7 @@ impl Lab<'_> {
                     rank: k,
                     build_seconds: parts.get(k).map_or(0.0, |p| p.seconds),
                     operator_bytes: parts.get(k).map_or(0, |p| p.bytes as u64),
+                    link_bytes: count(k, "link bytes") as u64,
                     links: (count(k, "far links") + count(k, "near links")) as u64,
                     rays: count(k, "shadow rays") as u64,
                     tasks: count(k, "tasks") as u64,

@@ -73,6 +73,12 @@ impl<T: Copy + Default + Send> Adjacency<T> {
         })
     }
 
+    /// The bytes the links' entries hold: their other ends and values, not the offsets every
+    /// key has.
+    pub(super) fn entry_bytes(&self) -> usize {
+        self.other.len() * (size_of::<u32>() + size_of::<T>())
+    }
+
     /// The bytes the lists hold.
     pub(super) fn bytes(&self) -> usize {
         self.start.len() * size_of::<usize>() + self.other.len() * (size_of::<u32>() + size_of::<T>())

@@ -183,7 +183,7 @@ impl HierarchicalColumns {
         let assemble = |tree: ClusterTree, links: &Links| {
             let mut operator = HierarchicalColumns::assemble(scene, tree, links, start);
             if let Some(c) = &collective {
-                let own = RankFigures::new(&operator.figures, tasks, estimated);
+                let own = RankFigures::new(&operator, tasks, estimated);
                 operator.distribution = Some(Distribution::new(c.clone(), own));
             }
             operator
@@ -215,7 +215,7 @@ impl HierarchicalColumns {
         operator.figures.seconds = start.elapsed().as_secs_f64();
         if let Some(c) = collective {
             // Every rank's figures, and the whole operator's from them.
-            let own = RankFigures::new(&operator.figures, tasks, estimated);
+            let own = RankFigures::new(&operator, tasks, estimated);
             let distribution = Distribution::new(c, own);
             operator.figures = totals(distribution.ranks(), &operator.figures);
             operator.distribution = Some(distribution);
@@ -318,6 +318,12 @@ impl HierarchicalColumns {
             .collect();
         links.sort_unstable();
         links
+    }
+
+    /// The bytes the links hold (each in the lists of both its ends), without the tree, the
+    /// patch data and the lists' offsets, which every rank of a split operator holds.
+    pub fn link_bytes(&self) -> usize {
+        self.far.entry_bytes() + self.near.entry_bytes() + self.pairs.entry_bytes()
     }
 
     /// What building found and cost.

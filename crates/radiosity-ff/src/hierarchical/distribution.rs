@@ -44,6 +44,8 @@ pub struct RankFigures {
     /// Bytes held by the rank's operator: its links, and the tree and patch data every rank
     /// holds.
     pub bytes: u64,
+    /// Of them, the bytes of its links ([`HierarchicalColumns::link_bytes`]).
+    pub link_bytes: u64,
     /// Seconds the rank took to build its part, closure included.
     pub seconds: f64,
     /// Tasks of the refinement dealt to the rank.
@@ -53,8 +55,9 @@ pub struct RankFigures {
 }
 
 impl RankFigures {
-    /// A rank's figures from its part's `figures`, its `tasks` and its estimated share.
-    pub(super) fn new(figures: &HierarchyFigures, tasks: usize, estimated_share: f64) -> RankFigures {
+    /// A rank's figures from its part of the operator, its `tasks` and its estimated share.
+    pub(super) fn new(part: &HierarchicalColumns, tasks: usize, estimated_share: f64) -> RankFigures {
+        let figures = &part.figures;
         RankFigures {
             far_links: figures.far_links as u64,
             zeroth_links: figures.zeroth_links as u64,
@@ -64,13 +67,14 @@ impl RankFigures {
             occluded: figures.occluded,
             clear_shafts: figures.clear_shafts,
             bytes: figures.bytes as u64,
+            link_bytes: part.link_bytes() as u64,
             seconds: figures.seconds,
             tasks: tasks as u64,
             estimated_share,
         }
     }
 
-    fn to_values(self) -> [Real; 11] {
+    fn to_values(self) -> [Real; 12] {
         [
             self.far_links as Real,
             self.zeroth_links as Real,
@@ -80,6 +84,7 @@ impl RankFigures {
             self.occluded as Real,
             self.clear_shafts as Real,
             self.bytes as Real,
+            self.link_bytes as Real,
             self.seconds,
             self.tasks as Real,
             self.estimated_share,
@@ -96,9 +101,10 @@ impl RankFigures {
             occluded: v[5] as u64,
             clear_shafts: v[6] as u64,
             bytes: v[7] as u64,
-            seconds: v[8],
-            tasks: v[9] as u64,
-            estimated_share: v[10],
+            link_bytes: v[8] as u64,
+            seconds: v[9],
+            tasks: v[10] as u64,
+            estimated_share: v[11],
         }
     }
 }
@@ -109,6 +115,7 @@ impl From<&RankFigures> for BackendFigures {
             ("far links", r.far_links as f64),
             ("near links", r.near_links as f64),
             ("shadow rays", r.rays as f64),
+            ("link bytes", r.link_bytes as f64),
             ("tasks", r.tasks as f64),
             ("estimated share", r.estimated_share),
         ];

@@ -120,6 +120,7 @@ impl FormFactorBackend for HierarchicalColumns {
 
     fn figures(&self) -> Option<BackendFigures> {
         let mut figures: BackendFigures = HierarchicalColumns::figures(self).into();
+        figures.counts.push(("link bytes".into(), self.link_bytes() as f64));
         if let Some(d) = &self.distribution {
             figures.summary = format!("{} over {} ranks", figures.summary, d.ranks().len());
             figures.ranks = d.ranks().iter().map(|r| r.into()).collect();

@@ -69,7 +69,7 @@ pub trait Collective: Send + Sync {
         let mut all = vec![0.0; m * k];
         all[self.rank() * m..(self.rank() + 1) * m].copy_from_slice(values);
         self.sum(&mut all);
-        all.chunks(m.max(1)).take(k).map(<[Real]>::to_vec).collect()
+        (0..k).map(|r| all[r * m..(r + 1) * m].to_vec()).collect()
     }
 }
 

@@ -177,7 +177,7 @@ impl HierarchicalColumns {
             None => (refiner.refine_all(), 1, 1.0),
             Some((c, tasks_per_rank)) => {
                 let share = refiner.refine_share((c.rank(), c.ranks()), *tasks_per_rank, observe);
-                (share.links, share.tasks.1, share.estimated)
+                (share.links, share.tasks, share.estimated)
             }
         };
         let assemble = |tree: ClusterTree, links: &Links| {

@@ -18,11 +18,10 @@ use super::build::HierarchyFigures;
 use super::links::BuildProgress;
 use super::params::HierarchicalParams;
 use crate::backend::BackendFigures;
-use radiosity_core::{Collective, Real, Scene, Traffic};
+use radiosity_core::{Collective, Real, Scene};
 use radiosity_geom::{SceneAnalysis, Visibility};
 use std::fmt;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
 
 /// What one rank built.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -141,10 +140,6 @@ impl From<&RankFigures> for BackendFigures {
 pub struct Distribution {
     collective: Arc<dyn Collective>,
     ranks: Vec<RankFigures>,
-    /// Products served, and the nanoseconds this rank spent on its part of them (the sums
-    /// aside: [`Collective::traffic`]).
-    products: AtomicU64,
-    local_nanos: AtomicU64,
 }
 
 impl fmt::Debug for Distribution {
@@ -161,7 +156,7 @@ impl Distribution {
     /// every rank's figures gathered.
     pub(super) fn new(collective: Arc<dyn Collective>, own: RankFigures) -> Distribution {
         let ranks = collective.gather(&own.to_values()).iter().map(|v| RankFigures::from_values(v)).collect();
-        Distribution { collective, ranks, products: AtomicU64::new(0), local_nanos: AtomicU64::new(0) }
+        Distribution { collective, ranks }
     }
 
     /// The ranks the operator is split over.
@@ -172,22 +167,6 @@ impl Distribution {
     /// What each rank built, in rank order (the same on every rank).
     pub fn ranks(&self) -> &[RankFigures] {
         &self.ranks
-    }
-
-    /// Products this rank served, and the seconds it spent on its own part of them.
-    pub fn local_products(&self) -> (u64, f64) {
-        (self.products.load(Ordering::Relaxed), self.local_nanos.load(Ordering::Relaxed) as f64 * 1e-9)
-    }
-
-    /// What this rank has sent and waited for in the operator's sums.
-    pub fn traffic(&self) -> Traffic {
-        self.collective.traffic()
-    }
-
-    /// Counts a product whose part took `nanos` on this rank.
-    pub(super) fn count_product(&self, nanos: u64) {
-        self.products.fetch_add(1, Ordering::Relaxed);
-        self.local_nanos.fetch_add(nanos, Ordering::Relaxed);
     }
 }
 

@@ -16,7 +16,6 @@ use super::links::{Span, kernel_factor};
 use crate::backend::{BackendFigures, FormFactorBackend};
 use radiosity_core::{Collective, ColumnSource, Real, Vec3};
 use rayon::prelude::*;
-use std::time::Instant;
 
 impl HierarchicalColumns {
     /// Calls `f(k)` for the leaf of `patch` and each of its ancestors.
@@ -89,7 +88,6 @@ impl ColumnSource for HierarchicalColumns {
     /// whatever the thread count), the linear forms down the tree, and the pairs and near
     /// links: `O(links + n)` for all channels in one pass over the links (module doc).
     fn multiply(&self, x: &[Real], channels: usize, out: &mut [Real]) -> bool {
-        let start = Instant::now();
         self.estimated_product(x, channels, &self.weights, out);
         out.par_chunks_mut(channels).enumerate().for_each(|(i, out)| {
             let w = self.weights[i];
@@ -101,10 +99,8 @@ impl ColumnSource for HierarchicalColumns {
                 }
             }
         });
-        if let Some(d) = &self.distribution {
-            d.count_product(start.elapsed().as_nanos() as u64);
-            d.collective().sum(out);
-        }
+        // Split over ranks, each rank's part summed.
+        self.summed(out);
         true
     }
 
@@ -120,7 +116,11 @@ impl FormFactorBackend for HierarchicalColumns {
 
     fn figures(&self) -> Option<BackendFigures> {
         let mut figures: BackendFigures = HierarchicalColumns::figures(self).into();
-        figures.counts.push(("link bytes".into(), self.link_bytes() as f64));
+        let link_bytes = match &self.distribution {
+            Some(d) => d.ranks().iter().map(|r| r.link_bytes as usize).sum(),
+            None => self.link_bytes(),
+        };
+        figures.counts.push(("link bytes".into(), link_bytes as f64));
         if let Some(d) = &self.distribution {
             figures.summary = format!("{} over {} ranks", figures.summary, d.ranks().len());
             figures.ranks = d.ranks().iter().map(|r| r.into()).collect();

@@ -70,8 +70,8 @@ impl Task {
 pub(super) struct Share {
     /// The links this rank built.
     pub links: Links,
-    /// The tasks of the frontier, and of them this rank's.
-    pub tasks: (usize, usize),
+    /// The tasks of the frontier dealt to this rank.
+    pub tasks: usize,
     /// This rank's estimated cost, as a share of the whole (`1 / ranks` when balanced).
     pub estimated: f64,
 }
@@ -95,7 +95,7 @@ impl Refiner<'_> {
         let mine: Vec<Task> = tasks.into_iter().zip(&owner).filter(|(_, o)| **o == rank).map(|(t, _)| t).collect();
         let own_cost: f64 = cost.iter().zip(&owner).filter(|(_, o)| **o == rank).map(|(c, _)| c).sum();
         let own_pairs: u64 = mine.iter().map(|t| t.pairs(self.tree)).sum();
-        let count = (owner.len(), mine.len());
+        let count = mine.len();
         let watched = self.watched(Watch::over(own_pairs, observe));
         let mut links = mine
             .into_par_iter()

@@ -16,7 +16,7 @@
 //! taken on rank 0 and shared ([`Collective::agree`]).
 
 use crate::math::Real;
-use std::sync::{Arc, Condvar, Mutex};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::Instant;
 
 /// What a rank has sent and waited for in collective sums.
@@ -156,6 +156,35 @@ impl InProcessRanks {
     }
 }
 
+impl InProcessRanks {
+    /// Arrives at the current round and waits until every rank has: the last to arrive starts
+    /// the next round.
+    fn meet<'a>(&self, mut round: MutexGuard<'a, Round>) -> MutexGuard<'a, Round> {
+        let meeting = &self.shared;
+        round.arrived += 1;
+        let generation = round.generation;
+        if round.arrived == meeting.ranks {
+            round.arrived = 0;
+            round.generation += 1;
+            meeting.changed.notify_all();
+        }
+        while round.generation == generation {
+            round = meeting.changed.wait(round).unwrap_or_else(|e| e.into_inner());
+            if round.generation == generation {
+                self.check_others(&round);
+            }
+        }
+        round
+    }
+
+    /// Panics when another rank has ended: the round can never be complete.
+    fn check_others(&self, round: &Round) {
+        if let Some(rank) = round.abandoned {
+            panic!("rank {rank} ended before a collective sum that rank {} waits in", self.rank);
+        }
+    }
+}
+
 impl Drop for InProcessRanks {
     /// A rank that ends, by returning or by panicking, enters no further sum: a rank waiting
     /// in one, or entering one later, would wait forever, so it panics instead.
@@ -177,52 +206,18 @@ impl Collective for InProcessRanks {
 
     fn sum(&self, values: &mut [Real]) {
         let start = Instant::now();
-        let meeting = &self.shared;
-        let lock = || meeting.state.lock().unwrap_or_else(|e| e.into_inner());
-        let stopped = |round: &Round| {
-            if let Some(rank) = round.abandoned {
-                panic!("rank {rank} ended before a collective sum that rank {} waits in", self.rank);
-            }
-        };
-        // Phase one: every rank leaves its vector; the last to arrive starts phase two.
-        let mut round = lock();
-        stopped(&round);
+        // Phase one: every rank leaves its vector, and waits for the others'.
+        let mut round = self.shared.state.lock().unwrap_or_else(|e| e.into_inner());
+        self.check_others(&round);
         round.slots[self.rank] = values.to_vec();
-        round.arrived += 1;
-        let generation = round.generation;
-        if round.arrived == meeting.ranks {
-            round.arrived = 0;
-            round.generation += 1;
-            meeting.changed.notify_all();
-        } else {
-            while round.generation == generation {
-                round = meeting.changed.wait(round).unwrap_or_else(|e| e.into_inner());
-                if round.generation == generation {
-                    stopped(&round);
-                }
-            }
-        }
+        let mut round = self.meet(round);
         // Every rank sums the slots in rank order: the same bits on each.
         values.copy_from_slice(&round.slots[0]);
         for slot in &round.slots[1..] {
             values.iter_mut().zip(slot).for_each(|(v, s)| *v += s);
         }
         // Phase two: no rank leaves a vector for the next sum before every rank has read this one.
-        round.arrived += 1;
-        let generation = round.generation;
-        if round.arrived == meeting.ranks {
-            round.arrived = 0;
-            round.generation += 1;
-            meeting.changed.notify_all();
-        } else {
-            while round.generation == generation {
-                round = meeting.changed.wait(round).unwrap_or_else(|e| e.into_inner());
-                if round.generation == generation {
-                    stopped(&round);
-                }
-            }
-        }
-        drop(round);
+        drop(self.meet(round));
         let mut traffic = self.traffic.lock().unwrap_or_else(|e| e.into_inner());
         traffic.sums += 1;
         traffic.values += values.len() as u64;

@@ -210,7 +210,7 @@ impl Collective for InProcessRanks {
         let mut round = self.shared.state.lock().unwrap_or_else(|e| e.into_inner());
         self.check_others(&round);
         round.slots[self.rank] = values.to_vec();
-        let mut round = self.meet(round);
+        let round = self.meet(round);
         // Every rank sums the slots in rank order: the same bits on each.
         values.copy_from_slice(&round.slots[0]);
         for slot in &round.slots[1..] {

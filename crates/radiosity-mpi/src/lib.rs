@@ -1,5 +1,5 @@
 //! MPI ranks for the radiosity solvers: [`launch`] starts a program as `K` MPI ranks on this
-//! machine, and, with the crate feature `mpi`, [`MpiWorld`] is a
+//! machine, and, with the crate feature `mpi`, `MpiWorld` is a
 //! [`radiosity_core::Collective`] whose ranks are MPI processes.
 //!
 //! A distributed run is SPMD (the module doc of `radiosity_core::collective`): every rank runs

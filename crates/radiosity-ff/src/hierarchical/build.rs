@@ -11,7 +11,7 @@
 use super::HierarchicalColumns;
 use super::adjacency::{Adjacency, Lists};
 use super::brightness::Brightness;
-use super::distribution::{Distribution, RankFigures, totals};
+use super::distribution::{Distribution, RankFigures};
 use super::links::{self, BuildProgress, Links, Refiner, Watch};
 use super::params::HierarchicalParams;
 use super::shaft::ShaftTree;
@@ -365,3 +365,21 @@ fn parents(tree: &ClusterTree) -> Vec<u32> {
 /// The Jacobi sweeps of the radiosity a later refinement pass is weighed by: light bounced
 /// this many times, enough for an oracle that only needs each patch's brightness to a factor.
 const SWEEPS: usize = 8;
+
+/// The figures of the whole operator from every rank's (`ranks`) and what closure found
+/// (`closed`, the same on every rank): counts added up, the build's seconds the slowest rank's.
+fn totals(ranks: &[RankFigures], closed: &HierarchyFigures) -> HierarchyFigures {
+    let sum = |f: fn(&RankFigures) -> u64| ranks.iter().map(f).sum::<u64>();
+    HierarchyFigures {
+        far_links: sum(|r| r.far_links) as usize,
+        zeroth_links: sum(|r| r.zeroth_links) as usize,
+        near_links: sum(|r| r.near_links) as usize,
+        far_pairs: sum(|r| r.far_pairs),
+        rays: sum(|r| r.rays),
+        occluded: sum(|r| r.occluded),
+        clear_shafts: sum(|r| r.clear_shafts),
+        seconds: ranks.iter().map(|r| r.seconds).fold(0.0, f64::max),
+        bytes: sum(|r| r.bytes) as usize,
+        ..*closed
+    }
+}

@@ -14,7 +14,6 @@
 //! next product, and the solvers' `O(n)` work is small beside the links' (docs/distributed.md).
 
 use super::HierarchicalColumns;
-use super::build::HierarchyFigures;
 use super::links::BuildProgress;
 use super::params::HierarchicalParams;
 use crate::backend::BackendFigures;
@@ -26,7 +25,7 @@ use std::sync::Arc;
 /// What one rank built.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct RankFigures {
-    /// Far links with a cluster at one end at least ([`HierarchyFigures::far_links`]).
+    /// Far links with a cluster at one end at least ([`crate::HierarchyFigures::far_links`]).
     pub far_links: u64,
     /// Of them, those to zeroth order.
     pub zeroth_links: u64,
@@ -198,23 +197,5 @@ impl HierarchicalColumns {
         if let Some(d) = &self.distribution {
             d.collective.sum(values);
         }
-    }
-}
-
-/// The figures of the whole operator from every rank's (`ranks`) and what closure found
-/// (`closed`, the same on every rank): counts added up, the build's seconds the slowest rank's.
-pub(super) fn totals(ranks: &[RankFigures], closed: &HierarchyFigures) -> HierarchyFigures {
-    let sum = |f: fn(&RankFigures) -> u64| ranks.iter().map(f).sum::<u64>();
-    HierarchyFigures {
-        far_links: sum(|r| r.far_links) as usize,
-        zeroth_links: sum(|r| r.zeroth_links) as usize,
-        near_links: sum(|r| r.near_links) as usize,
-        far_pairs: sum(|r| r.far_pairs),
-        rays: sum(|r| r.rays),
-        occluded: sum(|r| r.occluded),
-        clear_shafts: sum(|r| r.clear_shafts),
-        seconds: ranks.iter().map(|r| r.seconds).fold(0.0, f64::max),
-        bytes: sum(|r| r.bytes) as usize,
-        ..*closed
     }
 }

@@ -89,11 +89,10 @@ impl Refiner<'_> {
         let limit = ((n / (ranks * tasks_per_rank.max(1))) as u32).max(1);
         let mut settled = Links::default();
         let tasks = self.watched(Watch::new(n, &|_| {})).frontier(limit, &mut settled);
-        let owner = deal(&tasks, self.tree, ranks);
-        let cost: Vec<f64> = tasks.iter().map(|t| f64::from(t.patches(self.tree))).collect();
-        let total_cost: f64 = cost.iter().sum();
+        let (owner, load) = deal(&tasks, self.tree, ranks);
+        let total: u64 = load.iter().sum();
+        let estimated = if total > 0 { load[rank] as f64 / total as f64 } else { 0.0 };
         let mine: Vec<Task> = tasks.into_iter().zip(&owner).filter(|(_, o)| **o == rank).map(|(t, _)| t).collect();
-        let own_cost: f64 = cost.iter().zip(&owner).filter(|(_, o)| **o == rank).map(|(c, _)| c).sum();
         let own_pairs: u64 = mine.iter().map(|t| t.pairs(self.tree)).sum();
         let count = mine.len();
         let watched = self.watched(Watch::over(own_pairs, observe));
@@ -117,7 +116,7 @@ impl Refiner<'_> {
         if rank == 0 {
             links.append(settled);
         }
-        Share { links, tasks: count, estimated: if total_cost > 0.0 { own_cost / total_cost } else { 0.0 } }
+        Share { links, tasks: count, estimated }
     }
 
     /// The tasks of the refinement from the root's link with itself, each task with more than
@@ -154,9 +153,10 @@ impl Refiner<'_> {
     }
 }
 
-/// The rank each task goes to: largest estimated cost first (ties by position), each to the
-/// rank with the least estimated cost so far (ties to the lowest rank).
-fn deal(tasks: &[Task], tree: &ClusterTree, ranks: usize) -> Vec<usize> {
+/// The rank each task goes to, and each rank's estimated cost: largest estimated cost first
+/// (ties by position), each to the rank with the least estimated cost so far (ties to the
+/// lowest rank).
+fn deal(tasks: &[Task], tree: &ClusterTree, ranks: usize) -> (Vec<usize>, Vec<u64>) {
     let mut by_cost: Vec<(u32, usize)> = tasks.iter().enumerate().map(|(k, t)| (t.patches(tree), k)).collect();
     by_cost.sort_unstable_by(|x, y| y.0.cmp(&x.0).then(x.1.cmp(&y.1)));
     let mut load = vec![0u64; ranks];
@@ -166,5 +166,5 @@ fn deal(tasks: &[Task], tree: &ClusterTree, ranks: usize) -> Vec<usize> {
         load[least] += u64::from(cost);
         owner[k] = least;
     }
-    owner
+    (owner, load)
 }

@@ -168,3 +168,41 @@ fn deal(tasks: &[Task], tree: &ClusterTree, ranks: usize) -> (Vec<usize>, Vec<u6
     }
     (owner, load)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use radiosity_geom::PreparedScene;
+
+    #[test]
+    fn the_deal_gives_every_task_one_rank_and_keeps_the_loads_within_the_largest_task() {
+        let prepared = PreparedScene::load("cornell:res=6").unwrap();
+        let tree = ClusterTree::new(prepared.scene());
+        // Every node's links within it, and every pair of siblings: tasks of very unequal costs.
+        let tasks: Vec<Task> = (0..tree.nodes.len() as u32)
+            .map(Task::Within)
+            .chain(tree.nodes.iter().filter_map(|n| n.children).map(|[a, b]| Task::Between {
+                a,
+                b,
+                traced: Vec::new(),
+                candidates: Vec::new(),
+            }))
+            .collect();
+        let largest = tasks.iter().map(|t| u64::from(t.patches(&tree))).max().unwrap();
+        for ranks in [1, 2, 3, 7] {
+            let (owner, load) = deal(&tasks, &tree, ranks);
+            assert_eq!(owner.len(), tasks.len());
+            assert!(owner.iter().all(|&r| r < ranks));
+            // Each rank's load is the cost of its tasks, and together they are every task's.
+            for (r, &l) in load.iter().enumerate() {
+                let own: u64 =
+                    tasks.iter().zip(&owner).filter(|(_, o)| **o == r).map(|(t, _)| u64::from(t.patches(&tree))).sum();
+                assert_eq!(own, l, "{ranks} ranks, rank {r}");
+            }
+            // Largest first, each to the least loaded: no two loads differ by more than one task.
+            let (lo, hi) = (load.iter().min().unwrap(), load.iter().max().unwrap());
+            assert!(hi - lo <= largest, "{ranks} ranks: loads {load:?}, largest task {largest}");
+            assert_eq!(deal(&tasks, &tree, ranks), (owner, load), "{ranks} ranks: the deal is not deterministic");
+        }
+    }
+}

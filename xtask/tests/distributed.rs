@@ -1,6 +1,6 @@
-//! `solve --ranks K` (an xtask built with `--features mpi`): the same answer as one process to
-//! 1e-12, printed once, with every rank's part reported; and, without MPI, `--ranks` refused
-//! in one sentence.
+//! `solve --ranks K` and `compare --ranks 2` (an xtask built with `--features mpi`): the same
+//! answer as one process to 1e-12, printed and written once, with every rank's part reported;
+//! and, without MPI, `--ranks` refused in one sentence.
 
 use super::xtask;
 
@@ -56,6 +56,55 @@ fn solve_over_two_and_three_ranks_gives_the_single_process_answer_once() {
     let text = String::from_utf8(solve(&["--ranks", "2"]).success().get_output().stdout.clone()).unwrap();
     assert_eq!(text.matches("scene        ").count(), 1, "{text}");
     assert_eq!(text.matches("\nrank ").count(), 2, "{text}");
+}
+
+#[cfg(feature = "mpi")]
+#[test]
+fn compare_over_two_ranks_writes_the_single_process_table_once() {
+    let dir = std::env::temp_dir().join(format!("radiosity-compare-ranks-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let table = |name: &str, extra: &[&str]| -> Vec<Vec<String>> {
+        let out = dir.join(name);
+        let out_arg = out.to_str().unwrap();
+        let mut args = vec![
+            "compare",
+            "--scene",
+            "cornell:res=6",
+            "--ff",
+            "hierarchical:eps=0.05",
+            "--solvers",
+            "gmres-30,xu",
+            "--until",
+            "steps=30",
+            "--out",
+            out_arg,
+        ];
+        args.extend(extra);
+        xtask(&args).success();
+        let text = std::fs::read_to_string(out.join("convergence.csv")).unwrap();
+        text.lines().map(|l| l.split(',').map(str::to_string).collect()).collect()
+    };
+    let one = table("one", &[]);
+    let split = table("split", &["--ranks", "2"]);
+    // Rank 0 alone wrote: one folder each, nothing beside them.
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 2);
+    assert_eq!(split.len(), one.len());
+    let header = &one[0];
+    for (a, b) in split.iter().zip(&one).skip(1) {
+        for (k, name) in header.iter().enumerate() {
+            match name.as_str() {
+                // Measured on each run's own clock.
+                "seconds" | "ff_seconds" => {}
+                // Printed to 4 significant digits; the runs agree to 1e-12.
+                "e_rms" | "e_max" | "residual" | "bound" => {
+                    let (x, y): (f64, f64) = (a[k].parse().unwrap(), b[k].parse().unwrap());
+                    assert!((x - y).abs() <= 1e-3 * y.abs(), "{name}: {x} against {y} in {a:?}");
+                }
+                _ => assert_eq!(a[k], b[k], "{name} in {a:?}"),
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[cfg(not(feature = "mpi"))]

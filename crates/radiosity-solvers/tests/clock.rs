@@ -9,14 +9,15 @@ use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 /// The cube's columns, each charged `price` seconds, whatever it takes to read.
-struct Priced {
-    columns: DenseColumns,
+pub(crate) struct Priced {
+    /// The columns served.
+    pub(crate) columns: DenseColumns,
     price: Real,
     charged: Mutex<Real>,
 }
 
 impl Priced {
-    fn new(price: Real) -> Priced {
+    pub(crate) fn new(price: Real) -> Priced {
         Priced { columns: cube(), price, charged: Mutex::new(0.0) }
     }
 }

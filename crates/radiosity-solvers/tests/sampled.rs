@@ -2,10 +2,10 @@
 //! ask for it get the solver's standard error on every state they see, as they get its residual
 //! bound; and a charged clock counts the rays' measured seconds, which no source charges for.
 
+use super::clock::Priced;
 use super::cube;
-use radiosity_core::{Channels, ColumnSource, ColumnTransport, DenseColumns, LinearSystem, Real};
+use radiosity_core::{Channels, ColumnTransport, LinearSystem, Real};
 use radiosity_solvers::*;
-use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 /// One Jacobi sweep of light by rays per step, in two replicates with independent streams:
@@ -123,32 +123,10 @@ fn observers_get_the_standard_error_before_every_state_they_see() {
     assert!(run.state.rays >= 200 && run.state.rays == problem.rays_cast(), "{}", run.state.rays);
 }
 
-/// The cube's columns, each charged `price` seconds.
-struct Priced {
-    columns: DenseColumns,
-    price: Real,
-    charged: Mutex<Real>,
-}
-
-impl ColumnSource for Priced {
-    fn patch_count(&self) -> usize {
-        self.columns.patch_count()
-    }
-
-    fn fill_column(&self, j: usize, column: &mut [Real]) {
-        self.columns.fill_column(j, column);
-        *self.charged.lock().unwrap() += self.price;
-    }
-
-    fn charged_seconds(&self) -> Option<Real> {
-        Some(*self.charged.lock().unwrap())
-    }
-}
-
 #[test]
 fn a_charged_clock_counts_the_rays_measured_seconds() {
     let system = system();
-    let source = Priced { columns: cube(), price: 1.0, charged: Mutex::new(0.0) };
+    let source = Priced::new(1.0);
     let transport = ColumnTransport::new(&source.columns, system.areas()).unwrap();
     let problem = Problem::new(&system, &source).unwrap().with_transport(&transport).unwrap();
     assert_eq!(problem.clock(), radiosity_core::Clock::Charged);

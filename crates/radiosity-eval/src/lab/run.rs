@@ -66,6 +66,7 @@ impl Lab<'_> {
 
     /// [`Lab::run_watched`], a solver that samples transport casting its rays through
     /// `sampler` ([`Lab::transport_sampler`], built by the caller: once for a comparison).
+    /// The caller has checked the rules ([`check_rules`]), before building the sampler.
     pub(crate) fn run_on(
         &self,
         solver: &mut dyn Solver,
@@ -75,7 +76,6 @@ impl Lab<'_> {
         watch: &mut dyn FnMut(&Point, &State) -> ControlFlow<()>,
         sampler: Option<&dyn TransportSampler>,
     ) -> Result<Outcome, LabError> {
-        check_rules(solver, rules)?;
         if let Some(w) = self.row_warning(solver) {
             progress.warn(&w);
         }

@@ -23,7 +23,7 @@ use crate::suites::bench::report_text::{duration, human_bytes, sig};
 use radiosity_core::{Clock, ColumnSource, LinearSystem, Real};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
-use radiosity_solvers::{Executor, ObserverMode, Problem, Solver, StopRules};
+use radiosity_solvers::{Executor, ObserverMode, Problem, Run, Solver, StopRules};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -112,14 +112,7 @@ pub fn time_to_accuracy_over(
     let order = radiosity_geom::spatial_order(&prepared.loaded.scene);
     let backend_seconds = start.elapsed().as_secs_f64() - scene_seconds;
     let problem = Problem::new(&system, source)?.with_patch_order(&order)?;
-    let mut recorder = Recorder::errors(&system, star, start);
-    let mut monitor = recorder.monitor().expect("a recorder of errors has a reference");
-    let run = Executor::new(solver, rules)
-        .monitor(&mut monitor)
-        .add_observer(&mut recorder, ObserverMode::Always)
-        .run(&problem)?;
-    let measurement = recorder.overhead();
-    let seconds = start.elapsed().as_secs_f64() - measurement;
+    let Recorded { run, recorder, seconds, measurement } = recorded_run(&system, star, start, solver, rules, &problem)?;
     let mut reached = Vec::new();
     for threshold in THRESHOLDS {
         let Some(p) = recorder.points().iter().find(|p| p.e_rms <= threshold) else { break };
@@ -137,6 +130,37 @@ pub fn time_to_accuracy_over(
         measurement,
         peak_rss: peak_rss(),
     })
+}
+
+/// A run timed from scene load, with every point's error against the reference
+/// ([`recorded_run`]).
+pub(crate) struct Recorded<'a> {
+    pub run: Run,
+    pub recorder: Recorder<'a>,
+    /// Seconds from `start` to the end of the run, less the recorder's own.
+    pub seconds: Real,
+    /// The recorder's own seconds.
+    pub measurement: Real,
+}
+
+/// Runs `solver` on `problem` under `rules`, recording e_rms against `star` after every step
+/// (the `rms=` rule's monitor), timed from `start`.
+pub(crate) fn recorded_run<'a>(
+    system: &'a LinearSystem,
+    star: &'a [Real],
+    start: Instant,
+    solver: &mut dyn Solver,
+    rules: StopRules,
+    problem: &Problem<'_>,
+) -> Result<Recorded<'a>, LabError> {
+    let mut recorder = Recorder::errors(system, star, start);
+    let mut monitor = recorder.monitor().expect("a recorder of errors has a reference");
+    let run = Executor::new(solver, rules)
+        .monitor(&mut monitor)
+        .add_observer(&mut recorder, ObserverMode::Always)
+        .run(problem)?;
+    let measurement = recorder.overhead();
+    Ok(Recorded { run, recorder, seconds: start.elapsed().as_secs_f64() - measurement, measurement })
 }
 
 /// Refuses a reference that is not one of `system`'s.

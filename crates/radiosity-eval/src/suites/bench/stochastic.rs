@@ -19,17 +19,16 @@
 
 use crate::error::LabError;
 use crate::lab::backends::fresh_backend;
-use crate::lab::recorder::Recorder;
 use crate::lab::timing::median;
 use crate::progress::NoProgress;
 use crate::reference::metrics::errors_against;
-use crate::suites::bench::e2e::{ReferenceNote, Setup, check_reference};
+use crate::suites::bench::e2e::{Recorded, ReferenceNote, Setup, check_reference, recorded_run};
 use crate::suites::bench::memory::peak_rss;
 use crate::suites::bench::report_text::{duration, human_bytes, sig};
 use radiosity_core::{LinearSystem, Real};
 use radiosity_ff::{BackendSpec, SceneTransport};
 use radiosity_geom::PreparedScene;
-use radiosity_solvers::{Executor, ObserverMode, Problem, Solver, SolverError, StopRules};
+use radiosity_solvers::{Problem, Solver, SolverError, StopRules};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -154,14 +153,7 @@ pub fn sampled_run(
     };
     let last = THRESHOLDS[THRESHOLDS.len() - 1];
     let rules = StopRules::parse(&format!("rms={last},time={}ms", (max_seconds * 1e3).ceil() as u64))?;
-    let mut recorder = Recorder::errors(&system, star, start);
-    let mut monitor = recorder.monitor().expect("a recorder of errors has a reference");
-    let run = Executor::new(solver, rules)
-        .monitor(&mut monitor)
-        .add_observer(&mut recorder, ObserverMode::Always)
-        .run(&problem)?;
-    let measurement = recorder.overhead();
-    let seconds = start.elapsed().as_secs_f64() - measurement;
+    let Recorded { run, recorder, seconds, measurement } = recorded_run(&system, star, start, solver, rules, &problem)?;
     let reached = THRESHOLDS
         .iter()
         .map_while(|&t| {

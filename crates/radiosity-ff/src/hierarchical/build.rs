@@ -182,10 +182,7 @@ impl HierarchicalColumns {
         };
         let assemble = |tree: ClusterTree, links: &Links| {
             let mut operator = HierarchicalColumns::assemble(scene, tree, links, start);
-            if let Some(c) = &collective {
-                let own = RankFigures::new(&operator, tasks, estimated);
-                operator.distribution = Some(Distribution::new(c.clone(), own));
-            }
+            operator.distribution = collective.clone().map(Distribution::new);
             operator
         };
         for _ in 1..params.passes {
@@ -213,12 +210,11 @@ impl HierarchicalColumns {
             operator.close(&near);
         }
         operator.figures.seconds = start.elapsed().as_secs_f64();
-        if let Some(c) = collective {
+        let own = RankFigures::new(&operator, tasks, estimated);
+        if let Some(distribution) = &mut operator.distribution {
             // Every rank's figures, and the whole operator's from them.
-            let own = RankFigures::new(&operator, tasks, estimated);
-            let distribution = Distribution::new(c, own);
+            distribution.gather(own);
             operator.figures = totals(distribution.ranks(), &operator.figures);
-            operator.distribution = Some(distribution);
         }
         operator
     }

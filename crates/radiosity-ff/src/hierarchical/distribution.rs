@@ -151,11 +151,16 @@ impl fmt::Debug for Distribution {
 }
 
 impl Distribution {
-    /// The distribution over `collective` of an operator whose rank built what `own` says:
-    /// every rank's figures gathered.
-    pub(super) fn new(collective: Arc<dyn Collective>, own: RankFigures) -> Distribution {
-        let ranks = collective.gather(&own.to_values()).iter().map(|v| RankFigures::from_values(v)).collect();
-        Distribution { collective, ranks }
+    /// The distribution over `collective`, its ranks' figures not yet gathered (a part still
+    /// being built: its products and closure already sum over the ranks).
+    pub(super) fn new(collective: Arc<dyn Collective>) -> Distribution {
+        Distribution { collective, ranks: Vec::new() }
+    }
+
+    /// Gathers every rank's figures, this rank's being `own`: a collective call, once the part
+    /// is built.
+    pub(super) fn gather(&mut self, own: RankFigures) {
+        self.ranks = self.collective.gather(&own.to_values()).iter().map(|v| RankFigures::from_values(v)).collect();
     }
 
     /// The ranks the operator is split over.

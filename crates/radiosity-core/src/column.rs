@@ -31,6 +31,7 @@
 
 use crate::collective::Collective;
 use crate::error::CoreError;
+use crate::link_source::LinkSource;
 use crate::math::Real;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
@@ -88,6 +89,12 @@ pub trait ColumnSource: Sync {
     /// collective sum, and callers take any decision that may differ between ranks (one that
     /// reads a clock) through [`Collective::agree`]. `None` (the default): one process.
     fn collective(&self) -> Option<&dyn Collective> {
+        None
+    }
+
+    /// The source's links, when it exposes them ([`LinkSource`]: a hierarchical operator), so
+    /// that solvers can shoot from the nodes of its tree; `None` (the default) otherwise.
+    fn link_source(&self) -> Option<&dyn LinkSource> {
         None
     }
 }
@@ -170,6 +177,10 @@ impl<T: ColumnSource + ?Sized> ColumnSource for &T {
     fn collective(&self) -> Option<&dyn Collective> {
         (**self).collective()
     }
+
+    fn link_source(&self) -> Option<&dyn LinkSource> {
+        (**self).link_source()
+    }
 }
 
 impl<T: ColumnSource + ?Sized> ColumnSource for Box<T> {
@@ -204,6 +215,10 @@ impl<T: ColumnSource + ?Sized> ColumnSource for Box<T> {
     fn collective(&self) -> Option<&dyn Collective> {
         (**self).collective()
     }
+
+    fn link_source(&self) -> Option<&dyn LinkSource> {
+        (**self).link_source()
+    }
 }
 
 impl<T: ColumnSource + ?Sized + Send> ColumnSource for std::sync::Arc<T> {
@@ -237,6 +252,10 @@ impl<T: ColumnSource + ?Sized + Send> ColumnSource for std::sync::Arc<T> {
 
     fn collective(&self) -> Option<&dyn Collective> {
         (**self).collective()
+    }
+
+    fn link_source(&self) -> Option<&dyn LinkSource> {
+        (**self).link_source()
     }
 }
 
@@ -410,5 +429,9 @@ impl<S: ColumnSource> ColumnSource for CountingColumns<S> {
     }
     fn collective(&self) -> Option<&dyn Collective> {
         self.inner.collective()
+    }
+
+    fn link_source(&self) -> Option<&dyn LinkSource> {
+        self.inner.link_source()
     }
 }

@@ -39,6 +39,7 @@ pub mod dense_lu;
 pub mod error;
 pub mod faer_operator;
 pub mod ids;
+pub mod link_source;
 pub mod math;
 pub mod operator;
 pub mod patch;
@@ -55,6 +56,7 @@ pub use column_transport::{AliasTable, ColumnTransport};
 pub use error::CoreError;
 pub use faer_operator::SymmetrizedOperator;
 pub use ids::{MaterialId, ObjectId};
+pub use link_source::{LinkSource, NO_PARENT};
 pub use math::{Real, Vec3};
 pub use operator::{
     Product, RadiosityOperator, apply_from_product, multiply, multiply_by_columns, residual_from_product,

@@ -9,6 +9,7 @@ mod hemicube;
 mod hierarchical;
 mod matrix;
 mod montecarlo;
+mod nodal;
 mod pair_visibility;
 mod scale;
 mod scene_transport;

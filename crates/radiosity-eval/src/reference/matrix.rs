@@ -238,6 +238,10 @@ impl<S: ColumnSource> ColumnSource for F32Columns<S> {
     fn collective(&self) -> Option<&dyn radiosity_core::Collective> {
         self.0.collective()
     }
+
+    fn link_source(&self) -> Option<&dyn radiosity_core::LinkSource> {
+        self.0.link_source()
+    }
 }
 
 fn assemble_dyn(f: &dyn ColumnSource, max_bytes: usize) -> Result<FormFactors, EvalError> {

@@ -63,6 +63,11 @@ impl<T: Copy + Default + Send> Adjacency<T> {
         self.other[at.clone()].iter().zip(&self.value[at])
     }
 
+    /// The number of links in the list of `k`.
+    pub(super) fn degree(&self, k: usize) -> usize {
+        self.start[k + 1] - self.start[k]
+    }
+
     /// Each link once: its ends, the lower first.
     pub(super) fn ends(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
         (0..self.start.len() - 1).flat_map(move |k| {

@@ -36,6 +36,8 @@
 //! - `adjacency`: the link lists (compressed sparse rows);
 //! - `product`: products, columns and rows, and what the operator can do as a
 //!   [`FormFactorBackend`](crate::FormFactorBackend);
+//! - `nodal`: its links shown to solvers that shoot from its nodes
+//!   ([`LinkSource`](radiosity_core::LinkSource));
 //! - `stored`: the operator as bytes, for the lab's cache.
 //!
 //! ## References
@@ -55,6 +57,7 @@ mod build;
 mod closure;
 mod distribution;
 mod links;
+mod nodal;
 mod params;
 mod product;
 mod shaft;

@@ -14,7 +14,7 @@ use super::HierarchicalColumns;
 use super::distribution::Distribution;
 use super::links::{Span, kernel_factor};
 use crate::backend::{BackendFigures, FormFactorBackend};
-use radiosity_core::{Collective, ColumnSource, Real, Vec3};
+use radiosity_core::{Collective, ColumnSource, LinkSource, Real, Vec3};
 use rayon::prelude::*;
 
 impl HierarchicalColumns {
@@ -106,6 +106,11 @@ impl ColumnSource for HierarchicalColumns {
 
     fn collective(&self) -> Option<&dyn Collective> {
         self.distribution.as_ref().map(Distribution::collective)
+    }
+
+    /// Its links, for shooting from its nodes (`nodal`); not when split over ranks.
+    fn link_source(&self) -> Option<&dyn LinkSource> {
+        self.distribution.is_none().then_some(self as &dyn LinkSource)
     }
 }
 
@@ -206,23 +211,23 @@ impl HierarchicalColumns {
 /// `M1` are `Σ w m_k b`) over its patches, `w = A x`, `m` the normal and `b` the offset of the
 /// centroid from the node's centre.
 #[derive(Clone, Copy, Debug, Default)]
-struct Moments {
-    m0: Vec3,
-    m1: [Vec3; 3],
+pub(super) struct Moments {
+    pub(super) m0: Vec3,
+    pub(super) m1: [Vec3; 3],
 }
 
 impl Moments {
-    fn of(wm: Vec3, b: Vec3) -> Moments {
+    pub(super) fn of(wm: Vec3, b: Vec3) -> Moments {
         Moments { m0: wm, m1: [b * wm.x, b * wm.y, b * wm.z] }
     }
 
     /// About a centre `δ` away: `b` becomes `b + δ`.
-    fn shifted(&self, delta: Vec3) -> Moments {
+    pub(super) fn shifted(&self, delta: Vec3) -> Moments {
         let m = self.m0;
         Moments { m0: m, m1: [self.m1[0] + delta * m.x, self.m1[1] + delta * m.y, self.m1[2] + delta * m.z] }
     }
 
-    fn plus(&self, o: &Moments) -> Moments {
+    pub(super) fn plus(&self, o: &Moments) -> Moments {
         Moments { m0: self.m0 + o.m0, m1: [self.m1[0] + o.m1[0], self.m1[1] + o.m1[1], self.m1[2] + o.m1[2]] }
     }
 }
@@ -230,9 +235,9 @@ impl Moments {
 /// What a node receives through its far links, as a function of a patch's normal `n` and
 /// offset `a` from the node's centre: `n · V + Σ_k n_k (W_k · a)`.
 #[derive(Clone, Copy, Debug, Default)]
-struct Form {
-    v: Vec3,
-    w: [Vec3; 3],
+pub(super) struct Form {
+    pub(super) v: Vec3,
+    pub(super) w: [Vec3; 3],
 }
 
 impl Form {
@@ -244,7 +249,7 @@ impl Form {
     /// `V += g (S e − 2Q e / r + P U / r − T e / r)` and
     /// `W += g (2S e eᵀ / r − S P / r + e (P M0)ᵀ / r)`.
     /// To zeroth order (`span.first` false), `V += g S e` alone.
-    fn receive(forms: &mut [Form], from: &[Moments], span: &Span) {
+    pub(super) fn receive(forms: &mut [Form], from: &[Moments], span: &Span) {
         let (e, r, g) = (span.d, span.r, span.g);
         if !span.first {
             for (form, from) in forms.iter_mut().zip(from) {
@@ -275,18 +280,18 @@ impl Form {
     }
 
     /// About a centre `δ` away (a child's): `a` becomes `a + δ`.
-    fn shifted(&self, delta: Vec3) -> Form {
+    pub(super) fn shifted(&self, delta: Vec3) -> Form {
         Form { v: self.v + Vec3::new(self.w[0].dot(delta), self.w[1].dot(delta), self.w[2].dot(delta)), w: self.w }
     }
 
-    fn add(&mut self, o: &Form) {
+    pub(super) fn add(&mut self, o: &Form) {
         self.v += o.v;
         for k in 0..3 {
             self.w[k] += o.w[k];
         }
     }
 
-    fn at(&self, n: Vec3, a: Vec3) -> Real {
+    pub(super) fn at(&self, n: Vec3, a: Vec3) -> Real {
         n.dot(self.v) + n.x * self.w[0].dot(a) + n.y * self.w[1].dot(a) + n.z * self.w[2].dot(a)
     }
 }

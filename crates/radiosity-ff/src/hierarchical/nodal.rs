@@ -1,0 +1,291 @@
+//! The operator's links shown to solvers ([`LinkSource`]): shooting from a node of the cluster
+//! tree through its own links, at their cost.
+//!
+//! A node's **charge** (per channel, [`CHARGE`] numbers) is what its far links read of a
+//! vector `x` over its patches, the moments `M0 = Σ A_j w_j x_j m_j` and
+//! `M1 = Σ A_j w_j x_j m_j b_jᵀ` of the product (`product`), and at a leaf also `x_p` itself,
+//! which its near links and far pairs read. A node's **field** ([`FIELD`] numbers) is the
+//! linear form `n · V + nᵀ W a` its far links give the patches below it, and at a leaf also
+//! the irradiance its near links and far pairs brought, weights applied. Pushed down the tree
+//! (shifting `V` by `W δ`) and evaluated at the patches, weighed by their closure weights,
+//! the fields give `Σ_k S_k x_k`: exactly what a product gives when every node sends the
+//! charge of the same `x` (tested).
+//!
+//! An operator split over ranks does not show its links: each rank holds a share of them, and a
+//! shot's fields would need a sum over ranks at every push (not built).
+
+use super::HierarchicalColumns;
+use super::links::{Span, kernel_factor};
+use super::product::{Form, Moments};
+use radiosity_core::{LinkSource, Real, Vec3};
+use rayon::prelude::*;
+
+/// The numbers of a charge per channel: `M0` (3), `M1` (9), and a leaf's `x_p`.
+const CHARGE: usize = 13;
+/// The numbers of a field per channel: `V` (3), `W` (9), and a leaf's irradiance from its near
+/// links and far pairs.
+const FIELD: usize = 13;
+
+/// What [`LinkSource::send_shares`] adds to every share, relative: the shares are computed by
+/// the product's moments, a few roundings from the entries the columns give.
+const SHARE_MARGIN: Real = 1e-9;
+
+fn moments(c: &[Real]) -> Moments {
+    Moments {
+        m0: Vec3::new(c[0], c[1], c[2]),
+        m1: [Vec3::new(c[3], c[4], c[5]), Vec3::new(c[6], c[7], c[8]), Vec3::new(c[9], c[10], c[11])],
+    }
+}
+
+fn put_moments(m: &Moments, c: &mut [Real]) {
+    c[..3].copy_from_slice(&m.m0.to_array());
+    for k in 0..3 {
+        c[3 + 3 * k..6 + 3 * k].copy_from_slice(&m.m1[k].to_array());
+    }
+}
+
+fn form(f: &[Real]) -> Form {
+    Form {
+        v: Vec3::new(f[0], f[1], f[2]),
+        w: [Vec3::new(f[3], f[4], f[5]), Vec3::new(f[6], f[7], f[8]), Vec3::new(f[9], f[10], f[11])],
+    }
+}
+
+fn put_form(form: &Form, f: &mut [Real]) {
+    f[..3].copy_from_slice(&form.v.to_array());
+    for k in 0..3 {
+        f[3 + 3 * k..6 + 3 * k].copy_from_slice(&form.w[k].to_array());
+    }
+}
+
+impl HierarchicalColumns {
+    /// The patch of leaf `node`.
+    fn patch_of_leaf(&self, node: usize) -> usize {
+        self.tree.order[self.tree.nodes[node].first as usize] as usize
+    }
+
+    /// The form node `node` receives through its far links from the charges of the other
+    /// ends `sending` marks (all of them when `None`), per channel, added to `field`.
+    fn receive_far(&self, node: usize, charges: &[Real], sending: Option<&[bool]>, k: usize, field: &mut [Real]) {
+        for (&other, &[clear, count]) in self.far.of(node) {
+            if sending.is_some_and(|s| !s[other as usize]) {
+                continue;
+            }
+            let span = Span::new(&self.tree, node as u32, other, clear, count);
+            for ch in 0..k {
+                let from = moments(&charges[(other as usize * k + ch) * CHARGE..]);
+                let slot = &mut field[ch * FIELD..(ch + 1) * FIELD];
+                let mut f = form(slot);
+                Form::receive(std::slice::from_mut(&mut f), std::slice::from_ref(&from), &span);
+                put_form(&f, slot);
+            }
+        }
+    }
+
+    /// What patch `p`'s near links and far pairs bring it from the values `value(q)` of the
+    /// patches at their other ends (`None`: not sent), weights applied.
+    fn receive_near(&self, p: usize, value: impl Fn(usize) -> Option<Real>) -> Real {
+        let mut s = 0.0;
+        for (&q, &t) in self.near.of(p) {
+            if let Some(x) = value(q as usize) {
+                s += t / self.areas[p] * x;
+            }
+        }
+        for (&q, &t) in self.pairs.of(p) {
+            if let Some(x) = value(q as usize) {
+                s += self.weights[p] * self.weights[q as usize] * (t / self.areas[p]) * x;
+            }
+        }
+        s
+    }
+
+    /// Whether node `o` holds the leaf `leaf`: in pre-order, `o`'s subtree is the `2 count − 1`
+    /// nodes from `o`.
+    fn holds(&self, o: usize, leaf: u32) -> bool {
+        let span = 2 * self.tree.nodes[o].count as usize - 1;
+        (o..o + span).contains(&(leaf as usize))
+    }
+}
+
+impl LinkSource for HierarchicalColumns {
+    fn parents(&self) -> &[u32] {
+        &self.parent
+    }
+
+    fn leaves(&self) -> &[u32] {
+        &self.tree.leaf
+    }
+
+    fn link_count(&self, node: usize) -> usize {
+        let near = if self.tree.nodes[node].is_leaf() {
+            let p = self.patch_of_leaf(node);
+            self.near.degree(p) + self.pairs.degree(p)
+        } else {
+            0
+        };
+        self.far.degree(node) + near
+    }
+
+    fn charge_len(&self) -> usize {
+        CHARGE
+    }
+
+    fn field_len(&self) -> usize {
+        FIELD
+    }
+
+    /// The product's moments, gathered up the tree (`product`).
+    fn charges(&self, x: &[Real], k: usize, charges: &mut [Real]) {
+        let nodes = &self.tree.nodes;
+        charges.fill(0.0);
+        for node in (0..nodes.len()).rev() {
+            match nodes[node].children {
+                None => {
+                    let p = self.patch_of_leaf(node);
+                    let offset = self.centroids[p] - nodes[node].centre;
+                    for ch in 0..k {
+                        let xp = x[p * k + ch];
+                        let m = Moments::of(self.normals[p] * (self.areas[p] * self.weights[p] * xp), offset);
+                        let slot = &mut charges[(node * k + ch) * CHARGE..(node * k + ch + 1) * CHARGE];
+                        put_moments(&m, slot);
+                        slot[12] = xp;
+                    }
+                }
+                Some([a, b]) => {
+                    let (a, b) = (a as usize, b as usize);
+                    let (da, db) = (nodes[a].centre - nodes[node].centre, nodes[b].centre - nodes[node].centre);
+                    for ch in 0..k {
+                        let ma = moments(&charges[(a * k + ch) * CHARGE..]);
+                        let mb = moments(&charges[(b * k + ch) * CHARGE..]);
+                        let m = ma.shifted(da).plus(&mb.shifted(db));
+                        put_moments(&m, &mut charges[(node * k + ch) * CHARGE..]);
+                    }
+                }
+            }
+        }
+    }
+
+    /// In parallel over the receivers, each summing its links in their fixed order.
+    fn shoot(&self, charges: &[Real], sending: &[bool], k: usize, fields: &mut [Real]) {
+        let leaves = &self.tree.leaf;
+        fields.par_chunks_mut(k * FIELD).enumerate().for_each(|(node, field)| {
+            self.receive_far(node, charges, Some(sending), k, field);
+            if self.tree.nodes[node].is_leaf() {
+                let p = self.patch_of_leaf(node);
+                for ch in 0..k {
+                    let value = |q: usize| {
+                        let leaf = leaves[q] as usize;
+                        sending[leaf].then(|| charges[(leaf * k + ch) * CHARGE + 12])
+                    };
+                    field[ch * FIELD + 12] += self.receive_near(p, value);
+                }
+            }
+        });
+    }
+
+    /// Pushed down in pre-order (`product`), then evaluated at the leaves.
+    fn evaluate(&self, fields: &mut [Real], k: usize, out: &mut [Real]) {
+        let nodes = &self.tree.nodes;
+        for node in 0..nodes.len() {
+            match nodes[node].children {
+                None => {
+                    let p = self.patch_of_leaf(node);
+                    let offset = self.centroids[p] - nodes[node].centre;
+                    for ch in 0..k {
+                        let slot = &fields[(node * k + ch) * FIELD..(node * k + ch + 1) * FIELD];
+                        out[p * k + ch] = self.weights[p] * form(slot).at(self.normals[p], offset) + slot[12];
+                    }
+                }
+                Some(children) => {
+                    for ch in 0..k {
+                        let parent = form(&fields[(node * k + ch) * FIELD..]);
+                        for &c in &children {
+                            let delta = nodes[c as usize].centre - nodes[node].centre;
+                            let slot = &mut fields[(c as usize * k + ch) * FIELD..];
+                            let mut child = form(slot);
+                            child.add(&parent.shifted(delta));
+                            put_form(&child, slot);
+                        }
+                    }
+                }
+            }
+        }
+        fields.fill(0.0);
+    }
+
+    /// Each node's far links receive the charges of `weights` (`A_i w_i weights_i` moments:
+    /// `A_i F_ij / A_j = F_ji` by the kernel's symmetry), evaluated at each of its patches
+    /// without what its ancestors receive, plus a leaf's near links and far pairs; the largest,
+    /// raised by [`SHARE_MARGIN`].
+    fn send_shares(&self, weights: &[Real], k: usize, shares: &mut [Real]) -> bool {
+        if self.distribution.is_some() {
+            return false;
+        }
+        let nodes = &self.tree.nodes;
+        let mut charges = vec![0.0; nodes.len() * k * CHARGE];
+        self.charges(weights, k, &mut charges);
+        shares.par_chunks_mut(k).enumerate().for_each(|(node, share)| {
+            let mut field = vec![0.0; k * FIELD];
+            self.receive_far(node, &charges, None, k, &mut field);
+            share.fill(0.0);
+            let centre = nodes[node].centre;
+            for &j in self.tree.patches_of(node as u32) {
+                let j = j as usize;
+                for ch in 0..k {
+                    let mut s =
+                        self.weights[j] * form(&field[ch * FIELD..]).at(self.normals[j], self.centroids[j] - centre);
+                    if nodes[node].is_leaf() {
+                        s += self.receive_near(j, |q| Some(weights[q * k + ch]));
+                    }
+                    share[ch] = share[ch].max(s * (1.0 + SHARE_MARGIN));
+                }
+            }
+        });
+        true
+    }
+
+    /// For each column `j`, the far links of `j`'s ancestors whose other end holds a patch of
+    /// the block, and `j`'s near links and far pairs, as `fill_line` computes them.
+    fn block(&self, patches: &[usize], block: &mut [Real]) {
+        let m = patches.len();
+        block.fill(0.0);
+        let leaves: Vec<u32> = patches.iter().map(|&p| self.tree.leaf[p]).collect();
+        let mut marked: Vec<u32> = Vec::new();
+        for &p in patches {
+            self.ancestors(p, |a| marked.push(a));
+        }
+        marked.sort_unstable();
+        marked.dedup();
+        let w = &self.weights;
+        for (b, &j) in patches.iter().enumerate() {
+            self.ancestors(j, |a| {
+                let ca = self.tree.nodes[a as usize].centre;
+                for (&o, &[clear, count]) in self.far.of(a as usize) {
+                    if marked.binary_search(&o).is_err() {
+                        continue;
+                    }
+                    let span = Span::new(&self.tree, a, o, clear, count);
+                    let co = self.tree.nodes[o as usize].centre;
+                    for (r, &i) in patches.iter().enumerate() {
+                        if self.holds(o as usize, leaves[r]) {
+                            let kappa = kernel_factor(
+                                &span,
+                                (self.normals[j], self.centroids[j] - ca),
+                                (self.normals[i], self.centroids[i] - co),
+                            );
+                            block[r * m + b] = w[j] * w[i] * (self.areas[j] * (span.g * kappa));
+                        }
+                    }
+                }
+            });
+            for (r, &i) in patches.iter().enumerate() {
+                let near = self.near.of(j).find(|(q, _)| **q as usize == i).map(|(_, &t)| t / self.areas[i]);
+                let pair =
+                    self.pairs.of(j).find(|(q, _)| **q as usize == i).map(|(_, &t)| w[i] * w[j] * (t / self.areas[i]));
+                if let Some(v) = near.or(pair) {
+                    block[r * m + b] = v;
+                }
+            }
+        }
+    }
+}

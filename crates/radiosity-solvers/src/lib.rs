@@ -35,6 +35,10 @@
 //!   ([`Problem::with_transport`], [`Problem::cast`]): `stochastic-jacobi`
 //!   ([`StochasticJacobiParams`]), with a standard error from independent replicates
 //!   ([`Solver::standard_error`], [`StandardError`]);
+//! - shooting on the hierarchy, from the nodes of a tree through their own links, at their
+//!   cost ([`Problem::link_source`], [`NodeShootingParams`]): `h-southwell`, `h-pr`, `h-xu`,
+//!   `h-jacobi`, `h-gauss-seidel`, with groups solved at every pull
+//!   (`groups=clusters|spatial|unshot`);
 //! - random walks over rays, which never form `F` and need a problem that samples transport
 //!   ([`Problem::with_transport`]): `random-walk`, shooting from the emitters or gathering
 //!   from every patch, scored by collision or absorption, its error bar the spread of
@@ -92,6 +96,7 @@
 mod error;
 mod gathering;
 mod group;
+mod hierarchy;
 mod krylov;
 mod naming;
 mod registry;
@@ -110,6 +115,10 @@ pub use group::group_gathering::{GroupGathering, GroupGatheringParams, Partition
 pub use group::group_shooting::{GroupShooting, GroupShootingParams};
 pub use group::group_step::{CONDITION_LIMIT, GroupShot, GroupStats, InnerSolve, group_shot};
 pub use group::memory::ColumnMemory;
+pub use hierarchy::groups::Grouping;
+pub use hierarchy::node_shooting::{
+    DEFAULT_BLOCKS, DEFAULT_GROUP, DEFAULT_SHARE, NodeOrder, NodeShooting, NodeShootingParams,
+};
 pub use krylov::bicgstab::{Bicgstab, BicgstabParams};
 pub use krylov::cg::{CgParams, ConjugateGradients};
 pub use krylov::gmres::{Gmres, GmresParams};
@@ -171,6 +180,20 @@ pub const GROUP_SOLVERS: [&str; 10] = [
 /// tests.
 pub const BEYOND_PAPER_SOLVERS: [&str; 3] =
     ["xu-g30-m480:f=10:groups=interaction", "xu-g30-m480:f=10:inner=gs", "xu-g30-m480:f=10:adaptive=0.1"];
+
+/// The node shooters on the hierarchy, by canonical name, without groups and with each kind
+/// of group (`groups=clusters` needs a hierarchy, `groups=spatial` a patch order): run by the
+/// scene-level tests.
+pub const NODE_SOLVERS: [&str; 8] = [
+    "h-southwell",
+    "h-pr",
+    "h-xu",
+    "h-jacobi",
+    "h-gauss-seidel",
+    "h-xu:groups=clusters",
+    "h-xu:groups=spatial",
+    "h-pr:groups=unshot",
+];
 
 /// The Krylov solvers, by canonical name (the comparators of docs/design.md §4.8): run by the
 /// scene-level tests and the stress suite.

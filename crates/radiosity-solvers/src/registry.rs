@@ -18,7 +18,7 @@
 //!
 //! The built-in families ([`SolverRegistry::builtin`]), in this order: [`JacobiParams`],
 //! [`GaussSeidelParams`], [`PointShootingParams`], [`GroupGatheringParams`],
-//! [`GroupShootingParams`], [`GroupAcceleratedParams`], [`CgParams`], [`GmresParams`],
+//! [`GroupShootingParams`], [`GroupAcceleratedParams`], [`NodeShootingParams`], [`CgParams`], [`GmresParams`],
 //! [`BicgstabParams`], [`StochasticJacobiParams`] and [`RandomWalkParams`]. Library users add their own,
 //! typed ([`SolverRegistry::register`]) or as a closure ([`SolverRegistry::register_fn`]);
 //! built-in families come first, so a new family cannot change what a built-in name means
@@ -40,6 +40,7 @@ use crate::gathering::jacobi::JacobiParams;
 use crate::group::group_accelerated::GroupAcceleratedParams;
 use crate::group::group_gathering::GroupGatheringParams;
 use crate::group::group_shooting::GroupShootingParams;
+use crate::hierarchy::node_shooting::NodeShootingParams;
 use crate::krylov::bicgstab::BicgstabParams;
 use crate::krylov::cg::CgParams;
 use crate::krylov::gmres::GmresParams;
@@ -115,7 +116,7 @@ impl SolverRegistry {
         SolverRegistry::default()
     }
 
-    /// The built-in families (module doc). Cheap: ten entries.
+    /// The built-in families (module doc). Cheap: twelve entries.
     pub fn builtin() -> SolverRegistry {
         let mut registry = SolverRegistry::empty();
         registry
@@ -125,6 +126,7 @@ impl SolverRegistry {
             .register::<GroupGatheringParams>()
             .register::<GroupShootingParams>()
             .register::<GroupAcceleratedParams>()
+            .register::<NodeShootingParams>()
             .register::<CgParams>()
             .register::<GmresParams>()
             .register::<BicgstabParams>()

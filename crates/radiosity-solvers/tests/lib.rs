@@ -9,6 +9,7 @@ use radiosity_solvers::*;
 
 mod clock;
 mod krylov;
+mod node_shooting;
 mod random_walk;
 mod residual_bound;
 mod sampled;

@@ -455,6 +455,7 @@ impl<'a> Executor<'a> {
         state.columns_reused = problem.columns_reused();
         state.products = problem.products();
         state.rays = problem.rays_cast();
+        state.links = problem.links_touched();
         state.ff_seconds += now.clock - ff_before.clock;
         state.solve_seconds += (wall - (now.measured - ff_before.measured)).max(0.0);
     }

@@ -36,8 +36,10 @@
 
 use crate::error::SolverError;
 use radiosity_core::operator::{Product, multiply_by_columns};
-use radiosity_core::{Clock, ColumnSource, LineTransfers, LinearSystem, Real, SampleCost, TransportSampler};
-use std::cell::Cell;
+use radiosity_core::{
+    Clock, ColumnSource, LineTransfers, LinearSystem, LinkSource, NO_PARENT, Real, SampleCost, TransportSampler,
+};
+use std::cell::{Cell, OnceCell};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
@@ -55,9 +57,14 @@ pub struct Problem<'a> {
     order: Option<&'a [usize]>,
     transport: Option<&'a dyn TransportSampler>,
     rays: AtomicU64,
-    /// Seconds spent casting rays, measured (also in `ff_seconds`): on a charged clock they
-    /// are added to the charge, since no source charges for them.
-    ray_seconds: Cell<f64>,
+    /// Seconds spent casting rays or shooting through links, measured (also in `ff_seconds`):
+    /// on a charged clock they are added to the charge, since no source charges for them.
+    uncharged_seconds: Cell<f64>,
+    /// Links touched by columns, rows, products and shots ([`Problem::links_touched`]).
+    links: Cell<u64>,
+    /// The links each patch's column touches, and all the links: counted once, when the
+    /// source shows its links.
+    link_costs: OnceCell<(Vec<u64>, u64)>,
 }
 
 /// Where a problem's columns come from.
@@ -158,7 +165,9 @@ impl<'a> Problem<'a> {
             order: None,
             transport: None,
             rays: AtomicU64::new(0),
-            ray_seconds: Cell::new(0.0),
+            uncharged_seconds: Cell::new(0.0),
+            links: Cell::new(0),
+            link_costs: OnceCell::new(),
         }
     }
 
@@ -207,7 +216,7 @@ impl<'a> Problem<'a> {
         let out = cast(&Rays { sampler, count: &self.rays });
         let seconds = start.elapsed().as_secs_f64();
         self.ff_seconds.set(self.ff_seconds.get() + seconds);
-        self.ray_seconds.set(self.ray_seconds.get() + seconds);
+        self.uncharged_seconds.set(self.uncharged_seconds.get() + seconds);
         Ok(out)
     }
 
@@ -274,6 +283,56 @@ impl<'a> Problem<'a> {
         self.columns.source().fill_column(j, out);
         self.ff_seconds.set(self.ff_seconds.get() + start.elapsed().as_secs_f64());
         self.fetched.set(self.fetched.get() + 1);
+        self.count_line_links(j);
+    }
+
+    /// Counts the links a column or row of patch `p` touches, when the source shows them: the
+    /// links of `p`'s leaf and of its ancestors.
+    fn count_line_links(&self, p: usize) {
+        if let Some(costs) = self.link_costs() {
+            self.links.set(self.links.get() + costs.0[p]);
+        }
+    }
+
+    /// The links each patch's column touches, and all the links, when the source shows them.
+    fn link_costs(&self) -> Option<&(Vec<u64>, u64)> {
+        let links = self.link_source()?;
+        Some(self.link_costs.get_or_init(|| {
+            let parents = links.parents();
+            let mut path = vec![0u64; parents.len()];
+            for k in 0..parents.len() {
+                let above = if parents[k] == NO_PARENT { 0 } else { path[parents[k] as usize] };
+                path[k] = above + links.link_count(k) as u64;
+            }
+            let all = (0..parents.len()).map(|k| links.link_count(k) as u64).sum();
+            (links.leaves().iter().map(|&leaf| path[leaf as usize]).collect(), all)
+        }))
+    }
+
+    /// The source's links, when it shows them ([`ColumnSource::link_source`]): what the
+    /// solvers that shoot from the nodes of a hierarchy use.
+    pub fn link_source(&self) -> Option<&dyn LinkSource> {
+        self.columns.source().link_source()
+    }
+
+    /// Runs `work` on the source's links, timed as form-factor seconds (measured on either
+    /// clock, as rays are), counting `touched` links; `None` when the source shows none.
+    pub fn through_links<R>(&self, touched: u64, work: impl FnOnce(&dyn LinkSource) -> R) -> Option<R> {
+        let links = self.link_source()?;
+        let start = Instant::now();
+        let out = work(links);
+        let seconds = start.elapsed().as_secs_f64();
+        self.ff_seconds.set(self.ff_seconds.get() + seconds);
+        self.uncharged_seconds.set(self.uncharged_seconds.get() + seconds);
+        self.links.set(self.links.get() + touched);
+        Some(out)
+    }
+
+    /// Links touched so far, when the source shows its links: a column or a row touches those
+    /// of its patch's leaf and ancestors, a product every link, a shot its nodes' links
+    /// ([`Problem::through_links`]). Zero over a source that shows none.
+    pub fn links_touched(&self) -> u64 {
+        self.links.get()
     }
 
     /// Row `i` of F (`F_ij` for every `j`) into `out`: one column computed. The row is exact
@@ -285,6 +344,7 @@ impl<'a> Problem<'a> {
         if exact {
             self.ff_seconds.set(self.ff_seconds.get() + start.elapsed().as_secs_f64());
             self.fetched.set(self.fetched.get() + 1);
+            self.count_line_links(i);
             return;
         }
         self.column(i, out);
@@ -299,6 +359,9 @@ impl<'a> Problem<'a> {
         if self.columns.source().multiply(x, self.channels(), out) {
             self.ff_seconds.set(self.ff_seconds.get() + start.elapsed().as_secs_f64());
             self.products.set(self.products.get() + 1);
+            if let Some((_, all)) = self.link_costs() {
+                self.links.set(self.links.get() + all);
+            }
             return Product::native();
         }
         column.resize(self.n(), 0.0);
@@ -350,7 +413,7 @@ impl<'a> Problem<'a> {
     /// either clock (no source charges for them).
     pub fn ff_seconds(&self) -> f64 {
         match (self.charged_from, self.columns.source().charged_seconds()) {
-            (Some(from), Some(now)) => (now - from).max(0.0) + self.ray_seconds.get(),
+            (Some(from), Some(now)) => (now - from).max(0.0) + self.uncharged_seconds.get(),
             _ => self.ff_seconds.get(),
         }
     }

@@ -35,6 +35,9 @@ pub struct State {
     /// Rays cast by a solver that samples transport ([`crate::Problem::cast`]): its cost, as
     /// columns are the others'.
     pub rays: u64,
+    /// Links touched, when the source shows its links ([`crate::Problem::links_touched`]): the
+    /// cost of shooting from the nodes of a hierarchy, and of columns and products over it.
+    pub links: u64,
     /// Seconds the columns and products cost, on the run's clock ([`crate::Problem::clock`]):
     /// measured, or charged by the source.
     pub ff_seconds: f64,
@@ -59,6 +62,7 @@ impl State {
             columns_reused: 0,
             products: 0,
             rays: 0,
+            links: 0,
             ff_seconds: 0.0,
             solve_seconds: 0.0,
             group_seconds: 0.0,

@@ -8,6 +8,7 @@ mod examples;
 mod gltf_export;
 mod lab;
 mod metrics;
+mod node_shooting;
 mod operator_distance;
 mod path_trace;
 mod plot;

@@ -24,8 +24,9 @@ use std::time::Instant;
 #[non_exhaustive]
 pub struct RecordPlan {
     /// Every metric every this many steps (`None`: about 100 points over the run's budget, and
-    /// every step of a solver whose step is a whole product by F, `StepKind::Product`, or an
-    /// iteration by rays, `StepKind::Sampled`).
+    /// every step of a solver whose step is a whole product by F, `StepKind::Product`, a round
+    /// of shooting on a hierarchy, `StepKind::Round`, or an iteration by rays,
+    /// `StepKind::Sampled`).
     /// e_rms is recorded after every step regardless.
     pub every: Option<u64>,
     /// Also record every metric at `n/4`, `n/2`, `n` and `2n` columns.

@@ -96,11 +96,13 @@ impl Lab<'_> {
             solver: name.clone(),
             // A step that is a whole product by F is a sweep's worth of columns, and one by rays
             // an iteration over every patch: every one is recorded.
-            every: plan.every.unwrap_or(if matches!(solver.step_kind(), StepKind::Product | StepKind::Sampled) {
-                1
-            } else {
-                (target / 100).max(1)
-            }),
+            every: plan.every.unwrap_or(
+                if matches!(solver.step_kind(), StepKind::Product | StepKind::Round | StepKind::Sampled) {
+                    1
+                } else {
+                    (target / 100).max(1)
+                },
+            ),
             marks: if plan.marks { vec![n / 4, n / 2, n, 2 * n] } else { Vec::new() },
             points: Vec::new(),
             rows: Vec::new(),

@@ -64,22 +64,30 @@ impl HierarchicalColumns {
         self.tree.order[self.tree.nodes[node].first as usize] as usize
     }
 
-    /// The form node `node` receives through its far links from the charges of the other
-    /// ends `sending` marks (all of them when `None`), per channel, added to `field`.
-    fn receive_far(&self, node: usize, charges: &[Real], sending: Option<&[bool]>, k: usize, field: &mut [Real]) {
+    /// Adds to `forms` (one per channel) what node `node` receives through its far links
+    /// from the moments of the other ends (`moments`, nodes × channels) that `sending` marks
+    /// (all of them when `None`).
+    fn receive_far(&self, node: usize, moments: &[Moments], sending: Option<&[bool]>, forms: &mut [Form]) {
+        let k = forms.len();
         for (&other, &[clear, count]) in self.far.of(node) {
             if sending.is_some_and(|s| !s[other as usize]) {
                 continue;
             }
             let span = Span::new(&self.tree, node as u32, other, clear, count);
-            for ch in 0..k {
-                let from = moments(&charges[(other as usize * k + ch) * CHARGE..]);
-                let slot = &mut field[ch * FIELD..(ch + 1) * FIELD];
-                let mut f = form(slot);
-                Form::receive(std::slice::from_mut(&mut f), std::slice::from_ref(&from), &span);
-                put_form(&f, slot);
-            }
+            Form::receive(forms, &moments[other as usize * k..(other as usize + 1) * k], &span);
         }
+    }
+
+    /// The moments of `charges` (nodes × channels), those of the nodes `sending` does not mark
+    /// left zero.
+    fn moments_of(&self, charges: &[Real], sending: Option<&[bool]>, k: usize) -> Vec<Moments> {
+        (0..self.tree.nodes.len() * k)
+            .into_par_iter()
+            .map(|idx| match sending {
+                Some(s) if !s[idx / k] => Moments::default(),
+                _ => moments(&charges[idx * CHARGE..]),
+            })
+            .collect()
     }
 
     /// What patch `p`'s near links and far pairs bring it from the values `value(q)` of the
@@ -168,19 +176,31 @@ impl LinkSource for HierarchicalColumns {
     /// In parallel over the receivers, each summing its links in their fixed order.
     fn shoot(&self, charges: &[Real], sending: &[bool], k: usize, fields: &mut [Real]) {
         let leaves = &self.tree.leaf;
-        fields.par_chunks_mut(k * FIELD).enumerate().for_each(|(node, field)| {
-            self.receive_far(node, charges, Some(sending), k, field);
-            if self.tree.nodes[node].is_leaf() {
-                let p = self.patch_of_leaf(node);
-                for ch in 0..k {
-                    let value = |q: usize| {
-                        let leaf = leaves[q] as usize;
-                        sending[leaf].then(|| charges[(leaf * k + ch) * CHARGE + 12])
-                    };
-                    field[ch * FIELD + 12] += self.receive_near(p, value);
+        let moments = self.moments_of(charges, Some(sending), k);
+        fields.par_chunks_mut(k * FIELD).enumerate().for_each_init(
+            || vec![Form::default(); k],
+            |forms, (node, field)| {
+                if self.far.degree(node) > 0 {
+                    for (ch, f) in forms.iter_mut().enumerate() {
+                        *f = form(&field[ch * FIELD..]);
+                    }
+                    self.receive_far(node, &moments, Some(sending), forms);
+                    for (ch, f) in forms.iter().enumerate() {
+                        put_form(f, &mut field[ch * FIELD..]);
+                    }
                 }
-            }
-        });
+                if self.tree.nodes[node].is_leaf() {
+                    let p = self.patch_of_leaf(node);
+                    for ch in 0..k {
+                        let value = |q: usize| {
+                            let leaf = leaves[q] as usize;
+                            sending[leaf].then(|| charges[(leaf * k + ch) * CHARGE + 12])
+                        };
+                        field[ch * FIELD + 12] += self.receive_near(p, value);
+                    }
+                }
+            },
+        );
     }
 
     /// Pushed down in pre-order (`product`), then evaluated at the leaves.
@@ -224,16 +244,16 @@ impl LinkSource for HierarchicalColumns {
         let nodes = &self.tree.nodes;
         let mut charges = vec![0.0; nodes.len() * k * CHARGE];
         self.charges(weights, k, &mut charges);
+        let moments = self.moments_of(&charges, None, k);
         shares.par_chunks_mut(k).enumerate().for_each(|(node, share)| {
-            let mut field = vec![0.0; k * FIELD];
-            self.receive_far(node, &charges, None, k, &mut field);
+            let mut forms = vec![Form::default(); k];
+            self.receive_far(node, &moments, None, &mut forms);
             share.fill(0.0);
             let centre = nodes[node].centre;
             for &j in self.tree.patches_of(node as u32) {
                 let j = j as usize;
                 for ch in 0..k {
-                    let mut s =
-                        self.weights[j] * form(&field[ch * FIELD..]).at(self.normals[j], self.centroids[j] - centre);
+                    let mut s = self.weights[j] * forms[ch].at(self.normals[j], self.centroids[j] - centre);
                     if nodes[node].is_leaf() {
                         s += self.receive_near(j, |q| Some(weights[q * k + ch]));
                     }

@@ -16,17 +16,21 @@
 //!   light, estimated as Xu estimates multiple reflections, by the ambient (Xu's direct part
 //!   needs a row of every patch and is left out). Every bounce, `1 / (1 − ρ̄)` times more,
 //!   diverged on a stored system of the tests (with spatial groups): on a hierarchy every
-//!   patch a pull reaches is overshot, not one shooter a step. An
-//!   overshot patch has a negative residual (a hole) until the light it anticipated comes
-//!   back; a pull holds the holes (takes `max(t, 0) + δ`) so that every node's unshot
-//!   radiosity stays non-negative and the bound tight, unless the holes outweigh the light
-//!   still unshot and the light the round brings (the overshoot was too large: the light
-//!   will not fill them), when it takes `t` as it is and does not overshoot;
+//!   patch a pull reaches is overshot, not one shooter a step;
 //! - `h-jacobi`: every node that holds anything, every round: a round is a sweep over the links,
 //!   as RenderPark's Jacobi iterates its hierarchy (one product's links);
 //! - `h-gauss-seidel`: the nodes in `blocks` slices of their numbering (a parent before its
 //!   children), one slice a round, so that what a slice sends is pulled before the next one
 //!   shoots: block Gauss–Seidel over the nodes, `blocks` rounds a sweep.
+//!
+//! **Holes.** An overshot patch, and a group whose interreflections were solved ahead
+//! (`groups`), have a negative residual, a hole, until the light they anticipated comes back
+//! through their own links. A pull holds the holes (takes `max(t, 0)`, then overshoots and
+//! solves the groups), so that every node's unshot radiosity stays non-negative and the bound
+//! tight: a group's solve of a hole would amplify it, and pulled holes would swing the
+//! radiosity. If a channel's holes outweigh the light still unshot on the nodes and the light
+//! the round brings, that light cannot fill them; the pull then takes `t` as it is, without
+//! overshoot or groups (counted as `holes_released`).
 //!
 //! Why a share, not one node a round: a push and a pull cost `O(nodes)`, as much as a few
 //! thousand links, so a round must move enough to pay for them; what a round sent stays out of
@@ -221,10 +225,11 @@ pub struct NodeShooting {
     params: NodeShootingParams,
     pipeline: Option<Pipeline>,
     groups: Groups,
-    /// What a push brings (`t`), overshot, and what a pull takes (`s`).
+    /// What a push brings (`t`) and what a pull takes (`s`).
     brought: Vec<Real>,
-    overshot: Vec<Real>,
     taken: Vec<Real>,
+    /// Pulls that took their holes back ([`NodeShooting::take`]).
+    released: u64,
     sending: Vec<bool>,
     rounds: u64,
     nodes_shot: u64,
@@ -237,8 +242,8 @@ impl Default for NodeShooting {
             pipeline: None,
             groups: Groups::default(),
             brought: Vec::new(),
-            overshot: Vec::new(),
             taken: Vec::new(),
+            released: 0,
             sending: Vec::new(),
             rounds: 0,
             nodes_shot: 0,
@@ -282,28 +287,34 @@ impl NodeShooting {
         }
     }
 
-    /// Xu's ambient overshoot added to `overshot`, channel by channel (module doc): while the
-    /// light still unshot on the nodes and the light the round brings outweigh the holes, the
-    /// holes are held and the rest overshot; otherwise everything is taken as it is.
-    fn overshoot(&mut self, problem: &Problem<'_>, pipeline: &Pipeline) {
-        let unshot = pipeline.unshot_norms();
+    /// What a pull takes of what the round brought (`t`, in `brought`), into `taken` (module
+    /// doc, "Holes"): holes held, overshot (`h-xu`), then each group's part solved; or `t` as
+    /// it is when some channel's holes outweigh the light unshot on the nodes and the light the
+    /// round brings.
+    fn take(&mut self, problem: &Problem<'_>, pipeline: &Pipeline) {
         let system = problem.system();
         let (area, k, n) = (system.areas(), problem.channels(), problem.n());
         let total: Real = area.iter().sum();
+        let unshot = pipeline.unshot_norms();
+        let mut held = self.brought.clone();
         for (c, unshot) in unshot.into_iter().enumerate() {
             let (lit, holes) = (0..n).fold((0.0, 0.0), |(lit, holes), i| {
-                let t = self.overshot[i * k + c];
+                let t = self.brought[i * k + c];
                 (lit + area[i] * t.max(0.0), holes + area[i] * (-t).max(0.0))
             });
-            let ambient = lit / total;
-            if holes > lit + unshot || !ambient.is_finite() {
-                continue;
+            if holes > lit + unshot {
+                // The light to come will not fill the holes: they are taken back as they are.
+                self.taken.clone_from(&self.brought);
+                self.released += 1;
+                return;
             }
+            let ambient = if self.params.overshoot { lit / total } else { 0.0 };
             for i in 0..n {
-                let t = &mut self.overshot[i * k + c];
+                let t = &mut held[i * k + c];
                 *t = t.max(0.0) + system.rho(i, c) * ambient;
             }
         }
+        self.groups.relax(problem, self.params.grouping, &held, &mut self.taken);
     }
 }
 
@@ -329,7 +340,7 @@ impl Solver for NodeShooting {
         let pipeline = Pipeline::start(problem, state)?;
         self.groups = Groups::prepare(problem, &pipeline, self.params.grouping, state.channels)?;
         self.pipeline = Some(pipeline);
-        (self.rounds, self.nodes_shot) = (0, 0);
+        (self.rounds, self.nodes_shot, self.released) = (0, 0, 0);
         Ok(())
     }
 
@@ -339,13 +350,7 @@ impl Solver for NodeShooting {
         let shot = self.sending.iter().filter(|s| **s).count() as u64;
         let touched = pipeline.shoot(problem, &self.sending);
         pipeline.push(problem, &mut self.brought);
-        // Overshot first, then each group's part solved: what the group takes carries its
-        // interreflections, overshoot included.
-        self.overshot.clone_from(&self.brought);
-        if self.params.overshoot {
-            self.overshoot(problem, &pipeline);
-        }
-        self.groups.relax(problem, self.params.grouping, &self.overshot, &mut self.taken);
+        self.take(problem, &pipeline);
         let pulled = pipeline.pull(problem, state, &self.brought, &self.taken);
         self.pipeline = Some(pipeline);
         pulled?;
@@ -362,14 +367,14 @@ impl Solver for NodeShooting {
         self.pipeline.as_ref().map(|p| p.bound(problem))
     }
 
-    /// A round: pushes and pulls over every node, like a product.
+    /// A round: some nodes' links, one push and one pull.
     fn step_kind(&self) -> StepKind {
-        StepKind::Product
+        StepKind::Round
     }
 
     fn record(&self) -> Record {
         let mut record = Record::new();
-        record.set("rounds", self.rounds).set("nodes_shot", self.nodes_shot);
+        record.set("rounds", self.rounds).set("nodes_shot", self.nodes_shot).set("holes_released", self.released);
         if self.params.grouping != Grouping::None {
             record
                 .set("group_solves", self.groups.solves)

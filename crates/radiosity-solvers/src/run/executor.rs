@@ -135,6 +135,11 @@ pub enum StepKind {
     /// [`crate::Gmres`]). The step cap counts it as `n` steps, so that it allows as many
     /// columns as it allows a gathering solver, and a lab records every such step.
     Product,
+    /// One round of shooting on a hierarchy ([`crate::NodeShooting`]): some nodes shoot
+    /// through their links, then one push and one pull over every node. Its cost is counted in
+    /// links ([`Problem::links_touched`]); the step cap counts it as one step, and a lab
+    /// records every such step.
+    Round,
 }
 
 /// One solver: how to start and how to take one step.

@@ -72,6 +72,8 @@ struct StatsJson {
     steps: u64,
     /// Rays cast by a solver that samples transport.
     rays: u64,
+    /// Links of the hierarchy touched (0 over a backend that shows none).
+    links: u64,
     seconds: Real,
     ff_seconds: Real,
     group_seconds: Real,
@@ -242,6 +244,7 @@ pub fn run(args: &Args) -> Result<()> {
         products: s.products,
         steps: s.step,
         rays: s.rays,
+        links: s.links,
         seconds: s.ff_seconds + s.solve_seconds,
         ff_seconds: s.ff_seconds,
         group_seconds: s.group_seconds,
@@ -286,12 +289,16 @@ pub fn run(args: &Args) -> Result<()> {
             0 => String::new(),
             k => format!(", {k} products"),
         };
+        let links = match stats.links {
+            0 => String::new(),
+            k => format!(", {k} links"),
+        };
         let (rays, in_ff) = match (stats.rays, stats.transport) {
             (0, _) => (String::new(), "in form factors"),
             (r, transport) => (format!(", {r} rays ({})", transport.unwrap_or_default()), "in form factors and rays"),
         };
         println!(
-            "work         {} steps, {} columns{reused}{products}{rays}, {:.3} s ({:.3} s {in_ff}; {} seconds)",
+            "work         {} steps, {} columns{reused}{products}{links}{rays}, {:.3} s ({:.3} s {in_ff}; {} seconds)",
             stats.steps, stats.columns, stats.seconds, stats.ff_seconds, stats.clock
         );
         if stats.group_seconds > 0.0 {

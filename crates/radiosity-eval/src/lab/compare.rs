@@ -39,7 +39,7 @@ impl Lab<'_> {
             false => None,
         };
         let sampler = built.as_ref().map(|b| &*b.sampler as &dyn TransportSampler);
-        let mut problem = Problem::new(self.system(), self.source())?;
+        let mut problem = Problem::new(self.system(), self.source())?.with_patch_order(&self.order)?;
         if let Some(sampler) = sampler {
             problem = problem.with_transport(sampler)?;
         }

@@ -63,6 +63,8 @@ pub struct Point {
     pub products: u64,
     /// Rays cast by a solver that samples transport.
     pub rays: u64,
+    /// Links of a hierarchy touched, when the source shows them ([`State::links`]).
+    pub links: u64,
     /// The run's seconds so far (form factors and solving; measurement excluded), on the run's
     /// clock ([`crate::Lab::clock`]): what a `time=` rule reads.
     pub seconds: Real,
@@ -288,6 +290,7 @@ impl Observer for Recorder<'_> {
             columns: state.columns,
             products: state.products,
             rays: state.rays,
+            links: state.links,
             seconds,
             wall,
             e_rms,

@@ -62,16 +62,17 @@ impl Comparison {
         Ok(Written { dir: dir.to_path_buf(), files })
     }
 
-    /// Writes the plots as SVG and PNG (against steps, columns, rays and seconds, each that
+    /// Writes the plots as SVG and PNG (against steps, columns, rays, links and seconds, each that
     /// has a solver to show: module doc); returns their file stems and titles.
     fn write_plots(&self, dir: &Path, files: &mut Vec<PathBuf>) -> Result<Vec<(String, String)>, LabError> {
         type Axis = fn(&Point) -> Real;
         type Shown = fn(&Outcome) -> bool;
         let seconds = format!("{} seconds (form factors and solving)", self.clock.name());
-        let axes: [(&str, &str, Axis, Shown); 4] = [
+        let axes: [(&str, &str, Axis, Shown); 5] = [
             ("steps", "shooting steps", |p| p.step as Real, |_| true),
             ("columns", "form-factor columns computed", |p| p.columns as Real, |o| !casts_only(o)),
             ("rays", "rays cast", |p| p.rays as Real, |o| o.state.rays > 0),
+            ("links", "links of the hierarchy touched", |p| p.links as Real, |o| o.state.links > 0),
             ("seconds", &seconds, |p| p.seconds, |_| true),
         ];
         let metric = self.metric();
@@ -151,7 +152,7 @@ impl Comparison {
         }
         let _ = writeln!(
             md,
-            "\n## Columns (and products, or rays) and {} seconds to reach {metric} 1e-2 and 1e-3\n",
+            "\n## Columns (and products, rays or links) and {} seconds to reach {metric} 1e-2 and 1e-3\n",
             self.clock.name()
         );
         let _ = writeln!(md, "| solver | 1e-2 | 1e-3 |\n|---|--:|--:|");
@@ -169,28 +170,39 @@ impl Comparison {
             self.clock.name()
         );
         let rays = self.casts_rays();
+        let links = self.touches_links();
         if let Some(transport) = &self.transport {
             let _ = writeln!(md, "Rays: {transport}; a ray's seconds are form-factor seconds, measured.\n");
         }
+        if links {
+            let _ = writeln!(
+                md,
+                "Links: those of the hierarchy each solver touched, a column the links of its patch's leaf and \
+                 ancestors, a product every link, a round of node shooting its nodes' links.\n"
+            );
+        }
         let _ = writeln!(
             md,
-            "| solver | steps | columns (reused) | products |{} form factors ({}) | solving | of which groups | \
-             measurement | stopped |\n|---|--:|--:|--:|{}--:|--:|--:|--:|---|",
+            "| solver | steps | columns (reused) | products |{}{} form factors ({}) | solving | of which groups | \
+             measurement | stopped |\n|---|--:|--:|--:|{}{}--:|--:|--:|--:|---|",
             if rays { " rays |" } else { "" },
+            if links { " links |" } else { "" },
             self.clock.name(),
             if rays { "--:|" } else { "" },
+            if links { "--:|" } else { "" },
         );
         for o in &self.outcomes {
             let s = &o.state;
             let _ = writeln!(
                 md,
-                "| `{}` | {} | {} ({}) | {} |{} {:.3} s | {:.3} s | {:.3} s | {:.3} s | {} |",
+                "| `{}` | {} | {} ({}) | {} |{}{} {:.3} s | {:.3} s | {:.3} s | {:.3} s | {} |",
                 o.solver,
                 s.step,
                 s.columns,
                 s.columns_reused,
                 s.products,
                 if rays { format!(" {} |", s.rays) } else { String::new() },
+                if links { format!(" {} |", s.links) } else { String::new() },
                 s.ff_seconds,
                 s.solve_seconds,
                 s.group_seconds,
@@ -273,6 +285,11 @@ impl Comparison {
         self.outcomes.iter().any(|o| o.state.rays > 0)
     }
 
+    /// Whether some run touched links of a hierarchy (its source shows them).
+    fn touches_links(&self) -> bool {
+        self.outcomes.iter().any(|o| o.state.links > 0)
+    }
+
     /// `report.md`'s section on each run's error bar: the certified bound beside the standard
     /// error, and what each promises.
     fn error_bars_markdown(&self, md: &mut String) {
@@ -309,14 +326,21 @@ impl Comparison {
     }
 
     fn reached_cell(&self, o: &Outcome, target: Real) -> String {
-        self.reached(o, target).map_or("—".into(), |p| match (p.products, p.rays) {
-            (0, 0) => format!("{} / {:.3} s", p.columns, p.seconds),
-            (0, r) if p.columns == 0 => format!("{r} rays / {:.3} s", p.seconds),
-            (k, r) => {
-                let rays = if r > 0 { format!(" + {r} rays") } else { String::new() };
-                let products = if k > 0 { format!(" + {k} products") } else { String::new() };
-                format!("{}{products}{rays} / {:.3} s", p.columns, p.seconds)
+        self.reached(o, target).map_or("—".into(), |p| {
+            if p.rays > 0 && p.columns == 0 && p.products == 0 {
+                return format!("{} rays / {:.3} s", p.rays, p.seconds);
             }
+            let mut cost = p.columns.to_string();
+            if p.products > 0 {
+                cost += &format!(" + {} products", p.products);
+            }
+            if p.rays > 0 {
+                cost += &format!(" + {} rays", p.rays);
+            }
+            if p.links > 0 {
+                cost += &format!(" ({} links)", p.links);
+            }
+            format!("{cost} / {:.3} s", p.seconds)
         })
     }
 }

@@ -101,8 +101,8 @@ pub use reference::solution::{Certificate, Method, ReferenceParams, ReferenceSol
 pub use reports::comparison::{Written, value_cell};
 pub use reports::paper;
 pub use reports::plot::{
-    BAND_LABEL, BAND_STANDARD_ERRORS, Curve, Marker, PlotSpec, Style, Variant, Y_LABEL, Y_LABEL_SHORT, style_of,
-    write_png, write_svg,
+    BAND_LABEL, BAND_STANDARD_ERRORS, BOUND_LABEL, BOUND_LABEL_SHORT, Curve, Marker, PlotSpec, Style, Variant, Y_LABEL,
+    Y_LABEL_SHORT, style_of, write_png, write_svg,
 };
 pub use reports::table::{ConvergenceTable, HEADER, round_significant};
 pub use suites::{bench, stress};

@@ -162,3 +162,22 @@ fn groups_solve_the_exchange_the_scene_holds_and_pay_on_a_stiff_furnace() {
     let (plain, grouped) = (error(&plain.state.radiosity), error(&grouped.state.radiosity));
     assert!(grouped < plain, "{grouped} with groups, {plain} without");
 }
+
+#[test]
+fn a_links_rule_stops_a_run_once_it_has_touched_that_many() {
+    let (_, system, f) = operator("cornell:res=4");
+    let rules = StopRules::parse("links=20000").unwrap();
+    assert_eq!(rules.rules[0].to_string(), "links=20000");
+    let problem = Problem::new(&system, &f).unwrap();
+    let mut solver = SolverRegistry::builtin().build("h-southwell").unwrap();
+    let run = Executor::new(solver.as_mut(), rules).run(&problem).unwrap();
+    assert!(matches!(run.termination, TerminationReason::Links(k) if k >= 20_000), "{}", run.termination);
+    // It stopped at the first round that reached the count, not later.
+    let rounds: u64 = run.record.count("rounds").unwrap();
+    assert!(rounds > 1, "the count needs more than one round on this scene");
+    let mut solver = SolverRegistry::builtin().build("h-southwell").unwrap();
+    let before = Executor::new(solver.as_mut(), StopRules::parse(&format!("steps={}", rounds - 1)).unwrap())
+        .run(&Problem::new(&system, &f).unwrap())
+        .unwrap();
+    assert!(before.state.links < 20_000, "{} links a round earlier", before.state.links);
+}

@@ -5,7 +5,9 @@
 
 use radiosity_eval::EvalError;
 use radiosity_eval::Rgb8;
-use radiosity_eval::{Curve, Marker, PlotSpec, Variant, Y_LABEL, Y_LABEL_SHORT, style_of, write_png, write_svg};
+use radiosity_eval::{
+    BOUND_LABEL, Curve, Marker, PlotSpec, Variant, Y_LABEL, Y_LABEL_SHORT, style_of, write_png, write_svg,
+};
 use std::collections::HashSet;
 
 fn decay(rate: f64) -> Vec<(f64, f64)> {
@@ -20,7 +22,7 @@ fn curves() -> Vec<Curve> {
 }
 
 fn spec() -> PlotSpec {
-    PlotSpec { title: "multi-cubes".into(), x_label: "shooting steps".into(), size: (480, 320) }
+    PlotSpec { title: "multi-cubes".into(), x_label: "shooting steps".into(), size: (480, 320), certified_bound: false }
 }
 
 fn png(curves: &[Curve], spec: &PlotSpec) -> Rgb8 {
@@ -43,6 +45,27 @@ fn svg_names_every_solver_and_the_axes() {
     write_svg(&curves(), &PlotSpec { size: (800, 500), ..spec() }, &mut out).unwrap();
     assert!(String::from_utf8(out).unwrap().contains(Y_LABEL));
     assert!(Y_LABEL.contains("e_rms") && Y_LABEL.contains("area-weighted relative RMS error"));
+    // A plot of certified bounds says so, not e_rms.
+    let mut out = Vec::new();
+    write_svg(&curves(), &PlotSpec { size: (800, 500), certified_bound: true, ..spec() }, &mut out).unwrap();
+    let svg = String::from_utf8(out).unwrap();
+    assert!(svg.contains(BOUND_LABEL) && !svg.contains("e_rms"), "the bound's label");
+}
+
+#[test]
+fn a_node_shooter_takes_its_point_methods_colour_and_each_kind_of_group_a_marker() {
+    for method in ["pr", "xu", "southwell", "jacobi", "gauss-seidel"] {
+        let (point, node) = (style_of(method), style_of(&format!("h-{method}")));
+        assert_eq!((node.colour, node.variant), (point.colour, Variant::Hierarchy), "h-{method}");
+    }
+    let names = ["h-xu", "h-xu:groups=clusters", "h-xu:groups=spatial", "h-xu:groups=unshot"];
+    let grey: HashSet<_> = names.iter().map(|n| style_of(n)).map(|s| (s.marker, s.filled)).collect();
+    assert_eq!(grey.len(), names.len(), "{names:?}");
+    let dashes: HashSet<_> = [Variant::Point, Variant::GroupAccelerated, Variant::Group, Variant::Hierarchy]
+        .iter()
+        .map(|v| v.dashes())
+        .collect();
+    assert_eq!(dashes.len(), 4);
 }
 
 #[test]

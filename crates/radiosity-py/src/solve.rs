@@ -54,7 +54,7 @@ pub struct Run {
 /// or `rms=` rule (`until="rays=1e7"`).
 ///
 /// `callback(point)`, when given, is called with every recorded point, after every step and
-/// on the initial state: a dict of `step`, `columns`, `products`, `rays`, `seconds`, `e_rms`,
+/// on the initial state: a dict of `step`, `columns`, `products`, `rays`, `links`, `seconds`, `e_rms`,
 /// `bound`, `std_error` (NaN where not known) and `radiosity` (`n × channels`). A true return value ends
 /// the run there (`stats["termination"]` says so); an exception ends it and is raised again
 /// from `solve`. Its time is not the run's.
@@ -176,6 +176,7 @@ fn call_back(py: Python<'_>, callback: &Py<PyAny>, point: &Point, state: &State)
     d.set_item("columns", point.columns)?;
     d.set_item("products", point.products)?;
     d.set_item("rays", point.rays)?;
+    d.set_item("links", point.links)?;
     d.set_item("seconds", point.seconds)?;
     d.set_item("e_rms", point.e_rms)?;
     d.set_item("bound", point.bound)?;
@@ -231,7 +232,8 @@ impl Run {
 
     /// The run's figures, with the keys of `cargo xtask solve --json`'s `stats`: `clock` (of
     /// every seconds figure: `measured` or `charged`), `columns`,
-    /// `columns_reused`, `products`, `steps`, `rays`, `seconds`, `ff_seconds`, `group_seconds`,
+    /// `columns_reused`, `products`, `steps`, `rays`, `links` (of a hierarchy, touched),
+    /// `seconds`, `ff_seconds`, `group_seconds`,
     /// `e_rms`, `e_max`, `residual` and `residual_of` (which vector it is the residual of),
     /// `bound`, `standard_error` and `replicates` (a solver's error bar from its replicates),
     /// `transport` (where its rays went: `scene` or `matrix`, `None` without rays),
@@ -248,6 +250,7 @@ impl Run {
         d.set_item("products", s.products)?;
         d.set_item("steps", s.step)?;
         d.set_item("rays", s.rays)?;
+        d.set_item("links", s.links)?;
         d.set_item("seconds", s.ff_seconds + s.solve_seconds)?;
         d.set_item("ff_seconds", s.ff_seconds)?;
         d.set_item("group_seconds", s.group_seconds)?;
@@ -292,7 +295,7 @@ impl Run {
         Ok(d)
     }
 
-    /// The recorded points as a dict of arrays: `step`, `columns`, `products`, `rays`,
+    /// The recorded points as a dict of arrays: `step`, `columns`, `products`, `rays`, `links`,
     /// `seconds`, `e_rms`, `bound` and `std_error` (NaN where not known).
     #[getter]
     fn points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
@@ -303,6 +306,7 @@ impl Run {
             ("columns", |p| p.columns as Real),
             ("products", |p| p.products as Real),
             ("rays", |p| p.rays as Real),
+            ("links", |p| p.links as Real),
             ("seconds", |p| p.seconds),
             ("e_rms", |p| p.e_rms),
             ("bound", |p| p.bound),

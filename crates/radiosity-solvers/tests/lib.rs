@@ -57,6 +57,7 @@ fn solvers() -> Vec<String> {
         .chain(["sor-0.8", "relax-0.8", "pr-g2:f=1"].map(String::from))
         .chain(KRYLOV_SOLVERS.iter().map(|s| s.to_string()))
         .chain(["gmres-2".to_string()])
+        .chain(["h-southwell", "h-xu", "h-gauss-seidel", "h-pr:groups=unshot:g=3"].map(String::from))
         .collect()
 }
 

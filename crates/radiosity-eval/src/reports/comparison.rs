@@ -97,6 +97,7 @@ impl Comparison {
                 title: format!("{}: {what} against {x_label}", self.scene.scene),
                 x_label: x_label.into(),
                 size: (800, 500),
+                certified_bound: !self.has_reference(),
             };
             let svg = dir.join(format!("{stem}.svg"));
             write_svg(&curves, &spec, create(&svg)?)?;
@@ -237,7 +238,8 @@ impl Comparison {
 
     /// The compact table for the terminal: with a reference, e_rms and the certified bound;
     /// without, the bound alone; when a solver cast rays or has a standard error, its rays and
-    /// its standard error too. `1e-3 at` counts columns, or rays for a solver that cast them.
+    /// its standard error too. `1e-3 at` counts columns, or rays for a solver that cast them, or
+    /// links for a solver over a hierarchy that computed no column.
     pub fn summary(&self) -> String {
         let metric = self.metric();
         let bound = if self.has_reference() { format!(" {:>10}", "bound end") } else { String::new() };
@@ -271,6 +273,8 @@ impl Comparison {
                 cell(o.points.last().map(|p| self.value(p))),
                 self.reached(o, 1e-3).map_or("—".into(), |p| if casts_only(o) {
                     format!("{} rays", p.rays)
+                } else if p.columns == 0 && p.links > 0 {
+                    format!("{:.2e} links", p.links as Real)
                 } else {
                     p.columns.to_string()
                 }),

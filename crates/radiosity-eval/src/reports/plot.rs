@@ -23,8 +23,10 @@
 //!   palette of Okabe & Ito without its yellow (too pale on white), and the marker shape;
 //! - the variant picks the dash pattern: point methods are solid, group-accelerated `S-gM`
 //!   dashed, its memory variant `S-gM-mK` dotted, and group methods `group-S-gM` (shooting
-//!   and gathering) dash-dotted. Parameters after a `:` (`pr-g30:f=auto`) swap the marker
-//!   between filled and hollow.
+//!   and gathering) dash-dotted, and node shooters on the hierarchy `h-S` short-dashed in the
+//!   colour of their point method `S`. Parameters after a `:` (`pr-g30:f=auto`) swap the
+//!   marker between filled and hollow; a node shooter's groups (`groups=clusters`, `spatial`,
+//!   `unshot`) each move its marker one further along the list of markers.
 //!
 //! So colour tells the methods apart on screen, and marker and dash tell them apart in grey
 //! or for readers who do not see the colours. Methods the table does not list get their
@@ -39,6 +41,7 @@
 //! smallest to the largest e_rms, widened by 3% of its span in decades so that the extreme
 //! points do not lie on the frame. The y axis says what e_rms is, the area-weighted relative
 //! RMS error of docs/design.md §6.1 ([`Y_LABEL`]), or just `e_rms (log scale)` ([`Y_LABEL_SHORT`])
+//! (for certified bounds, [`BOUND_LABEL`] and [`BOUND_LABEL_SHORT`])
 //! on a plot too short for the long label.
 //!
 //! Drawn with plotters; text uses the DejaVu Sans font embedded in the binary (the `dejavu`
@@ -95,12 +98,19 @@ pub struct PlotSpec {
     pub x_label: String,
     /// Width and height in pixels.
     pub size: (u32, u32),
+    /// Whether the values are certified bounds on the relative L1 error (a comparison without
+    /// a reference) rather than e_rms: the y axis says which ([`BOUND_LABEL`]).
+    pub certified_bound: bool,
 }
 
 /// The label of the y axis.
 pub const Y_LABEL: &str = "e_rms: area-weighted relative RMS error (log scale)";
 /// The label of the y axis of a plot too short for [`Y_LABEL`].
 pub const Y_LABEL_SHORT: &str = "e_rms (log scale)";
+/// The label of the y axis of a plot of certified bounds ([`PlotSpec::certified_bound`]).
+pub const BOUND_LABEL: &str = "certified bound on the relative L1 error (log scale)";
+/// The label of the y axis of a plot of certified bounds too short for [`BOUND_LABEL`].
+pub const BOUND_LABEL_SHORT: &str = "bound (log scale)";
 
 /// The shape drawn at a few points of a curve and in its legend entry.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -132,6 +142,8 @@ pub enum Variant {
     GroupAcceleratedMemory,
     /// Group shooting or gathering (`group-pr-g30`, `group-gs-g30`): dash-dotted.
     Group,
+    /// Shooting on the hierarchy (`h-pr`, `h-xu:groups=spatial`): short dashes.
+    Hierarchy,
 }
 
 impl Variant {
@@ -142,6 +154,7 @@ impl Variant {
             Variant::GroupAccelerated => &[11, 6],
             Variant::GroupAcceleratedMemory => &[3, 4],
             Variant::Group => &[12, 4, 3, 4],
+            Variant::Hierarchy => &[5, 3],
         }
     }
 }
@@ -199,13 +212,26 @@ const METHODS: [&str; 14] = [
 /// The style of the solver called `name`; see the module documentation for the rule.
 pub fn style_of(name: &str) -> Style {
     let (base, params) = name.split_once(':').map_or((name, ""), |(b, p)| (b, p));
-    let (method, variant) = method_and_variant(base.trim());
+    let base = base.trim();
+    // A node shooter on the hierarchy (`h-xu`): its point method's colour, its own dash, and
+    // a marker of its own for each kind of group.
+    let (method, variant, shift) = match base.strip_prefix("h-") {
+        Some(method) => {
+            let kinds = ["groups=clusters", "groups=spatial", "groups=unshot"];
+            let shift = kinds.iter().position(|k| params.split(':').any(|p| p == *k)).map_or(0, |k| k + 1);
+            (method, Variant::Hierarchy, shift)
+        }
+        None => {
+            let (method, variant) = method_and_variant(base);
+            (method, variant, 0)
+        }
+    };
     let method = if method == "gs" { "gauss-seidel" } else { method };
     let index = METHODS.iter().position(|m| *m == method).unwrap_or_else(|| {
         // Past the table, so an unknown method does not take a listed one's place by default.
         METHODS.len() + (fnv1a(method) % (PALETTE.len() * MARKERS.len()) as u64) as usize
     });
-    let (marker, filled) = MARKERS[index % MARKERS.len()];
+    let (marker, filled) = MARKERS[(index + shift) % MARKERS.len()];
     let (marker, filled) = match (params.trim().is_empty(), marker) {
         (true, _) => (marker, filled),
         // A cross has no inside to leave empty: tuned, it stands upright.
@@ -372,8 +398,9 @@ where
     let span = x_max - x_min;
     let decades = (hi / lo).log10();
     let data_height = chart.plotting_area().dim_in_pixel().1;
-    let long = plot_area.estimate_text_size(Y_LABEL, &font).map_err(plot_error)?.0;
-    let y_label = if long + 8 <= data_height { Y_LABEL } else { Y_LABEL_SHORT };
+    let (full, short) = if spec.certified_bound { (BOUND_LABEL, BOUND_LABEL_SHORT) } else { (Y_LABEL, Y_LABEL_SHORT) };
+    let long = plot_area.estimate_text_size(full, &font).map_err(plot_error)?.0;
+    let y_label = if long + 8 <= data_height { full } else { short };
     chart
         .configure_mesh()
         .x_desc(spec.x_label.as_str())

@@ -108,3 +108,15 @@ def test_an_exception_in_a_callback_ends_the_run_and_is_raised_again(cornell):
 
     with pytest.raises(Enough, match="seen enough"):
         radiosity.solve(cornell, "xu", callback=watch)
+
+
+def test_a_node_shooter_runs_on_the_hierarchy_counted_in_links(cornell):
+    # Shooting from the tree's nodes through their links: no column, links counted, and the
+    # run ends near the reference, which solves the operator's entries rounded to f32 (a floor
+    # of about 6e-8 relative), where the run's residual power of 1e-8 leaves it.
+    run = radiosity.solve(cornell, "h-southwell", ff="hierarchical:eps=5e-2", until="residual=1e-8")
+    stats = run.stats
+    assert stats["columns"] == 0 and stats["links"] > 0 and "residual power reached" in stats["termination"]
+    assert stats["record"]["rounds"] == stats["steps"]
+    assert stats["e_rms"] < 1e-5
+    assert run.points["links"][-1] == stats["links"]

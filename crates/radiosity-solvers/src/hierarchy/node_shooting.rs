@@ -20,7 +20,7 @@
 //! - `h-jacobi`: every node that holds anything, every round: a round is a sweep over the links,
 //!   as RenderPark's Jacobi iterates its hierarchy (one product's links);
 //! - `h-gauss-seidel`: the nodes in `blocks` slices of their numbering (a parent before its
-//!   children), one slice a round, so that what a slice sends is pulled before the next one
+//!   children; at most one slice a node), one slice a round, so that what a slice sends is pulled before the next one
 //!   shoots: block Gauss–Seidel over the nodes, `blocks` rounds a sweep.
 //!
 //! **Holes.** An overshot patch, and a group whose interreflections were solved ahead
@@ -62,6 +62,7 @@ use crate::run::residual_bound::ResidualBound;
 use crate::run::state::State;
 use radiosity_core::Real;
 use std::str::FromStr;
+use std::time::Instant;
 
 /// Which nodes a round shoots (module doc).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -261,7 +262,8 @@ impl NodeShooting {
         match self.params.order {
             NodeOrder::Jacobi => (0..nodes).for_each(|node| self.sending[node] = holds(node)),
             NodeOrder::GaussSeidel => {
-                let blocks = self.params.blocks as u64;
+                // No slice empty: at most as many slices as nodes.
+                let blocks = (self.params.blocks as u64).min(nodes as u64).max(1);
                 let slice = (self.rounds % blocks) as usize;
                 let range = slice * nodes / blocks as usize..(slice + 1) * nodes / blocks as usize;
                 range.for_each(|node| self.sending[node] = holds(node));
@@ -290,8 +292,8 @@ impl NodeShooting {
     /// What a pull takes of what the round brought (`t`, in `brought`), into `taken` (module
     /// doc, "Holes"): holes held, overshot (`h-xu`), then each group's part solved; or `t` as
     /// it is when some channel's holes outweigh the light unshot on the nodes and the light the
-    /// round brings.
-    fn take(&mut self, problem: &Problem<'_>, pipeline: &Pipeline) {
+    /// round brings. Returns the seconds the groups took.
+    fn take(&mut self, problem: &Problem<'_>, pipeline: &Pipeline) -> f64 {
         let system = problem.system();
         let (area, k, n) = (system.areas(), problem.channels(), problem.n());
         let total: Real = area.iter().sum();
@@ -306,15 +308,18 @@ impl NodeShooting {
                 // The light to come will not fill the holes: they are taken back as they are.
                 self.taken.clone_from(&self.brought);
                 self.released += 1;
-                return;
+                return 0.0;
             }
             let ambient = if self.params.overshoot { lit / total } else { 0.0 };
             for i in 0..n {
+                // A hole is held; a value that is not finite is kept, for the pull to report.
                 let t = &mut held[i * k + c];
-                *t = t.max(0.0) + system.rho(i, c) * ambient;
+                *t = if *t < 0.0 { 0.0 } else { *t } + system.rho(i, c) * ambient;
             }
         }
+        let start = Instant::now();
         self.groups.relax(problem, self.params.grouping, &held, &mut self.taken);
+        start.elapsed().as_secs_f64()
     }
 }
 
@@ -338,7 +343,9 @@ impl Solver for NodeShooting {
 
     fn init(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
         let pipeline = Pipeline::start(problem, state)?;
+        let start = Instant::now();
         self.groups = Groups::prepare(problem, &pipeline, self.params.grouping, state.channels)?;
+        state.group_seconds += start.elapsed().as_secs_f64();
         self.pipeline = Some(pipeline);
         (self.rounds, self.nodes_shot, self.released) = (0, 0, 0);
         Ok(())
@@ -350,7 +357,7 @@ impl Solver for NodeShooting {
         let shot = self.sending.iter().filter(|s| **s).count() as u64;
         let touched = pipeline.shoot(problem, &self.sending);
         pipeline.push(problem, &mut self.brought);
-        self.take(problem, &pipeline);
+        state.group_seconds += self.take(problem, &pipeline);
         let pulled = pipeline.pull(problem, state, &self.brought, &self.taken);
         self.pipeline = Some(pipeline);
         pulled?;

@@ -245,12 +245,10 @@ impl Pipeline {
             state.radiosity[idx] += s[idx];
             self.explicit[idx] = t[idx] - s[idx];
             state.unshot[idx] = s[idx];
-            if !(state.radiosity[idx].is_finite() && self.explicit[idx].is_finite()) {
-                return Err(SolverError::NonFinite {
-                    step: state.step + 1,
-                    patch: idx / k,
-                    value: state.radiosity[idx],
-                });
+            // The radiosity, or else the residual left, whichever is not finite.
+            let value = [state.radiosity[idx], self.explicit[idx]].into_iter().find(|v| !v.is_finite());
+            if let Some(value) = value {
+                return Err(SolverError::NonFinite { step: state.step + 1, patch: idx / k, value });
             }
         }
         self.nonnegative &= s.iter().all(|v| *v >= 0.0) && self.explicit.iter().all(|v| *v >= 0.0);

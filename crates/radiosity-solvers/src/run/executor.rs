@@ -509,6 +509,7 @@ impl<'a> Executor<'a> {
                 StopRule::Columns(c) if state.columns >= c.resolve(n) => TerminationReason::Columns(state.columns),
                 StopRule::Steps(c) if state.step >= c.resolve(n) => TerminationReason::Steps(state.step),
                 StopRule::Rays(c) if state.rays >= c.resolve(n) => TerminationReason::Rays(state.rays),
+                StopRule::Links(c) if state.links >= c.resolve(n) => TerminationReason::Links(state.links),
                 StopRule::Rms(target) if error.is_some_and(|e| e <= target) => TerminationReason::Rms(error.unwrap()),
                 StopRule::Residual(target) if residual.is_some_and(|r| r <= target) => {
                     TerminationReason::Residual(residual.unwrap())

@@ -30,9 +30,16 @@
 //! source charges for them. The same problem's columns still serve the others; a problem without a
 //! sampler refuses the solvers that need one ([`SolverError::NotApplicable`]).
 //!
+//! **Links.** A source that shows its links ([`ColumnSource::link_source`], the hierarchical
+//! operator) serves the solvers that shoot from the nodes of its tree
+//! ([`Problem::through_links`], timed as form-factor seconds, measured). Over such a source the
+//! problem also counts the links every column, row and product touches (a column or a row
+//! those of its patch's leaf and ancestors, a product every link), so that every solver over
+//! it has one cost axis beside columns and products ([`Problem::links_touched`]).
+//!
 //! A problem may also carry a spatially coherent order of the patches
 //! ([`Problem::with_patch_order`]), for solvers that group patches by proximity
-//! (`group-gs-gM:groups=spatial`); the others ignore it.
+//! (`group-gs-gM:groups=spatial`, `h-xu:groups=spatial`); the others ignore it.
 
 use crate::error::SolverError;
 use radiosity_core::operator::{Product, multiply_by_columns};

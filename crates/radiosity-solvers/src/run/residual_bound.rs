@@ -33,6 +33,13 @@
 //!   The shooter's own share of its shot (`ρ_j F_jj s`, non-zero only for a patch that sees
 //!   itself) stays unshot ([`crate::shooting::rule::own_share`]); before this was so, a point shot
 //!   cleared it, and with `F_jj > 0` `ΔB` was not the residual of `x`.
+//! - **Node shooting** (`h-southwell`, `h-pr`, `h-xu`, `h-jacobi`, `h-gauss-seidel`): between
+//!   steps `r(B) = ρ Σ_k S_k u_k + z` exactly, `F = Σ_k S_k` the parts each node sends through
+//!   its links, `u_k` the radiosity under node `k` it has not sent and `z` the explicit residual
+//!   ([`crate::hierarchy::pipeline`]). With `power_k ≥ ‖u_k‖_A` and the source's send shares
+//!   `σ_k ≥ max_j Σ_i A_i ρ_i (S_k)_ij / A_j`, `‖r‖_A ≤ Σ_k σ_k power_k + ‖z‖_A`: all of it
+//!   `direct` (`‖d‖_A = 0`). Over a source without shares (one level), `S_k ≤ F` gives
+//!   `‖d‖_A = Σ_k power_k` and `‖e‖_A = ‖z‖_A`.
 //! - **Gauss–Seidel** (`gauss-seidel`, ω = 1) with `u = state.unshot`, each patch's last
 //!   change. Gathering patch `i` moves `B_i` by its residual `c_i`, which leaves
 //!   `r_i = ρ_i F_ii c_i` and adds `ρ_l F_li c_i` to every other `r_l`. Between two updates of

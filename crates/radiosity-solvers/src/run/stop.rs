@@ -2,7 +2,8 @@
 //!
 //! Rules are a comma list, and the first that holds stops the run: `columns=N`, `columns=2n`
 //! (a multiple of the patch count), `steps=N` (also `steps=3n`), `rays=1e7` (rays cast by a
-//! solver that samples transport, [`crate::Problem::cast`]; also `rays=100n`), `rms=1e-3`,
+//! solver that samples transport, [`crate::Problem::cast`]; also `rays=100n`), `links=1e9` (links
+//! of a hierarchy touched, [`crate::Problem::links_touched`]; also `links=1000n`), `rms=1e-3`,
 //! `residual=1e-4`,
 //! `time=30s` (`ms`, `s` or `min`, on the run's clock: measured, or charged by the source,
 //! [`crate::Problem::clock`]). Every run ends even if no rule can hold any more: at
@@ -62,6 +63,9 @@ pub enum StopRule {
     Steps(Count),
     /// Stop once this many rays were cast ([`crate::Problem::cast`]).
     Rays(Count),
+    /// Stop once this many links of a hierarchy were touched
+    /// ([`crate::Problem::links_touched`]).
+    Links(Count),
     /// Stop once the observed `e_rms` is at most this.
     Rms(Real),
     /// Stop once the solver's residual power is at most this.
@@ -96,6 +100,7 @@ impl std::fmt::Display for StopRule {
             StopRule::Columns(c) => write!(f, "columns={c}"),
             StopRule::Steps(c) => write!(f, "steps={c}"),
             StopRule::Rays(c) => write!(f, "rays={c}"),
+            StopRule::Links(c) => write!(f, "links={c}"),
             StopRule::Rms(e) => write!(f, "rms={}", short(e)),
             StopRule::Residual(r) => write!(f, "residual={}", short(r)),
             StopRule::Time(t) => write!(f, "time={}s", short(t.as_secs_f64())),
@@ -158,6 +163,7 @@ impl StopRules {
                 "columns" => StopRule::Columns(parse_count(rule, value.trim())?),
                 "steps" => StopRule::Steps(parse_count(rule, value.trim())?),
                 "rays" => StopRule::Rays(parse_count(rule, value.trim())?),
+                "links" => StopRule::Links(parse_count(rule, value.trim())?),
                 "rms" => StopRule::Rms(parse_positive(rule, value.trim())?),
                 "residual" => StopRule::Residual(parse_positive(rule, value.trim())?),
                 "time" => StopRule::Time(parse_duration(rule, value.trim())?),
@@ -182,6 +188,8 @@ pub enum TerminationReason {
     Steps(u64),
     /// `rays=` reached.
     Rays(u64),
+    /// `links=` reached.
+    Links(u64),
     /// `rms=` reached.
     Rms(Real),
     /// `residual=` reached.
@@ -225,6 +233,7 @@ impl std::fmt::Display for TerminationReason {
             TerminationReason::Columns(k) => write!(f, "{k} columns computed"),
             TerminationReason::Steps(k) => write!(f, "{k} steps taken"),
             TerminationReason::Rays(k) => write!(f, "{k} rays cast"),
+            TerminationReason::Links(k) => write!(f, "{k} links touched"),
             TerminationReason::Rms(e) => write!(f, "e_rms reached {e:e}"),
             TerminationReason::Residual(r) => write!(f, "residual power reached {r:e}"),
             TerminationReason::Time(t) => write!(f, "time limit of {:.3} s reached", t.as_secs_f64()),

@@ -64,7 +64,10 @@ fn count(v: Option<u64>) -> String {
 /// A short name for how a run ended.
 fn stop_kind(t: &TerminationReason) -> &'static str {
     match t {
-        TerminationReason::Columns(_) | TerminationReason::Steps(_) | TerminationReason::Rays(_) => "budget",
+        TerminationReason::Columns(_)
+        | TerminationReason::Steps(_)
+        | TerminationReason::Rays(_)
+        | TerminationReason::Links(_) => "budget",
         TerminationReason::Rms(_) => "rms",
         TerminationReason::Residual(_) => "residual",
         TerminationReason::Time(_) => "time",

@@ -182,8 +182,8 @@ pub const BEYOND_PAPER_SOLVERS: [&str; 3] =
     ["xu-g30-m480:f=10:groups=interaction", "xu-g30-m480:f=10:inner=gs", "xu-g30-m480:f=10:adaptive=0.1"];
 
 /// The node shooters on the hierarchy, by canonical name, without groups and with each kind
-/// of group (`groups=clusters` needs a hierarchy, `groups=spatial` a patch order): run by the
-/// scene-level tests.
+/// of group (`groups=clusters` needs a hierarchy, `groups=spatial` a patch order): run on
+/// real hierarchies by radiosity-eval's `node_shooting` tests.
 pub const NODE_SOLVERS: [&str; 8] = [
     "h-southwell",
     "h-pr",

@@ -113,14 +113,21 @@ pub fn select<T: Copy>(
     Ok(chosen)
 }
 
-/// Every point, group, beyond-the-paper, Krylov and stochastic solver, by name: the suite's
-/// default solvers.
+/// The node shooters the suite runs: over its stored matrices they run one level (every
+/// patch a node, its column its links), which tests their rounds, bound, overshoot and the
+/// paper's groups on stiff systems; groups of the tree's clusters or of a spatial order need
+/// a hierarchy or an order, which the suite's problems do not have.
+pub const NODE_STRESS_SOLVERS: [&str; 4] = ["h-southwell", "h-xu", "h-jacobi", "h-pr:groups=unshot"];
+
+/// Every point, group, beyond-the-paper, Krylov, node and stochastic solver, by name: the
+/// suite's default solvers.
 pub fn all_solvers() -> Vec<String> {
     POINT_SOLVERS
         .iter()
         .chain(&GROUP_SOLVERS)
         .chain(&BEYOND_PAPER_SOLVERS)
         .chain(&KRYLOV_SOLVERS)
+        .chain(&NODE_STRESS_SOLVERS)
         .chain(&STOCHASTIC_SOLVERS)
         .map(|s| s.to_string())
         .collect()

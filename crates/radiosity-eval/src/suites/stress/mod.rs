@@ -15,7 +15,8 @@
 //! `eps`, so at `ρ = 0.999` it may amplify light, and then nothing is certified). Every solver
 //! of `POINT_SOLVERS`, `GROUP_SOLVERS`, `BEYOND_PAPER_SOLVERS` and `KRYLOV_SOLVERS` runs on each
 //! (`cg` refuses, in one sentence, the backends that state no reciprocity bound or one above
-//! its limit), and so do the solvers that sample transport, [`STOCHASTIC_SOLVERS`].
+//! its limit), and so do four node shooters, one level over the stored matrix
+//! ([`NODE_STRESS_SOLVERS`]), and the solvers that sample transport, [`STOCHASTIC_SOLVERS`].
 //!
 //! ## How a run is judged
 //!
@@ -76,8 +77,8 @@ mod report;
 mod suite;
 
 pub use cases::{
-    BACKENDS, CASES, CONVERGED, Case, RESIDUAL_TARGET, STEP_CAP, STOCHASTIC_RAYS_PER_PATCH, STOCHASTIC_SOLVERS,
-    STOCHASTIC_SPREADS, STOCHASTIC_TOLERANCE, SuiteBackend, all_solvers, select,
+    BACKENDS, CASES, CONVERGED, Case, NODE_STRESS_SOLVERS, RESIDUAL_TARGET, STEP_CAP, STOCHASTIC_RAYS_PER_PATCH,
+    STOCHASTIC_SOLVERS, STOCHASTIC_SPREADS, STOCHASTIC_TOLERANCE, SuiteBackend, all_solvers, select,
 };
 pub use judge::StressReport;
 pub use suite::StressSuite;

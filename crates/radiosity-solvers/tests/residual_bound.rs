@@ -113,7 +113,7 @@ fn most_negative_residual(system: &LinearSystem, f: &DenseColumns, b: &[Real]) -
 
 /// Checks every bound the executor passes against the exact residual, and keeps the ratios
 /// bound / residual.
-struct Checker<'a> {
+pub(super) struct Checker<'a> {
     name: String,
     system: &'a LinearSystem,
     f: &'a DenseColumns,
@@ -121,7 +121,7 @@ struct Checker<'a> {
     /// Bounds checked, how many of them the solver did not know, and how many stated a
     /// non-negative residual (each checked).
     checked: u64,
-    missing: u64,
+    pub(super) missing: u64,
     nonnegative: u64,
     /// `(step, channel, bound / ‖r_c‖_A)` for every check with `‖r_c‖_A > 0`.
     ratios: Vec<(u64, usize, Real)>,
@@ -186,7 +186,7 @@ impl Observer for Checker<'_> {
 
 /// Runs `name` for `steps` on `system`, its problem carrying a patch order (for
 /// `:groups=spatial`), with a [`Checker`]; returns the checker.
-fn check<'a>(name: &str, system: &'a LinearSystem, f: &'a DenseColumns, steps: &str) -> Checker<'a> {
+pub(super) fn check<'a>(name: &str, system: &'a LinearSystem, f: &'a DenseColumns, steps: &str) -> Checker<'a> {
     let order: Vec<usize> = (0..system.len()).rev().collect();
     let problem = Problem::new(system, f).unwrap().with_patch_order(&order).unwrap();
     let mut solver = solver_by_name(name).unwrap();

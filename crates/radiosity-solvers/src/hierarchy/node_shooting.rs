@@ -20,8 +20,9 @@
 //! - `h-jacobi`: every node that holds anything, every round: a round is a sweep over the links,
 //!   as RenderPark's Jacobi iterates its hierarchy (one product's links);
 //! - `h-gauss-seidel`: the nodes in `blocks` slices of their numbering (a parent before its
-//!   children; at most one slice a node), one slice a round, so that what a slice sends is pulled before the next one
-//!   shoots: block Gauss–Seidel over the nodes, `blocks` rounds a sweep.
+//!   children; at most one slice a node), one slice a round, so that what a slice sends is
+//!   pulled before the next one shoots: block Gauss–Seidel over the nodes, `blocks` rounds a
+//!   sweep.
 //!
 //! **Holes.** An overshot patch, and a group whose interreflections were solved ahead
 //! (`groups`), have a negative residual, a hole, until the light they anticipated comes back
@@ -39,8 +40,9 @@
 //!
 //! Every variant takes groups (`groups=clusters|spatial|unshot`, `g=M`, [`super::groups`]).
 //!
-//! Each round's cost is counted in links touched ([`Problem::through_links`]); over a source
-//! that shows no links, a node is a patch and a shot a column.
+//! Each round's cost is counted in links touched ([`Problem::through_links`]), and so is the
+//! start's, the send shares read from every link once; over a source that shows no links, a
+//! node is a patch and a shot a column.
 //!
 //! ## References
 //!
@@ -226,8 +228,9 @@ pub struct NodeShooting {
     params: NodeShootingParams,
     pipeline: Option<Pipeline>,
     groups: Groups,
-    /// What a push brings (`t`) and what a pull takes (`s`).
+    /// What a push brings (`t`), what a pull holds of it, and what it takes (`s`).
     brought: Vec<Real>,
+    held: Vec<Real>,
     taken: Vec<Real>,
     /// Pulls that took their holes back ([`NodeShooting::take`]).
     released: u64,
@@ -243,6 +246,7 @@ impl Default for NodeShooting {
             pipeline: None,
             groups: Groups::default(),
             brought: Vec::new(),
+            held: Vec::new(),
             taken: Vec::new(),
             released: 0,
             sending: Vec::new(),
@@ -298,7 +302,8 @@ impl NodeShooting {
         let (area, k, n) = (system.areas(), problem.channels(), problem.n());
         let total: Real = area.iter().sum();
         let unshot = pipeline.unshot_norms();
-        let mut held = self.brought.clone();
+        let mut held = std::mem::take(&mut self.held);
+        held.clone_from(&self.brought);
         for (c, unshot) in unshot.into_iter().enumerate() {
             let (lit, holes) = (0..n).fold((0.0, 0.0), |(lit, holes), i| {
                 let t = self.brought[i * k + c];
@@ -308,6 +313,7 @@ impl NodeShooting {
                 // The light to come will not fill the holes: they are taken back as they are.
                 self.taken.clone_from(&self.brought);
                 self.released += 1;
+                self.held = held;
                 return 0.0;
             }
             let ambient = if self.params.overshoot { lit / total } else { 0.0 };
@@ -319,6 +325,7 @@ impl NodeShooting {
         }
         let start = Instant::now();
         self.groups.relax(problem, self.params.grouping, &held, &mut self.taken);
+        self.held = held;
         start.elapsed().as_secs_f64()
     }
 }

@@ -94,8 +94,10 @@ impl Pipeline {
                 (p.charge_len, p.field_len) = (links.charge_len(), links.field_len());
                 let mut shares = vec![0.0; p.parents.len() * k];
                 let rho = problem.system().reflectivities();
-                p.shares =
-                    problem.through_links(0, |l| l.send_shares(rho, k, &mut shares)).unwrap_or(false).then_some(shares);
+                // The shares read every link once, as a product does: counted so.
+                let every: u64 = p.link_counts.iter().sum();
+                let known = problem.through_links(every, |l| l.send_shares(rho, k, &mut shares));
+                p.shares = known.unwrap_or(false).then_some(shares);
             }
             None => {
                 p.parents = vec![NO_PARENT; n];

@@ -33,10 +33,10 @@
 //! the round brings, that light cannot fill them; the pull then takes `t` as it is, without
 //! overshoot or groups (counted as `holes_released`).
 //!
-//! Why a share, not one node a round: a push and a pull cost `O(nodes)`, as much as a few
-//! thousand links, so a round must move enough to pay for them; what a round sent stays out of
-//! sight of the choice until its push, and a share of a half keeps the choice current while it
-//! moves most of the residual in a few rounds. `share=1` is `h-jacobi`'s round.
+//! Why a share, not one node a round: a push and a pull cost `O(nodes)` whatever the round
+//! shoots, so a round must move enough to pay for them; what a round sent stays out of sight of
+//! the choice until its push, and a share of a half keeps the choice current while it moves
+//! most of the residual in a few rounds. `share=1` is `h-jacobi`'s round.
 //!
 //! Every variant takes groups (`groups=clusters|spatial|unshot`, `g=M`, [`super::groups`]).
 //!

@@ -388,8 +388,16 @@ where
         LegendPlace::Below(h, _) => root.split_vertically(height.saturating_sub(h)),
     };
 
+    // The title at 20 pixels, smaller (down to 12) when it would not fit the plot's width.
+    let title_size = (12..=20)
+        .rev()
+        .find(|&size| {
+            let style: TextStyle = ("sans-serif", size).into_font().into();
+            plot_area.estimate_text_size(&spec.title, &style).is_ok_and(|(w, _)| w + 24 <= plot_area.dim_in_pixel().0)
+        })
+        .unwrap_or(12);
     let mut chart = ChartBuilder::on(&plot_area)
-        .caption(&spec.title, ("sans-serif", 20))
+        .caption(&spec.title, ("sans-serif", title_size))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(64)

@@ -9,7 +9,7 @@
 //! A group whose system is not a nonsingular M-matrix, or whose condition number exceeds
 //! [`CONDITION_LIMIT`], takes `t_G` (a fallback, counted).
 //!
-//! Two ways to choose groups:
+//! Three ways to choose groups:
 //!
 //! - **clusters** (`groups=clusters`): the tree's clusters of at most `g` patches whose
 //!   parents hold more, each with an internal exchange (a block of `F` not all zero); their
@@ -22,7 +22,6 @@
 //!   the most residual power `Σ_c A_i |t_ic|`, their block read from the links (or from `g`
 //!   columns over one level) and solved then.
 
-use crate::error::SolverError;
 use crate::group::group_step::CONDITION_LIMIT;
 use crate::hierarchy::pipeline::Pipeline;
 use crate::run::problem::Problem;
@@ -62,30 +61,26 @@ struct Solved {
 /// The groups of a run and what they did.
 #[derive(Debug, Default)]
 pub(crate) struct Groups {
-    clusters: Vec<Solved>,
+    /// The clusters or runs solved at the start.
+    solved: Vec<Solved>,
     /// Group solves applied, and those that fell back to `t`.
     pub(crate) solves: u64,
     pub(crate) fallbacks: u64,
-    /// Patches in the clusters solved at the start.
+    /// Patches in the clusters or runs solved at the start.
     pub(crate) clustered: usize,
 }
 
 impl Groups {
-    /// The groups `grouping` asks for; for clusters, their systems solved.
-    pub(crate) fn prepare(
-        problem: &Problem<'_>,
-        pipeline: &Pipeline,
-        grouping: Grouping,
-        channels: usize,
-    ) -> Result<Groups, SolverError> {
+    /// The groups `grouping` asks for; for clusters and runs, their systems solved.
+    pub(crate) fn prepare(problem: &Problem<'_>, pipeline: &Pipeline, grouping: Grouping, channels: usize) -> Groups {
         let mut groups = Groups::default();
         let members = match grouping {
-            Grouping::None | Grouping::Unshot { .. } => return Ok(groups),
+            Grouping::None | Grouping::Unshot { .. } => return groups,
             Grouping::Clusters { size } => clusters(problem, pipeline, size),
             // Without an order there are no runs (the solver refuses such a problem first).
             Grouping::Spatial { size } => match problem.patch_order() {
                 Some(order) => order.chunks(size).map(<[usize]>::to_vec).collect(),
-                None => return Ok(groups),
+                None => return groups,
             },
         };
         for patches in members.into_iter().filter(|m| m.len() > 1) {
@@ -95,12 +90,12 @@ impl Groups {
             }
             if let Some(inverse) = inverses(problem, &patches, &block, channels) {
                 groups.clustered += patches.len();
-                groups.clusters.push(Solved { patches, inverse });
+                groups.solved.push(Solved { patches, inverse });
             } else {
                 groups.fallbacks += 1;
             }
         }
-        Ok(groups)
+        groups
     }
 
     /// The amount a pull takes for the residual `t`: `t`, with each group's part solved
@@ -112,10 +107,10 @@ impl Groups {
         match grouping {
             Grouping::None => {}
             Grouping::Clusters { .. } | Grouping::Spatial { .. } => {
-                for group in &self.clusters {
+                for group in &self.solved {
                     apply(group, t, s, k);
                 }
-                self.solves += self.clusters.len() as u64;
+                self.solves += self.solved.len() as u64;
             }
             Grouping::Unshot { size } => {
                 let area = problem.system().areas();

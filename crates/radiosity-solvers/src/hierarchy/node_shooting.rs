@@ -349,9 +349,9 @@ impl Solver for NodeShooting {
     }
 
     fn init(&mut self, problem: &Problem<'_>, state: &mut State) -> Result<(), SolverError> {
-        let pipeline = Pipeline::start(problem, state)?;
+        let pipeline = Pipeline::start(problem, state);
         let start = Instant::now();
-        self.groups = Groups::prepare(problem, &pipeline, self.params.grouping, state.channels)?;
+        self.groups = Groups::prepare(problem, &pipeline, self.params.grouping, state.channels);
         state.group_seconds += start.elapsed().as_secs_f64();
         self.pipeline = Some(pipeline);
         (self.rounds, self.nodes_shot, self.released) = (0, 0, 0);

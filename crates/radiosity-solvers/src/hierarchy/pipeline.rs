@@ -82,7 +82,7 @@ pub(crate) struct Pipeline {
 
 impl Pipeline {
     /// The pipeline over `problem`'s links (or one level), started from `B = E`.
-    pub(crate) fn start(problem: &Problem<'_>, state: &State) -> Result<Pipeline, SolverError> {
+    pub(crate) fn start(problem: &Problem<'_>, state: &State) -> Pipeline {
         let (n, k) = (problem.n(), state.channels);
         let mut p = Pipeline { k, nonnegative: true, ..Pipeline::default() };
         match problem.link_source() {
@@ -125,7 +125,7 @@ impl Pipeline {
         // B = E: every node holds E under it, unsent.
         p.add_pending(problem, &state.radiosity);
         p.nonnegative = state.radiosity.iter().all(|v| *v >= 0.0);
-        Ok(p)
+        p
     }
 
     /// The number of nodes.

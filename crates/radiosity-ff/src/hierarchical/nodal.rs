@@ -64,20 +64,6 @@ impl HierarchicalColumns {
         self.tree.order[self.tree.nodes[node].first as usize] as usize
     }
 
-    /// Adds to `forms` (one per channel) what node `node` receives through its far links
-    /// from the moments of the other ends (`moments`, nodes × channels) that `sending` marks
-    /// (all of them when `None`).
-    fn receive_far(&self, node: usize, moments: &[Moments], sending: Option<&[bool]>, forms: &mut [Form]) {
-        let k = forms.len();
-        for (&other, &[clear, count]) in self.far.of(node) {
-            if sending.is_some_and(|s| !s[other as usize]) {
-                continue;
-            }
-            let span = Span::new(&self.tree, node as u32, other, clear, count);
-            Form::receive(forms, &moments[other as usize * k..(other as usize + 1) * k], &span);
-        }
-    }
-
     /// The moments of `charges` (nodes × channels), those of the nodes `sending` does not mark
     /// left zero.
     fn moments_of(&self, charges: &[Real], sending: Option<&[bool]>, k: usize) -> Vec<Moments> {
@@ -144,31 +130,14 @@ impl LinkSource for HierarchicalColumns {
 
     /// The product's moments, gathered up the tree (`product`).
     fn charges(&self, x: &[Real], k: usize, charges: &mut [Real]) {
-        let nodes = &self.tree.nodes;
+        let moments = self.gathered_moments(x, k, &self.weights);
         charges.fill(0.0);
-        for node in (0..nodes.len()).rev() {
-            match nodes[node].children {
-                None => {
-                    let p = self.patch_of_leaf(node);
-                    let offset = self.centroids[p] - nodes[node].centre;
-                    for ch in 0..k {
-                        let xp = x[p * k + ch];
-                        let m = Moments::of(self.normals[p] * (self.areas[p] * self.weights[p] * xp), offset);
-                        let slot = &mut charges[(node * k + ch) * CHARGE..(node * k + ch + 1) * CHARGE];
-                        put_moments(&m, slot);
-                        slot[12] = xp;
-                    }
-                }
-                Some([a, b]) => {
-                    let (a, b) = (a as usize, b as usize);
-                    let (da, db) = (nodes[a].centre - nodes[node].centre, nodes[b].centre - nodes[node].centre);
-                    for ch in 0..k {
-                        let ma = moments(&charges[(a * k + ch) * CHARGE..]);
-                        let mb = moments(&charges[(b * k + ch) * CHARGE..]);
-                        let m = ma.shifted(da).plus(&mb.shifted(db));
-                        put_moments(&m, &mut charges[(node * k + ch) * CHARGE..]);
-                    }
-                }
+        for (slot, m) in charges.chunks_exact_mut(CHARGE).zip(&moments) {
+            put_moments(m, slot);
+        }
+        for (p, &leaf) in self.tree.leaf.iter().enumerate() {
+            for ch in 0..k {
+                charges[(leaf as usize * k + ch) * CHARGE + 12] = x[p * k + ch];
             }
         }
     }
@@ -205,29 +174,12 @@ impl LinkSource for HierarchicalColumns {
 
     /// Pushed down in pre-order (`product`), then evaluated at the leaves.
     fn evaluate(&self, fields: &mut [Real], k: usize, out: &mut [Real]) {
-        let nodes = &self.tree.nodes;
-        for node in 0..nodes.len() {
-            match nodes[node].children {
-                None => {
-                    let p = self.patch_of_leaf(node);
-                    let offset = self.centroids[p] - nodes[node].centre;
-                    for ch in 0..k {
-                        let slot = &fields[(node * k + ch) * FIELD..(node * k + ch + 1) * FIELD];
-                        out[p * k + ch] = self.weights[p] * form(slot).at(self.normals[p], offset) + slot[12];
-                    }
-                }
-                Some(children) => {
-                    for ch in 0..k {
-                        let parent = form(&fields[(node * k + ch) * FIELD..]);
-                        for &c in &children {
-                            let delta = nodes[c as usize].centre - nodes[node].centre;
-                            let slot = &mut fields[(c as usize * k + ch) * FIELD..];
-                            let mut child = form(slot);
-                            child.add(&parent.shifted(delta));
-                            put_form(&child, slot);
-                        }
-                    }
-                }
+        let mut forms: Vec<Form> = fields.chunks_exact(FIELD).map(form).collect();
+        self.pushed_down(&mut forms, k, out);
+        for (p, &leaf) in self.tree.leaf.iter().enumerate() {
+            for ch in 0..k {
+                let near = fields[(leaf as usize * k + ch) * FIELD + 12];
+                out[p * k + ch] = self.weights[p] * out[p * k + ch] + near;
             }
         }
         fields.fill(0.0);

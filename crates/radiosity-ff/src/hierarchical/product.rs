@@ -144,9 +144,25 @@ impl HierarchicalColumns {
     /// far pairs, before any closure weight), each sender weighed by `weights`.
     pub(super) fn estimated_product(&self, x: &[Real], channels: usize, weights: &[Real], out: &mut [Real]) {
         let k = channels;
+        let moments = self.gathered_moments(x, k, weights);
+        let mut forms = vec![Form::default(); self.tree.nodes.len() * k];
+        forms.par_chunks_mut(k).enumerate().for_each(|(node, forms)| self.receive_far(node, &moments, None, forms));
+        self.pushed_down(&mut forms, k, out);
+        out.par_chunks_mut(k).enumerate().for_each(|(i, out)| {
+            for (&j, &transfer) in self.pairs.of(i) {
+                let f = transfer / self.areas[i] * weights[j as usize];
+                for ch in 0..k {
+                    out[ch] += f * x[j as usize * k + ch];
+                }
+            }
+        });
+    }
+
+    /// Every node's moments of `x` (`k` channels), each sender weighed by `weights`: gathered
+    /// up the tree (children come after their parent, so a backward pass sees them first).
+    pub(super) fn gathered_moments(&self, x: &[Real], k: usize, weights: &[Real]) -> Vec<Moments> {
         let nodes = &self.tree.nodes;
         let mut moments = vec![Moments::default(); nodes.len() * k];
-        // Gathered up: children come after their parent, so a backward pass sees them first.
         for node in (0..nodes.len()).rev() {
             match nodes[node].children {
                 None => {
@@ -167,15 +183,28 @@ impl HierarchicalColumns {
                 }
             }
         }
-        let mut forms = vec![Form::default(); nodes.len() * k];
-        forms.par_chunks_mut(k).enumerate().for_each(|(node, forms)| {
-            for (&other, &[clear, count]) in self.far.of(node) {
-                // From this node to the other end.
-                let span = Span::new(&self.tree, node as u32, other, clear, count);
-                let from = &moments[other as usize * k..(other as usize + 1) * k];
-                Form::receive(forms, from, &span);
+        moments
+    }
+
+    /// Adds to `forms` (one per channel) what node `node` receives through its far links from
+    /// the moments of the other ends (`moments`, nodes × channels) that `sending` marks (all of
+    /// them when `None`), in the links' fixed order.
+    pub(super) fn receive_far(&self, node: usize, moments: &[Moments], sending: Option<&[bool]>, forms: &mut [Form]) {
+        let k = forms.len();
+        for (&other, &[clear, count]) in self.far.of(node) {
+            if sending.is_some_and(|s| !s[other as usize]) {
+                continue;
             }
-        });
+            // From this node to the other end.
+            let span = Span::new(&self.tree, node as u32, other, clear, count);
+            Form::receive(forms, &moments[other as usize * k..(other as usize + 1) * k], &span);
+        }
+    }
+
+    /// Pushes `forms` (nodes × `k` channels) down the tree, a parent's shifted into its
+    /// children's, and writes each leaf's form evaluated at its patch into `out`.
+    pub(super) fn pushed_down(&self, forms: &mut [Form], k: usize, out: &mut [Real]) {
+        let nodes = &self.tree.nodes;
         for node in 0..nodes.len() {
             match nodes[node].children {
                 None => {
@@ -196,14 +225,6 @@ impl HierarchicalColumns {
                 }
             }
         }
-        out.par_chunks_mut(k).enumerate().for_each(|(i, out)| {
-            for (&j, &transfer) in self.pairs.of(i) {
-                let f = transfer / self.areas[i] * weights[j as usize];
-                for ch in 0..k {
-                    out[ch] += f * x[j as usize * k + ch];
-                }
-            }
-        });
     }
 }
 

@@ -26,8 +26,8 @@
 //!
 //! **Holes.** An overshot patch, and a group whose interreflections were solved ahead
 //! (`groups`), have a negative residual, a hole, until the light they anticipated comes back
-//! through their own links. A pull holds the holes (takes `max(t, 0)`, then overshoots and
-//! solves the groups), so that every node's unshot radiosity stays non-negative and the bound
+//! through their own links. Where there can be holes (`h-xu`, groups), a pull holds them
+//! (takes `max(t, 0)`, then overshoots and solves the groups), so that every node's unshot radiosity stays non-negative and the bound
 //! tight: a group's solve of a hole would amplify it, and pulled holes would swing the
 //! radiosity. If a channel's holes outweigh the light still unshot on the nodes and the light
 //! the round brings, that light cannot fill them; the pull then takes `t` as it is, without
@@ -235,6 +235,8 @@ pub struct NodeShooting {
     /// Pulls that took their holes back ([`NodeShooting::take`]).
     released: u64,
     sending: Vec<bool>,
+    /// The nodes a Southwell or PR round ranks, with their priorities.
+    order: Vec<(Real, usize)>,
     rounds: u64,
     nodes_shot: u64,
 }
@@ -250,6 +252,7 @@ impl Default for NodeShooting {
             taken: Vec::new(),
             released: 0,
             sending: Vec::new(),
+            order: Vec::new(),
             rounds: 0,
             nodes_shot: 0,
         }
@@ -277,12 +280,13 @@ impl NodeShooting {
                     NodeOrder::Southwell => pipeline.gain(node),
                     _ => pipeline.power(node).iter().sum(),
                 };
-                let mut order: Vec<(Real, usize)> =
-                    (0..nodes).map(|node| (priority(node), node)).filter(|(p, _)| *p > 0.0).collect();
+                let order = &mut self.order;
+                order.clear();
+                order.extend((0..nodes).map(|node| (priority(node), node)).filter(|(p, _)| *p > 0.0));
                 let total: Real = order.iter().map(|(p, _)| p).sum();
                 order.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
                 let mut taken = 0.0;
-                for (p, node) in order {
+                for &(p, node) in order.iter() {
                     if taken >= self.params.share * total {
                         break;
                     }
@@ -298,6 +302,11 @@ impl NodeShooting {
     /// it is when some channel's holes outweigh the light unshot on the nodes and the light the
     /// round brings. Returns the seconds the groups took.
     fn take(&mut self, problem: &Problem<'_>, pipeline: &Pipeline) -> f64 {
+        // Without overshoot or groups nothing makes a hole: a pull takes `t`.
+        if !self.params.overshoot && self.params.grouping == Grouping::None {
+            self.taken.clone_from(&self.brought);
+            return 0.0;
+        }
         let system = problem.system();
         let (area, k, n) = (system.areas(), problem.channels(), problem.n());
         let total: Real = area.iter().sum();

@@ -120,6 +120,9 @@ impl Plan {
         eprintln!("{}: {} patches; left out: {}", report.scene, report.patches, report.left_out_phrase());
         let lab = lab(&prepared, &self.spec, true, self.kind, self.columns, self.transport)?;
         let comparison = lab.compare(self.solvers, &self.rules, &Bars::new())?;
+        for note in comparison.outcomes.iter().filter_map(radiosity_eval::Outcome::cap_note) {
+            eprintln!("warning: {note}");
+        }
         // Distributed, rank 0 alone writes.
         if crate::ranks::reports() {
             comparison.write(out)?;

@@ -235,6 +235,9 @@ pub fn solved_rgb(
         None => lab.radiosity_rgb(None, rules, &Bars::new())?,
         Some(mut solver) => {
             let o = lab.run(solver.as_mut(), rules, &radiosity_eval::RecordPlan::errors_only(), &Bars::new())?;
+            if let Some(note) = o.cap_note() {
+                eprintln!("warning: {note}");
+            }
             let rays = match o.state.rays {
                 0 => String::new(),
                 r => format!(", {r} rays"),

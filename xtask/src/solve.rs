@@ -194,6 +194,9 @@ pub fn run(args: &Args) -> Result<()> {
         Some(mut solver) => {
             let plan = RecordPlan::errors_only();
             let o = lab.run(solver.as_mut(), &rules, &plan, &Bars::new())?;
+            if let Some(note) = o.cap_note() {
+                eprintln!("warning: {note}");
+            }
             let reached = if rules.needs_error() {
                 o.reached_powers()
                     .into_iter()
@@ -211,7 +214,7 @@ pub fn run(args: &Args) -> Result<()> {
             Outcome {
                 solver: o.solver,
                 state: o.state,
-                termination: o.termination,
+                termination: o.termination.to_string(),
                 last: o.last,
                 reached,
                 record: o.record,

@@ -574,6 +574,30 @@ fn solve_stops_at_every_kind_of_rule() {
 }
 
 #[test]
+fn a_time_rule_lifts_the_step_cap_and_a_capped_run_says_so() {
+    // A stiff furnace (ρ = 0.99, 24 patches) over its stored matrix: Jacobi needs thousands of
+    // steps to a residual of 1e-8, far past the cap of 20n = 480.
+    let args =
+        ["solve", "--scene", "furnace:res=2:rho=0.99", "--ff", "matrix", "--reference", "none", "--solver", "jacobi"];
+    let args = [&args[..], &["--json", "--until"]].concat();
+    let out = xtask(&[&args[..], &["residual=1e-8,time=300s"]].concat()).success().get_output().clone();
+    let stats = serde_json::from_slice::<Value>(&out.stdout).unwrap()["stats"].clone();
+    assert!(stats["termination"].as_str().unwrap().starts_with("residual power reached"), "{stats}");
+    assert!(stats["steps"].as_u64().unwrap() > 480, "{stats}");
+    assert!(out.stderr.is_empty(), "{}", String::from_utf8_lossy(&out.stderr));
+    // Without it the cap ends the run, which says so on stderr in one sentence.
+    let out = xtask(&[&args[..], &["residual=1e-8"]].concat()).success().get_output().clone();
+    let stats = serde_json::from_slice::<Value>(&out.stdout).unwrap()["stats"].clone();
+    assert_eq!(stats["steps"], 480, "{stats}");
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("jacobi stopped at the step cap of 480 steps") && stderr.contains("not converged"),
+        "{stderr}"
+    );
+}
+
+#[test]
 fn solve_gathers_exact_rows_or_says_it_cannot() {
     // Analytic rows are exact: Gauss–Seidel reaches the reference of the same columns.
     let args = ["solve", "--scene", "furnace:res=2:block=true", "--solver", "gauss-seidel", "--until", "steps=40n"];

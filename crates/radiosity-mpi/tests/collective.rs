@@ -1,12 +1,14 @@
 //! `MpiWorld` under `mpirun`, started through `launch`: the collective-check program's ranks
 //! write what they summed and received, and these tests check it against sums taken here in
 //! rank order, bit for bit; a rank that exits early must end the run with one sentence.
-#![cfg(feature = "mpi")]
 
 use radiosity_mpi::launch;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::Duration;
+
+/// Why the tests here are ignored in a build without the feature `mpi`, whose programs they run.
+const NEEDS_MPI: &str = "needs MPI: run with --features mpi, Open MPI and libclang installed (as .ci/run does)";
 
 /// Runs collective-check as `ranks` ranks with `mode` (if any), failing the test when the run
 /// takes longer than `limit`; returns the run's result and its output directory.
@@ -19,7 +21,7 @@ fn run_check(ranks: usize, mode: Option<&str>, limit: Duration) -> (Result<(), S
     args.extend(mode.map(Into::into));
     let (done, outcome) = mpsc::channel();
     std::thread::spawn(move || {
-        let program = Path::new(env!("CARGO_BIN_EXE_collective-check"));
+        let program = Path::new(option_env!("CARGO_BIN_EXE_collective-check").expect(NEEDS_MPI));
         let _ = done.send(launch(ranks, program, &args).map_err(|e| e.to_string()));
     });
     let result = outcome.recv_timeout(limit).unwrap_or_else(|_| panic!("{ranks} ranks ran past {limit:?}"));
@@ -89,16 +91,28 @@ fn check_sums(ranks: usize) {
 }
 
 #[test]
+#[cfg_attr(
+    not(feature = "mpi"),
+    ignore = "needs MPI: run with --features mpi, Open MPI and libclang installed (as .ci/run does)"
+)]
 fn two_ranks_sum_in_rank_order_with_the_same_bits_everywhere() {
     check_sums(2);
 }
 
 #[test]
+#[cfg_attr(
+    not(feature = "mpi"),
+    ignore = "needs MPI: run with --features mpi, Open MPI and libclang installed (as .ci/run does)"
+)]
 fn three_ranks_sum_in_rank_order_with_the_same_bits_everywhere() {
     check_sums(3);
 }
 
 #[test]
+#[cfg_attr(
+    not(feature = "mpi"),
+    ignore = "needs MPI: run with --features mpi, Open MPI and libclang installed (as .ci/run does)"
+)]
 fn a_rank_that_exits_early_ends_the_run_with_one_sentence() {
     let (result, _) = run_check(3, Some("exit-early"), Duration::from_secs(20));
     assert_eq!(result, Err("rank 1 of 3 ended with exit status 3 before the distributed run finished".to_string()));

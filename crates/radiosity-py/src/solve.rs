@@ -153,7 +153,7 @@ pub fn solve(
                     state: o.state,
                     solver: o.solver,
                     backend: lab.backend().into(),
-                    termination: o.termination,
+                    termination: o.termination.to_string(),
                     last: o.last,
                     points: o.points,
                     reference: chosen,

@@ -190,7 +190,7 @@ fn column_time_is_form_factor_time() {
 }
 
 #[test]
-fn runs_end_at_round_off_or_at_the_step_cap() {
+fn runs_end_at_round_off_or_at_the_step_cap_unless_timed() {
     // No rule: PR converges to round-off on the cube well before 20n steps.
     let system = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![1.0; 6]).unwrap();
     let f = cube();
@@ -204,6 +204,11 @@ fn runs_end_at_round_off_or_at_the_step_cap() {
     // An explicit rule beyond the cap raises it.
     let run = solve_capped("jacobi", &slow, &f, "steps=50n", StopRules::default().step_cap);
     assert_eq!(run.termination, TerminationReason::Steps(300));
+    // A `time=` rule lifts the cap: the run goes on to its residual, far past 120 steps
+    // (Jacobi at ρ = 0.999 contracts the residual by 0.999 a step at best).
+    let run = solve_capped("jacobi", &slow, &f, "residual=1e-2,time=300s", StopRules::default().step_cap);
+    assert!(matches!(run.termination, TerminationReason::Residual(_)), "{}", run.termination);
+    assert!(run.state.step > 1000, "{} steps", run.state.step);
     // Nothing emitted: nothing to do.
     let dark = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![0.0; 6]).unwrap();
     assert_eq!(solve("southwell", &dark, &f, "").termination, TerminationReason::RoundOff);

@@ -3,7 +3,7 @@
 
 use crate::lab::recorder::{Point, TableRow};
 use radiosity_core::{Clock, Real};
-use radiosity_solvers::{Record, StandardError, State};
+use radiosity_solvers::{Record, StandardError, State, TerminationReason};
 
 /// The metrics of a run's final radiosity.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,7 +43,7 @@ pub struct Outcome {
     /// The final state.
     pub state: State,
     /// Why the run ended.
-    pub termination: String,
+    pub termination: TerminationReason,
     /// The solver's own figures (group sizes, condition numbers, fallbacks).
     pub record: Record,
     /// Seconds spent measuring, outside the run.
@@ -98,6 +98,19 @@ impl Outcome {
             }
         }
         out
+    }
+
+    /// One sentence when the run ended at the step cap, before any of its rules held: it has
+    /// not converged to what was asked, and the caller says so (on stderr, in the report).
+    pub fn cap_note(&self) -> Option<String> {
+        match self.termination {
+            TerminationReason::StepCap(k) => Some(format!(
+                "{} stopped at the step cap of {k} steps before any rule held, so it has not converged: give it a \
+                 time=, steps= or columns= rule to run on",
+                self.solver
+            )),
+            _ => None,
+        }
     }
 
     /// The group-solve share of the run's time.

@@ -178,7 +178,7 @@ impl Lab<'_> {
             solver: run.solver,
             points: recorder.points,
             rows: recorder.rows,
-            termination: run.termination.to_string(),
+            termination: run.termination,
             record: run.record,
             overhead: recorder.overhead,
             last,

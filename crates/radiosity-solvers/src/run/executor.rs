@@ -367,15 +367,7 @@ impl<'a> Executor<'a> {
         self.observe(problem, &state, |o| o.observe_init(&name, &state), StepOrInit::Init);
         let mut error = self.measure(&state);
         let mut watch = Watch::new();
-        // The cap guards runs whose rules cannot be met; an explicit `steps=` or `columns=`
-        // beyond it raises it (one step costs at least one column or none). A step that is a
-        // whole matrix–vector product counts as n steps.
-        let explicit = self.rules.rules.iter().filter_map(|r| match *r {
-            StopRule::Steps(c) | StopRule::Columns(c) => Some(c.resolve(n)),
-            _ => None,
-        });
-        let per_step = if self.solver.step_kind() == StepKind::Product { n.max(1) as f64 } else { 1.0 };
-        let cap = explicit.fold((self.rules.step_cap * n as f64 / per_step).ceil() as u64, u64::max);
+        let cap = self.step_cap(n);
         let termination = loop {
             let clocked = self.clocked(problem, &state);
             if clocked[0] {
@@ -410,6 +402,23 @@ impl<'a> Executor<'a> {
             observer.observe_final(&run);
         }
         Ok(run)
+    }
+
+    /// The steps after which a run of `n` patches ends if no rule held: none with a `time=`
+    /// rule, which ends every run by itself (the clock advances with every step, charged or
+    /// not); otherwise the cap guards runs whose rules cannot be met, and an explicit `steps=` or
+    /// `columns=` beyond it raises it (one step costs at least one column or none). A step that
+    /// is a whole matrix–vector product counts as n steps.
+    fn step_cap(&self, n: usize) -> u64 {
+        if self.rules.rules.iter().any(|r| matches!(r, StopRule::Time(_))) {
+            return u64::MAX;
+        }
+        let explicit = self.rules.rules.iter().filter_map(|r| match *r {
+            StopRule::Steps(c) | StopRule::Columns(c) => Some(c.resolve(n)),
+            _ => None,
+        });
+        let per_step = if self.solver.step_kind() == StepKind::Product { n.max(1) as f64 } else { 1.0 };
+        explicit.fold((self.rules.step_cap * n as f64 / per_step).ceil() as u64, u64::max)
     }
 
     /// Calls `call` on every observer whose mode takes `step` (`true`: the initial state,

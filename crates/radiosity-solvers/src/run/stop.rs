@@ -8,8 +8,8 @@
 //! `time=30s` (`ms`, `s` or `min`, on the run's clock: measured, or charged by the source,
 //! [`crate::Problem::clock`]). Every run ends even if no rule can hold any more: at
 //! round-off convergence (nothing left to shoot or gather), at a step cap of `20n` steps,
-//! raised to the largest `steps=` or `columns=` rule given, or when the residual power shows
-//! that the iteration diverges ([`crate::run::executor`]).
+//! raised to the largest `steps=` or `columns=` rule given and lifted by a `time=` rule, or
+//! when the residual power shows that the iteration diverges ([`crate::run::executor`]).
 
 use crate::error::SolverError;
 use radiosity_core::Real;

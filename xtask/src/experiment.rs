@@ -164,34 +164,39 @@ pub fn lab<'p>(
     Ok(lab)
 }
 
-/// Checks, before any work, that `path` can be written as a file: it is not a directory and
-/// nothing above it is a file; creates the folders it goes into (as `compare` creates its
-/// output folder).
+/// Checks, before any work, that `path` can be written as a file: it is not a folder, and the
+/// folder it goes into is made (with its missing parents) and written to (docs/cli.md, "Output
+/// paths"), so that a bad `--out` costs nothing.
 pub fn check_output_file(path: &Path) -> Result<()> {
     if path.is_dir() {
         bail!("cannot write {}: it is a directory; --out names the file to write", path.display());
     }
-    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
-        if let Some(file) = parent.ancestors().find(|a| !a.as_os_str().is_empty() && a.exists() && !a.is_dir()) {
-            bail!("cannot write {}: {} is not a directory", path.display(), file.display());
-        }
-        std::fs::create_dir_all(parent).map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
-    }
-    Ok(())
+    let parent = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    writable_dir(parent).map_err(|why| anyhow::anyhow!("cannot write {}: {why}", path.display()))
 }
 
-/// Checks, before any work, that `dir` is a directory or can be created as one: the nearest
-/// part of it that exists is a directory.
+/// Checks, before any work, that `dir` can hold a command's output: it is made (with its
+/// missing parents) and written to (docs/cli.md, "Output paths").
 pub fn check_out_dir(dir: &Path) -> Result<()> {
-    if let Some(existing) = dir.ancestors().find(|a| !a.as_os_str().is_empty() && a.exists()) {
-        if !existing.is_dir() {
-            bail!(
-                "cannot create the output folder {}: {} is a file, not a directory",
-                dir.display(),
-                existing.display()
-            );
-        }
+    writable_dir(dir).map_err(|why| anyhow::anyhow!("cannot write into the output folder {}: {why}", dir.display()))
+}
+
+/// Makes `dir` with its missing parents and writes and removes a probe file in it; why not,
+/// as a clause.
+fn writable_dir(dir: &Path) -> Result<(), String> {
+    if let Some(file) = dir.ancestors().find(|a| !a.as_os_str().is_empty() && a.exists() && !a.is_dir()) {
+        return Err(format!("{} is a file, not a folder", file.display()));
     }
+    let reason = |e: std::io::Error| match e.kind() {
+        std::io::ErrorKind::PermissionDenied => "permission denied".to_string(),
+        std::io::ErrorKind::ReadOnlyFilesystem => "the file system is read-only".to_string(),
+        std::io::ErrorKind::NotFound => "the folder cannot be made there".to_string(),
+        _ => e.to_string(),
+    };
+    std::fs::create_dir_all(dir).map_err(reason)?;
+    let probe = dir.join(format!(".radiosity-write-check-{}", std::process::id()));
+    std::fs::write(&probe, b"").map_err(reason)?;
+    let _ = std::fs::remove_file(&probe);
     Ok(())
 }
 

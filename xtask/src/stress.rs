@@ -5,7 +5,7 @@
 //! `--out`, and prints how many runs converged per case and backend.
 
 use crate::bars::Bars;
-use crate::experiment::default_out;
+use crate::experiment::{check_out_dir, default_out};
 use anyhow::{Context, Result};
 use radiosity_eval::stress::{BACKENDS, CASES, StressSuite, select};
 use radiosity_solvers::SolverRegistry;
@@ -39,7 +39,7 @@ pub fn run(args: &Args) -> Result<()> {
         suite.solvers = list.split(',').map(str::trim).filter(|s| !s.is_empty()).map(String::from).collect();
     }
     let out = args.out.clone().unwrap_or_else(|| default_out("stress"));
-    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+    check_out_dir(&out)?;
     let report = suite.run(&Bars::new())?;
     report.write(&out)?;
     print!("{}", report.summary());

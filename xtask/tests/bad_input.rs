@@ -351,9 +351,22 @@ fn outputs_that_cannot_be_written_are_refused_before_solving() {
     let file = dir.path("file");
     std::fs::write(&file, b"").unwrap();
     let out = format!("{file}/run.json");
-    refused(&run("solve", &out), &[&format!("cannot write {out}"), &format!("{file} is not a directory")]);
+    refused(&run("solve", &out), &[&format!("cannot write {out}"), &format!("{file} is a file, not a folder")]);
     let out = format!("{file}/deeper/run.json");
-    refused(&run("solve", &out), &[&format!("cannot write {out}"), &format!("{file} is not a directory")]);
+    refused(&run("solve", &out), &[&format!("cannot write {out}"), &format!("{file} is a file, not a folder")]);
+    // Where no folder can be made: refused in one sentence before the scene is loaded (the
+    // one line on stderr is the refusal: nothing was loaded or solved).
+    for command in ["solve", "render", "export"] {
+        let file = match command {
+            "render" => "x.png",
+            "export" => "x.glb",
+            _ => "x.json",
+        };
+        let out = format!("/proc/nope/{file}");
+        refused(&run(command, &out), &[&format!("cannot write {out}"), "cannot be made"]);
+    }
+    let args = ["compare", "--scene", "furnace:res=2", "--solvers", "pr", "--out", "/proc/nope/r"];
+    refused(&args, &["output folder /proc/nope/r", "cannot be made"]);
 
     // compare creates its folder, however deep...
     let folder = dir.path("a/b/c");

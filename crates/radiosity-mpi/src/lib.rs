@@ -15,7 +15,8 @@
 //! cargo test -p radiosity-mpi --features mpi
 //! ```
 //!
-//! MPICH (`libmpich-dev mpich`) works too. Running as root, Open MPI's `mpirun` refuses to start
+//! Only Open MPI is tested (CI installs it); MPICH's launcher and its rank variables are
+//! recognised, but no test runs under MPICH. Running as root, Open MPI's `mpirun` refuses to start
 //! without `--allow-run-as-root`; [`launch`] adds it, and `--oversubscribe` so that more ranks
 //! than cores may run (the ranks of a test on a small machine).
 //!

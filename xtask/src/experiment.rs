@@ -91,7 +91,11 @@ impl SolveArgs {
             "reference" => None,
             name => Some(SolverRegistry::builtin().build(name).map_err(|e| match e {
                 // `reference` is no solver of the registry's, but these commands take it.
-                SolverError::UnknownSolver { .. } => anyhow::anyhow!("{e};\n  or reference, the exact solution"),
+                SolverError::UnknownSolver { suggestion: None, .. }
+                    if radiosity_core::suggest::nearest(name, ["reference"]).is_some() =>
+                {
+                    anyhow::anyhow!("unknown solver '{name}' (did you mean 'reference', the exact solution?)")
+                }
                 e => e.into(),
             })?),
         };

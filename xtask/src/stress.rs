@@ -6,7 +6,7 @@
 
 use crate::bars::Bars;
 use crate::experiment::{check_out_dir, default_out};
-use anyhow::{Context, Result};
+use anyhow::Result;
 use radiosity_eval::stress::{BACKENDS, CASES, StressSuite, select};
 use radiosity_solvers::SolverRegistry;
 use std::path::PathBuf;

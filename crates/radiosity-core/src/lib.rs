@@ -46,6 +46,7 @@ pub mod patch;
 pub mod scene;
 pub mod sobol;
 pub mod spectrum;
+pub mod suggest;
 pub mod system;
 pub mod transport;
 

@@ -132,7 +132,7 @@ fn a_watch_sees_every_point_with_its_state_and_can_end_the_run() {
     let o = lab.run_watched(solver.as_mut(), &rules, &RecordPlan::default(), &NoProgress, &mut watch).unwrap();
     assert_eq!(seen, (0..=7).collect::<Vec<u64>>());
     assert_eq!(o.state.step, 7);
-    assert_eq!(o.termination, "stopped by its observer after 7 steps");
+    assert_eq!(o.termination.to_string(), "stopped by its observer after 7 steps");
     assert_eq!(o.points.last().unwrap().step, 7);
     // A run that is not stopped goes on to its rule.
     let o = lab.run(solver.as_mut(), &rules, &RecordPlan::default(), &NoProgress).unwrap();
@@ -475,7 +475,7 @@ fn the_clock_rules_and_the_report_read_the_same_seconds() {
 
 /// `run` ended on its `time=` rule at its first point whose seconds reached `limit`.
 fn stopped_where_the_seconds_pass(run: &radiosity_eval::Outcome, limit: f64) {
-    assert!(run.termination.starts_with("time limit"), "{}", run.termination);
+    assert!(run.termination.to_string().starts_with("time limit"), "{}", run.termination);
     let [.., before, last] = &run.points[..] else { panic!("{:?}", run.points) };
     assert!(before.seconds < limit && last.seconds >= limit, "{} then {}", before.seconds, last.seconds);
     assert_eq!(last.seconds, run.seconds());

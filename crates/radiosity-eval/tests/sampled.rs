@@ -128,7 +128,7 @@ fn a_sampled_run_records_every_step_with_its_rays_and_standard_error() {
     assert_eq!(*units.0.lock().unwrap(), ["rays"], "a rays= rule counts the progress in rays");
     // Every step recorded, each with the rays so far; the first point is the initial state.
     let steps = o.state.step;
-    assert!(o.termination.contains("rays"), "{}", o.termination);
+    assert!(o.termination.to_string().contains("rays"), "{}", o.termination);
     assert_eq!(o.points.len() as u64, steps + 1);
     assert_eq!(o.rows.len() as u64, steps + 1);
     assert!(o.points.windows(2).all(|w| w[1].rays > w[0].rays), "rays grow at every step");
@@ -213,8 +213,8 @@ fn a_comparison_mixing_deterministic_and_sampled_solvers_gives_one_table_and_one
     let rules = StopRules::parse("columns=n,rays=2e4").unwrap();
     let comparison: Comparison = lab.compare(solvers, &rules, &NoProgress).unwrap();
     let (pr, rays) = (&comparison.outcomes[0], &comparison.outcomes[1]);
-    assert!(pr.termination.contains("columns") && pr.state.rays == 0, "{}", pr.termination);
-    assert!(rays.termination.contains("rays") && rays.state.columns == 0, "{}", rays.termination);
+    assert!(pr.termination.to_string().contains("columns") && pr.state.rays == 0, "{}", pr.termination);
+    assert!(rays.termination.to_string().contains("rays") && rays.state.columns == 0, "{}", rays.termination);
     assert!(comparison.transport.as_deref().is_some_and(|t| t.starts_with("`matrix`")), "{:?}", comparison.transport);
     let dir = std::env::temp_dir().join(format!("radiosity-eval-sampled-{}", std::process::id()));
     let written = comparison.write(&dir).unwrap();

@@ -16,7 +16,7 @@
 //! later entry of the same name is never reached: start from [`BackendRegistry::empty`] to
 //! give a built-in name another meaning). An unknown name is [`FfError::UnknownBackend`], with
 //! the list of names ([`BackendRegistry::names`]) and, when a known name is within
-//! [`suggestion_distance`] edits (Damerau–Levenshtein, from `strsim`), that name as a
+//! [`radiosity_core::suggest::suggestion_distance`] edits (Damerau–Levenshtein), that name as a
 //! suggestion. Refused parameters are one sentence beginning `form-factor backend 'NAME'` and
 //! naming the key ([`KeyValueParams`]).
 //!
@@ -153,28 +153,13 @@ impl BackendRegistry {
 
     /// The known name nearest to `name`, if one is near enough to be a typo (module doc).
     pub fn suggest(&self, name: &str) -> Option<String> {
-        let mut best: Option<(usize, &str)> = None;
-        for entry in &self.entries {
-            let distance = strsim::damerau_levenshtein(name, &entry.name);
-            if distance > 0 && best.is_none_or(|(d, _)| distance < d) {
-                best = Some((distance, &entry.name));
-            }
-        }
-        let (distance, candidate) = best?;
-        (distance <= suggestion_distance(name.chars().count().max(candidate.chars().count())))
-            .then(|| candidate.to_string())
+        radiosity_core::suggest::nearest(name, self.entries.iter().map(|e| e.name.as_str())).map(str::to_string)
     }
 }
 
 /// The owner named by a backend's refusals: `form-factor backend 'NAME'`.
 pub fn owner(name: &str) -> String {
     format!("form-factor backend '{name}'")
-}
-
-/// The most edits at which a name of `length` characters (the longer of the two compared) is
-/// suggested: a quarter of it, at least 1.
-pub fn suggestion_distance(length: usize) -> usize {
-    (length / 4).max(1)
 }
 
 #[cfg(test)]

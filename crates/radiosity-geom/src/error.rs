@@ -20,15 +20,19 @@ pub enum GeomError {
         cause: CoreError,
     },
     /// A scene name that is neither built in nor a supported file.
-    #[error("unknown scene '{name}'; built-in scenes are {valid}, or give a path to a .gltf, .glb or .mgf file")]
+    #[error(
+        "unknown scene '{name}'{suggestion}; built-in scenes are {valid}, or give a path to a .gltf, .glb or .mgf file"
+    )]
     UnknownScene {
         /// The name given.
         name: String,
         /// The valid names, comma-separated.
         valid: String,
+        /// ` (did you mean 'NAME'?)` for a typo of a built-in name, or nothing.
+        suggestion: String,
     },
     /// A `key=value` parameter the scene or backend does not take.
-    #[error("{owner} has no parameter '{key}'; its parameters are {valid}")]
+    #[error("{owner} has no parameter '{key}'{suggestion}; its parameters are {valid}")]
     UnknownParameter {
         /// What the parameters belong to: `scene 'furnace'`.
         owner: String,
@@ -36,6 +40,8 @@ pub enum GeomError {
         key: String,
         /// The valid keys, comma-separated.
         valid: String,
+        /// ` (did you mean 'KEY'?)` for a typo of a valid key, or nothing.
+        suggestion: String,
     },
     /// A parameter value that does not parse or is out of range.
     #[error("{owner}: parameter {key}={value} is invalid; expected {expected}")]
@@ -59,10 +65,14 @@ pub enum GeomError {
     },
     /// A relative scene path found neither from the current directory nor in the folder of
     /// third-party scenes.
-    #[error("scene file {path} not found, neither from the current directory nor in the scenes folder {folder}")]
+    #[error(
+        "scene file {path} not found, neither from the current directory nor in the scenes folder {folder}{suggestion}"
+    )]
     SceneFileNotFound {
         /// The path as written.
         path: PathBuf,
+        /// `; did you mean PATH?` for the folder's scene file nearest to it, or nothing.
+        suggestion: String,
         /// The folder looked in, and why that one ([`crate::third_party::ScenesFolder::describe`]).
         folder: String,
     },

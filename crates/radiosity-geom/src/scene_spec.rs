@@ -52,7 +52,8 @@ impl SceneSpec {
         let name = parts.next().unwrap_or_default();
         let Some(builtin) = builtin_scenes().iter().find(|s| s.name == name) else {
             let valid = builtin_scenes().iter().map(|s| s.name).collect::<Vec<_>>().join(", ");
-            return Err(GeomError::UnknownScene { name: arg.to_string(), valid });
+            let suggestion = radiosity_core::suggest::did_you_mean(name, builtin_scenes().iter().map(|s| s.name));
+            return Err(GeomError::UnknownScene { name: arg.to_string(), valid, suggestion });
         };
         let params =
             KeyValueParams::parse(&format!("scene '{name}'"), parts.filter(|s| !s.is_empty()), builtin.params)?;
@@ -120,7 +121,12 @@ impl SceneSpec {
                 let folder = ScenesFolder::from_env();
                 let path = folder.resolve(written);
                 if written.is_relative() && !path.exists() {
-                    return Err(GeomError::SceneFileNotFound { path: path.clone(), folder: folder.describe() });
+                    let suggestion = folder.nearest(written).map(|p| format!("; did you mean {}?", p.display()));
+                    return Err(GeomError::SceneFileNotFound {
+                        path: path.clone(),
+                        folder: folder.describe(),
+                        suggestion: suggestion.unwrap_or_default(),
+                    });
                 }
                 match format {
                     FileFormat::Gltf => gltf_input::load(&path, &self.params),

@@ -53,7 +53,13 @@ impl KeyValueParams {
                 } else {
                     docs.iter().map(|d| d.key).collect::<Vec<_>>().join(", ")
                 };
-                return Err(GeomError::UnknownParameter { owner: owner.to_string(), key: key.to_string(), valid });
+                let suggestion = radiosity_core::suggest::did_you_mean(key, docs.iter().map(|d| d.key));
+                return Err(GeomError::UnknownParameter {
+                    owner: owner.to_string(),
+                    key: key.to_string(),
+                    valid,
+                    suggestion,
+                });
             }
             values.retain(|(k, _)| k != key);
             values.push((key.to_string(), value.to_string()));

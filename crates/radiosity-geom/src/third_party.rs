@@ -10,7 +10,9 @@
 //!   current directory is looked up in the folder ([`ScenesFolder::resolve`]), so
 //!   `mgf/office3/office.mgf` names RenderPark's office wherever the folder is. A path found
 //!   from the current directory wins: the folder is a fallback, never a shadow.
-//! - Nothing here reads a file; [`ScenesFolder::file`] only asks whether one exists.
+//! - Nothing here reads a file; [`ScenesFolder::file`] only asks whether one exists, and
+//!   [`ScenesFolder::nearest`] lists the folder's scene files (at most [`LISTED`], four
+//!   folders deep) to suggest one for a path that names none.
 
 use std::path::{Path, PathBuf};
 
@@ -62,6 +64,25 @@ impl ScenesFolder {
         self.file(path).unwrap_or_else(|| path.to_path_buf())
     }
 
+    /// The scene file of the folder nearest to `written`, a path that exists neither from the
+    /// current directory nor in the folder, as a typo of it
+    /// ([`radiosity_core::suggest::nearest`]): compared path to path, then by file name alone, so
+    /// that `clasroom.mgf` finds `mgf/salon/classroom.mgf`.
+    pub fn nearest(&self, written: &Path) -> Option<PathBuf> {
+        let mut files = Vec::new();
+        list_scene_files(&self.path, Path::new(""), 4, &mut files);
+        let paths: Vec<String> = files.iter().map(|f| f.to_string_lossy().into_owned()).collect();
+        let text = written.to_string_lossy();
+        if let Some(found) = radiosity_core::suggest::nearest(&text, paths.iter().map(String::as_str)) {
+            return Some(PathBuf::from(found));
+        }
+        let name = written.file_name()?.to_string_lossy();
+        let names: Vec<String> =
+            files.iter().map(|f| f.file_name().unwrap_or_default().to_string_lossy().into_owned()).collect();
+        let found = radiosity_core::suggest::nearest(&name, names.iter().map(String::as_str))?;
+        files.into_iter().find(|f| f.file_name().is_some_and(|n| n.to_string_lossy() == found))
+    }
+
     /// Says where the folder is and why, for messages: the path, then `(from
     /// RADIOSITY_SCENES)` or `(the default; RADIOSITY_SCENES is unset)`.
     pub fn describe(&self) -> String {
@@ -69,6 +90,30 @@ impl ScenesFolder {
             format!("{} (from {SCENES_VARIABLE})", self.path.display())
         } else {
             format!("{} (the default; {SCENES_VARIABLE} is unset)", self.path.display())
+        }
+    }
+}
+
+/// The most scene files [`ScenesFolder::nearest`] lists.
+pub const LISTED: usize = 10_000;
+
+/// Appends to `out` the `.mgf`, `.gltf` and `.glb` files under `dir`, as paths relative to the
+/// folder (`relative` is `dir`'s), descending at most `depth` folders, up to [`LISTED`] files.
+fn list_scene_files(dir: &Path, relative: &Path, depth: usize, out: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    let mut entries: Vec<_> = entries.filter_map(Result::ok).map(|e| e.path()).collect();
+    entries.sort();
+    for path in entries {
+        if out.len() >= LISTED {
+            return;
+        }
+        let Some(name) = path.file_name() else { continue };
+        if path.is_dir() {
+            if depth > 0 {
+                list_scene_files(&path, &relative.join(name), depth - 1, out);
+            }
+        } else if path.extension().is_some_and(|e| ["mgf", "gltf", "glb"].iter().any(|x| e.eq_ignore_ascii_case(x))) {
+            out.push(relative.join(name));
         }
     }
 }

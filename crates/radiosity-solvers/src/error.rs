@@ -26,7 +26,7 @@ pub enum SolverError {
     },
     /// A stop rule that does not parse.
     #[error(
-        "invalid stop rule '{rule}': {reason}; rules are columns=N, columns=2n, steps=N, rays=1e7, rms=1e-3, residual=1e-4, time=30s"
+        "invalid stop rule '{rule}': {reason}; rules are columns=N, columns=2n, steps=N, rays=1e7, links=1e9, rms=1e-3, residual=1e-4, time=30s"
     )]
     BadRule {
         /// The rule as written.
@@ -56,9 +56,9 @@ pub enum SolverError {
     #[error("{0}")]
     BadParams(String),
     /// A solver name that names no solver ([`crate::SolverRegistry::build`]). Its message is
-    /// one sentence over several lines: the name, the nearest known name when one is close,
-    /// and the solvers there are, wrapped to [`MESSAGE_WIDTH`] characters.
-    #[error("{}", unknown_solver(name, suggestion.as_deref(), valid))]
+    /// one sentence: the name, the nearest known name when one is close, and where every
+    /// family is listed; the list itself is `valid`.
+    #[error("{}", unknown_solver(name, suggestion.as_deref()))]
     UnknownSolver {
         /// The name given.
         name: String,
@@ -97,41 +97,10 @@ pub enum SolverError {
     },
 }
 
-/// The longest line of a multi-line error message ([`SolverError::UnknownSolver`]), in
-/// characters; continuation lines are indented by two spaces within it.
-pub const MESSAGE_WIDTH: usize = 100;
-
 /// The message of [`SolverError::UnknownSolver`].
-fn unknown_solver(name: &str, suggestion: Option<&str>, valid: &str) -> String {
-    let mut text = format!("unknown solver '{name}'");
-    if let Some(s) = suggestion {
-        text.push_str(&format!(" (did you mean '{s}'?)"));
-    }
-    text.push_str("; solvers are ");
-    text.push_str(valid);
-    wrap(&text, MESSAGE_WIDTH, "  ")
-}
-
-/// `text` broken at spaces into lines of at most `width` characters, every line after the
-/// first starting with `indent`; a word longer than a line stands alone on its own.
-pub(crate) fn wrap(text: &str, width: usize, indent: &str) -> String {
-    let mut out = String::new();
-    let mut line = 0;
-    for word in text.split(' ').filter(|w| !w.is_empty()) {
-        let length = word.chars().count();
-        if line == 0 && out.is_empty() {
-            out.push_str(word);
-            line = length;
-        } else if line + 1 + length <= width {
-            out.push(' ');
-            out.push_str(word);
-            line += 1 + length;
-        } else {
-            out.push('\n');
-            out.push_str(indent);
-            out.push_str(word);
-            line = indent.chars().count() + length;
-        }
-    }
-    out
+fn unknown_solver(name: &str, suggestion: Option<&str>) -> String {
+    let guess = suggestion.map(|s| format!(" (did you mean '{s}'?)")).unwrap_or_default();
+    format!(
+        "unknown solver '{name}'{guess}; `cargo xtask solve --help` lists every solver family (SolverRegistry::help)"
+    )
 }

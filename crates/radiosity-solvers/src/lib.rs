@@ -104,7 +104,7 @@ mod run;
 mod shooting;
 mod stochastic;
 
-pub use error::{MESSAGE_WIDTH, SolverError};
+pub use error::SolverError;
 pub use gathering::gauss_seidel::{GaussSeidel, GaussSeidelParams};
 pub use gathering::jacobi::{Jacobi, JacobiParams};
 pub use group::group_accelerated::{

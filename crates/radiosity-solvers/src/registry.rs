@@ -27,7 +27,7 @@
 //! Suggestions use the Damerau–Levenshtein distance (adjacent transpositions count as one
 //! edit) from the `strsim` crate, against every family's example names, their heads without
 //! `:key=value` parameters, and the plain names in its syntax; a name is suggested when at
-//! most [`suggestion_distance`] edits away (the nearest, the first family's on a tie).
+//! most [`radiosity_core::suggest::suggestion_distance`] edits away (the nearest, the first family's on a tie).
 //!
 //! ## References
 //!
@@ -234,20 +234,12 @@ impl SolverRegistry {
     /// heads are compared; the parameters given (`:f=10`) are kept.
     pub fn suggest(&self, name: &str) -> Option<String> {
         let (head, params) = split_params(name);
-        let mut best: Option<(usize, &str)> = None;
-        for entry in &self.entries {
+        let candidates = self.entries.iter().flat_map(|entry| {
             let examples = entry.examples.iter().flat_map(|e| [e.as_str(), split_params(e).0]);
-            for candidate in examples.chain(entry.plain_names()) {
-                let distance = strsim::damerau_levenshtein(head, candidate);
-                if distance > 0 && best.is_none_or(|(d, _)| distance < d) {
-                    best = Some((distance, candidate));
-                }
-            }
-        }
-        let (distance, candidate) = best?;
-        let limit = suggestion_distance(head.chars().count().max(candidate.chars().count()));
-        (distance <= limit)
-            .then(|| if params.is_empty() { candidate.to_string() } else { format!("{candidate}:{params}") })
+            examples.chain(entry.plain_names()).collect::<Vec<_>>()
+        });
+        let candidate = radiosity_core::suggest::nearest(head, candidates)?;
+        Some(if params.is_empty() { candidate.to_string() } else { format!("{candidate}:{params}") })
     }
 }
 
@@ -258,12 +250,6 @@ const COLUMN: usize = 40;
 fn pad(text: &str, width: usize) -> String {
     let length = text.chars().count();
     format!("{text}{}", " ".repeat(width.saturating_sub(length)))
-}
-
-/// The most edits at which a name of `length` characters (the longer of the two compared) is
-/// suggested: a quarter of it, at least 1.
-pub fn suggestion_distance(length: usize) -> usize {
-    (length / 4).max(1)
 }
 
 /// The built-in registry, built once ([`crate::solver_by_name`]).

@@ -123,6 +123,9 @@ impl Default for StopRules {
     }
 }
 
+/// The rules' keys, for a typo's suggestion.
+const RULE_KEYS: [&str; 7] = ["columns", "steps", "rays", "links", "rms", "residual", "time"];
+
 fn bad(rule: &str, reason: &str) -> SolverError {
     SolverError::BadRule { rule: rule.to_string(), reason: reason.to_string() }
 }
@@ -167,7 +170,10 @@ impl StopRules {
                 "rms" => StopRule::Rms(parse_positive(rule, value.trim())?),
                 "residual" => StopRule::Residual(parse_positive(rule, value.trim())?),
                 "time" => StopRule::Time(parse_duration(rule, value.trim())?),
-                _ => return Err(bad(rule, "unknown rule")),
+                other => {
+                    let guess = radiosity_core::suggest::did_you_mean(other, RULE_KEYS);
+                    return Err(bad(rule, &format!("unknown rule{guess}")));
+                }
             });
         }
         Ok(StopRules { rules, ..StopRules::default() })

@@ -13,9 +13,14 @@
 use crate::experiment::{SolveArgs, check_output_file, prepare, solved_rgb};
 use anyhow::{Result, bail};
 use radiosity_core::Real;
-use radiosity_eval::{Camera, MAX_SIDE, RenderParams, render};
+use radiosity_eval::{MAX_SIDE, RenderParams, render};
 use radiosity_geom::SceneSpec;
 use std::path::PathBuf;
+
+/// A coordinate as `--camera` takes it, to four significant digits.
+fn sig(x: Real) -> String {
+    radiosity_eval::round_significant(x, 4)
+}
 use std::time::Instant;
 
 /// Arguments of `render`.
@@ -27,7 +32,10 @@ pub struct Args {
     #[arg(long, value_name = "IMAGE.png")]
     out: PathBuf,
     /// The camera: eye `x,y,z`, the point it looks at `tx,ty,tz` and optionally the vertical
-    /// field of view in degrees (default 45), in scene coordinates, y up.
+    /// field of view in degrees (default 45), in scene coordinates, with the scene's up axis up
+    /// on the image (+y for built-in and glTF scenes, +z for MGF unless the luminaires say
+    /// otherwise; printed). Default: a built-in scene's preset, or for a file a view from
+    /// inside its enclosure where there is one, else from outside.
     #[arg(long, value_name = "x,y,z:tx,ty,tz[:fov]")]
     camera: Option<String>,
     /// Image width in pixels, 1 to 8192.
@@ -52,13 +60,32 @@ pub fn run(args: &Args) -> Result<()> {
             bail!("--{name} {side} is out of range: an image side is 1 to {MAX_SIDE} pixels");
         }
     }
-    let camera = args.camera.as_deref().map(str::parse::<Camera>).transpose()?;
+    let camera = args.camera.as_deref().map(str::parse::<radiosity_eval::Camera>).transpose()?;
 
     let scene_spec = SceneSpec::parse(&args.run.scene)?;
     let prepared = prepare(&args.run.scene)?;
     let scene = &prepared.loaded.scene;
     let aspect = Real::from(args.width) / Real::from(args.height);
-    let camera = camera.unwrap_or_else(|| Camera::default_for(&scene_spec, scene, aspect));
+    let (up, why) = radiosity_eval::up_axis(&scene_spec, scene);
+    let (camera, how) = match camera {
+        Some(camera) => (camera.with_up(up), "as given"),
+        None => {
+            let framing = radiosity_eval::default_view(&scene_spec, scene, &prepared.visibility, aspect);
+            let how = if framing.inside { "the default, inside the enclosure" } else { "the default, from outside" };
+            (framing.camera, how)
+        }
+    };
+    let (e, t) = (camera.eye(), camera.target());
+    eprintln!(
+        "camera {},{},{}:{},{},{}:{} ({how}; up {why})",
+        sig(e.x),
+        sig(e.y),
+        sig(e.z),
+        sig(t.x),
+        sig(t.y),
+        sig(t.z),
+        sig(camera.fov())
+    );
     let (rgb, _) = solved_rgb(&args.run, &prepared, &spec, solver, &rules, kind)?;
 
     let render_start = Instant::now();

@@ -17,6 +17,11 @@ fn main() -> ExitCode {
             run: mgf_scenes_load_with_renderpark_patch_counts,
         },
         SceneTest {
+            name: "classroom_renders_from_inside_by_default",
+            needs: &["mgf/salon/classroom.mgf"],
+            run: classroom_renders_from_inside_by_default,
+        },
+        SceneTest {
             name: "real_cornell_export_loads_upright",
             needs: &["cornell-box-toy-ray-tracer.gltf"],
             run: real_cornell_export_loads_upright,
@@ -60,4 +65,26 @@ fn real_cornell_export_loads_upright(scenes: &Scenes) {
     // Upright: y runs from the floor at 0 to the ceiling at 1.99.
     assert!((r["bounds"][0][1].as_f64().unwrap()).abs() < 1e-6);
     assert!((r["bounds"][1][1].as_f64().unwrap() - 1.99).abs() < 1e-6);
+}
+
+/// `render` of RenderPark's classroom with no `--camera`: the room from inside, z up (its
+/// luminaires shine down along -z), and the camera used printed, to be given back as
+/// `--camera`.
+fn classroom_renders_from_inside_by_default(scenes: &Scenes) {
+    let png = std::env::temp_dir().join(format!("radiosity-classroom-{}.png", std::process::id()));
+    let out = Command::cargo_bin("xtask")
+        .unwrap()
+        .args(["render", "--scene", "mgf/salon/classroom.mgf", "--solver", "pr", "--ff", "hemicube"])
+        .args(["--until", "steps=1", "--width", "64", "--height", "48", "--out", png.to_str().unwrap()])
+        .env("RADIOSITY_SCENES", scenes.path(""))
+        .assert()
+        .success()
+        .get_output()
+        .clone();
+    let _ = std::fs::remove_file(&png);
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    let line = stderr.lines().find(|l| l.starts_with("camera ")).unwrap_or_else(|| panic!("{stderr}"));
+    assert!(line.contains("inside the enclosure") && line.contains("up +z, from the luminaires"), "{line}");
+    let camera = line.split_whitespace().nth(1).unwrap();
+    assert!(camera.parse::<radiosity_eval::Camera>().is_ok(), "{line}");
 }

@@ -114,6 +114,7 @@ pub use truth::validate::{
     DiscreteMean, ObjectValidation, Refinement, Resolution, TraceSummary, ValidateError, ValidateParams, Validation,
     validate,
 };
+pub use view::framing::{Framing, INSIDE_FOV, default_view, up_axis};
 pub use view::gltf_export::{ExportInfo, Glb, export_glb, exposure};
 pub use view::png_image::{Rgb8, write_rgb8};
 pub use view::render::{Camera, DEFAULT_FOV, Image, MAX_SIDE, RenderParams, corner_weights, render, srgb_byte};

@@ -140,3 +140,52 @@ fn bad_input_is_refused_before_rendering() {
     let other = Visibility::new(&radiosity_geom::load_scene("furnace:res=2").unwrap().scene);
     assert!(matches!(render(&scene, &other, &rgb, &params), Err(EvalError::SizeMismatch { .. })));
 }
+
+/// `built` (a built-in scene argument) exported to binary glTF and loaded back as a file scene,
+/// with its spec and BVH.
+fn as_file(built: &str, name: &str) -> (SceneSpec, radiosity_core::Scene, Visibility) {
+    let scene = radiosity_geom::load_scene(built).unwrap().scene;
+    let rgb: Vec<[Real; 3]> = (0..scene.len()).map(|i| scene.emission(i).0).collect();
+    let about = radiosity_eval::ExportInfo { scene: built.into(), solver: "none".into(), ff: "none".into() };
+    let dir = std::env::temp_dir().join(format!("radiosity-framing-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    radiosity_eval::export_glb(&scene, &rgb, &about).unwrap().save(&path).unwrap();
+    let spec = SceneSpec::parse(path.to_str().unwrap()).unwrap();
+    let loaded = spec.load().unwrap().scene;
+    std::fs::remove_file(&path).unwrap();
+    let visibility = Visibility::new(&loaded);
+    (spec, loaded, visibility)
+}
+
+#[test]
+fn a_file_scene_is_framed_from_inside_its_enclosure_and_an_open_box_from_its_open_side() {
+    // A closed room as a file: the default eye is inside, and every ray of the picture sees the
+    // front of a wall (from outside, every one would see a back or nothing).
+    let (spec, scene, visibility) = as_file("furnace:res=3:block=true", "furnace.glb");
+    let framing = radiosity_eval::default_view(&spec, &scene, &visibility, 4.0 / 3.0);
+    assert!(framing.inside, "{framing:?}");
+    assert_eq!(framing.camera.up(), Vec3::Y, "glTF is y-up: {framing:?}");
+    assert!(framing.camera.front_share(&visibility, 32, 24) > 0.999, "{framing:?}");
+    // The Cornell box, open at its front: no eye is enclosed, and the view from outside is
+    // the one through the opening, which sees more fronts than any other side.
+    let (spec, scene, visibility) = as_file("cornell:res=2", "cornell.glb");
+    let framing = radiosity_eval::default_view(&spec, &scene, &visibility, 4.0 / 3.0);
+    assert!(!framing.inside, "{framing:?}");
+    let share = framing.camera.front_share(&visibility, 32, 24);
+    let side = Camera::new(Vec3::new(3000.0, 300.0, 280.0), Vec3::new(278.0, 274.0, 280.0), DEFAULT_FOV).unwrap();
+    assert!(share > 0.3 && share > side.front_share(&visibility, 32, 24) + 0.2, "{share}: {framing:?}");
+}
+
+#[test]
+fn the_up_axis_of_a_file_follows_its_luminaires() {
+    // The furnace's every patch emits, in every direction: the luminaires do not say, and a
+    // glTF file is y-up. The Cornell box's light faces down (-y): up is +y.
+    let (spec, scene, _) = as_file("furnace:res=2", "furnace-up.glb");
+    assert_eq!(radiosity_eval::up_axis(&spec, &scene), (Vec3::Y, "+y, glTF's convention (the luminaires do not say)"));
+    let (spec, scene, _) = as_file("cornell:res=2", "cornell-up.glb");
+    assert_eq!(radiosity_eval::up_axis(&spec, &scene).0, Vec3::Y);
+    // Built-in scenes are y-up.
+    let spec = SceneSpec::parse("cornell:res=2").unwrap();
+    assert_eq!(radiosity_eval::up_axis(&spec, &scene).0, Vec3::Y);
+}

@@ -4,16 +4,18 @@
 //!
 //! ## Camera
 //!
-//! A pinhole camera ([`Camera`]): an eye, a point it looks at, +y up (every built-in scene is
-//! y-up) and a vertical field of view in degrees; written `x,y,z:tx,ty,tz[:fov]`
+//! A pinhole camera ([`Camera`]): an eye, a point it looks at, an up direction (+y, as every
+//! built-in scene, unless [`Camera::with_up`] sets the scene's own, [`crate::up_axis`]) and a
+//! vertical field of view in degrees; written `x,y,z:tx,ty,tz[:fov]`
 //! ([`Camera::from_str`](std::str::FromStr::from_str)), 45° when the field of view is left
 //! out. Each built-in scene has a preset chosen to show what matters in it, kept beside the
 //! scene in `radiosity_geom::scenes` ([`radiosity_geom::CameraPreset`]) and made the default by
 //! [`Camera::default_for`]: the Cornell box from its published camera, looking into the open
 //! front (inside the box when `front=true` closes it); the closed rooms (`multi-cubes`,
 //! `office`, `furnace`) from inside, near a wall or corner, looking across; the labyrinth, open
-//! to the sky, from above and in front, looking down at its middle. Any other scene is seen
-//! from its +z side, slightly above, far enough back for its bounding sphere to fit the frame.
+//! to the sky, from above and in front, looking down at its middle. A scene file is framed by
+//! [`crate::default_view`]: from inside its enclosure where there is one, else from outside
+//! (module `framing`).
 //!
 //! ## Shading
 //!
@@ -84,6 +86,7 @@ pub struct Camera {
     eye: Vec3,
     target: Vec3,
     fov: Real,
+    up: Vec3,
 }
 
 impl Camera {
@@ -109,7 +112,19 @@ impl Camera {
         if eye == target {
             return Err("the eye and the point it looks at are the same");
         }
-        Ok(Camera { eye, target, fov })
+        Ok(Camera { eye, target, fov, up: Vec3::Y })
+    }
+
+    /// The same camera with `up` up on the image (+y unless set; a scene's up axis,
+    /// [`crate::up_axis`]); a zero or non-finite `up` leaves it as it was.
+    pub fn with_up(self, up: Vec3) -> Camera {
+        let up = up.normalize_or_zero();
+        if up == Vec3::ZERO || !up.is_finite() { self } else { Camera { up, ..self } }
+    }
+
+    /// The direction that is up on the image.
+    pub fn up(&self) -> Vec3 {
+        self.up
     }
 
     /// Where the camera is.
@@ -134,7 +149,7 @@ impl Camera {
     pub fn default_for(spec: &SceneSpec, scene: &Scene, aspect: Real) -> Camera {
         let preset = spec.builtin().and_then(|s| s.camera(scene));
         if let Some(CameraPreset { eye, target, fov }) = preset {
-            return Camera { eye, target, fov };
+            return Camera { eye, target, fov, up: Vec3::Y };
         }
         // Anything else: from the +z side, 15° above, far enough for the bounding sphere to
         // fit the narrower of the two fields of view.
@@ -144,7 +159,22 @@ impl Camera {
         let half = half_v.min((half_v.tan() * aspect).atan());
         let distance = radius / half.sin();
         let up = 15f64.to_radians();
-        Camera { eye: c + Vec3::new(0.0, up.sin(), up.cos()) * distance, target: c, fov: DEFAULT_FOV }
+        Camera { eye: c + Vec3::new(0.0, up.sin(), up.cos()) * distance, target: c, fov: DEFAULT_FOV, up: Vec3::Y }
+    }
+
+    /// The share of a coarse `width × height` grid of rays through this camera that see the
+    /// front of a patch: how much of a picture would show lit surfaces rather than the black
+    /// beyond the scene or the backs of its walls.
+    pub fn front_share(&self, visibility: &Visibility, width: u32, height: u32) -> Real {
+        let Ok(view) = self.view(width.max(1), height.max(1)) else { return 0.0 };
+        let mut front = 0usize;
+        for y in 0..view.height {
+            for x in 0..view.width {
+                let d = view.direction(Real::from(x) + 0.5, Real::from(y) + 0.5);
+                front += usize::from(visibility.first_hit(view.eye, d, None).is_some_and(|h| h.front));
+            }
+        }
+        front as Real / Real::from(view.width * view.height)
     }
 
     /// The view through this camera for a `width × height` image.
@@ -156,10 +186,10 @@ impl Camera {
                 reason: "the eye and the point it looks at are the same",
             });
         }
-        // +y up; looking straight up or down, -z is "up" on the image instead.
-        let mut right = forward.cross(Vec3::Y);
+        // The camera's up; looking straight along it, the next axis round is "up" instead.
+        let mut right = forward.cross(self.up);
         if right.length() < 1e-9 {
-            right = forward.cross(Vec3::NEG_Z);
+            right = forward.cross(-Vec3::new(self.up.z, self.up.x, self.up.y));
         }
         let right = right.normalize();
         let up = right.cross(forward);

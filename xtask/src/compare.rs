@@ -9,6 +9,7 @@
 
 use crate::bars::Bars;
 use crate::experiment::{ReferenceArg, check_measurable, check_out_dir, default_out, lab, prepare};
+use crate::ranks::Ranks;
 use anyhow::{Result, bail};
 use radiosity_eval::ReferenceKind;
 use radiosity_eval::{ColumnCost, Comparison, Transport};
@@ -63,12 +64,27 @@ pub struct Plan {
     kind: ReferenceKind,
     columns: ColumnCost,
     transport: Transport,
+    /// Whether this process writes the results: rank 0, or a single process.
+    writes: bool,
 }
 
 impl Plan {
     /// Checks every argument, so a typo fails at once.
     pub fn new(scene: &str, solvers: &str, ff: &str, until: &str, kind: ReferenceKind) -> Result<Plan> {
-        let spec = crate::ranks::backend(ff)?;
+        Plan::on_ranks(scene, solvers, ff, until, kind, &Ranks::default())
+    }
+
+    /// [`Plan::new`] for a process that is one of `ranks`: the backend is its part, and only
+    /// rank 0 writes.
+    pub fn on_ranks(
+        scene: &str,
+        solvers: &str,
+        ff: &str,
+        until: &str,
+        kind: ReferenceKind,
+        ranks: &Ranks,
+    ) -> Result<Plan> {
+        let spec = ranks.backend(ff)?;
         let registry = SolverRegistry::builtin();
         let solvers = solvers
             .split(',')
@@ -92,6 +108,7 @@ impl Plan {
             kind,
             columns: ColumnCost::default(),
             transport: Transport::default(),
+            writes: ranks.reports(),
         })
     }
 
@@ -124,7 +141,7 @@ impl Plan {
             eprintln!("warning: {note}");
         }
         // Distributed, rank 0 alone writes.
-        if crate::ranks::reports() {
+        if self.writes {
             comparison.write(out)?;
         }
         Ok(comparison)
@@ -137,12 +154,12 @@ fn parse_columns(value: &str) -> Result<ColumnCost, String> {
 }
 
 /// Runs `compare`.
-pub fn run(args: &Args) -> Result<()> {
-    let plan = Plan::new(&args.scene, &args.solvers, &args.ff, &args.until, args.reference.parse()?)?
+pub fn run(args: &Args, ranks: &Ranks) -> Result<()> {
+    let plan = Plan::on_ranks(&args.scene, &args.solvers, &args.ff, &args.until, args.reference.parse()?, ranks)?
         .with_columns(args.columns)
         .with_transport(args.transport.transport);
     let out = args.out.clone().unwrap_or_else(|| default_out(&args.scene));
-    if crate::ranks::reports() {
+    if ranks.reports() {
         check_out_dir(&out)?;
     }
     let comparison = plan.execute(&out)?;

@@ -86,7 +86,12 @@ impl SolveArgs {
     /// Checks the backend, the solver (or `reference`) and the stop rules before any geometry
     /// is built, so a typo fails at once; gives the solver (`None` for the reference).
     pub fn check(&self) -> Result<Checked> {
-        let spec = crate::ranks::backend(&self.ff)?;
+        self.check_on(&crate::ranks::Ranks::default())
+    }
+
+    /// [`SolveArgs::check`] for a process that is one of `ranks` (the backend is its part).
+    pub fn check_on(&self, ranks: &crate::ranks::Ranks) -> Result<Checked> {
+        let spec = ranks.backend(&self.ff)?;
         let solver = match self.solver.as_str() {
             "reference" => None,
             name => Some(SolverRegistry::builtin().build(name).map_err(|e| match e {

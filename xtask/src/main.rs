@@ -79,15 +79,15 @@ fn main() -> ExitCode {
         Err(e) if ranks::reported(&e) => return ExitCode::FAILURE,
         Err(e) => return failure(&e),
     }
-    let world = match ranks::Ranks::start(name, distributed) {
+    let ranks = match ranks::Ranks::start(name, distributed) {
         Ok(world) => world,
         Err(e) => return failure(&e),
     };
     let result = match cli.command {
         Command::Scenes(args) => scenes::run(&args),
         Command::Ff(args) => ff::run(&args),
-        Command::Solve(args) => solve::run(&args),
-        Command::Compare(args) => compare::run(&args),
+        Command::Solve(args) => solve::run(&args, &ranks),
+        Command::Compare(args) => compare::run(&args, &ranks),
         Command::Paper(args) => paper::run(&args),
         Command::Render(args) => render::run(&args),
         Command::Export(args) => export::run(&args),
@@ -99,7 +99,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => failure(&e),
     };
-    drop(world);
+    drop(ranks);
     code
 }
 

@@ -10,8 +10,8 @@
 
 use anyhow::{Result, bail};
 use radiosity_core::Collective;
-use radiosity_ff::{BackendRegistry, BackendSpec, TASKS_PER_RANK};
-use std::sync::{Arc, Mutex};
+use radiosity_ff::{BackendRegistry, BackendSpec};
+use std::sync::Arc;
 
 /// `--ranks K`, for the commands that run distributed.
 #[derive(Debug, clap::Args)]
@@ -23,11 +23,13 @@ pub struct RanksArg {
     pub ranks: Option<u32>,
 }
 
-/// The ranks this process is one of, while a command runs: set by [`Ranks::start`].
-static WORLD: Mutex<Option<Arc<dyn Collective>>> = Mutex::new(None);
-
-/// The ranks, held by `main` while the command runs; MPI is finalised when it is dropped.
-pub struct Ranks;
+/// The ranks this process is one of, made by `main` and handed to the command that runs
+/// distributed; a single process holds none. MPI is finalised when the last reference to the
+/// world is dropped, which is this value's, at the end of `main`.
+#[derive(Clone, Default)]
+pub struct Ranks {
+    world: Option<Arc<dyn Collective>>,
+}
 
 impl Ranks {
     /// Starts MPI when this process is one of several ranks (`distributed`: whether the
@@ -35,29 +37,31 @@ impl Ranks {
     /// not, or for a build without MPI.
     pub fn start(command: &str, distributed: bool) -> Result<Ranks> {
         let Some((rank, ranks)) = radiosity_mpi::rank_from_env().filter(|&(_, k)| k > 1) else {
-            return Ok(Ranks);
+            return Ok(Ranks::default());
         };
         if !distributed {
             bail!(
                 "`cargo xtask {command}` runs in one process, and this is rank {rank} of {ranks}: only solve and compare run distributed under mpirun"
             );
         }
-        start_mpi(rank, ranks)?;
-        Ok(Ranks)
+        Ok(Ranks { world: Some(start_mpi(rank, ranks)?) })
     }
-}
 
-impl Drop for Ranks {
-    fn drop(&mut self) {
-        // The last reference: MPI is finalised here, on the thread that initialised it.
-        let world = WORLD.lock().unwrap_or_else(|e| e.into_inner()).take();
-        drop(world);
+    /// Whether this process prints and writes: rank 0, or a single process.
+    pub fn reports(&self) -> bool {
+        self.world.as_ref().is_none_or(|w| w.rank() == 0)
+    }
+
+    /// The backend `arg` names: over several ranks, `hierarchical` is this rank's part of the
+    /// operator split over them ([`BackendRegistry::for_ranks`]).
+    pub fn backend(&self, arg: &str) -> Result<BackendSpec> {
+        Ok(BackendRegistry::for_ranks(self.world.clone()).parse(arg)?)
     }
 }
 
 /// Initialises MPI as rank `rank` of `ranks`, silencing the ranks above 0.
 #[cfg(feature = "mpi")]
-fn start_mpi(rank: usize, ranks: usize) -> Result<()> {
+fn start_mpi(rank: usize, ranks: usize) -> Result<Arc<dyn Collective>> {
     let world = radiosity_mpi::MpiWorld::init()?;
     anyhow::ensure!(
         (world.rank(), world.ranks()) == (rank, ranks),
@@ -68,13 +72,12 @@ fn start_mpi(rank: usize, ranks: usize) -> Result<()> {
     if rank != 0 {
         silence(rank)?;
     }
-    *WORLD.lock().unwrap_or_else(|e| e.into_inner()) = Some(Arc::new(world));
-    Ok(())
+    Ok(Arc::new(world))
 }
 
 /// Refuses to run as a rank of several without MPI.
 #[cfg(not(feature = "mpi"))]
-fn start_mpi(rank: usize, ranks: usize) -> Result<()> {
+fn start_mpi(rank: usize, ranks: usize) -> Result<Arc<dyn Collective>> {
     bail!(
         "this is rank {rank} of {ranks} under mpirun, but this xtask was built without MPI, so each rank would solve \
          alone: build it with --features mpi (cargo xtask-mpi)"
@@ -90,31 +93,12 @@ fn silence(rank: usize) -> Result<()> {
     let null = std::fs::OpenOptions::new().write(true).open("/dev/null")?;
     nix::unistd::dup2_stdout(&null)?;
     nix::unistd::dup2_stderr(&null)?;
-    let stderr = Mutex::new(stderr);
+    let stderr = std::sync::Mutex::new(stderr);
     std::panic::set_hook(Box::new(move |info| {
         let mut out = stderr.lock().unwrap_or_else(|e| e.into_inner());
         let _ = writeln!(out, "rank {rank}: {info}");
     }));
     Ok(())
-}
-
-/// Whether this process prints and writes: rank 0, or a single process.
-pub fn reports() -> bool {
-    world().is_none_or(|w| w.rank() == 0)
-}
-
-/// The ranks this process is one of, when it is one of several.
-pub fn world() -> Option<Arc<dyn Collective>> {
-    WORLD.lock().unwrap_or_else(|e| e.into_inner()).clone()
-}
-
-/// The backend `arg` names: over several ranks, `hierarchical` is this rank's part of the
-/// operator split over them.
-pub fn backend(arg: &str) -> Result<BackendSpec> {
-    Ok(match world() {
-        Some(world) => BackendRegistry::builtin_split(world, TASKS_PER_RANK).parse(arg)?,
-        None => BackendSpec::parse(arg)?,
-    })
 }
 
 /// Whether `e`, from [`launch`], is rank 0 ending as a failed command ends (exit status 1),

@@ -167,8 +167,8 @@ fn json_value(v: &Value) -> serde_json::Value {
 }
 
 /// Runs `solve`.
-pub fn run(args: &Args) -> Result<()> {
-    let (spec, solver, rules, kind) = args.run.check()?;
+pub fn run(args: &Args, ranks: &crate::ranks::Ranks) -> Result<()> {
+    let (spec, solver, rules, kind) = args.run.check_on(ranks)?;
     if let Some(out) = &args.out {
         check_output_file(out)?;
     }
@@ -388,7 +388,7 @@ pub fn run(args: &Args) -> Result<()> {
     let text = serde_json::to_string(&json)?;
     match &args.out {
         // Distributed, rank 0 alone writes.
-        Some(path) if crate::ranks::reports() => {
+        Some(path) if ranks.reports() => {
             std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))?
         }
         Some(_) => {}

@@ -480,3 +480,44 @@ fn stopped_where_the_seconds_pass(run: &radiosity_eval::Outcome, limit: f64) {
     assert!(before.seconds < limit && last.seconds >= limit, "{} then {}", before.seconds, last.seconds);
     assert_eq!(last.seconds, run.seconds());
 }
+
+/// Analytic columns standing in for an operator split over ranks: they say they are.
+struct Split<'a> {
+    inner: Box<dyn radiosity_ff::FormFactorBackend + 'a>,
+    ranks: std::sync::Arc<radiosity_core::InProcessRanks>,
+}
+
+impl ColumnSource for Split<'_> {
+    fn patch_count(&self) -> usize {
+        self.inner.patch_count()
+    }
+
+    fn fill_column(&self, j: usize, column: &mut [radiosity_core::Real]) {
+        self.inner.fill_column(j, column);
+    }
+
+    fn collective(&self) -> Option<&dyn radiosity_core::Collective> {
+        Some(self.ranks.as_ref())
+    }
+}
+
+#[test]
+fn node_shooters_over_a_split_operator_are_warned_that_they_run_one_level() {
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let registry = SolverRegistry::builtin();
+    let warnings = radiosity_core::InProcessRanks::run(1, |ranks| {
+        let inner = radiosity_eval::fresh_backend(&scene, &analytic(), &NoProgress).unwrap();
+        let options = LabOptions::default().with_columns(ColumnCost::Computed);
+        let lab = Lab::with_source(&scene, "split", Box::new(Split { inner, ranks }), true, options, &NoProgress);
+        let lab = lab.unwrap();
+        let warn = |name: &str| lab.link_warning(registry.build(name).unwrap().as_ref());
+        (warn("h-xu"), warn("xu"))
+    });
+    let (node, point) = &warnings[0];
+    assert!(node.as_deref().is_some_and(|w| w.contains("h-xu") && w.contains("one level")), "{node:?}");
+    assert_eq!(point, &None);
+    // Over the whole hierarchical operator, which shows its links, no warning.
+    let spec = BackendSpec::parse("hierarchical:eps=0.05").unwrap();
+    let lab = Lab::new(&scene, &spec, LabOptions::default().with_reference(ReferenceKind::None), &NoProgress).unwrap();
+    assert_eq!(lab.link_warning(registry.build("h-xu").unwrap().as_ref()), None);
+}

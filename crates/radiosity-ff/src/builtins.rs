@@ -54,6 +54,16 @@ impl BackendRegistry {
 }
 
 impl BackendRegistry {
+    /// The built-in backends for a process that is one of the ranks of `world`, when it is one
+    /// of several: [`BackendRegistry::builtin_split`] with [`crate::TASKS_PER_RANK`] tasks a
+    /// rank; for a single process, [`BackendRegistry::builtin`].
+    pub fn for_ranks(world: Option<Arc<dyn Collective>>) -> BackendRegistry {
+        match world {
+            Some(world) => BackendRegistry::builtin_split(world, crate::TASKS_PER_RANK),
+            None => BackendRegistry::builtin(),
+        }
+    }
+
     /// The built-in backends with `hierarchical` split over the ranks of `collective`: on each
     /// rank, that rank's part of the operator ([`HierarchicalColumns::new_distributed`], about
     /// `tasks_per_rank` refinement tasks a rank). Every rank parses the same arguments and

@@ -32,6 +32,22 @@ impl Lab<'_> {
         })
     }
 
+    /// Why `solver`, a shooter from the nodes of a hierarchy, will not shoot through links on
+    /// this source, if it will not: an operator split over ranks keeps each rank's links apart
+    /// and shows none, so the shooter runs one level, every patch a node and its column its
+    /// links, and computes columns (design.md §4.10).
+    pub fn link_warning(&self, solver: &dyn Solver) -> Option<String> {
+        let split = self.source.collective().is_some() && self.source.link_source().is_none();
+        (solver.step_kind() == StepKind::Round && split).then(|| {
+            format!(
+                "{} shoots from the nodes of a hierarchy, but {} is split over ranks and shows no links, so it runs \
+                 one level, every patch a node, and computes a column for every shot",
+                solver.name(),
+                self.backend
+            )
+        })
+    }
+
     /// Runs `solver` under `rules`, recording as `plan` says, reporting to `progress`.
     pub fn run(
         &self,
@@ -76,7 +92,7 @@ impl Lab<'_> {
         watch: &mut dyn FnMut(&Point, &State) -> ControlFlow<()>,
         sampler: Option<&dyn TransportSampler>,
     ) -> Result<Outcome, LabError> {
-        if let Some(w) = self.row_warning(solver) {
+        for w in [self.row_warning(solver), self.link_warning(solver)].into_iter().flatten() {
             progress.warn(&w);
         }
         let name = solver.name();

@@ -165,6 +165,9 @@ pub fn run(args: &Args, ranks: &Ranks) -> Result<()> {
     let comparison = plan.execute(&out)?;
     print!("{}", comparison.summary());
     println!("{}: {}", comparison.clock.seconds_label(), comparison.seconds_phrase());
+    if let Some(build) = &comparison.backend_build {
+        println!("form factors {}: {build}, outside every solver's seconds", comparison.backend);
+    }
     println!("wrote {} (report.md, convergence.csv and plots)", out.display());
     Ok(())
 }

@@ -90,6 +90,10 @@ pub struct Comparison {
     /// sampler took to build ([`TransportBuilt::describe`]), when some solver sampled
     /// transport; set by [`Lab::compare`].
     pub transport: Option<String>,
+    /// How the backend was built, when it says ([`Lab::backend_figures`]: the hierarchical
+    /// operator): `built in 15.20 s`, or read back from the cache; outside every solver's
+    /// seconds.
+    pub backend_build: Option<String>,
 }
 
 impl Comparison {
@@ -108,6 +112,13 @@ impl Comparison {
             charge: lab.charge().copied(),
             clock: lab.clock(),
             transport: None,
+            backend_build: lab.backend_figures().map(|f| {
+                if f.loaded {
+                    format!("read back from the cache (built in {:.2} s when it was made)", f.seconds)
+                } else {
+                    format!("built in {:.2} s", f.seconds)
+                }
+            }),
         }
     }
 

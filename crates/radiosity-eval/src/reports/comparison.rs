@@ -121,6 +121,9 @@ impl Comparison {
         );
         let _ = writeln!(md, "- Left out by the scene analysis: {}.", self.scene.left_out_phrase());
         let _ = writeln!(md, "- {}: {}.", capitalised(&self.clock.seconds_label()), self.seconds_phrase());
+        if let Some(build) = &self.backend_build {
+            let _ = writeln!(md, "- Form factors `{}`: {build}, outside every solver's seconds.", self.backend);
+        }
         let origin = match &self.reference_origin {
             ReferenceOrigin::Solved { assembly_seconds, solve_seconds } if *assembly_seconds > 0.0 => {
                 format!("F assembled in {assembly_seconds:.2} s, solved in {solve_seconds:.2} s")

@@ -137,7 +137,7 @@ impl Plan {
         eprintln!("{}: {} patches; left out: {}", report.scene, report.patches, report.left_out_phrase());
         let lab = lab(&prepared, &self.spec, true, self.kind, self.columns, self.transport)?;
         let comparison = lab.compare(self.solvers, &self.rules, &Bars::new())?;
-        for note in comparison.outcomes.iter().filter_map(radiosity_eval::Outcome::cap_note) {
+        for note in &comparison.notes {
             eprintln!("warning: {note}");
         }
         // Distributed, rank 0 alone writes.

@@ -521,3 +521,24 @@ fn node_shooters_over_a_split_operator_are_warned_that_they_run_one_level() {
     let lab = Lab::new(&scene, &spec, LabOptions::default().with_reference(ReferenceKind::None), &NoProgress).unwrap();
     assert_eq!(lab.link_warning(registry.build("h-xu").unwrap().as_ref()), None);
 }
+
+#[test]
+fn a_budget_a_last_step_overshoots_is_said_and_a_capped_run_is_not_converged() {
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let lab = Lab::new(&scene, &analytic(), LabOptions::default(), &NoProgress).unwrap();
+    let registry = SolverRegistry::builtin();
+    // A step of gmres-30 is a product, the columns of every lit patch at once: it goes past
+    // n/2 columns in its first step.
+    let comparison =
+        lab.compare(vec![registry.build("gmres-30").unwrap()], &StopRules::parse("columns=0.5n").unwrap(), &NoProgress);
+    let comparison = comparison.unwrap();
+    let spent = comparison.outcomes[0].state.columns;
+    assert!(spent > lab.n() as u64 / 2, "{spent}");
+    assert_eq!(comparison.notes.len(), 1, "{:?}", comparison.notes);
+    assert!(comparison.notes[0].starts_with(&format!("gmres-30 spent {spent} columns, past columns=0.5n")));
+    assert!(comparison.report_markdown(&[]).contains("**Not as asked.** gmres-30 spent"));
+    // PR stops exactly at its budget: nothing to say.
+    let comparison =
+        lab.compare(vec![registry.build("pr").unwrap()], &StopRules::parse("columns=0.5n").unwrap(), &NoProgress);
+    assert!(comparison.unwrap().notes.is_empty());
+}

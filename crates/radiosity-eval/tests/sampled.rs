@@ -263,6 +263,9 @@ fn stochastic_jacobi_casts_its_rays_in_the_scene_by_default() {
     let comparison = lab.compare(solvers(), &rules, &NoProgress).unwrap();
     let transport = comparison.transport.as_deref().unwrap();
     assert!(transport.starts_with("`scene`, one ray through"), "{transport}");
+    // The report says that their e_rms holds the backend's own distance from the kernel.
+    assert!(transport.contains("includes that backend's own distance from the exact kernel"), "{transport}");
+    assert!(comparison.report_markdown(&[]).contains("backend's own distance"));
     let o = &comparison.outcomes[1];
     assert!(o.state.rays >= 20_000 && o.state.columns == 0, "{} rays, {} columns", o.state.rays, o.state.columns);
     assert_eq!(o.last.replicates, Some(4));

@@ -8,11 +8,11 @@
 
 use crate::error::LabError;
 use crate::lab::options::ColumnCharge;
+use crate::lab::options::Transport;
 use crate::lab::outcome::Outcome;
 use crate::lab::recorder::{Point, RecordPlan};
 use crate::lab::run::check_rules;
 use crate::lab::setup::{ChosenReference, Lab, ReferenceOrigin};
-use crate::lab::transport::TransportBuilt;
 use crate::progress::Progress;
 use radiosity_core::TransportSampler;
 use radiosity_core::{Clock, Real};
@@ -54,7 +54,17 @@ impl Lab<'_> {
             outcomes.push(self.run_on(solver.as_mut(), rules, &plan, progress, &mut watch, sampler)?);
         }
         let mut comparison = Comparison::new(self, rules, outcomes);
-        comparison.transport = built.as_ref().map(TransportBuilt::describe);
+        comparison.transport = built.as_ref().map(|b| {
+            let mixed = (self.transport() == Transport::Scene && comparison.has_reference()).then(|| {
+                format!(
+                    "; rays in the scene sample the exact kernel while the reference solves `{}`'s F, so those \
+                     solvers' e_rms includes that backend's own distance from the exact kernel (`cargo xtask ff \
+                     --against` measures it; `--transport matrix` samples the reference's own F)",
+                    comparison.backend
+                )
+            });
+            format!("{}{}", b.describe(), mixed.unwrap_or_default())
+        });
         Ok(comparison)
     }
 }
@@ -94,11 +104,18 @@ pub struct Comparison {
     /// operator): `built in 15.20 s`, or read back from the cache; outside every solver's
     /// seconds.
     pub backend_build: Option<String>,
+    /// What the runs did not do as asked, one sentence each: runs ended at the step cap, not
+    /// converged ([`Outcome::cap_note`]), and budgets overshot by a last step
+    /// ([`Outcome::overshoot_notes`]). Printed on stderr by the command line and in
+    /// `report.md`.
+    pub notes: Vec<String>,
 }
 
 impl Comparison {
     /// The comparison of `outcomes`, run on `lab` under `rules`.
     pub fn new(lab: &Lab<'_>, rules: &StopRules, outcomes: Vec<Outcome>) -> Comparison {
+        let notes =
+            outcomes.iter().flat_map(|o| o.cap_note().into_iter().chain(o.overshoot_notes(rules, lab.n()))).collect();
         Comparison {
             scene: lab.report().clone(),
             n: lab.n() as u64,
@@ -112,6 +129,7 @@ impl Comparison {
             charge: lab.charge().copied(),
             clock: lab.clock(),
             transport: None,
+            notes,
             backend_build: lab.backend_figures().map(|f| {
                 if f.loaded {
                     format!("read back from the cache (built in {:.2} s when it was made)", f.seconds)

@@ -3,7 +3,7 @@
 
 use crate::lab::recorder::{Point, TableRow};
 use radiosity_core::{Clock, Real};
-use radiosity_solvers::{Record, StandardError, State, TerminationReason};
+use radiosity_solvers::{Record, StandardError, State, StopRule, StopRules, TerminationReason};
 
 /// The metrics of a run's final radiosity.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -111,6 +111,33 @@ impl Outcome {
             )),
             _ => None,
         }
+    }
+
+    /// One sentence for each budget of `rules` (columns, rays, links) the run went past, on a
+    /// system of `n` patches: a run stops only between steps, and one step may spend much at
+    /// once (a product of F is n columns), so the last step may overshoot what was asked.
+    pub fn overshoot_notes(&self, rules: &StopRules, n: usize) -> Vec<String> {
+        let s = &self.state;
+        rules
+            .rules
+            .iter()
+            .filter_map(|rule| {
+                let (spent, what, limit) = match *rule {
+                    StopRule::Columns(c) => (s.columns, "columns", c.resolve(n)),
+                    StopRule::Rays(c) => (s.rays, "rays", c.resolve(n)),
+                    StopRule::Links(c) => (s.links, "links", c.resolve(n)),
+                    _ => return None,
+                };
+                (spent > limit).then(|| {
+                    format!(
+                        "{} spent {spent} {what}, past {rule} ({limit}): it stops only between steps, and its last step \
+                         spent {} at once",
+                        self.solver,
+                        if what == "columns" && s.products > 0 { "a whole product of F" } else { "more than was left" }
+                    )
+                })
+            })
+            .collect()
     }
 
     /// The group-solve share of the run's time.

@@ -214,9 +214,8 @@ impl Comparison {
                 o.termination
             );
         }
-        let capped: Vec<String> = self.outcomes.iter().filter_map(Outcome::cap_note).collect();
-        if !capped.is_empty() {
-            let _ = writeln!(md, "\n**Not converged.** {}.", capped.join("; "));
+        if !self.notes.is_empty() {
+            let _ = writeln!(md, "\n**Not as asked.** {}.", self.notes.join("; "));
         }
         let records: Vec<&Outcome> = self.outcomes.iter().filter(|o| !o.record.is_empty()).collect();
         if !records.is_empty() {

@@ -149,7 +149,7 @@ impl Plan {
 }
 
 /// Reads `--columns` ([`ColumnCost::name`]).
-fn parse_columns(value: &str) -> Result<ColumnCost, String> {
+pub(crate) fn parse_columns(value: &str) -> Result<ColumnCost, String> {
     value.parse().map_err(|e: radiosity_eval::EvalError| e.to_string())
 }
 

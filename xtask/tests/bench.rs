@@ -1,7 +1,8 @@
 //! `cargo xtask bench --quick`: every section is in the report, with sane figures. Nothing
 //! here asserts a time: a smoke run on a loaded machine proves nothing about speed.
 
-use super::{failure, xtask};
+use super::{cache_dir, failure, xtask};
+use assert_cmd::Command;
 
 /// The cells of the rows of the first table after the line starting with `heading`.
 fn table(report: &str, heading: &str) -> Vec<Vec<String>> {
@@ -159,4 +160,69 @@ fn bench_refuses_bad_arguments() {
     let e = failure(&["bench", "--quick", "--only", "lu", "--out", out.to_str().unwrap()]);
     assert!(e.contains("is not a directory"), "{e}");
     std::fs::remove_file(&file).unwrap();
+}
+
+/// A closed unit box in MGF, every face inward, the ceiling emitting.
+const BOX_MGF: &str = "m wall =\n\tc\n\trd 0.6\nm lamp =\n\tc\n\trd 0.1\n\ted 5\n\
+v a = \n\tp 0 0 0\nv b = \n\tp 1 0 0\nv c = \n\tp 1 1 0\nv d = \n\tp 0 1 0\n\
+v e = \n\tp 0 0 1\nv f = \n\tp 1 0 1\nv g = \n\tp 1 1 1\nv h = \n\tp 0 1 1\n\
+m wall\nf a b c d\nf a e f b\nf d c g h\nf a d h e\nf b f g c\nm lamp\nf e h g f\n";
+
+/// `bench --only stochastic` on a small MGF box with one solver, as JSON and Markdown, with
+/// `env` added to the environment (and `RENDERPARK` removed).
+fn stochastic_bench(dir: &std::path::Path, extra: &[&str], env: &[(&str, &str)]) -> (String, serde_json::Value) {
+    let scene = dir.join("box.mgf");
+    std::fs::write(&scene, BOX_MGF).unwrap();
+    let json_out = dir.join("bench.json");
+    let mut args = vec!["bench", "--quick", "--only", "stochastic", "--runs", "1", "--max-seconds", "1"];
+    args.extend(["--solvers", "stochastic-jacobi", "--scene", scene.to_str().unwrap()]);
+    args.extend(["--json", json_out.to_str().unwrap()]);
+    args.extend(extra);
+    let mut command = Command::cargo_bin("xtask").unwrap();
+    command.args(&args).env("RADIOSITY_CACHE_DIR", cache_dir()).env_remove("RENDERPARK");
+    for (key, value) in env {
+        command.env(key, value);
+    }
+    let report = String::from_utf8(command.assert().success().get_output().stdout.clone()).unwrap();
+    let json = serde_json::from_str(&std::fs::read_to_string(&json_out).unwrap()).unwrap();
+    (report, json)
+}
+
+#[test]
+fn stochastic_bench_times_the_given_renderpark_beside_ours_or_says_it_has_none() {
+    let dir = std::env::temp_dir().join(format!("radiosity-bench-peer-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+
+    // Without an executable: one sentence, and no figures.
+    let (report, json) = stochastic_bench(&dir, &[], &[]);
+    assert!(report.contains("No peer measurement") && report.contains("--renderpark FILE"), "{report}");
+    let missing = json["peer"]["missing"].as_str().unwrap_or_default();
+    assert!(missing.starts_with("No peer measurement") && json["peer"]["peer"].is_null(), "{json}");
+    assert_eq!(json["peer"]["cases"].as_array().unwrap().len(), 0, "{json}");
+
+    // A stand-in that records its arguments and sleeps 0.3 s: its wall time is read back, at
+    // least the sleep, with little CPU.
+    use std::os::unix::fs::PermissionsExt;
+    let standin = dir.join("rpk");
+    let args_file = dir.join("args");
+    std::fs::write(&standin, format!("#!/bin/sh\necho \"$@\" > {}\nsleep 0.3\n", args_file.display())).unwrap();
+    std::fs::set_permissions(&standin, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let (report, json) =
+        stochastic_bench(&dir, &["--renderpark", standin.to_str().unwrap()], &[("RENDERPARK_COMMIT", "abc1234")]);
+    assert!(!report.contains("No peer measurement") && report.contains("abc1234"), "{report}");
+    let args = std::fs::read_to_string(&args_file).unwrap();
+    let scene = dir.join("box.mgf");
+    assert_eq!(
+        args.trim(),
+        format!("{} -raytracing-method none -radiance-method StochJacobi -iterations 20 -timings", scene.display())
+    );
+    let rows = table(&report, "### RenderPark");
+    assert_eq!(rows.len(), 1, "{report}");
+    assert_eq!((rows[0][0].as_str(), rows[0][1].as_str(), rows[0][2].as_str()), ("`StochJacobi`", "20", "1"));
+    assert!(seconds(&rows[0][3]) >= 0.3, "{rows:?}");
+    let run = &json["peer"]["cases"][0]["runs"][0];
+    let (wall, cpu) = (run["wall"].as_f64().unwrap(), run["user"].as_f64().unwrap() + run["system"].as_f64().unwrap());
+    assert!(wall >= 0.3 && cpu < 0.2 && json["peer"]["missing"].is_null(), "{run}");
+    assert!((wall / seconds(&rows[0][3]) - 1.0).abs() < 0.01, "{run} against {rows:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -217,6 +217,20 @@ fn paper_sets_each_claim_beside_the_measurement() {
     assert_eq!(verdicts, 5, "{report}");
     assert!(dir.join("multi-cubes").join("e_rms-steps.svg").exists());
     std::fs::remove_dir_all(&dir).unwrap();
+
+    // By default the columns come from the assembled matrix, charged: every seconds figure says
+    // so. Computed columns put them on the measured clock, and the claims, in steps, read the
+    // same figures either way.
+    assert!(report.contains("Seconds on the `charged` clock") && report.contains("to 1e-2 (columns / charged s)"));
+    let out = dir.to_str().unwrap();
+    xtask(&["paper", "--scenes", "multi-cubes", "--ff", QUICK_FF, "--columns", "computed", "--out", out]).success();
+    let computed = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(computed.contains("Seconds on the `measured` clock") && !computed.contains("charged"), "{computed}");
+    let claims = |r: &str| -> Vec<String> {
+        r.lines().filter(|l| l.ends_with("| yes |") || l.ends_with("| **no** |")).map(String::from).collect()
+    };
+    assert_eq!(claims(&report), claims(&computed));
+    std::fs::remove_dir_all(&dir).unwrap();
     let e = failure(&["paper", "--scenes", "cornell"]);
     assert!(e.contains("'cornell' is not one of the paper's scenes"), "{e}");
 }

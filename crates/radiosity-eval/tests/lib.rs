@@ -4,6 +4,7 @@
 //! and the path tracer against closed forms and beside the discrete solution.
 
 mod backends;
+mod bench_peer;
 mod examples;
 mod gltf_export;
 mod lab;

@@ -86,13 +86,22 @@ pub fn claims(figure: &Figure, c: &Comparison) -> Vec<(String, String, bool)> {
 }
 
 /// The report's section on `figure`, whose comparison is `c`: the step plot (in the folder
-/// named after the scene), a table of every method and the claims with their verdicts.
+/// named after the scene), a table of every method, its seconds labelled with the run's clock,
+/// and the claims with their verdicts.
 pub fn section(figure: &Figure, c: &Comparison) -> String {
     let mut md = String::new();
     let _ = writeln!(md, "## {} ({}, n = {})\n", figure.scene, figure.figure, c.n);
     let metric = c.metric();
     let _ = writeln!(md, "![{metric} against shooting steps]({}/{metric}-steps.png)\n", figure.scene);
-    let _ = writeln!(md, "| method | {metric} at n steps | columns | to 1e-2 | to 1e-3 | group share |");
+    // Every seconds figure names its clock: `charged` when the columns came from the stored
+    // matrix at the backend's measured cost, `measured` when each was computed.
+    let clock = c.clock.name();
+    let _ = writeln!(md, "Seconds on the `{clock}` clock: {}.\n", c.seconds_phrase());
+    let _ = writeln!(
+        md,
+        "| method | {metric} at n steps | columns | to 1e-2 (columns / {clock} s) | to 1e-3 (columns / {clock} s) | \
+         group share |"
+    );
     let _ = writeln!(md, "|---|--:|--:|--:|--:|--:|");
     for o in &c.outcomes {
         let reach = |t: Real| c.reached(o, t).map_or("—".into(), |p| format!("{} / {:.2} s", p.columns, p.seconds));

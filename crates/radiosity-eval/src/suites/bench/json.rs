@@ -20,6 +20,10 @@ pub struct BenchJson {
     /// Stochastic relaxation from scene load, one entry per solver.
     #[serde(default)]
     pub stochastic: Vec<crate::bench::stochastic::StochasticJson>,
+    /// RenderPark's process times beside the stochastic section, or why there are none
+    /// (`null` when the section did not run).
+    #[serde(default)]
+    pub peer: Option<crate::bench::peer::PeerJson>,
 }
 
 /// The machine the figures were taken on.

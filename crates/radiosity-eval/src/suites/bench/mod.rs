@@ -20,19 +20,29 @@
 //!   the solvers that sample transport with rays in a real scene.
 //! - [`scale`]: the same without a reference or a matrix, to a certified bound, with the growth
 //!   exponent of the time per column in `n`.
+//! - [`peer`]: a RenderPark executable the user supplies, timed on the stochastic section's
+//!   scene in the same run (process wall and CPU seconds); without one, a sentence saying so.
+//!
+//! What a run measures and how it is judged is [`plan`]: the sections and their defaults
+//! ([`plan::BenchConfig`]), the cases of each, the report's header and its performance targets
+//! ([`plan::targets`]). The heavy cases run in child processes ([`children`]: the reference
+//! they share in a file, what a child runs and the JSON line it answers with).
 //!
 //! Each measurement returns typed figures; [`median`] aggregates runs, each section module
 //! writes its Markdown section from them, and [`BenchJson`] holds the figures under the stable
-//! keys of `cargo xtask bench --json`. Running the cases of a section in child processes, so
-//! that each peak memory is its own, is the caller's part: the command line re-invokes itself
-//! and reads each child's report, which serialises to one JSON line.
+//! keys of `cargo xtask bench --json`. Spawning the child processes, so that each peak memory
+//! is its own, is the caller's part: the command line re-invokes itself with a
+//! [`children::ChildCase`] and reads back the JSON line it prints.
 
 pub mod assembly;
+pub mod children;
 pub mod columns;
 pub mod e2e;
 mod json;
 pub mod lu;
 pub(crate) mod memory;
+pub mod peer;
+pub mod plan;
 pub mod report_text;
 pub mod scale;
 pub mod stochastic;

@@ -12,10 +12,9 @@
 //! ([`report`]) gives, per solver, the median wall seconds and rays to each threshold, and for
 //! every quasi-random sequence the rays it needed against `seq=random` at the same e_rms.
 //!
-//! The comparison the issue asks for: RenderPark's stochastic Jacobi
-//! (`-radiance-method StochJacobi -iterations 20`) took [`RENDERPARK_SECONDS`] on
-//! `salon/classroom.mgf` in a side-by-side run on this project's 2-core machine, the whole
-//! process (load and solve); it is not rerun here (docs/stochastic.md says why).
+//! Beside them, when given a RenderPark executable, the section times RenderPark's own
+//! stochastic Jacobi on the same scene file in the same run ([`crate::bench::peer`]); without
+//! one it says it has no peer measurement.
 
 use crate::error::LabError;
 use crate::lab::backends::fresh_backend;
@@ -38,10 +37,6 @@ pub const SCENE: &str = "mgf/salon/classroom.mgf";
 
 /// The e_rms thresholds timed, largest first; the runs stop at the last.
 pub const THRESHOLDS: [Real; 3] = [1e-2, 3e-3, 1e-3];
-
-/// RenderPark's stochastic Jacobi, 20 iterations, on [`SCENE`]: the whole process, in seconds,
-/// measured side by side on this project's 2-core machine (module doc).
-pub const RENDERPARK_SECONDS: Real = 1.7;
 
 /// The solvers of the section by default.
 pub const SOLVERS: [&str; 7] = [
@@ -224,13 +219,11 @@ pub fn report(
         "`{scene}` ({patches} patches), rays in the scene (`SceneTransport`), e_rms against the analytic reference \
          ({}, solved in {} before the runs; {}). Wall time from the start of the scene load (load, BVH, analysis, \
          solve) until e_rms first falls to each threshold, in a child process per run, the time spent measuring \
-         e_rms taken out; runs stop at e_rms ≤ 1e-3 or after {} s. RenderPark's stochastic Jacobi (20 iterations, \
-         about 111k rays) took {} for the whole process on the same machine, side by side (not rerun here).\n",
+         e_rms taken out; runs stop at e_rms ≤ 1e-3 or after {} s.\n",
         reference.method,
         duration(reference.seconds),
         reference.certificate,
         sig(max_seconds, 3),
-        duration(RENDERPARK_SECONDS),
     );
     out += "| solver | over | to 1e-2 | to 3e-3 | to 1e-3 | cost to 3e-3 | cost to 1e-3 | setup | last e_rms | last \
             standard error | peak memory |\n|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";

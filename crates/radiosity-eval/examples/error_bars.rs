@@ -25,7 +25,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         argument("--solvers").unwrap_or_else(|| "stochastic-jacobi,stochastic-jacobi:seq=sobol,random-walk".into());
     let prepared = PreparedScene::load(&scene)?;
     let cache = Cache::from_env(concat!(env!("CARGO_MANIFEST_DIR"), "/../../target/ff-cache"));
-    let options = LabOptions { cache: Some(cache), ..LabOptions::default() };
+    let options = LabOptions::default().with_cache(Some(cache));
     let lab = Lab::new(&prepared, &BackendSpec::parse("analytic")?, options, &NoProgress)?;
     let rules = StopRules::parse(&until)?;
     println!("{scene}, --until {until}, {seeds} seeds");

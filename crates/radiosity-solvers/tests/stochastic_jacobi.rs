@@ -108,6 +108,10 @@ fn the_standard_error_covers_the_true_error_at_the_rate_it_claims() {
     }
     let share = within as Real / total as Real;
     let claimed = t_coverage_of_two(replicates);
+    eprintln!(
+        "coverage: {share:.3} within 2 standard errors, {claimed:.3} claimed; mean e_rms² / mean SE² {:.3}",
+        e2 / s2
+    );
     assert!((share - claimed).abs() < 0.04, "{share} of the values within 2 standard errors, {claimed} claimed");
     // The summary squared estimates the mean e_rms squared: their means over 200 seeds agree
     // within 15% (each a mean of 200 chi-square-like terms).
@@ -214,6 +218,7 @@ fn the_error_against_rays_follows_the_first_order_variance_formula() {
             .sum::<Real>()
             / norm;
         let ratio = (e2 / predicted).sqrt();
+        eprintln!("variance formula: {budget} rays, measured e_rms over predicted {ratio:.3}");
         assert!((ratio - 1.0).abs() < 0.3, "{budget} rays: e_rms {} against {} predicted", e2.sqrt(), predicted.sqrt());
     }
 }

@@ -28,8 +28,9 @@ pub struct Calibration {
     pub ratio: Real,
     /// The fraction of seeds with e_rms within 2 standard errors.
     pub within_two: Real,
-    /// The mean e_rms and the mean standard error.
+    /// The mean e_rms.
     pub e_rms: Real,
+    /// The mean standard error.
     pub standard_error: Real,
 }
 

@@ -353,3 +353,39 @@ fn global_lines_through_the_scene_are_unbiased_in_a_closed_furnace() {
     assert!(level_se < 2.5e-3 * 2.0, "no power: the level's standard error is {level_se}");
     assert!((mean_level[0] - 2.0).abs() <= 4.0 * level_se, "level {} ± {level_se} against 2", mean_level[0]);
 }
+
+#[test]
+fn a_stochastic_run_shows_no_bound_from_f_and_no_band_on_a_bound_axis() {
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let registry = SolverRegistry::builtin();
+    let rules = StopRules::parse("columns=n,rays=2e4").unwrap();
+    let solvers = || vec![registry.build("pr").unwrap(), registry.build("stochastic-jacobi:seed=2").unwrap()];
+    // F is kept: the deterministic run shows F's bound, the stochastic one none, and the
+    // report's row gives its standard error and its unshot power instead.
+    let kept = lab(&scene, ReferenceKind::Matrix, Transport::Matrix).unwrap();
+    let comparison = kept.compare(solvers(), &rules, &NoProgress).unwrap();
+    let (pr, sj) = (&comparison.outcomes[0], &comparison.outcomes[1]);
+    assert!(pr.last.bound.is_some() && sj.last.bound.is_none(), "{:?} {:?}", pr.last.bound, sj.last.bound);
+    assert!(sj.last.standard_error.is_some());
+    let unshot = sj.record.real("unshot_power").unwrap();
+    assert!((0.0..=1e-4).contains(&unshot), "unshot power {unshot} after the incremental series");
+    let dir = std::env::temp_dir().join(format!("radiosity-eval-bars-{}", std::process::id()));
+    comparison.write(&dir).unwrap();
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(report.contains("| standard error (replicates) | unshot power | rays |"), "{report}");
+    let row = report.lines().find(|l| l.starts_with("| `stochastic-jacobi:seed=2` |")).unwrap();
+    let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+    assert_eq!(cells[3], "—", "no certified bound: {row}");
+    std::fs::remove_dir_all(&dir).ok();
+    // Without a reference the plots show certified bounds: no standard-error band on them.
+    let blind = lab(&scene, ReferenceKind::None, Transport::Scene).unwrap();
+    let comparison = blind.compare(solvers(), &rules, &NoProgress).unwrap();
+    let written = comparison.write(&dir).unwrap();
+    let svgs: Vec<_> = written.files.iter().filter(|f| f.extension().is_some_and(|e| e == "svg")).collect();
+    assert!(!svgs.is_empty(), "{:?}", written.files);
+    for svg in svgs {
+        let text = std::fs::read_to_string(svg).unwrap();
+        assert!(!text.contains(radiosity_eval::BAND_LABEL), "a band on {}", svg.display());
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -95,6 +95,9 @@ impl Comparison {
                         Vec::new()
                     },
                 })
+                // A run with nothing to show on this axis (a stochastic run has no bound) is
+                // left out of the plot.
+                .filter(|c| !c.points.is_empty() || !c.spread.is_empty())
                 .collect();
             if curves.is_empty() {
                 continue;

@@ -366,6 +366,8 @@ fn a_stochastic_run_shows_no_bound_from_f_and_no_band_on_a_bound_axis() {
     let comparison = kept.compare(solvers(), &rules, &NoProgress).unwrap();
     let (pr, sj) = (&comparison.outcomes[0], &comparison.outcomes[1]);
     assert!(pr.last.bound.is_some() && sj.last.bound.is_none(), "{:?} {:?}", pr.last.bound, sj.last.bound);
+    assert!(!sj.rows.is_empty() && sj.rows.iter().all(|r| r.bound.is_nan()), "a bound in the stochastic run's rows");
+    assert!(pr.rows.iter().all(|r| r.bound.is_finite()));
     assert!(sj.last.standard_error.is_some());
     let unshot = sj.record.real("unshot_power").unwrap();
     assert!((0.0..=1e-4).contains(&unshot), "unshot power {unshot} after the incremental series");

@@ -112,6 +112,7 @@ impl Lab<'_> {
             latest: Rc::default(),
             watch: Some(watch),
             stop: false,
+            sampled,
         };
         progress.begin(&name, target, unit.name());
         // Every run starts from columns as costly as the first ones: what an earlier run left

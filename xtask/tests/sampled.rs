@@ -31,6 +31,9 @@ fn solve_reports_the_rays_and_the_standard_error_of_a_stochastic_solver() {
     // their spread, at a fixed seed.
     assert!(spread > 0.0 && e_rms <= 3.0 * spread, "e_rms {e_rms}, standard error {spread}");
     assert!(stats["termination"].as_str().unwrap().contains("rays"), "{stats}");
+    // The power its incremental series left unshot, at most its threshold (1e-4 of the emitted).
+    let unshot = stats["record"]["unshot_power"].as_f64().unwrap();
+    assert!((0.0..=1e-4).contains(&unshot), "unshot power {unshot}");
     // A deterministic solver's JSON has no standard error and no rays.
     let pr = stdout_json(&["solve", "--scene", "cornell:res=2", "--solver", "pr", "--json"]);
     assert!(pr["stats"]["standard_error"].is_null() && pr["stats"]["rays"] == 0, "{}", pr["stats"]);

@@ -81,6 +81,7 @@ pub use lab::backends::{
     Assembled, CacheUse, ObtainedMatrix, assemble_matrix, assemble_stored, assembly_of, backend, fresh_backend,
     obtain_matrix,
 };
+pub use lab::calibration::Calibration;
 pub use lab::compare::Comparison;
 pub use lab::options::{ColumnCharge, ColumnCost, LabOptions, Transport};
 pub use lab::outcome::{FinalMetrics, Outcome};

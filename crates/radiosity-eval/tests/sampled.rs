@@ -274,3 +274,123 @@ fn stochastic_jacobi_casts_its_rays_in_the_scene_by_default() {
     // both the noise and their difference, which on 53 patches is far below 1.
     assert!(e_rms < 0.5 && spread > 0.0 && spread < 0.5, "e_rms {e_rms}, standard error {spread}");
 }
+
+/// The mean over `seeds` runs of `name:seed=s` in `lab` under `rules`, the standard error of
+/// that mean (the spread over seeds), and the runs' mean e_rms² over their mean standard
+/// error² against `exact` with the fraction of runs whose e_rms lies within 2 standard errors.
+fn over_seeds(
+    lab: &Lab<'_>,
+    name: &str,
+    rules: &str,
+    seeds: u64,
+    exact: &[Real],
+) -> (Vec<Real>, Vec<Real>, Real, Real) {
+    let registry = SolverRegistry::builtin();
+    let rules = StopRules::parse(rules).unwrap();
+    let (mut runs, mut e2, mut s2, mut within) = (Vec::new(), 0.0, 0.0, 0);
+    for seed in 1..=seeds {
+        let mut solver = registry.build(&format!("{name}:seed={seed}")).unwrap();
+        let o = lab.run(solver.as_mut(), &rules, &RecordPlan::errors_only(), &NoProgress).unwrap();
+        let e_rms = radiosity_eval::errors_against(lab.system(), exact, &o.state.radiosity).unwrap().e_rms;
+        let spread = o.last.standard_error.unwrap();
+        (e2, s2) = (e2 + e_rms * e_rms, s2 + spread * spread);
+        within += usize::from(e_rms <= 2.0 * spread);
+        runs.push(o.state.radiosity);
+    }
+    let slices: Vec<&[Real]> = runs.iter().map(Vec::as_slice).collect();
+    let mut mean = vec![0.0; exact.len()];
+    let se = StandardError::of_replicates(&slices, &mut mean);
+    (mean, se.values, e2 / s2, within as Real / seeds as Real)
+}
+
+#[test]
+fn at_a_small_budget_stochastic_jacobi_is_unbiased_in_a_scene_and_its_bar_covers() {
+    // A closed box of one material, rays in the scene: B = E / (1 − ρ) = 2 on every patch
+    // whatever the form factors. At ρ = 0.5 the incremental series takes about 2 batches of
+    // rays; a budget of 1.5 batches once cut it after its second iteration, a bias of 1/8 of
+    // B shared by every replicate, with a standard error of a few percent.
+    let scene = PreparedScene::load("furnace:res=3:rho=0.5").unwrap();
+    let lab = lab(&scene, ReferenceKind::None, Transport::Scene).unwrap();
+    let exact = vec![2.0; lab.n()];
+    let (mean, se, ratio, within) = over_seeds(&lab, "stochastic-jacobi:batch=2000", "rays=3000", 24, &exact);
+    for (idx, (m, s)) in mean.iter().zip(&se).enumerate() {
+        assert!((m - 2.0).abs() <= 4.0 * s, "patch {idx}: mean {m} against 2, standard error {s}");
+    }
+    // The bar: mean e_rms² over mean standard error² near 1 (each a mean over 24 seeds of
+    // sums over 54 patches), and about t_coverage_of_two(4) = 0.86 of the runs within 2.
+    assert!((0.6..1.6).contains(&ratio), "mean e_rms² over mean standard error² {ratio}");
+    assert!(within >= 0.6, "{within} of the runs within 2 standard errors");
+}
+
+#[test]
+fn global_lines_through_the_scene_are_unbiased_in_a_closed_furnace() {
+    // lines=global over SceneTransport, rays in a closed box: B = E / (1 − ρ) = 2. Per patch
+    // the mean over seeds lies within 4 of its standard errors; the area-weighted mean over
+    // patches, whose standard error is a fraction of any patch's, within 4 of its own, which
+    // catches a bias of 1% of B in the lines' weight (its standard error is below 0.25%).
+    let scene = PreparedScene::load("furnace:res=3:rho=0.5").unwrap();
+    let lab = lab(&scene, ReferenceKind::None, Transport::Scene).unwrap();
+    let exact = vec![2.0; lab.n()];
+    let seeds = 24;
+    let registry = SolverRegistry::builtin();
+    let rules = StopRules::parse("steps=12").unwrap();
+    let areas = lab.system().areas();
+    let total: Real = areas.iter().sum();
+    let mut levels = Vec::new();
+    let mut runs = Vec::new();
+    for seed in 1..=seeds {
+        let mut solver = registry.build(&format!("stochastic-jacobi:lines=global:seed={seed}")).unwrap();
+        let o = lab.run(solver.as_mut(), &rules, &RecordPlan::errors_only(), &NoProgress).unwrap();
+        levels.push(o.state.radiosity.iter().zip(areas).map(|(b, a)| a * b).sum::<Real>() / total);
+        runs.push(o.state.radiosity);
+    }
+    let slices: Vec<&[Real]> = runs.iter().map(Vec::as_slice).collect();
+    let mut mean = vec![0.0; exact.len()];
+    let se = StandardError::of_replicates(&slices, &mut mean);
+    for (idx, (m, s)) in mean.iter().zip(&se.values).enumerate() {
+        assert!((m - 2.0).abs() <= 4.0 * s, "patch {idx}: mean {m} against 2, standard error {s}");
+    }
+    let level: Vec<&[Real]> = levels.chunks(1).collect();
+    let mut mean_level = [0.0];
+    let level_se = StandardError::of_replicates(&level, &mut mean_level).values[0];
+    assert!(level_se < 2.5e-3 * 2.0, "no power: the level's standard error is {level_se}");
+    assert!((mean_level[0] - 2.0).abs() <= 4.0 * level_se, "level {} ± {level_se} against 2", mean_level[0]);
+}
+
+#[test]
+fn a_stochastic_run_shows_no_bound_from_f_and_no_band_on_a_bound_axis() {
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let registry = SolverRegistry::builtin();
+    let rules = StopRules::parse("columns=n,rays=2e4").unwrap();
+    let solvers = || vec![registry.build("pr").unwrap(), registry.build("stochastic-jacobi:seed=2").unwrap()];
+    // F is kept: the deterministic run shows F's bound, the stochastic one none, and the
+    // report's row gives its standard error and its unshot power instead.
+    let kept = lab(&scene, ReferenceKind::Matrix, Transport::Matrix).unwrap();
+    let comparison = kept.compare(solvers(), &rules, &NoProgress).unwrap();
+    let (pr, sj) = (&comparison.outcomes[0], &comparison.outcomes[1]);
+    assert!(pr.last.bound.is_some() && sj.last.bound.is_none(), "{:?} {:?}", pr.last.bound, sj.last.bound);
+    assert!(!sj.rows.is_empty() && sj.rows.iter().all(|r| r.bound.is_nan()), "a bound in the stochastic run's rows");
+    assert!(pr.rows.iter().all(|r| r.bound.is_finite()));
+    assert!(sj.last.standard_error.is_some());
+    let unshot = sj.record.real("unshot_power").unwrap();
+    assert!((0.0..=1e-4).contains(&unshot), "unshot power {unshot} after the incremental series");
+    let dir = std::env::temp_dir().join(format!("radiosity-eval-bars-{}", std::process::id()));
+    comparison.write(&dir).unwrap();
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(report.contains("| standard error (replicates) | unshot power | rays |"), "{report}");
+    let row = report.lines().find(|l| l.starts_with("| `stochastic-jacobi:seed=2` |")).unwrap();
+    let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+    assert_eq!(cells[3], "—", "no certified bound: {row}");
+    std::fs::remove_dir_all(&dir).ok();
+    // Without a reference the plots show certified bounds: no standard-error band on them.
+    let blind = lab(&scene, ReferenceKind::None, Transport::Scene).unwrap();
+    let comparison = blind.compare(solvers(), &rules, &NoProgress).unwrap();
+    let written = comparison.write(&dir).unwrap();
+    let svgs: Vec<_> = written.files.iter().filter(|f| f.extension().is_some_and(|e| e == "svg")).collect();
+    assert!(!svgs.is_empty(), "{:?}", written.files);
+    for svg in svgs {
+        let text = std::fs::read_to_string(svg).unwrap();
+        assert!(!text.contains(radiosity_eval::BAND_LABEL), "a band on {}", svg.display());
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -108,6 +108,10 @@ fn the_standard_error_covers_the_true_error_at_the_rate_it_claims() {
     }
     let share = within as Real / total as Real;
     let claimed = t_coverage_of_two(replicates);
+    eprintln!(
+        "coverage: {share:.3} within 2 standard errors, {claimed:.3} claimed; mean e_rms² / mean SE² {:.3}",
+        e2 / s2
+    );
     assert!((share - claimed).abs() < 0.04, "{share} of the values within 2 standard errors, {claimed} claimed");
     // The summary squared estimates the mean e_rms squared: their means over 200 seeds agree
     // within 15% (each a mean of 200 chi-square-like terms).
@@ -214,6 +218,7 @@ fn the_error_against_rays_follows_the_first_order_variance_formula() {
             .sum::<Real>()
             / norm;
         let ratio = (e2 / predicted).sqrt();
+        eprintln!("variance formula: {budget} rays, measured e_rms over predicted {ratio:.3}");
         assert!((ratio - 1.0).abs() < 0.3, "{budget} rays: e_rms {} against {} predicted", e2.sqrt(), predicted.sqrt());
     }
 }
@@ -261,4 +266,40 @@ fn the_control_variate_is_refused_before_any_ray_where_row_sums_are_unknown() {
     // Without the control variate, the same sampler serves the gathering form.
     let mut plain = solver_by_name("stochastic-jacobi:form=gathering").unwrap();
     assert!(Executor::new(plain.as_mut(), StopRules::parse("steps=5").unwrap()).run(&problem).is_ok());
+}
+
+#[test]
+fn a_written_batch_is_cast_as_written() {
+    // batch=400 over 4 replicates: 100 rays a replicate and regular iteration, each patch's
+    // share rounded (at most one ray off a patch, 12 patches), never raised to a floor.
+    let (system, f) = twelve();
+    let rays_after =
+        |steps: u64| run_sampled("stochastic-jacobi:batch=400", &system, &f, &format!("steps={steps}")).0.state.rays;
+    let (first, second, third) = (rays_after(1), rays_after(2), rays_after(3));
+    for regular in [second - first, third - second] {
+        assert!(regular.abs_diff(400) <= 4 * 12, "a regular iteration cast {regular} rays for batch=400");
+    }
+    // The first step is the whole incremental series: 400 rays for the emitted power, then
+    // fewer for each reflection of it, so more than a batch in all.
+    assert!(first > 400, "the incremental series cast {first} rays");
+    // Fewer rays than replicates is refused, not raised.
+    let message = solver_by_name("stochastic-jacobi:batch=3").err().unwrap().to_string();
+    assert!(message.contains("fewer than one ray"), "{message}");
+}
+
+#[test]
+fn the_standard_error_is_the_textbook_formula() {
+    // Four replicates of two values, worked by hand: the first (1, 2, 3, 6) has mean 3 and
+    // squared deviations summing to 14, so s² = 14 / (R (R − 1)) = 14 / 12; the second is the
+    // same in every replicate, s = 0. Dividing by R² instead (an R for R − 1) gives 14 / 16.
+    let replicates: [&[Real]; 4] = [&[1.0, 2.0], &[2.0, 2.0], &[3.0, 2.0], &[6.0, 2.0]];
+    let mut mean = [0.0; 2];
+    let se = StandardError::of_replicates(&replicates, &mut mean);
+    assert_eq!(mean, [3.0, 2.0]);
+    assert!((se.values[0] - (14.0f64 / 12.0).sqrt()).abs() < 1e-15, "{:?}", se.values);
+    assert_eq!((se.values[1], se.replicates), (0.0, 4));
+    // The summary: sqrt(Σ A s² / Σ A B̄²) with areas 1 and 3: sqrt((14/12) / (9 + 12)).
+    let system = LinearSystem::new(Channels::Grey, vec![1.0, 3.0], vec![0.5, 0.5], vec![1.0, 0.0]).unwrap();
+    let summary = se.relative_rms(&system, &mean);
+    assert!((summary - (14.0f64 / 12.0 / 21.0).sqrt()).abs() < 1e-15, "{summary}");
 }

@@ -75,6 +75,7 @@
 //! [`check_rules`]: crate::check_rules
 
 pub(crate) mod backends;
+pub(crate) mod calibration;
 pub(crate) mod charged;
 pub(crate) mod compare;
 pub(crate) mod options;

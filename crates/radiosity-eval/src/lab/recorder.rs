@@ -177,6 +177,9 @@ pub struct Recorder<'a> {
     pub(super) watch: Option<&'a mut PointWatch<'a>>,
     /// Whether the watch asked the run to end.
     pub(super) stop: bool,
+    /// Whether the solver samples transport: its rows then never take F's bound for their
+    /// own (docs/design.md §6.3).
+    pub(super) sampled: bool,
 }
 
 impl<'a> Recorder<'a> {
@@ -203,6 +206,7 @@ impl<'a> Recorder<'a> {
             latest: Rc::default(),
             watch: None,
             stop: false,
+            sampled: false,
         }
     }
 
@@ -273,7 +277,9 @@ impl Observer for Recorder<'_> {
             };
             match self.evaluator.map(|e| e.evaluate(&state.radiosity)) {
                 Some(Ok(m)) => {
-                    let fallback = if m.bound.certified {
+                    let fallback = if self.sampled {
+                        Real::NAN
+                    } else if m.bound.certified {
                         matrix_relative_bound(self.system, &m, &state.radiosity)
                     } else {
                         Real::INFINITY

@@ -638,9 +638,10 @@ impl Solver for RandomWalk {
         StepKind::Sampled
     }
 
-    /// `walks` (every replicate's, so far) and `mean_walk_length` (rays a walk).
+    /// `walks` (every replicate's, so far), `mean_walk_length` (rays a walk) and
+    /// `unshot_power`, 0: every walk is followed until it ends, so no power is left out.
     fn record(&self) -> Record {
-        let mut record = Record::new().with("walks", self.walks);
+        let mut record = Record::new().with("walks", self.walks).with("unshot_power", 0.0);
         if self.walks > 0 {
             record.set("mean_walk_length", self.rays as Real / self.walks as Real);
         }

@@ -32,13 +32,22 @@
 //! - `replicates=R` (4 by default, at least 2): `R` independent chains, each with `N / R` rays
 //!   a step; the solver displays their mean and its standard error
 //!   ([`crate::StandardError`]), the error bar that needs no reference.
-//! - `batch=N` (`10n` by default, at least 1000): the rays of a step, over all replicates;
+//! - `batch=N` (by default `10n` and at least 1000): the rays of a regular iteration, and of
+//!   the incremental phase's first, over all replicates; a batch that is written is kept as
+//!   written (at least one ray a replicate), never raised;
 //!   `seed=S` (1 by default).
 //!
-//! One step is one iteration of every replicate ([`StepKind::Sampled`]); its cost is the rays
-//! cast ([`crate::State::rays`]). No residual is known without `F`, so none is reported
-//! ([`Solver::residual_power`]), and a run ends by its stop rules or the step cap; the state's
-//! unshot radiosity is the replicates' mean during the incremental phase, 0 afterwards.
+//! The first step is the whole incremental phase of every replicate, about `N / (1 − q)` rays
+//! for a scene that reflects a fraction `q` of the power shot; every later step is one regular
+//! iteration of every replicate ([`StepKind::Sampled`]). A step's cost is the rays cast
+//! ([`crate::State::rays`]). A run stopped inside the incremental phase would display an
+//! estimate short of the power still unshot: a bias every replicate shares, which the spread
+//! between them cannot see, so the standard error would not cover the true error
+//! (docs/stochastic.md).
+//! Taken whole, the series leaves at most `spent` of the emitted power unshot, reported as
+//! `unshot_power` in the solver's record ([`StochasticJacobi::unshot_power`]). No residual is
+//! known without `F`, so none is reported ([`Solver::residual_power`]), and a run ends by its
+//! stop rules or the step cap; the state's unshot radiosity is 0 once the series is shot.
 //!
 //! ## References
 //!
@@ -111,7 +120,7 @@ impl Default for StochasticJacobiParams {
     }
 }
 
-/// The smallest batch.
+/// The smallest default batch.
 const MIN_BATCH: u64 = 1000;
 
 fn refuse(reason: String) -> ParseSolverError {
@@ -198,6 +207,14 @@ impl SolverParams for StochasticJacobiParams {
         &["stochastic-jacobi", "stochastic-jacobi:seq=sobol", "stochastic-jacobi:form=gathering:cv=true"];
 
     fn build(&self) -> Result<Box<dyn Solver>, SolverError> {
+        if let Count::Absolute(b) = self.batch {
+            if b < self.replicates as u64 {
+                return Err(SolverError::BadParams(format!(
+                    "batch={b} gives fewer than one ray to each of {} replicates",
+                    self.replicates
+                )));
+            }
+        }
         if self.control_variate && self.form != JacobiForm::Gathering {
             return Err(SolverError::BadParams(
                 "the constant control variate (cv=true) applies to the gathering form: add form=gathering".into(),
@@ -223,6 +240,8 @@ struct Chain {
     weight: Real,
     /// Whether the incremental phase is over.
     regular: bool,
+    /// The power the incremental phase left unshot, relative to the emitted (at most `spent`).
+    left: Real,
     /// Iterations taken.
     iteration: u64,
     /// Points each patch has drawn from its stream ([`crate::stochastic::estimate`]).
@@ -242,7 +261,10 @@ impl StochasticJacobi {
     /// The rays of a step for one replicate, for `n` patches.
     fn batch(&self, n: usize) -> u64 {
         let total = self.params.batch.resolve(n);
-        (total.max(MIN_BATCH) / self.params.replicates as u64).max(1)
+        // Only the default has a floor: tiny systems would cast a few rays a step.
+        let total =
+            if self.params.batch == StochasticJacobiParams::default().batch { total.max(MIN_BATCH) } else { total };
+        (total / self.params.replicates as u64).max(1)
     }
 
     /// `Σ_ic A_i |v_ic|`.
@@ -268,17 +290,27 @@ impl StochasticJacobi {
             iteration: chain.iteration,
             drawn: &mut chain.drawn,
         };
-        chain.iteration += 1;
         if !chain.regular {
-            let unshot = Self::power(problem, &chain.unshot);
-            if unshot <= params.spent * emitted {
-                chain.regular = true;
-                chain.unshot.fill(0.0);
-            } else {
+            // The whole incremental series in one step: a run stopped between two of its
+            // iterations would show an estimate short of the power still unshot, a bias that
+            // every replicate shares and no spread between them can see.
+            let mut x = vec![0.0; n * k];
+            let mut incoming = vec![0.0; n * k];
+            loop {
+                let unshot = Self::power(problem, &chain.unshot);
+                if unshot <= params.spent * emitted {
+                    chain.regular = true;
+                    chain.left = unshot / emitted;
+                    chain.unshot.fill(0.0);
+                    return Ok(());
+                }
+                streams.iteration = chain.iteration;
+                chain.iteration += 1;
                 let n_rays = ((batch as Real * unshot / emitted).ceil() as u64).max(1);
                 // Power shot: A_j ΔB_j.
-                let x: Vec<Real> = chain.unshot.iter().enumerate().map(|(idx, b)| areas[idx / k] * b).collect();
-                let mut incoming = vec![0.0; n * k];
+                for (idx, (p, b)) in x.iter_mut().zip(&chain.unshot).enumerate() {
+                    *p = areas[idx / k] * b;
+                }
                 let cast = if params.global_lines {
                     problem
                         .cast(&name, |rays| lines(rays, &chain.unshot, k, n_rays, &streams, &mut incoming))?
@@ -293,9 +325,10 @@ impl StochasticJacobi {
                     chain.estimate[idx] += delta;
                 }
                 chain.weight += cast.rays as Real;
-                return Ok(());
             }
         }
+        streams.iteration = chain.iteration;
+        chain.iteration += 1;
         // A regular iteration from the estimate.
         let mut fresh = vec![0.0; n * k];
         let cast = match (params.form, params.global_lines) {
@@ -351,6 +384,19 @@ impl StochasticJacobi {
             chain.weight = total;
         }
         Ok(())
+    }
+}
+
+impl StochasticJacobi {
+    /// The power the incremental series left unshot, relative to the emitted, averaged over
+    /// the replicates: 1 before the first step, at most `spent` after it. Every replicate
+    /// leaves it out of its estimate, a bias which the regular iterations then shrink by the
+    /// reflectance at each and which no standard error sees.
+    pub fn unshot_power(&self) -> Real {
+        if self.chains.is_empty() {
+            return 1.0;
+        }
+        self.chains.iter().map(|c| c.left).sum::<Real>() / self.chains.len() as Real
     }
 }
 
@@ -418,6 +464,7 @@ impl Solver for StochasticJacobi {
             unshot: emission,
             weight: 0.0,
             regular: false,
+            left: 1.0,
             iteration: 0,
             drawn: vec![0; n],
         };
@@ -471,6 +518,7 @@ impl Solver for StochasticJacobi {
         let mut record = Record::new();
         record.set("replicates", self.chains.len());
         record.set("regular_iterations", self.chains.iter().filter(|c| c.regular).count());
+        record.set("unshot_power", self.unshot_power());
         record
     }
 }

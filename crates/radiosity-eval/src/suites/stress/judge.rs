@@ -114,6 +114,8 @@ pub(super) enum Unsettled {
     Unmeasured,
     /// The standard error is above [`STOCHASTIC_TOLERANCE`].
     Noisy(Real),
+    /// e_rms against the reference is above [`STOCHASTIC_TOLERANCE`].
+    Inaccurate(Real),
     /// e_rms against the reference is more than [`STOCHASTIC_SPREADS`] standard errors.
     Off { e_rms: Real, spread: Real },
 }
@@ -124,19 +126,21 @@ impl Ended {
     }
 
     /// For a stochastic run, why it did not converge (`None` when it did): its standard error
-    /// must be at most [`STOCHASTIC_TOLERANCE`] and its e_rms against the reference at most
-    /// [`STOCHASTIC_SPREADS`] standard errors.
+    /// and its e_rms against the reference must both be at most [`STOCHASTIC_TOLERANCE`], and
+    /// its e_rms at most [`STOCHASTIC_SPREADS`] standard errors.
     pub(super) fn unsettled(&self) -> Option<Unsettled> {
         let (Some((spread, _)), Some(e_rms)) = (self.spread, self.e_reference) else {
             return Some(Unsettled::Unmeasured);
         };
         // A NaN fails both tests.
         let precise = spread <= STOCHASTIC_TOLERANCE;
+        let accurate = e_rms <= STOCHASTIC_TOLERANCE;
         let unbiased = e_rms <= STOCHASTIC_SPREADS * spread;
-        match (precise, unbiased) {
-            (false, _) => Some(Unsettled::Noisy(spread)),
-            (true, false) => Some(Unsettled::Off { e_rms, spread }),
-            (true, true) => None,
+        match (precise, unbiased, accurate) {
+            (false, _, _) => Some(Unsettled::Noisy(spread)),
+            (true, false, _) => Some(Unsettled::Off { e_rms, spread }),
+            (true, true, false) => Some(Unsettled::Inaccurate(e_rms)),
+            (true, true, true) => None,
         }
     }
 }
@@ -323,4 +327,43 @@ fn run_solver(
         state: run.state,
         record: run.record,
     })))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A stochastic run's end with standard error `spread` and e_rms `e_rms`.
+    fn sampled(spread: Real, e_rms: Real) -> Ended {
+        Ended {
+            termination: TerminationReason::Rays(1),
+            state: State::from_emission(&[1.0], 1),
+            record: Record::new(),
+            reached: [None, None],
+            e_reference: Some(e_rms),
+            e_exact: None,
+            bound: Real::INFINITY,
+            non_finite: 0,
+            negative: 0,
+            energy: None,
+            sampled: true,
+            spread: Some((spread, 16)),
+        }
+    }
+
+    #[test]
+    fn a_stochastic_run_converges_only_where_its_e_rms_meets_the_tolerance() {
+        let tol = STOCHASTIC_TOLERANCE;
+        assert!(sampled(tol, 0.5 * tol).converged());
+        assert!(sampled(tol, tol).converged());
+        // Within 4 standard errors, yet 4 times the tolerance: no answer to it.
+        assert_eq!(sampled(tol, 4.0 * tol).unsettled(), Some(Unsettled::Inaccurate(4.0 * tol)));
+        assert!(!sampled(tol, 1.01 * tol).converged());
+        assert_eq!(sampled(2.0 * tol, 0.5 * tol).unsettled(), Some(Unsettled::Noisy(2.0 * tol)));
+        assert_eq!(
+            sampled(0.1 * tol, 0.5 * tol).unsettled(),
+            Some(Unsettled::Off { e_rms: 0.5 * tol, spread: 0.1 * tol })
+        );
+        assert!(!sampled(tol, Real::NAN).converged());
+    }
 }

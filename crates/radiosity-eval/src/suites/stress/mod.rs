@@ -51,7 +51,9 @@
 //! is, [`radiosity_solvers::StandardError::relative_rms`]): it has **converged** when
 //!
 //! - `s ≤` [`STOCHASTIC_TOLERANCE`] (`5e-2`): the estimate is as precise as asked, a few
-//!   percent, which the budget reaches at `ρ = 0.999`; and
+//!   percent, which the budget reaches at `ρ = 0.999`;
+//! - its e_rms against the reference `≤` [`STOCHASTIC_TOLERANCE`] too: as accurate as asked
+//!   (an e_rms of 4 standard errors of 5e-2 is no answer to 5e-2); and
 //! - its e_rms against the reference `≤` [`STOCHASTIC_SPREADS`]` · s` (4): it is unbiased as
 //!   far as its noise can show. The squared e_rms of an unbiased mean and its squared
 //!   standard error have the same expectation. Where the errors of the patches are

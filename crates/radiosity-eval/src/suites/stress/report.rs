@@ -132,6 +132,14 @@ fn why(result: &BackendResult, outcome: &Outcome) -> Option<(String, Option<Real
             )
             .ok();
         }
+        Some(Unsettled::Inaccurate(e_rms)) => {
+            write!(
+                why,
+                "; e_rms {} against the reference above the tolerance {STOCHASTIC_TOLERANCE:e}",
+                round_significant(e_rms, 2)
+            )
+            .ok();
+        }
         Some(Unsettled::Off { e_rms, spread }) => {
             write!(
                 why,
@@ -229,8 +237,8 @@ fn report_markdown(results: &[CaseResult], solvers: &[String]) -> String {
              {STOCHASTIC_RAYS_PER_PATCH} rays per patch. No bound is certified for an estimate: such a run is `✓` when \
              its standard error (the spread of its replicates, relative as e_rms is, shown after `±`) is at most \
              {STOCHASTIC_TOLERANCE:e} and its e_rms against the reference of the system it sampled (its exact answer) \
-             is at most {STOCHASTIC_SPREADS} standard errors: unbiased as far as its noise shows, and as precise as \
-             asked.\n"
+             is at most {STOCHASTIC_TOLERANCE:e} too and at most {STOCHASTIC_SPREADS} standard errors: as accurate as \
+             asked, and unbiased as far as its noise shows.\n"
         )
         .ok();
     }

@@ -10,7 +10,7 @@
 //! column when a solver asks for it, on the measured clock, at several times the cost.
 
 use crate::compare::Plan;
-use crate::experiment::{ReferenceArg, default_out};
+use crate::experiment::{ReferenceArg, check_out_dir, default_out};
 use anyhow::{Context, Result, bail};
 use radiosity_eval::ColumnCost;
 use radiosity_eval::paper::{FIGURES, RULES, header, section};
@@ -55,13 +55,13 @@ pub fn run(args: &Args) -> Result<()> {
         .map(|f| Ok(Plan::new(f.scene, f.solvers, &args.ff, RULES, kind)?.with_columns(args.columns)))
         .collect::<Result<Vec<_>>>()?;
     let out = args.out.clone().unwrap_or_else(|| default_out("paper"));
+    check_out_dir(&out)?;
     let mut md = header(&plans.first().map_or_else(String::new, |p| p.backend().canonical()));
     for (figure, plan) in figures.iter().zip(plans) {
         let comparison = plan.execute(&out.join(figure.scene))?;
         print!("{}", comparison.summary());
         md += &section(figure, &comparison);
     }
-    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
     let path = out.join("report.md");
     std::fs::write(&path, md).with_context(|| format!("cannot write {}", path.display()))?;
     println!("wrote {}", path.display());

@@ -69,6 +69,7 @@
 mod error;
 pub mod exchange;
 mod lab;
+mod memory;
 mod progress;
 mod reference;
 mod reports;

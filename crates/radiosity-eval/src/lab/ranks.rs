@@ -2,7 +2,7 @@
 //! its part of the operator, its peak memory, and the time and bytes of its collective sums.
 
 use super::setup::Lab;
-use crate::suites::bench::memory::peak_rss;
+use crate::memory::peak_rss;
 use radiosity_core::{Real, Traffic};
 use serde::Serialize;
 

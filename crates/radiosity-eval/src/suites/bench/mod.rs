@@ -40,7 +40,6 @@ pub mod columns;
 pub mod e2e;
 mod json;
 pub mod lu;
-pub(crate) mod memory;
 pub mod peer;
 pub mod plan;
 pub mod report_text;
@@ -48,5 +47,5 @@ pub mod scale;
 pub mod stochastic;
 
 pub use crate::lab::timing::median;
+pub use crate::memory::peak_rss;
 pub use json::{BenchJson, ColumnsJson, E2eJson, Machine, SceneJson};
-pub use memory::peak_rss;

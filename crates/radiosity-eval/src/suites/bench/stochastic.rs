@@ -19,10 +19,10 @@
 use crate::error::LabError;
 use crate::lab::backends::fresh_backend;
 use crate::lab::timing::median;
+use crate::memory::peak_rss;
 use crate::progress::NoProgress;
 use crate::reference::metrics::errors_against;
 use crate::suites::bench::e2e::{Recorded, ReferenceNote, Setup, check_reference, recorded_run};
-use crate::suites::bench::memory::peak_rss;
 use crate::suites::bench::report_text::{duration, human_bytes, sig};
 use radiosity_core::{LinearSystem, Real};
 use radiosity_ff::{BackendSpec, SceneTransport};

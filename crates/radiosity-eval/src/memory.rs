@@ -1,4 +1,5 @@
-//! The peak resident memory of this process, which the end-to-end and scale sections report.
+//! The peak resident memory of this process, which the bench sections and each rank of a
+//! distributed run report.
 
 /// The high-water mark of this process's resident memory (`VmHWM` of `/proc/self/status`), in
 /// bytes; `None` where there is no `/proc`.

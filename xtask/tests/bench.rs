@@ -158,7 +158,7 @@ fn bench_refuses_bad_arguments() {
     std::fs::write(&file, b"").unwrap();
     let out = file.join("bench.md");
     let e = failure(&["bench", "--quick", "--only", "lu", "--out", out.to_str().unwrap()]);
-    assert!(e.contains("is not a directory"), "{e}");
+    assert!(e.contains("is a file, not a folder"), "{e}");
     std::fs::remove_file(&file).unwrap();
 }
 

@@ -195,7 +195,7 @@ fn compare_writes_the_table_the_report_and_the_plots() {
     let e = failure(&["compare", "--columns", "free"]);
     assert!(e.contains("it must be computed or charged"), "{e}");
     let e = failure(&["compare", "--solvers", "pr,magic"]);
-    assert!(e.contains("unknown solver 'magic'") && e.contains("pr-g30"), "{e}");
+    assert!(e.contains("unknown solver 'magic'") && e.contains("solve --help"), "{e}");
     let e = failure(&["compare", "--solvers", " , "]);
     assert!(e.contains("no solver"), "{e}");
     let e = failure(&["compare", "--until", "colums=2n"]);
@@ -634,7 +634,7 @@ fn solve_gathers_exact_rows_or_says_it_cannot() {
 #[test]
 fn solve_refuses_bad_arguments_before_any_work() {
     let e = failure(&["solve", "--scene", "multi-cubes", "--solver", "xu-q30"]);
-    assert!(e.contains("unknown solver 'xu-q30'") && e.contains("pr-g30") && e.contains("or reference"), "{e}");
+    assert!(e.contains("unknown solver 'xu-q30' (did you mean 'xu-g30'?)") && e.contains("solve --help"), "{e}");
     let e = failure(&["solve", "--scene", "multi-cubes", "--solver", "pr", "--until", "columns=abc"]);
     assert!(e.contains("invalid stop rule 'columns=abc'"), "{e}");
     let e = failure(&["solve", "--scene", "multi-cubes", "--solver", "pr", "--ff", "radiance"]);
@@ -692,7 +692,8 @@ fn render_and_export_stop_at_an_rms_rule() {
         let output = xtask(&[&[command][..], &args].concat()).success().get_output().clone();
         let stderr = String::from_utf8(output.stderr).unwrap();
         assert!(stderr.contains("pr stopped: e_rms reached"), "{command}: {stderr}");
-        let steps: u64 = stderr.split("; ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+        let stopped = stderr.lines().find(|l| l.starts_with("pr stopped")).unwrap();
+        let steps: u64 = stopped.split("; ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
         assert!(steps < 40, "{command} ran {steps} steps for e_rms 1e-1: {stderr}");
     }
     std::fs::remove_dir_all(&dir).unwrap();
@@ -730,7 +731,7 @@ fn reference_none_reports_the_bound_alone_end_to_end() {
     let args = ["solve", "--scene", "furnace:res=2", "--solver", "xu", "--reference", "none", "--json"];
     let r = stdout_json(&args);
     let stats = &r["stats"];
-    assert!(stats.get("e_rms").is_none() && stats.get("e_max").is_none(), "{stats}");
+    assert!(stats["e_rms"].is_null() && stats["e_max"].is_null(), "{stats}");
     assert_eq!(stats["reference"]["kind"], "none", "{stats}");
     let bound = stats["bound"].as_f64().unwrap();
     // Against the matrix reference the same run has the same solution and a bound no

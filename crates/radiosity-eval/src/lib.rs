@@ -90,6 +90,7 @@ pub use lab::ranks::RankReport;
 pub use lab::recorder::{Point, RecordPlan, Recorder, TableRow};
 pub use lab::run::{check_rules, rgb};
 pub use lab::setup::{ChosenReference, Lab, ReferenceOrigin, require_emitters};
+pub use lab::summary::{OperatorSummary, Reached, ReferenceSummary, RunSummary};
 pub use lab::transport::TransportBuilt;
 pub use progress::{NoProgress, Progress};
 pub use radiosity_core::Clock;

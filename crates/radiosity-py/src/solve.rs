@@ -9,13 +9,13 @@ use crate::form_factors::cache;
 use crate::scene::Scene;
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::PyDict;
 use radiosity_core::Real;
 use radiosity_eval::{
-    Clock, ColumnCost, FinalMetrics, Lab, LabOptions, NoProgress, Point, RecordPlan, ReferenceKind, Transport,
+    ColumnCost, Lab, LabOptions, NoProgress, Point, RecordPlan, ReferenceKind, RunSummary, Transport,
 };
 use radiosity_ff::BackendSpec;
-use radiosity_solvers::{SolverError, SolverRegistry, State, StopRules, Value};
+use radiosity_solvers::{SolverError, SolverRegistry, State, StopRules};
 use std::ops::ControlFlow;
 
 /// How one run pays for its columns unless told: as `cargo xtask solve` does.
@@ -24,20 +24,11 @@ const ONE_RUN: ColumnCost = ColumnCost::Computed;
 /// What a run left.
 #[pyclass(frozen, module = "radiosity")]
 pub struct Run {
-    solver: String,
     backend: String,
-    termination: String,
     state: State,
-    last: FinalMetrics,
-    record: Vec<(String, Value)>,
     points: Vec<Point>,
-    /// With an `rms=` rule: where `e_rms` first fell to each power of ten.
-    reached: Vec<(Real, Point)>,
-    reference: (String, String),
-    /// The clock of every seconds figure.
-    clock: Clock,
-    /// Where the rays went, when the solver samples transport.
-    transport: Option<Transport>,
+    /// The run's figures, as `cargo xtask solve --json` gives them.
+    summary: RunSummary,
 }
 
 /// Runs `solver` (a built-in name, or `reference` for the exact solution) on `scene` over the
@@ -122,43 +113,18 @@ pub fn solve(
             .with_columns(columns)
             .with_transport(transport);
         let lab = Lab::new(&prepared, &spec, options, &NoProgress)?;
-        let chosen = (lab.chosen().kind.to_string(), lab.chosen().why.clone());
-        let clock = lab.clock();
         let run = match built.as_mut() {
-            None => {
-                let state = lab.reference_state()?;
-                let method = lab.reference().map(|r| r.method().to_string()).unwrap_or_default();
-                Run {
-                    state,
-                    solver: "reference".into(),
-                    backend: lab.backend().into(),
-                    termination: format!("solved exactly: {method}"),
-                    last: lab.reference_metrics()?,
-                    record: Vec::new(),
-                    points: Vec::new(),
-                    reached: Vec::new(),
-                    reference: chosen,
-                    clock,
-                    transport: None,
-                }
-            }
+            None => Run {
+                backend: lab.backend().into(),
+                state: lab.reference_state()?,
+                points: Vec::new(),
+                summary: lab.reference_summary()?,
+            },
             Some(solver) => {
                 let o =
                     lab.run_watched(solver.as_mut(), &rules, &RecordPlan::errors_only(), &NoProgress, &mut watch)?;
-                let reached = if rules.needs_error() { o.reached_powers() } else { Vec::new() };
-                Run {
-                    record: o.record.iter().map(|(k, v)| (k.to_string(), v.clone())).collect(),
-                    reached,
-                    transport: (o.state.rays > 0).then(|| lab.transport()),
-                    state: o.state,
-                    solver: o.solver,
-                    backend: lab.backend().into(),
-                    termination: o.termination.to_string(),
-                    last: o.last,
-                    points: o.points,
-                    reference: chosen,
-                    clock,
-                }
+                let summary = lab.summary(&o, rules.needs_error());
+                Run { backend: lab.backend().into(), state: o.state, points: o.points, summary }
             }
         };
         Ok::<Run, Box<dyn std::error::Error + Send + Sync>>(run)
@@ -201,7 +167,7 @@ impl Run {
     /// The solver's name, parameters spelled out.
     #[getter]
     fn solver(&self) -> &str {
-        &self.solver
+        &self.summary.solver
     }
 
     /// The backend's canonical spec.
@@ -213,8 +179,8 @@ impl Run {
     /// The clock of every seconds figure of the run (`stats`, `points`): `measured` or
     /// `charged`.
     #[getter]
-    fn clock(&self) -> &'static str {
-        self.clock.name()
+    fn clock(&self) -> &str {
+        &self.summary.clock
     }
 
     /// The rays the run cast (0 for a solver that does not sample transport).
@@ -227,7 +193,7 @@ impl Run {
     /// its independent replicates: a spread, not a bound), or `None` when the solver has none.
     #[getter]
     fn standard_error(&self) -> Option<Real> {
-        self.last.standard_error
+        self.summary.standard_error
     }
 
     /// The run's figures, with the keys of `cargo xtask solve --json`'s `stats`: `clock` (of
@@ -241,58 +207,10 @@ impl Run {
     /// each power of ten), `record` (the solver's own figures) and `reference` (`kind`,
     /// `why`). Figures not known are `None`.
     #[getter]
-    fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let s = &self.state;
-        let d = PyDict::new(py);
-        d.set_item("clock", self.clock.name())?;
-        d.set_item("columns", s.columns)?;
-        d.set_item("columns_reused", s.columns_reused)?;
-        d.set_item("products", s.products)?;
-        d.set_item("steps", s.step)?;
-        d.set_item("rays", s.rays)?;
-        d.set_item("links", s.links)?;
-        d.set_item("seconds", s.ff_seconds + s.solve_seconds)?;
-        d.set_item("ff_seconds", s.ff_seconds)?;
-        d.set_item("group_seconds", s.group_seconds)?;
-        d.set_item("e_rms", self.last.e_rms)?;
-        d.set_item("e_max", self.last.e_max)?;
-        let (residual, residual_of) = match (self.last.residual, self.last.solver_residual) {
-            (Some(r), _) => (Some(r), Some("displayed radiosity")),
-            (None, Some(r)) => (Some(r), Some("the solver's own (for shooting methods, the shot radiosity)")),
-            (None, None) => (None, None),
-        };
-        d.set_item("residual", residual)?;
-        d.set_item("residual_of", residual_of)?;
-        d.set_item("bound", self.last.bound)?;
-        d.set_item("standard_error", self.last.standard_error)?;
-        d.set_item("replicates", self.last.replicates)?;
-        d.set_item("transport", self.transport.map(|t| t.name()))?;
-        d.set_item("termination", &self.termination)?;
-        let reached = PyList::empty(py);
-        for (e_rms, p) in &self.reached {
-            let r = PyDict::new(py);
-            r.set_item("e_rms", e_rms)?;
-            r.set_item("steps", p.step)?;
-            r.set_item("columns", p.columns)?;
-            r.set_item("rays", p.rays)?;
-            r.set_item("seconds", p.seconds)?;
-            reached.append(r)?;
-        }
-        d.set_item("reached", reached)?;
-        let record = PyDict::new(py);
-        for (k, v) in &self.record {
-            match v {
-                Value::Count(c) => record.set_item(k, *c)?,
-                Value::Real(r) => record.set_item(k, *r)?,
-                other => record.set_item(k, other.to_string())?,
-            }
-        }
-        d.set_item("record", record)?;
-        let reference = PyDict::new(py);
-        reference.set_item("kind", &self.reference.0)?;
-        reference.set_item("why", &self.reference.1)?;
-        d.set_item("reference", reference)?;
-        Ok(d)
+    fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        // The one run summary, as the command line's JSON gives it, read by Python's json.
+        let text = serde_json::to_string(&self.summary).map_err(|e| value_error(e.to_string()))?;
+        py.import("json")?.call_method1("loads", (text,))
     }
 
     /// The recorded points as a dict of arrays: `step`, `columns`, `products`, `rays`, `links`,
@@ -318,6 +236,6 @@ impl Run {
     }
 
     fn __repr__(&self) -> String {
-        format!("Run({} with {}: {})", self.solver, self.backend, self.termination)
+        format!("Run({} with {}: {})", self.summary.solver, self.backend, self.summary.termination)
     }
 }

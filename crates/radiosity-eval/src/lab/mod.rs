@@ -84,5 +84,6 @@ pub(crate) mod ranks;
 pub(crate) mod recorder;
 pub(crate) mod run;
 pub(crate) mod setup;
+pub(crate) mod summary;
 pub(crate) mod timing;
 pub(crate) mod transport;

@@ -5,4 +5,6 @@
 pub(crate) mod comparison;
 pub mod paper;
 pub(crate) mod plot;
+pub mod report_text;
+pub(crate) mod run_text;
 pub(crate) mod table;

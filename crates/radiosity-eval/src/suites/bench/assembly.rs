@@ -6,7 +6,7 @@
 use crate::error::LabError;
 use crate::lab::timing::median;
 use crate::progress::Progress;
-use crate::suites::bench::report_text::{human_bytes, sig};
+use crate::reports::report_text::{human_bytes, sig};
 use radiosity_core::Real;
 use radiosity_ff::guard::MatrixFigures;
 use radiosity_ff::matrix::Storage;

@@ -13,8 +13,8 @@
 use crate::error::LabError;
 use crate::lab::timing::median;
 use crate::progress::Progress;
+use crate::reports::report_text::{duration, percent, sig};
 use crate::suites::bench::json::ColumnsJson;
-use crate::suites::bench::report_text::{duration, percent, sig};
 use radiosity_core::ColumnSource;
 use radiosity_ff::pair_visibility::SamplingPath;
 use radiosity_ff::{AnalyticColumns, AnalyticParams, BackendSpec, ColumnRays, FormFactorInput, TracedRays};

@@ -11,7 +11,7 @@
 use crate::error::LabError;
 use crate::lab::timing::median;
 use crate::progress::Progress;
-use crate::suites::bench::report_text::duration;
+use crate::reports::report_text::duration;
 use radiosity_core::Real;
 use radiosity_core::dense_lu::lu_solve_columns;
 use std::fmt::Write as _;

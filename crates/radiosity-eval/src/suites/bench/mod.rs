@@ -42,7 +42,7 @@ mod json;
 pub mod lu;
 pub mod peer;
 pub mod plan;
-pub mod report_text;
+pub use crate::reports::report_text;
 pub mod scale;
 pub mod stochastic;
 

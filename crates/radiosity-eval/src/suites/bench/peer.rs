@@ -13,7 +13,7 @@
 
 use crate::error::LabError;
 use crate::lab::timing::median;
-use crate::suites::bench::report_text::duration;
+use crate::reports::report_text::duration;
 use radiosity_core::Real;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;

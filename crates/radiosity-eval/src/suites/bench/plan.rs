@@ -8,12 +8,12 @@
 //! here, so a researcher's crate runs the same bench with the same judgement.
 
 use crate::error::LabError;
+use crate::reports::report_text::{duration, human_bytes, sig};
 use crate::suites::bench::assembly::AssemblyParams;
 use crate::suites::bench::columns::ColumnsParams;
 use crate::suites::bench::json::BenchJson;
 use crate::suites::bench::lu::LuParams;
 use crate::suites::bench::peer::Peer;
-use crate::suites::bench::report_text::{duration, human_bytes, sig};
 use crate::suites::bench::{scale, stochastic};
 use radiosity_core::Real;
 use radiosity_ff::BackendSpec;

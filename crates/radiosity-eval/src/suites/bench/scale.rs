@@ -25,7 +25,7 @@ use crate::lab::timing::median;
 use crate::memory::peak_rss;
 use crate::progress::NoProgress;
 use crate::reference::kind::ReferenceKind;
-use crate::suites::bench::report_text::{duration, human_bytes, sig};
+use crate::reports::report_text::{duration, human_bytes, sig};
 use radiosity_core::Real;
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;

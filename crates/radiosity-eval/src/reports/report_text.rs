@@ -1,5 +1,5 @@
-//! How the bench's Markdown writes its figures: significant digits with thousands separators,
-//! durations in µs, ms or s, and bytes in powers of ten (the unit of the 2 GB memory target).
+//! How reports write their figures (the bench's Markdown, a run's text): significant digits
+//! with thousands separators, durations in µs, ms or s, and bytes in powers of ten.
 
 /// `x` with `digits` significant digits, without exponent for everyday magnitudes; `—` when
 /// it is not finite.

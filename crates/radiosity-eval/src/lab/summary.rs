@@ -1,0 +1,211 @@
+//! One run's figures, as every front end shows them ([`RunSummary`]): `cargo xtask solve`'s
+//! JSON `stats` and text, and Python's `Run.stats`, built once here from the lab and the run's
+//! outcome and serialized by serde, so that a figure added here reaches every front end.
+//!
+//! Keys are stable: `clock` (of every seconds figure), the costs (`columns`, `columns_reused`,
+//! `products`, `steps`, `rays`, `links`), the seconds (`seconds`, `ff_seconds`,
+//! `group_seconds`), the errors (`e_rms`, `e_max`, `residual` and `residual_of`, `bound`,
+//! `standard_error`, `replicates`), `transport`, `termination`, `reached`, `record` (the
+//! solver's own figures, the unshot power of a stochastic run among them), `reference`, and,
+//! when there are any, `operator` and `ranks`. A figure not known is `null`.
+
+use crate::error::LabError;
+use crate::lab::outcome::Outcome;
+use crate::lab::ranks::RankReport;
+use crate::lab::setup::Lab;
+use radiosity_core::Real;
+use radiosity_solvers::{Record, State, Value};
+use serde::Serialize;
+
+/// One run's figures (module doc).
+#[derive(Clone, Debug, Serialize)]
+pub struct RunSummary {
+    /// The solver's name, parameters spelled out (`reference` for the exact solution).
+    #[serde(skip)]
+    pub solver: String,
+    /// The clock of every seconds figure: `measured`, or `charged`.
+    pub clock: String,
+    /// Columns of F computed.
+    pub columns: u64,
+    /// Columns served again from a solver's memory.
+    pub columns_reused: u64,
+    /// Products `F x` the backend computed itself.
+    pub products: u64,
+    /// Steps taken.
+    pub steps: u64,
+    /// Rays cast by a solver that samples transport.
+    pub rays: u64,
+    /// Links of a hierarchy touched (0 over a backend that shows none).
+    pub links: u64,
+    /// The run's seconds: form factors and solving.
+    pub seconds: Real,
+    /// Of them, form factors' (rays' for a solver that samples transport).
+    pub ff_seconds: Real,
+    /// Of them, solving groups'.
+    pub group_seconds: Real,
+    /// e_rms against the reference, when there is one.
+    pub e_rms: Option<Real>,
+    /// e_max against the reference, when there is one.
+    pub e_max: Option<Real>,
+    /// The residual power of the displayed radiosity, or else the solver's own.
+    pub residual: Option<Real>,
+    /// Which vector `residual` is the residual of, and why F's is not known when it is not.
+    pub residual_of: String,
+    /// The certified bound on the relative L1 error of the displayed radiosity.
+    pub bound: Option<Real>,
+    /// The solver's standard error, relative as e_rms is: a spread, not a bound.
+    pub standard_error: Option<Real>,
+    /// The replicates the standard error rests on.
+    pub replicates: Option<usize>,
+    /// Where the rays went (`scene` or `matrix`), when the solver cast some.
+    pub transport: Option<String>,
+    /// Why the run ended.
+    pub termination: String,
+    /// With an `rms=` rule: where e_rms first fell to each power of ten.
+    pub reached: Vec<Reached>,
+    /// The solver's own figures: counts and finite reals as numbers, anything else as text.
+    pub record: serde_json::Map<String, serde_json::Value>,
+    /// The reference the run was measured against.
+    pub reference: ReferenceSummary,
+    /// What building the backend cost, when it says (the hierarchical operator).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub operator: Option<OperatorSummary>,
+    /// Each rank's part, when the run was distributed over MPI ranks.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ranks: Option<Vec<RankReport>>,
+}
+
+/// Where a run stood when its e_rms first fell to `e_rms`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Reached {
+    /// The power of ten.
+    pub e_rms: Real,
+    /// Steps by then.
+    pub steps: u64,
+    /// Columns by then.
+    pub columns: u64,
+    /// Rays by then.
+    pub rays: u64,
+    /// Seconds by then, on the run's clock.
+    pub seconds: Real,
+}
+
+/// The reference a run was measured against.
+#[derive(Clone, Debug, Serialize)]
+pub struct ReferenceSummary {
+    /// `matrix`, `shooting` or `none`.
+    pub kind: String,
+    /// Why it was chosen.
+    pub why: String,
+    /// How it was computed, unless `none`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub method: Option<String>,
+    /// Its certificate, unless `none`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub certificate: Option<String>,
+}
+
+/// What building the backend cost ([`radiosity_ff::BackendFigures`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct OperatorSummary {
+    /// Seconds to build (the build's, when read back from the cache).
+    pub build_seconds: Real,
+    /// Bytes held.
+    pub bytes: usize,
+    /// Of them, the links'.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub link_bytes: Option<Real>,
+    /// One line.
+    pub summary: String,
+}
+
+/// A record value as JSON: counts and finite reals as numbers, anything else as text.
+fn json_value(v: &Value) -> serde_json::Value {
+    match v {
+        Value::Count(c) => (*c).into(),
+        Value::Real(r) if r.is_finite() => (*r).into(),
+        other => other.to_string().into(),
+    }
+}
+
+impl Lab<'_> {
+    /// The summary of `outcome`, a run on this lab; `reached` when an `rms=` rule asked for
+    /// where e_rms fell to each power of ten.
+    pub fn summary(&self, outcome: &Outcome, reached: bool) -> RunSummary {
+        let reached = if reached { outcome.reached_powers() } else { Vec::new() };
+        let reached = reached
+            .into_iter()
+            .map(|(e_rms, p)| Reached { e_rms, steps: p.step, columns: p.columns, rays: p.rays, seconds: p.seconds })
+            .collect();
+        let termination = outcome.termination.to_string();
+        self.summarize(&outcome.solver, &outcome.state, termination, &outcome.last, reached, &outcome.record)
+    }
+
+    /// The summary of the reference itself as a run: its cost is assembling F and solving it.
+    pub fn reference_summary(&self) -> Result<RunSummary, LabError> {
+        let state = self.reference_state()?;
+        let method = self.reference().map(|r| r.method().to_string()).unwrap_or_default();
+        let last = self.reference_metrics()?;
+        let termination = format!("solved exactly: {method}");
+        Ok(self.summarize("reference", &state, termination, &last, Vec::new(), &Record::default()))
+    }
+
+    fn summarize(
+        &self,
+        solver: &str,
+        s: &State,
+        termination: String,
+        last: &crate::FinalMetrics,
+        reached: Vec<Reached>,
+        record: &Record,
+    ) -> RunSummary {
+        let no_f = match self.reference() {
+            Some(_) => "F was not assembled, the reference came from the cache",
+            None => "F was not assembled: there is no reference",
+        };
+        let (residual, residual_of) = match (last.residual, last.solver_residual) {
+            (Some(r), _) => (Some(r), "displayed radiosity".to_string()),
+            (None, Some(r)) => {
+                (Some(r), format!("the solver's own (for shooting methods, the shot radiosity); {no_f}"))
+            }
+            (None, None) => (None, format!("not known: {no_f}")),
+        };
+        RunSummary {
+            solver: solver.to_string(),
+            clock: self.clock().name().to_string(),
+            columns: s.columns,
+            columns_reused: s.columns_reused,
+            products: s.products,
+            steps: s.step,
+            rays: s.rays,
+            links: s.links,
+            seconds: s.ff_seconds + s.solve_seconds,
+            ff_seconds: s.ff_seconds,
+            group_seconds: s.group_seconds,
+            e_rms: last.e_rms,
+            e_max: last.e_max,
+            residual,
+            residual_of,
+            bound: last.bound,
+            standard_error: last.standard_error,
+            replicates: last.replicates,
+            transport: (s.rays > 0).then(|| self.transport().name().to_string()),
+            termination,
+            reached,
+            record: record.iter().map(|(k, v)| (k.to_string(), json_value(v))).collect(),
+            reference: ReferenceSummary {
+                kind: self.chosen().kind.to_string(),
+                why: self.chosen().why.clone(),
+                method: self.reference().map(|r| r.method().to_string()),
+                certificate: self.reference().map(|r| r.certificate().to_string()),
+            },
+            operator: self.backend_figures().map(|f| OperatorSummary {
+                build_seconds: f.seconds,
+                bytes: f.bytes,
+                link_bytes: f.count("link bytes"),
+                summary: f.summary.clone(),
+            }),
+            ranks: None,
+        }
+    }
+}

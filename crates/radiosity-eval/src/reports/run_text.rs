@@ -1,0 +1,120 @@
+//! A run's summary as text, one labelled line a figure, as `cargo xtask solve` prints it
+//! ([`RunSummary::text`]).
+
+use crate::lab::summary::RunSummary;
+use crate::reports::report_text::human_bytes;
+use crate::reports::table::round_significant;
+use std::fmt::Write as _;
+
+impl RunSummary {
+    /// The summary as text: the scene (`scene`, its `patches`) and the backend (`backend`)
+    /// head it; then how the run stopped, its work, its error and bound, its spread, where it
+    /// reached each power of ten, what the solver recorded, each rank's part, and the reference.
+    pub fn text(&self, scene: &str, patches: usize, backend: &str) -> String {
+        let mut out = String::new();
+        let mut line = |label: &str, text: String| {
+            let _ = writeln!(out, "{label:<12} {text}");
+        };
+        line("scene", format!("{scene}: {patches} patches"));
+        line(
+            "solver",
+            match &self.transport {
+                // A solver that samples transport casts rays; the backend only serves the reference.
+                Some(transport) => format!("{} with rays ({transport}; the reference over {backend})", self.solver),
+                None => format!("{} with {backend}", self.solver),
+            },
+        );
+        line("stopped", self.termination.clone());
+        let count = |k: u64, what: &str| if k == 0 { String::new() } else { format!(", {k} {what}") };
+        let reused = if self.columns_reused == 0 {
+            String::new()
+        } else {
+            format!(" (and {} served again from memory)", self.columns_reused)
+        };
+        let (rays, in_ff) = match (self.rays, &self.transport) {
+            (0, _) => (String::new(), "in form factors"),
+            (r, t) => (format!(", {r} rays ({})", t.as_deref().unwrap_or_default()), "in form factors and rays"),
+        };
+        line(
+            "work",
+            format!(
+                "{} steps, {} columns{reused}{}{}{rays}, {:.3} s ({:.3} s {in_ff}; {} seconds)",
+                self.steps,
+                self.columns,
+                count(self.products, "products"),
+                count(self.links, "links"),
+                self.seconds,
+                self.ff_seconds,
+                self.clock
+            ),
+        );
+        if self.group_seconds > 0.0 {
+            let share = 100.0 * self.group_seconds / self.seconds;
+            line("groups", format!("{:.3} s solving groups, {share:.2}% of the run", self.group_seconds));
+        }
+        let residual = match self.residual {
+            Some(r) if self.residual_of == "displayed radiosity" => format!("residual power {r:.4e}"),
+            Some(r) => format!("residual power {r:.4e}, {}", self.residual_of),
+            None => format!("residual {}", self.residual_of),
+        };
+        let errors = match (self.e_rms, self.e_max) {
+            (Some(r), Some(m)) => format!("e_rms {r:.4e}, e_max {m:.4e}, "),
+            _ => "no e_rms (no reference), ".into(),
+        };
+        line("error", format!("{errors}{residual}"));
+        line(
+            "bound",
+            match self.bound {
+                Some(b) => format!("certified relative L1 error ≤ {b:.4e}"),
+                None => "none: the solver knows no bound on its residual".into(),
+            },
+        );
+        if let Some(s) = self.standard_error {
+            let replicates = self.replicates.map_or(String::new(), |r| format!(" of {r} independent replicates"));
+            line("spread", format!("standard error {s:.4e}, relative as e_rms is{replicates} (a spread, not a bound)"));
+        }
+        for r in &self.reached {
+            let text =
+                format!("e_rms {:.0e} after {} steps, {} columns, {:.3} s", r.e_rms, r.steps, r.columns, r.seconds);
+            line("reached", text);
+        }
+        if !self.record.is_empty() {
+            let cell = |v: &serde_json::Value| match v {
+                serde_json::Value::Number(n) if n.is_f64() => round_significant(n.as_f64().unwrap_or_default(), 4),
+                serde_json::Value::String(s) => s.clone(),
+                other => other.to_string(),
+            };
+            let items: Vec<String> = self.record.iter().map(|(k, v)| format!("{k} {}", cell(v))).collect();
+            line("recorded", items.join(", "));
+        }
+        for r in self.ranks.iter().flatten() {
+            line(
+                &format!("rank {}", r.rank),
+                format!(
+                    "{} links ({} tasks, {:.1}% of the estimated cost), {} operator ({} of links) built in {:.2} s; \
+                     peak memory {}; the run: {:.3} s in the operator, {:.3} s in {} sums, {} sent",
+                    r.links,
+                    r.tasks,
+                    100.0 * r.estimated_share,
+                    human_bytes(r.operator_bytes),
+                    human_bytes(r.link_bytes),
+                    r.build_seconds,
+                    r.peak_rss.map_or("n/a".into(), human_bytes),
+                    r.run_operator_seconds,
+                    r.run_sum_seconds,
+                    r.run_sums,
+                    human_bytes(r.run_bytes_sent)
+                ),
+            );
+        }
+        let r = &self.reference;
+        line(
+            "reference",
+            match (&r.method, &r.certificate) {
+                (Some(method), Some(certificate)) => format!("{} ({}): {method}; {certificate}", r.kind, r.why),
+                _ => format!("none ({})", r.why),
+            },
+        );
+        out
+    }
+}

@@ -159,7 +159,7 @@ impl Lab<'_> {
                 let m = e.evaluate(&run.state.radiosity)?;
                 // F's bound on the displayed radiosity stands in for a deterministic solver that
                 // has none of its own; a solver that samples transport shows its standard error
-                // only, never a certified bound it did not compute (docs/design.md §5).
+                // only, never a certified bound it did not compute (docs/design.md §4.9).
                 let matrix_bound = (m.bound.certified && !sampled)
                     .then(|| matrix_relative_bound(&self.system, &m, &run.state.radiosity));
                 FinalMetrics {

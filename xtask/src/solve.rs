@@ -68,7 +68,10 @@ pub fn run(args: &Args, ranks: &crate::ranks::Ranks) -> Result<()> {
     let traffic = lab.traffic();
     let (summary, state) = match solver {
         // `reference` is the exact solution itself: its cost is assembling F and solving it.
-        None => (lab.reference_summary()?, lab.reference_state()?),
+        None => {
+            let state = lab.reference_state()?;
+            (lab.reference_summary(&state)?, state)
+        }
         Some(mut solver) => {
             let o = lab.run(solver.as_mut(), &rules, &RecordPlan::errors_only(), &Bars::new())?;
             if let Some(note) = o.cap_note() {

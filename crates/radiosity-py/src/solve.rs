@@ -114,12 +114,11 @@ pub fn solve(
             .with_transport(transport);
         let lab = Lab::new(&prepared, &spec, options, &NoProgress)?;
         let run = match built.as_mut() {
-            None => Run {
-                backend: lab.backend().into(),
-                state: lab.reference_state()?,
-                points: Vec::new(),
-                summary: lab.reference_summary()?,
-            },
+            None => {
+                let state = lab.reference_state()?;
+                let summary = lab.reference_summary(&state)?;
+                Run { backend: lab.backend().into(), state, points: Vec::new(), summary }
+            }
             Some(solver) => {
                 let o =
                     lab.run_watched(solver.as_mut(), &rules, &RecordPlan::errors_only(), &NoProgress, &mut watch)?;

@@ -141,13 +141,13 @@ impl Lab<'_> {
         self.summarize(&outcome.solver, &outcome.state, termination, &outcome.last, reached, &outcome.record)
     }
 
-    /// The summary of the reference itself as a run: its cost is assembling F and solving it.
-    pub fn reference_summary(&self) -> Result<RunSummary, LabError> {
-        let state = self.reference_state()?;
+    /// The summary of the reference itself as a run, whose state is `state`
+    /// ([`Lab::reference_state`]): its cost is assembling F and solving it.
+    pub fn reference_summary(&self, state: &State) -> Result<RunSummary, LabError> {
         let method = self.reference().map(|r| r.method().to_string()).unwrap_or_default();
         let last = self.reference_metrics()?;
         let termination = format!("solved exactly: {method}");
-        Ok(self.summarize("reference", &state, termination, &last, Vec::new(), &Record::default()))
+        Ok(self.summarize("reference", state, termination, &last, Vec::new(), &Record::default()))
     }
 
     fn summarize(

@@ -258,6 +258,17 @@ pub struct StochasticJacobi {
 }
 
 impl StochasticJacobi {
+    /// The power the incremental series left unshot, relative to the emitted, averaged over
+    /// the replicates: 1 before the first step, at most `spent` after it. Every replicate
+    /// leaves it out of its estimate, a bias which the regular iterations then shrink by the
+    /// reflectance at each and which no standard error sees.
+    pub fn unshot_power(&self) -> Real {
+        if self.chains.is_empty() {
+            return 1.0;
+        }
+        self.chains.iter().map(|c| c.left).sum::<Real>() / self.chains.len() as Real
+    }
+
     /// The rays of a step for one replicate, for `n` patches.
     fn batch(&self, n: usize) -> u64 {
         let total = self.params.batch.resolve(n);
@@ -384,19 +395,6 @@ impl StochasticJacobi {
             chain.weight = total;
         }
         Ok(())
-    }
-}
-
-impl StochasticJacobi {
-    /// The power the incremental series left unshot, relative to the emitted, averaged over
-    /// the replicates: 1 before the first step, at most `spent` after it. Every replicate
-    /// leaves it out of its estimate, a bias which the regular iterations then shrink by the
-    /// reflectance at each and which no standard error sees.
-    pub fn unshot_power(&self) -> Real {
-        if self.chains.is_empty() {
-            return 1.0;
-        }
-        self.chains.iter().map(|c| c.left).sum::<Real>() / self.chains.len() as Real
     }
 }
 

@@ -252,16 +252,12 @@ pub fn solved_rgb(
             if let Some(note) = o.cap_note() {
                 eprintln!("warning: {note}");
             }
-            let rays = match o.state.rays {
-                0 => String::new(),
-                r => format!(", {r} rays"),
-            };
             eprintln!(
-                "{} stopped: {}; {} steps, {} columns{rays}, {:.3} s, {}",
+                "{} stopped: {}; {} steps, {}, {:.3} s, {}",
                 args.solver,
                 o.termination,
                 o.state.step,
-                o.state.columns,
+                o.state.cost,
                 o.seconds(),
                 error_phrase(&o.last)
             );

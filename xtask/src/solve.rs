@@ -81,7 +81,7 @@ pub fn run(args: &Args, ranks: &crate::ranks::Ranks) -> Result<()> {
         }
     };
     let summary =
-        RunSummary { ranks: traffic.and_then(|before| lab.rank_reports(before, state.ff_seconds)), ..summary };
+        RunSummary { ranks: traffic.and_then(|before| lab.rank_reports(before, state.cost.ff_seconds)), ..summary };
     let scene = prepared.scene();
     if !args.json && args.out.is_none() {
         print!("{}", summary.text(&args.run.scene, scene.len(), lab.backend()));

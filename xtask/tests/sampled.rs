@@ -75,7 +75,7 @@ fn compare_puts_deterministic_and_stochastic_solvers_in_one_table_and_one_set_of
 #[test]
 fn misuses_of_rays_are_refused_in_one_sentence() {
     let e = failure(&["solve", "--scene", "cornell:res=2", "--solver", "stochastic-jacobi"]);
-    assert!(e.contains("computes no columns") && e.contains("rays="), "{e}");
+    assert!(e.contains("spends no columns, products or links") && e.contains("rays="), "{e}");
     let e = failure(&["compare", "--scene", "cornell:res=2", "--solvers", "pr,stochastic-jacobi"]);
     assert!(e.contains("stochastic-jacobi casts rays"), "{e}");
     let e = failure(&["solve", "--scene", "cornell:res=2", "--solver", "pr", "--transport", "nowhere"]);

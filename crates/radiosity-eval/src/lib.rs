@@ -107,7 +107,7 @@ pub use reports::plot::{
     BAND_LABEL, BAND_STANDARD_ERRORS, BOUND_LABEL, BOUND_LABEL_SHORT, Curve, Marker, PlotSpec, Style, Variant, Y_LABEL,
     Y_LABEL_SHORT, style_of, write_png, write_svg,
 };
-pub use reports::table::{ConvergenceTable, HEADER, round_significant};
+pub use reports::table::{ConvergenceTable, round_significant};
 pub use suites::{bench, stress};
 pub use truth::operator_distance::{OperatorDistance, OperatorDistanceParams, OperatorSolve, operator_distance};
 pub use truth::path_trace::{

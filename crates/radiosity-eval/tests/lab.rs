@@ -14,6 +14,7 @@ use radiosity_eval::{MemoryBudget, ReferenceKind, parse_bytes};
 use radiosity_eval::{SolverBound, errors, errors_against};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
+use radiosity_solvers::Unit;
 use radiosity_solvers::{
     Executor, Observer, ObserverMode, POINT_SOLVERS, Problem, Record, ResidualBound, SolverRegistry, State, StopRules,
 };
@@ -105,7 +106,7 @@ fn a_run_records_the_bound_beside_e_rms_and_ends_on_it() {
     let (first, last) = (o.points.first().unwrap(), o.points.last().unwrap());
     // The first point is the initial state, B = E, with its error against the reference.
     let at_start = errors_against(lab.system(), lab.reference().unwrap().values(), lab.system().emissions()).unwrap();
-    assert_eq!((first.step, first.columns, first.e_rms), (0, 0, at_start.e_rms));
+    assert_eq!((first.step, first.cost[Unit::Columns], first.e_rms), (0, 0, at_start.e_rms));
     assert!(last.bound < 1e-2 * first.bound, "{first:?} {last:?}");
     assert_eq!(o.last.bound, Some(last.bound));
     // The rows of the table carry the same bound as the point of their step.
@@ -395,15 +396,22 @@ fn charged_columns_give_the_computed_runs_numbers_at_the_measured_price() {
     assert_eq!(charge.sampled, ColumnCharge::SAMPLE.min(computed.n as usize));
     assert_eq!(charged.charge, Some(charge));
     for (a, b) in computed.outcomes.iter().zip(&charged.outcomes) {
-        assert_eq!((a.state.step, a.state.columns), (b.state.step, b.state.columns), "{}", a.solver);
+        assert_eq!(
+            (a.state.step, a.state.cost[Unit::Columns]),
+            (b.state.step, b.state.cost[Unit::Columns]),
+            "{}",
+            a.solver
+        );
         assert_eq!(a.state.radiosity, b.state.radiosity, "{}", a.solver);
-        let e = |o: &radiosity_eval::Outcome| o.points.iter().map(|p| (p.step, p.columns, p.e_rms)).collect::<Vec<_>>();
+        let e = |o: &radiosity_eval::Outcome| {
+            o.points.iter().map(|p| (p.step, p.cost[Unit::Columns], p.e_rms)).collect::<Vec<_>>()
+        };
         assert_eq!(e(a), e(b), "{}", a.solver);
         // Between every column recorded and every column fresh; the last point is the run's.
-        let (columns, ff) = (b.state.columns as f64, b.state.ff_seconds);
+        let (columns, ff) = (b.state.cost[Unit::Columns] as f64, b.state.cost.ff_seconds);
         let slack = 1e-9 * ff.max(1e-9);
         assert!(ff >= charge.recorded * columns - slack && ff <= charge.fresh * columns + slack, "{}", a.solver);
-        assert_eq!(b.points.last().unwrap().seconds, b.seconds(), "{}", a.solver);
+        assert_eq!(b.points.last().unwrap().cost.seconds(), b.seconds(), "{}", a.solver);
     }
     // Jacobi's first sweep gathers each row once, in order: the k-th has k of its pairs
     // recorded, so n rows cost n·fresh − (fresh − recorded)(n − 1)/2.
@@ -413,7 +421,7 @@ fn charged_columns_give_the_computed_runs_numbers_at_the_measured_price() {
     let charge = lab.charge().unwrap();
     let n = lab.n() as f64;
     let expected = n * charge.fresh - (charge.fresh - charge.recorded) * (n - 1.0) / 2.0;
-    let ff = run.unwrap().state.ff_seconds;
+    let ff = run.unwrap().state.cost.ff_seconds;
     assert!((ff - expected).abs() <= 1e-9 * expected, "{ff} against {expected}");
     assert!(charged.seconds_phrase().contains("charged"), "{}", charged.seconds_phrase());
 }
@@ -433,8 +441,8 @@ fn the_clock_rules_and_the_report_read_the_same_seconds() {
     assert_eq!(comparison.clock, Clock::Charged);
     let run = &comparison.outcomes[0];
     assert_eq!(run.clock, Clock::Charged);
-    assert_eq!((run.state.columns, run.state.ff_seconds), (11, 11.0));
-    assert!(run.state.solve_seconds < 0.5, "{}", run.state.solve_seconds);
+    assert_eq!((run.state.cost[Unit::Columns], run.state.cost.ff_seconds), (11, 11.0));
+    assert!(run.state.cost.solve_seconds < 0.5, "{}", run.state.cost.solve_seconds);
     stopped_where_the_seconds_pass(run, 10.5);
     let summary = comparison.summary();
     let header = summary.lines().next().unwrap();
@@ -477,8 +485,13 @@ fn the_clock_rules_and_the_report_read_the_same_seconds() {
 fn stopped_where_the_seconds_pass(run: &radiosity_eval::Outcome, limit: f64) {
     assert!(run.termination.to_string().starts_with("time limit"), "{}", run.termination);
     let [.., before, last] = &run.points[..] else { panic!("{:?}", run.points) };
-    assert!(before.seconds < limit && last.seconds >= limit, "{} then {}", before.seconds, last.seconds);
-    assert_eq!(last.seconds, run.seconds());
+    assert!(
+        before.cost.seconds() < limit && last.cost.seconds() >= limit,
+        "{} then {}",
+        before.cost.seconds(),
+        last.cost.seconds()
+    );
+    assert_eq!(last.cost.seconds(), run.seconds());
 }
 
 /// Analytic columns standing in for an operator split over ranks: they say they are.
@@ -532,7 +545,7 @@ fn a_budget_a_last_step_overshoots_is_said_and_a_capped_run_is_not_converged() {
     let comparison =
         lab.compare(vec![registry.build("gmres-30").unwrap()], &StopRules::parse("columns=0.5n").unwrap(), &NoProgress);
     let comparison = comparison.unwrap();
-    let spent = comparison.outcomes[0].state.columns;
+    let spent = comparison.outcomes[0].state.cost[Unit::Columns];
     assert!(spent > lab.n() as u64 / 2, "{spent}");
     assert_eq!(comparison.notes.len(), 1, "{:?}", comparison.notes);
     assert!(comparison.notes[0].starts_with(&format!("gmres-30 spent {spent} columns, past columns=0.5n")));

@@ -8,6 +8,7 @@ use radiosity_core::dense_lu::lu_solve;
 use radiosity_core::{ColumnSource, LinearSystem, Real};
 use radiosity_ff::{HierarchicalColumns, HierarchicalParams};
 use radiosity_geom::{PreparedScene, spatial_order};
+use radiosity_solvers::Unit;
 use radiosity_solvers::{
     Executor, NODE_SOLVERS, Observer, ObserverMode, Problem, Record, ResidualBound, SolverRegistry, State, StopRules,
     TerminationReason, area_norms,
@@ -117,7 +118,11 @@ fn every_node_shooter_converges_to_the_operators_own_solution() {
             assert!(worst <= 1e-9 * scale, "{scene}, {name}: {worst:e} off against {scale}");
             assert!(holds.checked > 2, "{scene}, {name}");
             // Shots through links, not columns (a group's block is read from the links too).
-            assert!(run.state.columns == 0 && run.state.links > 0, "{scene}, {name}: {:?}", run.state);
+            assert!(
+                run.state.cost[Unit::Columns] == 0 && run.state.cost[Unit::Links] > 0,
+                "{scene}, {name}: {:?}",
+                run.state
+            );
         }
     }
 }
@@ -134,9 +139,9 @@ fn a_round_of_every_node_costs_the_links_of_a_product() {
         Executor::new(solver.as_mut(), StopRules::parse("steps=1").unwrap()).run(&problem).unwrap()
     };
     let (round, product) = (first("h-jacobi"), first("jacobi:sweep=product"));
-    assert_eq!(product.state.products, 1);
-    assert!(round.state.links > 0);
-    assert_eq!(round.state.links, 2 * product.state.links);
+    assert_eq!(product.state.cost[Unit::Products], 1);
+    assert!(round.state.cost[Unit::Links] > 0);
+    assert_eq!(round.state.cost[Unit::Links], 2 * product.state.cost[Unit::Links]);
     // And the same radiosity, a few roundings apart: both are B = E + ρ F E.
     for (a, b) in round.state.radiosity.iter().zip(&product.state.radiosity) {
         assert!((a - b).abs() <= 1e-12 * b.abs().max(1.0), "{a} against {b}");
@@ -172,7 +177,7 @@ fn a_links_rule_stops_a_run_once_it_has_touched_that_many() {
     let problem = Problem::new(&system, &f).unwrap();
     let mut solver = SolverRegistry::builtin().build("h-southwell").unwrap();
     let run = Executor::new(solver.as_mut(), rules).run(&problem).unwrap();
-    assert!(matches!(run.termination, TerminationReason::Links(k) if k >= 20_000), "{}", run.termination);
+    assert!(matches!(run.termination, TerminationReason::Spent(Unit::Links, k) if k >= 20_000), "{}", run.termination);
     // It stopped at the first round that reached the count, not later.
     let rounds: u64 = run.record.count("rounds").unwrap();
     assert!(rounds > 1, "the count needs more than one round on this scene");
@@ -180,5 +185,5 @@ fn a_links_rule_stops_a_run_once_it_has_touched_that_many() {
     let before = Executor::new(solver.as_mut(), StopRules::parse(&format!("steps={}", rounds - 1)).unwrap())
         .run(&Problem::new(&system, &f).unwrap())
         .unwrap();
-    assert!(before.state.links < 20_000, "{} links a round earlier", before.state.links);
+    assert!(before.state.cost[Unit::Links] < 20_000, "{} links a round earlier", before.state.cost[Unit::Links]);
 }

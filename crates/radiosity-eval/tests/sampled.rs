@@ -12,6 +12,7 @@ use radiosity_eval::{
 };
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
+use radiosity_solvers::Unit;
 use radiosity_solvers::{
     Problem, Record, Sequence, Solver, SolverError, SolverRegistry, StandardError, State, StepKind, StopRules,
 };
@@ -131,9 +132,14 @@ fn a_sampled_run_records_every_step_with_its_rays_and_standard_error() {
     assert!(o.termination.to_string().contains("rays"), "{}", o.termination);
     assert_eq!(o.points.len() as u64, steps + 1);
     assert_eq!(o.rows.len() as u64, steps + 1);
-    assert!(o.points.windows(2).all(|w| w[1].rays > w[0].rays), "rays grow at every step");
-    assert_eq!(o.points.last().unwrap().rays, o.state.rays);
-    assert!(o.state.rays >= 100_000 && o.state.columns == 0, "{} rays, {} columns", o.state.rays, o.state.columns);
+    assert!(o.points.windows(2).all(|w| w[1].cost[Unit::Rays] > w[0].cost[Unit::Rays]), "rays grow at every step");
+    assert_eq!(o.points.last().unwrap().cost[Unit::Rays], o.state.cost[Unit::Rays]);
+    assert!(
+        o.state.cost[Unit::Rays] >= 100_000 && o.state.cost[Unit::Columns] == 0,
+        "{} rays, {} columns",
+        o.state.cost[Unit::Rays],
+        o.state.cost[Unit::Columns]
+    );
     // The initial state has no standard error; every step's has its two replicates'.
     assert!(o.points[0].std_error.is_nan());
     assert!(o.points[1..].iter().all(|p| p.std_error.is_finite() && p.std_error > 0.0));
@@ -213,8 +219,12 @@ fn a_comparison_mixing_deterministic_and_sampled_solvers_gives_one_table_and_one
     let rules = StopRules::parse("columns=n,rays=2e4").unwrap();
     let comparison: Comparison = lab.compare(solvers, &rules, &NoProgress).unwrap();
     let (pr, rays) = (&comparison.outcomes[0], &comparison.outcomes[1]);
-    assert!(pr.termination.to_string().contains("columns") && pr.state.rays == 0, "{}", pr.termination);
-    assert!(rays.termination.to_string().contains("rays") && rays.state.columns == 0, "{}", rays.termination);
+    assert!(pr.termination.to_string().contains("columns") && pr.state.cost[Unit::Rays] == 0, "{}", pr.termination);
+    assert!(
+        rays.termination.to_string().contains("rays") && rays.state.cost[Unit::Columns] == 0,
+        "{}",
+        rays.termination
+    );
     assert!(comparison.transport.as_deref().is_some_and(|t| t.starts_with("`matrix`")), "{:?}", comparison.transport);
     let dir = std::env::temp_dir().join(format!("radiosity-eval-sampled-{}", std::process::id()));
     let written = comparison.write(&dir).unwrap();
@@ -241,7 +251,7 @@ fn a_comparison_mixing_deterministic_and_sampled_solvers_gives_one_table_and_one
     let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
     assert!(report.contains("## Error bars: certified bounds and standard errors"), "{report}");
     let row = report.lines().find(|l| l.starts_with("| `direct-rays` |") && l.contains("(2)")).unwrap();
-    assert!(row.contains(&rays.state.rays.to_string()), "{row}");
+    assert!(row.contains(&rays.state.cost[Unit::Rays].to_string()), "{row}");
     // The terminal summary gives the rays and the standard error beside the bound.
     let summary = comparison.summary();
     assert!(summary.lines().next().unwrap().contains("std error"), "{summary}");
@@ -267,7 +277,12 @@ fn stochastic_jacobi_casts_its_rays_in_the_scene_by_default() {
     assert!(transport.contains("includes that backend's own distance from the exact kernel"), "{transport}");
     assert!(comparison.report_markdown(&[]).contains("backend's own distance"));
     let o = &comparison.outcomes[1];
-    assert!(o.state.rays >= 20_000 && o.state.columns == 0, "{} rays, {} columns", o.state.rays, o.state.columns);
+    assert!(
+        o.state.cost[Unit::Rays] >= 20_000 && o.state.cost[Unit::Columns] == 0,
+        "{} rays, {} columns",
+        o.state.cost[Unit::Rays],
+        o.state.cost[Unit::Columns]
+    );
     assert_eq!(o.last.replicates, Some(4));
     let (e_rms, spread) = (o.last.e_rms.unwrap(), o.last.standard_error.unwrap());
     // The rays see the exact geometry, the reference the analytic backend's F: e_rms holds

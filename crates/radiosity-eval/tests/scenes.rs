@@ -15,6 +15,7 @@ use radiosity_solvers::{
     BEYOND_PAPER_SOLVERS, Executor, GROUP_SOLVERS, KRYLOV_SOLVERS, Observer, ObserverMode, POINT_SOLVERS, Problem,
     Record, Run, State, StopRules, solver_by_name,
 };
+use radiosity_solvers::{Cost, Unit};
 use std::collections::HashMap;
 use std::panic::{self, AssertUnwindSafe};
 use std::sync::OnceLock;
@@ -115,7 +116,7 @@ fn check_reaches_reference(scene: &str) {
                 "{name} on {scene} (n = {}): e_rms {e_rms:.3e} after {} steps, {} columns; {}",
                 fixture.n(),
                 run.state.step,
-                run.state.columns,
+                run.state.cost[Unit::Columns],
                 run.termination
             ));
         }
@@ -154,8 +155,12 @@ struct ColumnRecorder {
 impl Observer for ColumnRecorder {
     fn observe_step(&mut self, state: &State, _figures: &Record) {
         for (target, slot) in self.targets.iter().zip(&mut self.recorded) {
-            if slot.is_none() && state.columns == *target {
-                *slot = Some(Recorded { step: state.step, columns: state.columns, radiosity: state.radiosity.clone() });
+            if slot.is_none() && state.cost[Unit::Columns] == *target {
+                *slot = Some(Recorded {
+                    step: state.step,
+                    columns: state.cost[Unit::Columns],
+                    radiosity: state.radiosity.clone(),
+                });
             }
         }
     }
@@ -183,11 +188,7 @@ fn convergence_table(scene: &str) -> String {
             table.push(TableRow {
                 solver: name.to_string(),
                 step: r.step,
-                columns: r.columns,
-                products: 0,
-                rays: 0,
-                seconds: 0.0,
-                ff_seconds: 0.0,
+                cost: Cost::default().with(Unit::Columns, r.columns),
                 e_rms: m.e_rms,
                 e_max: m.e_max,
                 residual: m.residual,
@@ -282,11 +283,9 @@ fn end_table(scene: &str, names: &[&'static str], rule: &str, title: &str) -> (S
         table.push(TableRow {
             solver: name.to_string(),
             step: run.state.step,
-            columns: run.state.columns,
-            products: run.state.products,
-            rays: 0,
-            seconds: 0.0,
-            ff_seconds: 0.0,
+            cost: Cost::default()
+                .with(Unit::Columns, run.state.cost[Unit::Columns])
+                .with(Unit::Products, run.state.cost[Unit::Products]),
             e_rms: m.e_rms,
             e_max: m.e_max,
             residual: m.residual,

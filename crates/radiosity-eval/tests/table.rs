@@ -3,17 +3,14 @@
 
 use radiosity_eval::round_significant;
 use radiosity_eval::{ConvergenceTable, TableRow};
+use radiosity_solvers::{Cost, Unit};
 
 fn table() -> ConvergenceTable {
     let mut t = ConvergenceTable::new();
     let row = |solver: &str, step, columns, seconds, ff_seconds, e_rms, e_max, residual: f64| TableRow {
         solver: solver.to_string(),
         step,
-        columns,
-        products: 0,
-        rays: 0,
-        seconds,
-        ff_seconds,
+        cost: Cost::default().with(Unit::Columns, columns).with_seconds(ff_seconds, seconds - ff_seconds),
         e_rms,
         e_max,
         residual,
@@ -23,7 +20,7 @@ fn table() -> ConvergenceTable {
     t.push(row("pr", 0, 0, 0.0, 0.0, 1.0, 1.0, 0.6123456));
     t.push(row("pr", 480, 480, 1.23456789, 1.19876543, 4.7123456e-3, 2.0987654e-2, 1.5e-3));
     t.push(row("xu-g30-m480", 960, 512, 2.71846, 2.5, 4.2e-5, 9.99996e-5, 3.14159e-9));
-    t.push(row("odd, \"name\" | here", 1, 1, 123456.7, f64::NAN, f64::INFINITY, 0.000123449, 1e-300));
+    t.push(row("odd, \"name\" | here", 1, 1, 123456.7, 2.5e-7, f64::INFINITY, 0.000123449, 1e-300));
     t
 }
 
@@ -69,7 +66,7 @@ fn products_are_written_when_a_row_made_one() {
     assert!(String::from_utf8(without).unwrap().starts_with("solver,step,columns,seconds,"));
     let mut t = table();
     let mut krylov = t.rows()[2].clone();
-    (krylov.solver, krylov.products) = ("gmres-30".to_string(), 7);
+    (krylov.solver, krylov.cost[Unit::Products]) = ("gmres-30".to_string(), 7);
     t.push(krylov);
     let (mut csv, mut markdown) = (Vec::new(), Vec::new());
     t.write_csv(&mut csv).unwrap();
@@ -87,7 +84,7 @@ fn rays_and_standard_errors_are_written_when_a_row_has_them() {
     // deterministic rows with 0 rays and no standard error.
     let mut t = table();
     let mut sampled = t.rows()[1].clone();
-    (sampled.solver, sampled.columns, sampled.rays, sampled.std_error) =
+    (sampled.solver, sampled.cost[Unit::Columns], sampled.cost[Unit::Rays], sampled.std_error) =
         ("stochastic-jacobi".to_string(), 0, 1_000_000, 1.2345678e-3);
     t.push(sampled);
     let (mut csv, mut markdown) = (Vec::new(), Vec::new());

@@ -31,7 +31,7 @@ use radiosity_core::Real;
 use radiosity_eval::{ColumnCost, Comparison, Lab, LabOptions, NoProgress, ReferenceKind, Transport};
 use radiosity_ff::BackendSpec;
 use radiosity_solvers::{
-    Problem, Record, ResidualBound, Solver, SolverError, SolverRegistry, State, StepKind, StopRules,
+    Problem, Record, ResidualBound, Solver, SolverError, SolverRegistry, State, StepKind, StopRules, Unit,
 };
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, Sender, channel};
@@ -567,7 +567,7 @@ impl PyComparison {
 
     /// Every recorded row of every run, as `convergence.csv` holds them: a dict of `solver`
     /// (a list of names), `clock` (the clock of the seconds, `measured` or `charged`) and numpy
-    /// arrays `step`, `columns`, `products`, `rays`, `seconds`, `ff_seconds`, `e_rms`, `e_max`,
+    /// arrays `step`, `columns`, `products`, `rays`, `links`, `seconds`, `ff_seconds`, `e_rms`, `e_max`,
     /// `residual`, `bound` and `std_error` (the standard error of a solver whose answer is an
     /// estimate, NaN for the others).
     fn table<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
@@ -578,11 +578,11 @@ impl PyComparison {
         let column =
             |f: &dyn Fn(&radiosity_eval::TableRow) -> Real| PyArray1::from_vec(py, rows.iter().map(|r| f(r)).collect());
         d.set_item("step", column(&|r| r.step as Real))?;
-        d.set_item("columns", column(&|r| r.columns as Real))?;
-        d.set_item("products", column(&|r| r.products as Real))?;
-        d.set_item("rays", column(&|r| r.rays as Real))?;
-        d.set_item("seconds", column(&|r| r.seconds))?;
-        d.set_item("ff_seconds", column(&|r| r.ff_seconds))?;
+        for unit in Unit::ALL.into_iter().filter(|u| u.paid()) {
+            d.set_item(unit.key(), column(&|r| r.cost[unit] as Real))?;
+        }
+        d.set_item("seconds", column(&|r| r.cost.seconds()))?;
+        d.set_item("ff_seconds", column(&|r| r.cost.ff_seconds))?;
         d.set_item("e_rms", column(&|r| r.e_rms))?;
         d.set_item("e_max", column(&|r| r.e_max))?;
         d.set_item("residual", column(&|r| r.residual))?;

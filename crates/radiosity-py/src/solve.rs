@@ -15,7 +15,7 @@ use radiosity_eval::{
     ColumnCost, Lab, LabOptions, NoProgress, Point, RecordPlan, ReferenceKind, RunSummary, Transport,
 };
 use radiosity_ff::BackendSpec;
-use radiosity_solvers::{SolverError, SolverRegistry, State, StopRules};
+use radiosity_solvers::{SolverError, SolverRegistry, State, StopRules, Unit};
 use std::ops::ControlFlow;
 
 /// How one run pays for its columns unless told: as `cargo xtask solve` does.
@@ -138,11 +138,10 @@ pub fn solve(
 fn call_back(py: Python<'_>, callback: &Py<PyAny>, point: &Point, state: &State) -> PyResult<bool> {
     let d = PyDict::new(py);
     d.set_item("step", point.step)?;
-    d.set_item("columns", point.columns)?;
-    d.set_item("products", point.products)?;
-    d.set_item("rays", point.rays)?;
-    d.set_item("links", point.links)?;
-    d.set_item("seconds", point.seconds)?;
+    for unit in Unit::ALL.into_iter().filter(|u| u.paid()) {
+        d.set_item(unit.key(), point.cost[unit])?;
+    }
+    d.set_item("seconds", point.cost.seconds())?;
     d.set_item("e_rms", point.e_rms)?;
     d.set_item("bound", point.bound)?;
     d.set_item("std_error", point.std_error)?;
@@ -179,13 +178,13 @@ impl Run {
     /// `charged`.
     #[getter]
     fn clock(&self) -> &str {
-        &self.summary.clock
+        self.summary.cost.clock.name()
     }
 
     /// The rays the run cast (0 for a solver that does not sample transport).
     #[getter]
     fn rays(&self) -> u64 {
-        self.state.rays
+        self.state.cost[Unit::Rays]
     }
 
     /// The solver's standard error of the final radiosity, relative as e_rms is (the spread of
@@ -212,25 +211,21 @@ impl Run {
         py.import("json")?.call_method1("loads", (text,))
     }
 
-    /// The recorded points as a dict of arrays: `step`, `columns`, `products`, `rays`, `links`,
-    /// `seconds`, `e_rms`, `bound` and `std_error` (NaN where not known).
+    /// The recorded points as a dict of arrays: `step`, what the run had spent in every paid
+    /// unit of cost (`columns`, `products`, `rays`, `links`), `seconds`, `e_rms`, `bound` and
+    /// `std_error` (NaN where not known).
     #[getter]
     fn points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
-        let column = |f: fn(&Point) -> Real| self.points.iter().map(f).collect::<Vec<Real>>();
-        for (name, f) in [
-            ("step", (|p: &Point| p.step as Real) as fn(&Point) -> Real),
-            ("columns", |p| p.columns as Real),
-            ("products", |p| p.products as Real),
-            ("rays", |p| p.rays as Real),
-            ("links", |p| p.links as Real),
-            ("seconds", |p| p.seconds),
-            ("e_rms", |p| p.e_rms),
-            ("bound", |p| p.bound),
-            ("std_error", |p| p.std_error),
-        ] {
-            d.set_item(name, PyArray1::from_vec(py, column(f)))?;
+        let column = |f: &dyn Fn(&Point) -> Real| PyArray1::from_vec(py, self.points.iter().map(f).collect());
+        d.set_item("step", column(&|p| p.step as Real))?;
+        for unit in Unit::ALL.into_iter().filter(|u| u.paid()) {
+            d.set_item(unit.key(), column(&|p| p.cost[unit] as Real))?;
         }
+        d.set_item("seconds", column(&|p| p.cost.seconds()))?;
+        d.set_item("e_rms", column(&|p| p.e_rms))?;
+        d.set_item("bound", column(&|p| p.bound))?;
+        d.set_item("std_error", column(&|p| p.std_error))?;
         Ok(d)
     }
 

@@ -124,6 +124,7 @@ pub use krylov::cg::{CgParams, ConjugateGradients};
 pub use krylov::gmres::{Gmres, GmresParams};
 pub use naming::{ParseSolverError, SolverParams};
 pub use registry::{SolverEntry, SolverRegistry};
+pub use run::cost::{Cost, Unit};
 pub use run::executor::{
     DIVERGENCE_FACTOR, DIVERGENCE_FLOOR, ErrorMonitor, Executor, Observer, ObserverMode, Run, Solver, StepKind,
 };

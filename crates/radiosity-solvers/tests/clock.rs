@@ -61,7 +61,7 @@ impl Observer for Seen {
         if figures.get("group_size").is_some() {
             self.groups.push(state.step);
         }
-        self.seconds.push(state.ff_seconds + state.solve_seconds);
+        self.seconds.push(state.cost.ff_seconds + state.cost.solve_seconds);
     }
 }
 
@@ -83,7 +83,7 @@ fn stopped_at_limit(run: &Run, seen: &Seen, limit: Real) {
     assert_eq!(run.termination, TerminationReason::Time(Duration::from_secs_f64(limit)));
     let [.., before, last] = seen.seconds[..] else { panic!("{:?}", seen.seconds) };
     assert!(before < limit && last >= limit, "{:?}", seen.seconds);
-    assert_eq!(last, run.state.ff_seconds + run.state.solve_seconds);
+    assert_eq!(last, run.state.cost.ff_seconds + run.state.cost.solve_seconds);
 }
 
 #[test]
@@ -95,10 +95,10 @@ fn a_time_rule_stops_on_the_charged_seconds() {
     let (run, seen, clock) = run("pr", "time=3.5s", &source);
     assert_eq!(clock, Clock::Charged);
     stopped_at_limit(&run, &seen, 3.5);
-    assert_eq!((run.state.step, run.state.columns), (4, 4));
-    assert_eq!(run.state.ff_seconds, 4.0, "the form factors' seconds are the charge");
+    assert_eq!((run.state.step, run.state.cost[Unit::Columns]), (4, 4));
+    assert_eq!(run.state.cost.ff_seconds, 4.0, "the form factors' seconds are the charge");
     // Solving is measured: microseconds here, none of the charge.
-    assert!(run.state.solve_seconds < 0.1, "{} s solving", run.state.solve_seconds);
+    assert!(run.state.cost.solve_seconds < 0.1, "{} s solving", run.state.cost.solve_seconds);
     assert!(start.elapsed().as_secs_f64() < 1.0, "the run took its charge, not its wall time");
 }
 
@@ -123,10 +123,10 @@ fn a_time_rule_stops_on_measured_seconds_over_an_ordinary_source() {
     assert_eq!(clock, Clock::Measured);
     stopped_at_limit(&run, &seen, 3.5e-3);
     assert!(
-        run.state.ff_seconds >= 1e-3 * run.state.columns as Real,
+        run.state.cost.ff_seconds >= 1e-3 * run.state.cost[Unit::Columns] as Real,
         "{} s for {} columns",
-        run.state.ff_seconds,
-        run.state.columns
+        run.state.cost.ff_seconds,
+        run.state.cost[Unit::Columns]
     );
 }
 

@@ -84,10 +84,10 @@ fn a_step_costs_the_columns_of_the_patches_it_multiplies() {
     assert!(emitters < n);
     for name in KRYLOV_SOLVERS {
         let one = run(name, &system, &f, "steps=1").unwrap();
-        assert_eq!((one.state.step, one.state.columns), (1, emitters), "{name}");
+        assert_eq!((one.state.step, one.state.cost[Unit::Columns]), (1, emitters), "{name}");
         assert_eq!(one.state.radiosity, system.emissions(), "{name}: the first step only measures r_0");
         let four = run(name, &system, &f, "steps=4").unwrap();
-        assert_eq!(four.state.columns, emitters + 3 * n, "{name}");
+        assert_eq!(four.state.cost[Unit::Columns], emitters + 3 * n, "{name}");
         assert_eq!(four.record.count("columns_skipped"), Some(n - emitters), "{name}: {}", four.record);
     }
 }

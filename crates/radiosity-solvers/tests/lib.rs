@@ -148,9 +148,9 @@ fn accounting_counts_one_column_a_step() {
     for name in POINT_SOLVERS.into_iter().chain(["sor-0.8", "relax-0.8"]) {
         let run = solve(name, &system, &f, "steps=2n");
         assert_eq!(run.termination, TerminationReason::Steps(12), "{name}");
-        assert_eq!(run.state.columns, 12, "{name}");
+        assert_eq!(run.state.cost[Unit::Columns], 12, "{name}");
         let run = solve(name, &system, &f, "columns=7,steps=100");
-        assert_eq!(run.termination, TerminationReason::Columns(7), "{name}");
+        assert_eq!(run.termination, TerminationReason::Spent(Unit::Columns, 7), "{name}");
         assert_eq!(run.solver, name);
     }
 }
@@ -184,8 +184,12 @@ fn column_time_is_form_factor_time() {
         let mut solver = solver_by_name(name).unwrap();
         let problem = Problem::new(&system, &slow).unwrap();
         let run = Executor::new(solver.as_mut(), StopRules::parse("steps=12").unwrap()).run(&problem).unwrap();
-        assert!(run.state.ff_seconds >= 0.012, "{name}: {}", run.state.ff_seconds);
-        assert!(run.state.solve_seconds < run.state.ff_seconds, "{name}: {} s solving", run.state.solve_seconds);
+        assert!(run.state.cost.ff_seconds >= 0.012, "{name}: {}", run.state.cost.ff_seconds);
+        assert!(
+            run.state.cost.solve_seconds < run.state.cost.ff_seconds,
+            "{name}: {} s solving",
+            run.state.cost.solve_seconds
+        );
     }
 }
 
@@ -255,7 +259,7 @@ fn the_rms_rule_uses_the_monitor() {
 fn stop_rules_parse_and_refuse_clearly() {
     let rules = StopRules::parse("columns=2n, steps=100, rms=1e-3, residual=1e-4, time=30s").unwrap();
     assert_eq!(rules.rules.len(), 5);
-    assert_eq!(rules.rules[0], StopRule::Columns(Count::PerPatch(2.0)));
+    assert_eq!(rules.rules[0], StopRule::Spent(Unit::Columns, Count::PerPatch(2.0)));
     assert_eq!(Count::PerPatch(2.0).resolve(480), 960);
     assert_eq!(StopRules::parse("time=250ms").unwrap().rules[0], StopRule::Time(std::time::Duration::from_millis(250)));
     assert_eq!(StopRules::parse("time=2min").unwrap().rules[0], StopRule::Time(std::time::Duration::from_secs(120)));
@@ -340,20 +344,20 @@ fn a_column_served_from_memory_costs_no_column_and_is_counted_apart() {
     assert_eq!(memory.column(&problem, 0, &mut scratch), f.column(0));
     assert_eq!(memory.column(&problem, 1, &mut scratch), f.column(1));
     assert_eq!(memory.column(&problem, 0, &mut scratch), f.column(0));
-    assert_eq!((problem.columns_fetched(), problem.columns_reused()), (2, 1));
+    assert_eq!((problem.spent(Unit::Columns), problem.spent(Unit::Reused)), (2, 1));
     // Full: 2 is stored in place of the least recently used, 1; 0 stays.
     assert_eq!(memory.column(&problem, 2, &mut scratch), f.column(2));
     assert!(memory.contains(0) && memory.contains(2) && !memory.contains(1));
     assert_eq!(memory.peek(2), Some(f.column(2)));
     assert_eq!(memory.peek(1), None);
     assert_eq!(memory.column(&problem, 1, &mut scratch), f.column(1));
-    assert_eq!((problem.columns_fetched(), problem.columns_reused()), (4, 1));
+    assert_eq!((problem.spent(Unit::Columns), problem.spent(Unit::Reused)), (4, 1));
     assert_eq!(memory.len(), 2);
     // No capacity: every column is computed.
     let mut none = ColumnMemory::new(6, 0);
     assert_eq!(none.column(&problem, 3, &mut scratch), f.column(3));
     assert_eq!(none.column(&problem, 3, &mut scratch), f.column(3));
-    assert_eq!((problem.columns_fetched(), problem.columns_reused()), (6, 1));
+    assert_eq!((problem.spent(Unit::Columns), problem.spent(Unit::Reused)), (6, 1));
     assert!(none.is_empty());
 }
 
@@ -423,7 +427,7 @@ fn a_group_step_leaves_zero_unshot_in_the_group_or_minus_the_overshoot() {
     // exactly 4 zeros (the emitters received light again).
     let zeros = |state: &State| (0..12).filter(|&i| (0..k).all(|c| state.unshot[i * k + c] == 0.0)).count();
     let run = solve("group-pr-g4", &system, &f, "steps=1");
-    assert_eq!((zeros(&run.state), run.state.columns), (3, 3), "{:?}", run.state.unshot);
+    assert_eq!((zeros(&run.state), run.state.cost[Unit::Columns]), (3, 3), "{:?}", run.state.unshot);
     let run = solve("group-pr-g4", &system, &f, "steps=2");
     assert_eq!(zeros(&run.state), 4, "{:?}", run.state.unshot);
     // Group relaxation: the group holds exactly −ΔB⁺ = −(ω − 1) ΔB. The first group is the
@@ -453,14 +457,14 @@ fn group_acceleration_stores_columns_and_reuses_them() {
     let dark_emitters =
         LinearSystem::new(Channels::Rgb, system.areas().to_vec(), rho, system.emissions().to_vec()).unwrap();
     let run = solve("pr-g4-m12:f=3", &dark_emitters, &f, "steps=200");
-    assert_eq!(run.state.columns, 12);
-    assert!(run.state.columns_reused > 0);
-    assert_eq!(run.state.columns + run.state.columns_reused, run.state.step);
-    assert!(run.state.group_seconds > 0.0 && run.state.group_seconds <= run.state.solve_seconds);
+    assert_eq!(run.state.cost[Unit::Columns], 12);
+    assert!(run.state.cost[Unit::Reused] > 0);
+    assert_eq!(run.state.cost[Unit::Columns] + run.state.cost[Unit::Reused], run.state.step);
+    assert!(run.state.cost.group_seconds > 0.0 && run.state.cost.group_seconds <= run.state.cost.solve_seconds);
     // Group shooting with the group's columns kept: a member chosen again costs nothing. The
     // first group is the 3 emitters, every later one has 4 patches.
     let run = solve("group-pr-g4", &system, &f, "steps=30");
-    assert_eq!(run.state.columns + run.state.columns_reused, 4 * run.state.step - 1);
+    assert_eq!(run.state.cost[Unit::Columns] + run.state.cost[Unit::Reused], 4 * run.state.step - 1);
 }
 
 /// Runs `name` on `problem` under `rules`, with the step cap of [`solve`].
@@ -487,10 +491,10 @@ fn one_group_holding_every_patch_solves_the_system_in_one_step() {
         let exact = solve("gauss-seidel", system, f, "residual=1e-15").state.radiosity;
         for solver in [name.to_string(), name.replace("gs", "jacobi"), format!("{name}0")] {
             let run = solve(&solver, system, f, "steps=1");
-            assert_eq!((run.state.step, run.state.columns), (1, system.len() as u64), "{solver}");
+            assert_eq!((run.state.step, run.state.cost[Unit::Columns]), (1, system.len() as u64), "{solver}");
             let error = max_relative(&run.state.radiosity, &exact);
             assert!(error < 1e-12, "{solver}: {error:e} from Gauss–Seidel");
-            assert!(run.state.group_seconds > 0.0 && run.state.group_seconds <= run.state.solve_seconds);
+            assert!(run.state.cost.group_seconds > 0.0 && run.state.cost.group_seconds <= run.state.cost.solve_seconds);
         }
     }
     // The cube's closed form (to 6 decimals, as above).
@@ -511,7 +515,7 @@ fn group_gathering_converges_to_gauss_seidel_a_group_of_columns_a_step() {
         assert!(error < 1e-12, "{name}: {error:e} from Gauss–Seidel after {} steps", run.state.step);
         if name.contains("g4") {
             // 12 = 3 × 4: every step gathers a whole group of 4 rows.
-            assert_eq!(run.state.columns, 4 * run.state.step, "{name}");
+            assert_eq!(run.state.cost[Unit::Columns], 4 * run.state.step, "{name}");
         }
         // The unshot radiosity keeps each patch's last change, as for point gathering.
         assert!(run.state.unshot.iter().all(|u| u.is_finite()));
@@ -519,10 +523,10 @@ fn group_gathering_converges_to_gauss_seidel_a_group_of_columns_a_step() {
     }
     // Groups of 5 over 12 patches: 5 + 5 + 2, so a sweep is 3 steps and 12 columns.
     let run = solve("group-gs-g5", &system, &f, "steps=3");
-    assert_eq!(run.state.columns, 12);
+    assert_eq!(run.state.cost[Unit::Columns], 12);
     // Group Gauss–Seidel needs no more sweeps than point Gauss–Seidel, and group Jacobi no more
     // than point Jacobi.
-    let columns = |name: &str| solve(name, &system, &f, "residual=1e-10").state.columns;
+    let columns = |name: &str| solve(name, &system, &f, "residual=1e-10").state.cost[Unit::Columns];
     assert!(columns("group-gs-g4") <= columns("gauss-seidel"));
     assert!(columns("group-jacobi-g4") <= columns("jacobi"));
 }
@@ -1094,7 +1098,7 @@ fn a_users_solver_builds_through_the_registry() {
     let f = cube();
     let problem = Problem::new(&system, &f).unwrap();
     let run = Executor::new(lazy.as_mut(), StopRules::parse("steps=3").unwrap()).run(&problem).unwrap();
-    assert_eq!((run.termination, run.state.columns), (TerminationReason::Steps(3), 0));
+    assert_eq!((run.termination, run.state.cost[Unit::Columns]), (TerminationReason::Steps(3), 0));
     assert_eq!(run.record.count("laziness"), Some(3));
     // Its refusals name it; the built-in names keep their meaning; the lists show it.
     assert_eq!(registry.build("lazy-0").err().unwrap().to_string(), "solver 'lazy-0': needs lazy-N with N ≥ 1");
@@ -1283,8 +1287,34 @@ fn an_rms_rule_without_a_monitor_is_refused_before_the_run() {
 }
 
 #[test]
+fn a_cost_counts_each_unit_apart_and_reads_in_its_own() {
+    let columns = Cost::default().with(Unit::Columns, 659).with(Unit::Reused, 12).with_seconds(1.5, 0.25);
+    assert_eq!(
+        (columns.seconds(), columns.principal(), columns.to_string()),
+        (1.75, Unit::Columns, "659 columns".into())
+    );
+    let krylov = Cost::default().with(Unit::Products, 7).with(Unit::Links, 4100);
+    assert_eq!((krylov.principal(), krylov.to_string()), (Unit::Links, "0 columns + 7 products (4100 links)".into()));
+    let rays = Cost::default().with(Unit::Rays, 1000);
+    assert!(rays.only_rays() && !krylov.only_rays());
+    assert_eq!((rays.principal(), rays.to_string()), (Unit::Rays, "1000 rays".into()));
+    assert_eq!(Cost::default().principal(), Unit::Columns);
+    let mixed = Cost::default().with(Unit::Columns, 3).with(Unit::Rays, 10);
+    assert_eq!(mixed.to_string(), "3 columns + 10 rays");
+    // Every paid unit is a rule's key; columns served from memory are free and are not.
+    for unit in Unit::ALL {
+        assert_eq!(Unit::from_key(unit.key()), unit.paid().then_some(unit), "{unit}");
+    }
+    let free = StopRules::parse("columns_reused=5").unwrap_err().to_string();
+    assert!(free.contains("unknown rule"), "{free}");
+    let typo = StopRules::parse("product=5").unwrap_err().to_string();
+    assert!(typo.contains("did you mean 'products'?"), "{typo}");
+}
+
+#[test]
 fn stop_rules_show_as_written() {
-    let list = "columns=2n, steps=100, rms=1e-3, residual=1e-4, time=30s, steps=n, rms=0.05, time=0.25s";
+    let list = "columns=2n, steps=100, rms=1e-3, residual=1e-4, time=30s, steps=n, rms=0.05, time=0.25s, products=4, \
+                rays=500, links=10n";
     let rules = StopRules::parse(list).unwrap();
     let shown: Vec<String> = rules.rules.iter().map(ToString::to_string).collect();
     assert_eq!(shown.join(", "), list);
@@ -1355,8 +1385,8 @@ fn automatic_group_frequency_is_reproducible_and_follows_the_cost_model() {
     assert_eq!(first.state.radiosity, second.state.radiosity);
     assert_eq!(first.state.unshot, second.state.unshot);
     assert_eq!(
-        (first.state.step, first.state.columns, first.state.columns_reused),
-        (second.state.step, second.state.columns, second.state.columns_reused)
+        (first.state.step, first.state.cost[Unit::Columns], first.state.cost[Unit::Reused]),
+        (second.state.step, second.state.cost[Unit::Columns], second.state.cost[Unit::Reused])
     );
     assert_eq!(first.record, second.record);
     // The runs are deterministic, so a run of s steps is the first s steps of a longer one:
@@ -1437,7 +1467,7 @@ fn jacobi_by_products_takes_the_sweeps_of_jacobi_by_rows() {
         LinearSystem::new(Channels::Rgb, vec![1.0; 6], [0.9, 0.5, 0.2].repeat(6), [1.0, 2.0, 0.5].repeat(6)).unwrap();
     let f = cube();
     let by_rows = solve("jacobi", &system, &f, "steps=30");
-    assert_eq!(by_rows.state.columns, 30);
+    assert_eq!(by_rows.state.cost[Unit::Columns], 30);
     let multiplying = Multiplying(&f);
     let sources: [(&dyn radiosity_core::ColumnSource, (u64, u64)); 2] = [(&multiplying, (0, 5)), (&f, (30, 0))];
     for (source, (columns, products)) in sources {
@@ -1449,7 +1479,10 @@ fn jacobi_by_products_takes_the_sweeps_of_jacobi_by_rows() {
             .run(&problem)
             .unwrap();
         assert_eq!(solver.step_kind(), StepKind::Product);
-        assert_eq!((run.state.step, run.state.columns, run.state.products), (5, columns, products));
+        assert_eq!(
+            (run.state.step, run.state.cost[Unit::Columns], run.state.cost[Unit::Products]),
+            (5, columns, products)
+        );
         for (a, b) in run.state.radiosity.iter().zip(&by_rows.state.radiosity) {
             assert!((a - b).abs() <= 1e-13 * b.abs(), "{a} against {b}");
         }
@@ -1458,6 +1491,13 @@ fn jacobi_by_products_takes_the_sweeps_of_jacobi_by_rows() {
             assert_unshot_is_the_residual("jacobi:sweep=product", &system, &f, state);
         }
     }
+    // Every paid unit has its rule, read from the one cost: products stop this run, as columns
+    // stop one over plain columns, and the reason names what was spent.
+    let problem = Problem::new(&system, &multiplying).unwrap();
+    let mut solver = solver_by_name("jacobi:sweep=product").unwrap();
+    let run = Executor::new(solver.as_mut(), StopRules::parse("products=3").unwrap()).run(&problem).unwrap();
+    assert_eq!(run.termination, TerminationReason::Spent(Unit::Products, 3));
+    assert_eq!((run.state.step, run.termination.to_string()), (3, "3 products computed".to_string()));
     let Err(ParseSolverError::Refused(e)) = "jacobi:sweep=sideways".parse::<JacobiParams>() else { panic!("sideways") };
     assert_eq!(e.to_string(), "solver 'jacobi' takes sweep=rows or sweep=product, not 'sweep=sideways'");
 }

@@ -62,7 +62,7 @@ fn every_node_shooter_converges_to_the_lu_solution_and_its_bound_holds() {
                 assert!((got - want).abs() <= 1e-9 * scale, "{name}: {got} against {want}");
             }
             // Over one level every shot is a column; no link is shown.
-            assert!(run.state.columns > 0 && run.state.links == 0, "{name}: {:?}", run.state);
+            assert!(run.state.cost[Unit::Columns] > 0 && run.state.cost[Unit::Links] == 0, "{name}: {:?}", run.state);
         }
     }
 }

@@ -28,7 +28,7 @@ fn walk(name: &str, system: &LinearSystem, f: &DenseColumns, rules: &str) -> Res
     let problem = Problem::new(system, f)?.with_transport(&transport)?;
     let mut solver = solver_by_name(name)?;
     let run = Executor::new(solver.as_mut(), StopRules::parse(rules)?).run(&problem)?;
-    assert_eq!(run.state.rays, problem.rays_cast());
+    assert_eq!(run.state.cost[Unit::Rays], problem.spent(Unit::Rays));
     let error = solver.standard_error(&problem, &run.state);
     Ok(Walked { run, error })
 }
@@ -121,7 +121,7 @@ fn the_closed_furnace_gives_e_over_one_minus_rho() {
     assert_eq!(walks, 3 * 4 * 6, "3 steps, 4 replicates, one walk from each of 6 patches");
     let long = walk("random-walk:form=gathering:walks=600", &system, &f, "steps=2").unwrap();
     let (walks, length) = (long.run.record.count("walks").unwrap(), long.run.record.real("mean_walk_length").unwrap());
-    assert_eq!((walks, long.run.state.rays), (2 * 4 * 600, (length * walks as Real).round() as u64));
+    assert_eq!((walks, long.run.state.cost[Unit::Rays]), (2 * 4 * 600, (length * walks as Real).round() as u64));
     let se = 0.9f64.sqrt() / 0.1 / (walks as Real).sqrt();
     assert!((length - 10.0).abs() < 4.0 * se, "mean walk length {length}, standard error {se}");
 }
@@ -247,7 +247,11 @@ fn the_same_seed_gives_the_same_numbers_whatever_the_thread_count() {
             let other = on(threads);
             assert_eq!(one.run.state.radiosity, other.run.state.radiosity, "{name} on {threads} threads");
             assert_eq!(one.error, other.error, "{name} on {threads} threads");
-            assert_eq!((one.run.state.rays, &one.run.record), (other.run.state.rays, &other.run.record), "{name}");
+            assert_eq!(
+                (one.run.state.cost[Unit::Rays], &one.run.record),
+                (other.run.state.cost[Unit::Rays], &other.run.record),
+                "{name}"
+            );
         }
         let reseeded = walk(&format!("{name}:seed=2"), &system, &f, "steps=3").unwrap();
         assert_ne!(one.run.state.radiosity, reseeded.run.state.radiosity, "{name}");
@@ -339,7 +343,7 @@ fn a_problem_without_a_transport_sampler_is_refused_before_any_work() {
         let SolverError::NotApplicable { solver: who, .. } = &err else { panic!("{name}: {err}") };
         assert_eq!(who, &solver.name());
         assert!(err.to_string().contains("has no transport sampler"), "{err}");
-        assert_eq!((problem.rays_cast(), problem.columns_fetched()), (0, 0));
+        assert_eq!((problem.spent(Unit::Rays), problem.spent(Unit::Columns)), (0, 0));
     }
 }
 
@@ -349,14 +353,16 @@ fn a_dark_system_is_solved_at_once_and_rays_are_counted_as_the_rule_asks() {
     let dark = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![0.0; 6]).unwrap();
     let walked = walk("random-walk", &dark, &cube(), "steps=10").unwrap();
     assert_eq!(walked.run.termination, TerminationReason::RoundOff);
-    assert_eq!((walked.run.state.step, walked.run.state.rays), (0, 0));
+    assert_eq!((walked.run.state.step, walked.run.state.cost[Unit::Rays]), (0, 0));
     assert!(walked.run.state.radiosity.iter().all(|&b| b == 0.0));
     assert!(walked.error.unwrap().values.iter().all(|&s| s == 0.0));
     // A rays= budget stops the first step that reaches it; no residual, the spread as error.
     let (system, f) = twelve();
     let walked = walk("random-walk", &system, &f, "rays=5000").unwrap();
-    let TerminationReason::Rays(rays) = walked.run.termination else { panic!("{}", walked.run.termination) };
-    assert!(rays >= 5000 && walked.run.state.columns == 0, "{rays} rays");
+    let TerminationReason::Spent(Unit::Rays, rays) = walked.run.termination else {
+        panic!("{}", walked.run.termination)
+    };
+    assert!(rays >= 5000 && walked.run.state.cost[Unit::Columns] == 0, "{rays} rays");
     let error = walked.error.unwrap();
     assert!(error.relative_rms(&system, &walked.run.state.radiosity) > 0.0);
 }

@@ -381,7 +381,7 @@ fn jacobi_by_products_bounds_its_residual() {
         .add_observer(&mut checker, ObserverMode::Always)
         .run(&problem)
         .unwrap();
-    assert_eq!((run.state.step, run.state.columns, run.state.products), (20, 0, 20));
+    assert_eq!((run.state.step, run.state.cost[Unit::Columns], run.state.cost[Unit::Products]), (20, 0, 20));
     assert_eq!((checker.checked, checker.missing), (21, 0));
     assert_eq!(checker.nonnegative, 21, "E ≥ 0 and F ≥ 0: every residual is non-negative");
 }

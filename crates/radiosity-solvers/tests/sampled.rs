@@ -120,7 +120,11 @@ fn observers_get_the_standard_error_before_every_state_they_see() {
     assert_eq!(quiet.seen, vec![(0, None), (2, Some(2))]);
     // Two replicates of 100 rays from the one emitter at each step: 3 · 2 · 100 rays, then
     // from every lit patch after the first step.
-    assert!(run.state.rays >= 200 && run.state.rays == problem.rays_cast(), "{}", run.state.rays);
+    assert!(
+        run.state.cost[Unit::Rays] >= 200 && run.state.cost[Unit::Rays] == problem.spent(Unit::Rays),
+        "{}",
+        run.state.cost[Unit::Rays]
+    );
 }
 
 #[test]
@@ -136,8 +140,12 @@ fn a_charged_clock_counts_the_rays_measured_seconds() {
     let run = Executor::new(&mut solver, StopRules::parse("steps=2").unwrap()).run(&problem).unwrap();
     let wall = start.elapsed().as_secs_f64();
     // No column was charged; the two casts slept 20 ms each, inside the rays' seconds.
-    assert_eq!(run.state.columns, 0);
-    let rays = run.state.ff_seconds;
+    assert_eq!(run.state.cost[Unit::Columns], 0);
+    let rays = run.state.cost.ff_seconds;
     assert!(rays >= 2.0 * pause.as_secs_f64() && rays <= wall, "ray seconds {rays} (wall {wall})");
-    assert!(run.state.solve_seconds <= wall - rays + 1e-9, "solving {} counts the rays", run.state.solve_seconds);
+    assert!(
+        run.state.cost.solve_seconds <= wall - rays + 1e-9,
+        "solving {} counts the rays",
+        run.state.cost.solve_seconds
+    );
 }

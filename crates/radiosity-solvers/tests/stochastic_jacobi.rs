@@ -139,10 +139,10 @@ fn the_same_seed_gives_the_same_numbers_whatever_the_thread_count() {
 fn rays_are_the_cost_and_the_rays_rule_stops_the_run() {
     let (system, f) = twelve();
     let (run, _) = run_sampled("stochastic-jacobi:batch=1000", &system, &f, "rays=20000");
-    assert!(matches!(run.termination, TerminationReason::Rays(r) if r >= 20_000));
+    assert!(matches!(run.termination, TerminationReason::Spent(Unit::Rays, r) if r >= 20_000));
     // A step casts at most a batch and a rounding per patch and replicate beyond the rule.
-    assert!(run.state.rays < 20_000 + 1000 + 4 * 12, "{}", run.state.rays);
-    assert_eq!(run.state.columns, 0, "a stochastic solver computes no column");
+    assert!(run.state.cost[Unit::Rays] < 20_000 + 1000 + 4 * 12, "{}", run.state.cost[Unit::Rays]);
+    assert_eq!(run.state.cost[Unit::Columns], 0, "a stochastic solver computes no column");
 }
 
 #[test]
@@ -210,7 +210,7 @@ fn the_error_against_rays_follows_the_first_order_variance_formula() {
             let num: Real =
                 run.state.radiosity.iter().zip(&star).zip(areas).map(|((b, t), a)| a * (b - t).powi(2)).sum();
             e2 += num / norm;
-            rays += run.state.rays as Real;
+            rays += run.state.cost[Unit::Rays] as Real;
         }
         let (e2, rays) = (e2 / seeds as Real, rays / seeds as Real);
         let predicted: Real = (0..system.len())
@@ -230,7 +230,7 @@ fn a_problem_without_form_factors_runs_only_the_solvers_that_sample() {
     let problem = Problem::sampled(&system, &transport).unwrap();
     let mut sampled = solver_by_name("stochastic-jacobi").unwrap();
     let run = Executor::new(sampled.as_mut(), StopRules::parse("steps=5").unwrap()).run(&problem).unwrap();
-    assert!(run.state.rays > 0 && run.state.radiosity.iter().all(|b| b.is_finite()));
+    assert!(run.state.cost[Unit::Rays] > 0 && run.state.radiosity.iter().all(|b| b.is_finite()));
     let mut formed = solver_by_name("gauss-seidel").unwrap();
     let e = Executor::new(formed.as_mut(), StopRules::parse("steps=5").unwrap()).run(&problem).unwrap_err();
     assert!(e.to_string().contains("only samples transport"), "{e}");
@@ -262,7 +262,7 @@ fn the_control_variate_is_refused_before_any_ray_where_row_sums_are_unknown() {
     let mut solver = solver_by_name("stochastic-jacobi:form=gathering:cv=true").unwrap();
     let e = Executor::new(solver.as_mut(), StopRules::parse("steps=5").unwrap()).run(&problem).unwrap_err();
     assert!(matches!(e, SolverError::NotApplicable { .. }) && e.to_string().contains("row sums"), "{e}");
-    assert_eq!(problem.rays_cast(), 0);
+    assert_eq!(problem.spent(Unit::Rays), 0);
     // Without the control variate, the same sampler serves the gathering form.
     let mut plain = solver_by_name("stochastic-jacobi:form=gathering").unwrap();
     assert!(Executor::new(plain.as_mut(), StopRules::parse("steps=5").unwrap()).run(&problem).is_ok());
@@ -273,8 +273,9 @@ fn a_written_batch_is_cast_as_written() {
     // batch=400 over 4 replicates: 100 rays a replicate and regular iteration, each patch's
     // share rounded (at most one ray off a patch, 12 patches), never raised to a floor.
     let (system, f) = twelve();
-    let rays_after =
-        |steps: u64| run_sampled("stochastic-jacobi:batch=400", &system, &f, &format!("steps={steps}")).0.state.rays;
+    let rays_after = |steps: u64| {
+        run_sampled("stochastic-jacobi:batch=400", &system, &f, &format!("steps={steps}")).0.state.cost[Unit::Rays]
+    };
     let (first, second, third) = (rays_after(1), rays_after(2), rays_after(3));
     for regular in [second - first, third - second] {
         assert!(regular.abs_diff(400) <= 4 * 12, "a regular iteration cast {regular} rays for batch=400");

@@ -13,6 +13,7 @@ use crate::lab::recorder::RecordPlan;
 use crate::lab::setup::Lab;
 use crate::progress::NoProgress;
 use radiosity_core::Real;
+use radiosity_solvers::Unit;
 use radiosity_solvers::{SolverRegistry, StopRules};
 
 /// One solver's error bar over seeds (module doc).
@@ -53,7 +54,7 @@ impl Lab<'_> {
             s2 += se * se;
             e += e_rms;
             s += se;
-            rays += outcome.state.rays as Real;
+            rays += outcome.state.cost[Unit::Rays] as Real;
             within += u64::from(e_rms <= 2.0 * se);
         }
         let n = seeds.max(1) as Real;

@@ -3,6 +3,7 @@
 
 use crate::lab::recorder::{Point, TableRow};
 use radiosity_core::{Clock, Real};
+use radiosity_solvers::Unit;
 use radiosity_solvers::{Record, StandardError, State, StopRule, StopRules, TerminationReason};
 
 /// The metrics of a run's final radiosity.
@@ -64,7 +65,7 @@ impl Outcome {
 
     /// The columns computed after `step` steps.
     pub fn columns_at_step(&self, step: u64) -> Option<u64> {
-        self.points.iter().take_while(|p| p.step <= step).last().map(|p| p.columns)
+        self.points.iter().take_while(|p| p.step <= step).last().map(|p| p.cost[Unit::Columns])
     }
 
     /// e_rms when `columns` columns had been computed (the first step there).
@@ -74,7 +75,11 @@ impl Outcome {
 
     /// The point where `columns` columns had been computed (the first step there).
     pub fn at_columns_point(&self, columns: u64) -> Option<Point> {
-        self.points.iter().find(|p| p.columns >= columns).filter(|p| p.columns == columns).copied()
+        self.points
+            .iter()
+            .find(|p| p.cost[Unit::Columns] >= columns)
+            .filter(|p| p.cost[Unit::Columns] == columns)
+            .copied()
     }
 
     /// The first point whose certified bound is at or below `target`.
@@ -113,7 +118,7 @@ impl Outcome {
         }
     }
 
-    /// One sentence for each budget of `rules` (columns, rays, links) the run went past, on a
+    /// One sentence for each budget of `rules` (a unit of cost) the run went past, on a
     /// system of `n` patches: a run stops only between steps, and one step may spend much at
     /// once (a product of F is n columns), so the last step may overshoot what was asked.
     pub fn overshoot_notes(&self, rules: &StopRules, n: usize) -> Vec<String> {
@@ -122,18 +127,19 @@ impl Outcome {
             .rules
             .iter()
             .filter_map(|rule| {
-                let (spent, what, limit) = match *rule {
-                    StopRule::Columns(c) => (s.columns, "columns", c.resolve(n)),
-                    StopRule::Rays(c) => (s.rays, "rays", c.resolve(n)),
-                    StopRule::Links(c) => (s.links, "links", c.resolve(n)),
-                    _ => return None,
-                };
+                let StopRule::Spent(unit, c) = *rule else { return None };
+                let (spent, limit) = (s.cost[unit], c.resolve(n));
                 (spent > limit).then(|| {
                     format!(
-                        "{} spent {spent} {what}, past {rule} ({limit}): it stops only between steps, and its last step \
+                        "{} spent {spent} {}, past {rule} ({limit}): it stops only between steps, and its last step \
                          spent {} at once",
                         self.solver,
-                        if what == "columns" && s.products > 0 { "a whole product of F" } else { "more than was left" }
+                        unit.name(),
+                        if unit == Unit::Columns && s.cost[Unit::Products] > 0 {
+                            "a whole product of F"
+                        } else {
+                            "more than was left"
+                        }
                     )
                 })
             })
@@ -142,12 +148,12 @@ impl Outcome {
 
     /// The group-solve share of the run's time.
     pub fn group_share(&self) -> Real {
-        let total = self.state.ff_seconds + self.state.solve_seconds;
-        if total > 0.0 { self.state.group_seconds / total } else { 0.0 }
+        let total = self.state.cost.seconds();
+        if total > 0.0 { self.state.cost.group_seconds / total } else { 0.0 }
     }
 
     /// The run's own seconds: form factors and solving.
     pub fn seconds(&self) -> Real {
-        self.state.ff_seconds + self.state.solve_seconds
+        self.state.cost.seconds()
     }
 }

@@ -13,7 +13,7 @@ use crate::progress::Progress;
 use crate::reference::certificate::{Contraction, SolverBound, relative_without_reference};
 use crate::reference::metrics::{Evaluator, Metrics, errors_against};
 use radiosity_core::{LinearSystem, Real};
-use radiosity_solvers::{ErrorMonitor, Observer, Record, ResidualBound, StandardError, State};
+use radiosity_solvers::{Cost, ErrorMonitor, Observer, Record, ResidualBound, StandardError, State, Unit};
 use std::cell::Cell;
 use std::ops::ControlFlow;
 use std::rc::Rc;
@@ -57,17 +57,10 @@ impl RecordPlan {
 pub struct Point {
     /// Steps done.
     pub step: u64,
-    /// Columns computed.
-    pub columns: u64,
-    /// Products `F·x` of the source's own ([`radiosity_core::ColumnSource::multiply`]).
-    pub products: u64,
-    /// Rays cast by a solver that samples transport.
-    pub rays: u64,
-    /// Links of a hierarchy touched, when the source shows them ([`State::links`]).
-    pub links: u64,
-    /// The run's seconds so far (form factors and solving; measurement excluded), on the run's
-    /// clock ([`crate::Lab::clock`]): what a `time=` rule reads.
-    pub seconds: Real,
+    /// What the run had spent: columns, products, rays, links, and seconds on the run's clock
+    /// ([`crate::Lab::clock`]), measurement excluded ([`Cost::seconds`] is what a `time=` rule
+    /// reads).
+    pub cost: Cost,
     /// Wall seconds since the recorder's clock started (for a lab's runs, when the run was
     /// set up), its own measuring taken out: the run's seconds and the executor's bookkeeping.
     pub wall: Real,
@@ -89,16 +82,9 @@ pub struct TableRow {
     pub solver: String,
     /// Steps done (shooting steps, or sweeps for gathering methods).
     pub step: u64,
-    /// Form-factor columns computed.
-    pub columns: u64,
-    /// Products by F the source computed itself.
-    pub products: u64,
-    /// Rays cast by a solver that samples transport.
-    pub rays: u64,
-    /// Seconds of the run so far (metrics excluded), on the run's clock ([`crate::Lab::clock`]).
-    pub seconds: Real,
-    /// Of them, the form factors' seconds, on the same clock.
-    pub ff_seconds: Real,
+    /// What the run had spent: columns, products, rays, links, and seconds (metrics
+    /// excluded) on the run's clock ([`crate::Lab::clock`]).
+    pub cost: Cost,
     /// Area-weighted relative RMS error.
     pub e_rms: Real,
     /// Largest error relative to the largest reference value.
@@ -116,30 +102,27 @@ pub struct TableRow {
 /// What watches a run's points ([`crate::Lab::run_watched`]): `Break` ends the run.
 pub(crate) type PointWatch<'w> = dyn FnMut(&Point, &State) -> ControlFlow<()> + 'w;
 
-/// What a run's progress counts (`Progress::advance`).
+/// What a run's progress counts (`Progress::advance`): steps, or a unit of cost.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum ProgressUnit {
-    Columns,
     Steps,
-    Rays,
+    Spent(Unit),
 }
 
 impl ProgressUnit {
     /// The unit's name, for progress bars.
     pub(crate) fn name(self) -> &'static str {
         match self {
-            ProgressUnit::Columns => "columns",
             ProgressUnit::Steps => "steps",
-            ProgressUnit::Rays => "rays",
+            ProgressUnit::Spent(unit) => unit.name(),
         }
     }
 
     /// The count of `state` in this unit.
     fn of(self, state: &State) -> u64 {
         match self {
-            ProgressUnit::Columns => state.columns,
             ProgressUnit::Steps => state.step,
-            ProgressUnit::Rays => state.rays,
+            ProgressUnit::Spent(unit) => state.cost[unit],
         }
     }
 }
@@ -202,7 +185,7 @@ impl<'a> Recorder<'a> {
             rows: Vec::new(),
             overhead: 0.0,
             progress: None,
-            unit: ProgressUnit::Columns,
+            unit: ProgressUnit::Spent(Unit::Columns),
             latest: Rc::default(),
             watch: None,
             stop: false,
@@ -256,19 +239,14 @@ impl Observer for Recorder<'_> {
             _ => Real::NAN,
         };
         let std_error = self.spread.take().map_or(Real::NAN, |s| s.relative_rms(self.system, &state.radiosity));
-        let ff_seconds = state.ff_seconds;
-        let seconds = ff_seconds + state.solve_seconds;
+        let columns = state.cost[Unit::Columns];
         let new_mark =
-            self.marks.contains(&state.columns) && self.points.last().is_none_or(|p| p.columns != state.columns);
+            self.marks.contains(&columns) && self.points.last().is_none_or(|p| p.cost[Unit::Columns] != columns);
         if state.step % self.every == 0 || new_mark {
             let row = |e_max, residual, bound| TableRow {
                 solver: self.solver.clone(),
                 step: state.step,
-                columns: state.columns,
-                products: state.products,
-                rays: state.rays,
-                seconds,
-                ff_seconds,
+                cost: state.cost,
                 e_rms,
                 e_max,
                 residual,
@@ -291,18 +269,7 @@ impl Observer for Recorder<'_> {
             }
         }
         let wall = (start - self.clock).as_secs_f64() - self.overhead;
-        let point = Point {
-            step: state.step,
-            columns: state.columns,
-            products: state.products,
-            rays: state.rays,
-            links: state.links,
-            seconds,
-            wall,
-            e_rms,
-            bound,
-            std_error,
-        };
+        let point = Point { step: state.step, cost: state.cost, wall, e_rms, bound, std_error };
         self.points.push(point);
         if let Some(watch) = self.watch.as_mut() {
             self.stop |= watch(&point, state).is_break();

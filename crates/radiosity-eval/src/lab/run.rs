@@ -12,6 +12,7 @@ use crate::reference::certificate::SolverBound;
 use crate::reference::metrics::errors;
 use crate::reference::solution::Method;
 use radiosity_core::{Real, TransportSampler};
+use radiosity_solvers::Unit;
 use radiosity_solvers::{Executor, ObserverMode, Problem, Solver, State, StepKind, StopRule, StopRules};
 use std::ops::ControlFlow;
 use std::rc::Rc;
@@ -215,16 +216,16 @@ impl Lab<'_> {
         let mut state = State::from_emission(self.system.emissions(), self.system.channels().count());
         state.radiosity.copy_from_slice(reference.values());
         state.unshot.fill(0.0);
-        state.columns = match reference.method() {
+        state.cost[Unit::Columns] = match reference.method() {
             Method::Shooting { columns, .. } => *columns,
             _ => self.system.len() as u64,
         };
         match self.origin {
             ReferenceOrigin::Solved { assembly_seconds, solve_seconds } => {
-                state.ff_seconds = assembly_seconds;
-                state.solve_seconds = solve_seconds;
+                state.cost.ff_seconds = assembly_seconds;
+                state.cost.solve_seconds = solve_seconds;
             }
-            ReferenceOrigin::Cached { seconds, .. } => state.solve_seconds = seconds,
+            ReferenceOrigin::Cached { seconds, .. } => state.cost.solve_seconds = seconds,
             ReferenceOrigin::NotComputed => {}
         }
         Ok(state)
@@ -278,15 +279,20 @@ pub fn rgb(state: &State) -> Vec<[Real; 3]> {
 }
 
 /// Refuses, before any work, a solver that samples transport under rules that only count
-/// columns: it computes none, so they could never stop it, and its step cap (`20n` steps of
-/// rays over every patch) is far off.
+/// other units than rays (`columns=`, `products=`, `links=`): it spends none of them, so they
+/// could never stop it, and its step cap (`20n` steps of rays over every patch) is far off.
 pub fn check_rules(solver: &dyn Solver, rules: &StopRules) -> Result<(), LabError> {
-    if solver.step_kind() == StepKind::Sampled && rules.rules.iter().all(|r| matches!(r, StopRule::Columns(_))) {
+    let other = |r: &StopRule| matches!(r, StopRule::Spent(u, _) if *u != Unit::Rays);
+    if solver.step_kind() == StepKind::Sampled && rules.rules.iter().all(other) {
         let written: Vec<String> = rules.rules.iter().map(ToString::to_string).collect();
+        let others: Vec<&str> =
+            Unit::ALL.into_iter().filter(|&u| u.paid() && u != Unit::Rays).map(Unit::name).collect();
+        let (last, first) = others.split_last().unwrap_or((&"", &[]));
         return Err(LabError::Invalid(format!(
-            "{} casts rays and computes no columns, so {} would never stop it: add a rays=, steps=, time= or rms= \
+            "{} casts rays and spends no {} or {last}, so {} would never stop it: add a rays=, steps=, time= or rms= \
              rule (e.g. rays=1e7)",
             solver.name(),
+            first.join(", "),
             written.join(",")
         )));
     }
@@ -295,18 +301,23 @@ pub fn check_rules(solver: &dyn Solver, rules: &StopRules) -> Result<(), LabErro
 
 /// The count a run's progress is measured against, and its unit: for a solver that samples
 /// transport (`sampled`), its first `rays=` or `steps=` rule (rays, with no target,
-/// otherwise); for the others, their first `columns=` or `steps=` rule (`2n` columns
-/// otherwise). A rule that counts what the run does not spend never holds for it: in a
+/// otherwise); for the others, their first `steps=` rule or rule on another unit of cost
+/// (`2n` columns otherwise). A rule that counts what the run does not spend never holds for it: in a
 /// comparison that mixes both, each solver stops on its own.
 fn progress_target(rules: &StopRules, n: usize, sampled: bool) -> (u64, ProgressUnit) {
     rules
         .rules
         .iter()
         .find_map(|r| match *r {
-            StopRule::Rays(c) if sampled => Some((c.resolve(n), ProgressUnit::Rays)),
-            StopRule::Columns(c) if !sampled => Some((c.resolve(n), ProgressUnit::Columns)),
+            StopRule::Spent(unit, c) if sampled == (unit == Unit::Rays) => {
+                Some((c.resolve(n), ProgressUnit::Spent(unit)))
+            }
             StopRule::Steps(c) => Some((c.resolve(n), ProgressUnit::Steps)),
             _ => None,
         })
-        .unwrap_or(if sampled { (0, ProgressUnit::Rays) } else { (2 * n as u64, ProgressUnit::Columns) })
+        .unwrap_or(if sampled {
+            (0, ProgressUnit::Spent(Unit::Rays))
+        } else {
+            (2 * n as u64, ProgressUnit::Spent(Unit::Columns))
+        })
 }

@@ -2,9 +2,9 @@
 //! JSON `stats` and text, and Python's `Run.stats`, built once here from the lab and the run's
 //! outcome and serialized by serde, so that a figure added here reaches every front end.
 //!
-//! Keys are stable: `clock` (of every seconds figure), the costs (`columns`, `columns_reused`,
-//! `products`, `steps`, `rays`, `links`), the seconds (`seconds`, `ff_seconds`,
-//! `group_seconds`), the errors (`e_rms`, `e_max`, `residual` and `residual_of`, `bound`,
+//! Keys are stable: `steps`, then the run's cost as flat keys ([`Cost`]: `clock` of every
+//! seconds figure, one count per unit, `columns`, `columns_reused`, `products`, `rays`,
+//! `links`, and the seconds, `seconds`, `ff_seconds`, `group_seconds`), the errors (`e_rms`, `e_max`, `residual` and `residual_of`, `bound`,
 //! `standard_error`, `replicates`), `transport`, `termination`, `reached`, `record` (the
 //! solver's own figures, the unshot power of a stochastic run among them), `reference`, and,
 //! when there are any, `operator` and `ranks`. A figure not known is `null`.
@@ -14,7 +14,7 @@ use crate::lab::outcome::Outcome;
 use crate::lab::ranks::RankReport;
 use crate::lab::setup::Lab;
 use radiosity_core::Real;
-use radiosity_solvers::{Record, State, Value};
+use radiosity_solvers::{Cost, Record, State, Unit, Value};
 use serde::Serialize;
 
 /// One run's figures (module doc).
@@ -23,26 +23,14 @@ pub struct RunSummary {
     /// The solver's name, parameters spelled out (`reference` for the exact solution).
     #[serde(skip)]
     pub solver: String,
-    /// The clock of every seconds figure: `measured`, or `charged`.
-    pub clock: String,
-    /// Columns of F computed.
-    pub columns: u64,
-    /// Columns served again from a solver's memory.
-    pub columns_reused: u64,
-    /// Products `F x` the backend computed itself.
-    pub products: u64,
     /// Steps taken.
     pub steps: u64,
-    /// Rays cast by a solver that samples transport.
-    pub rays: u64,
-    /// Links of a hierarchy touched (0 over a backend that shows none).
-    pub links: u64,
-    /// The run's seconds: form factors and solving.
-    pub seconds: Real,
-    /// Of them, form factors' (rays' for a solver that samples transport).
-    pub ff_seconds: Real,
-    /// Of them, solving groups'.
-    pub group_seconds: Real,
+    /// What the run spent, as flat keys: `clock` (of every seconds figure), every unit's count
+    /// (`columns`, `columns_reused`, `products`, `rays`, `links`), `seconds` (form factors and
+    /// solving), `ff_seconds` (of them, form factors', or rays' for a solver that samples
+    /// transport) and `group_seconds` (of them, solving groups').
+    #[serde(flatten)]
+    pub cost: Cost,
     /// e_rms against the reference, when there is one.
     pub e_rms: Option<Real>,
     /// e_max against the reference, when there is one.
@@ -82,12 +70,9 @@ pub struct Reached {
     pub e_rms: Real,
     /// Steps by then.
     pub steps: u64,
-    /// Columns by then.
-    pub columns: u64,
-    /// Rays by then.
-    pub rays: u64,
-    /// Seconds by then, on the run's clock.
-    pub seconds: Real,
+    /// What the run had spent by then, as flat keys ([`RunSummary::cost`]).
+    #[serde(flatten)]
+    pub cost: Cost,
 }
 
 /// The reference a run was measured against.
@@ -133,10 +118,7 @@ impl Lab<'_> {
     /// where e_rms fell to each power of ten.
     pub fn summary(&self, outcome: &Outcome, reached: bool) -> RunSummary {
         let reached = if reached { outcome.reached_powers() } else { Vec::new() };
-        let reached = reached
-            .into_iter()
-            .map(|(e_rms, p)| Reached { e_rms, steps: p.step, columns: p.columns, rays: p.rays, seconds: p.seconds })
-            .collect();
+        let reached = reached.into_iter().map(|(e_rms, p)| Reached { e_rms, steps: p.step, cost: p.cost }).collect();
         let termination = outcome.termination.to_string();
         self.summarize(&outcome.solver, &outcome.state, termination, &outcome.last, reached, &outcome.record)
     }
@@ -170,18 +152,13 @@ impl Lab<'_> {
             }
             (None, None) => (None, format!("not known: {no_f}")),
         };
+        // Every seconds figure of the lab's runs, the reference's too, is on the lab's clock.
+        let mut cost = s.cost;
+        cost.clock = self.clock();
         RunSummary {
             solver: solver.to_string(),
-            clock: self.clock().name().to_string(),
-            columns: s.columns,
-            columns_reused: s.columns_reused,
-            products: s.products,
             steps: s.step,
-            rays: s.rays,
-            links: s.links,
-            seconds: s.ff_seconds + s.solve_seconds,
-            ff_seconds: s.ff_seconds,
-            group_seconds: s.group_seconds,
+            cost,
             e_rms: last.e_rms,
             e_max: last.e_max,
             residual,
@@ -189,7 +166,7 @@ impl Lab<'_> {
             bound: last.bound,
             standard_error: last.standard_error,
             replicates: last.replicates,
-            transport: (s.rays > 0).then(|| self.transport().name().to_string()),
+            transport: (s.cost[Unit::Rays] > 0).then(|| self.transport().name().to_string()),
             termination,
             reached,
             record: record.iter().map(|(k, v)| (k.to_string(), json_value(v))).collect(),

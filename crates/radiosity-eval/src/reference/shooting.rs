@@ -33,6 +33,7 @@ use crate::progress::Progress;
 use crate::reference::certificate::{Contraction, SolverBound};
 use crate::reference::solution::{Certificate, Method, ReferenceSolution};
 use radiosity_core::{ColumnSource, LinearSystem, Real};
+use radiosity_solvers::Unit;
 use radiosity_solvers::{
     Executor, Observer, ObserverMode, Problem, Record, ResidualBound, SolverRegistry, State, StopRules,
 };
@@ -140,7 +141,8 @@ pub fn solve_by_shooting(
         certified: true,
         contraction,
     };
-    let method = Method::Shooting { solver: solver_name.clone(), steps: run.state.step, columns: run.state.columns };
+    let method =
+        Method::Shooting { solver: solver_name.clone(), steps: run.state.step, columns: run.state.cost[Unit::Columns] };
     Ok(ReferenceSolution::from_parts(system, run.state.radiosity, method, certificate))
 }
 
@@ -163,7 +165,7 @@ impl Observer for BoundWatch<'_> {
     fn observe_step(&mut self, state: &State, _figures: &Record) {
         if let Some(known) = self.last.take() {
             let bound = SolverBound::new(self.system, self.contraction, &known, &state.radiosity);
-            self.progress.advance(state.columns, &format!("bound {:.2e}", bound.relative));
+            self.progress.advance(state.cost[Unit::Columns], &format!("bound {:.2e}", bound.relative));
         }
     }
 

@@ -2,8 +2,8 @@
 //! the recorded steps), `report.md` (e_rms at n/4, n/2, n and 2n columns; columns and seconds
 //! to reach e_rms 1e-2 and 1e-3; where the time went; what the scene analysis left out; the
 //! reference, its kind and its certificate) and plots of e_rms against shooting steps (the
-//! paper's axis), columns and seconds (and rays, when a solver cast rays), as SVG and PNG, and
-//! a summary table for the terminal.
+//! paper's axis), columns, every other unit of cost some solver spent (products, rays, links:
+//! [`Unit`]) and seconds, as SVG and PNG, and a summary table for the terminal.
 //!
 //! **Solvers that sample transport** sit in the same table and plots as the others. Their
 //! cost is counted in rays: the rays plot holds the solvers that cast rays, the columns plot
@@ -25,6 +25,7 @@ use crate::lab::setup::ReferenceOrigin;
 use crate::reports::plot::{Curve, PlotSpec, write_png, write_svg};
 use crate::reports::table::{ConvergenceTable, round_significant};
 use radiosity_core::{Clock, Real};
+use radiosity_solvers::Unit;
 use radiosity_solvers::Value;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -65,32 +66,36 @@ impl Comparison {
     /// Writes the plots as SVG and PNG (against steps, columns, rays, links and seconds, each that
     /// has a solver to show: module doc); returns their file stems and titles.
     fn write_plots(&self, dir: &Path, files: &mut Vec<PathBuf>) -> Result<Vec<(String, String)>, LabError> {
-        type Axis = fn(&Point) -> Real;
-        type Shown = fn(&Outcome) -> bool;
+        // Steps (the paper's axis), every paid unit of cost, and seconds.
         let seconds = format!("{} seconds (form factors and solving)", self.clock.name());
-        let axes: [(&str, &str, Axis, Shown); 5] = [
-            ("steps", "shooting steps", |p| p.step as Real, |_| true),
-            ("columns", "form-factor columns computed", |p| p.columns as Real, |o| !casts_only(o)),
-            ("rays", "rays cast", |p| p.rays as Real, |o| o.state.rays > 0),
-            ("links", "links of the hierarchy touched", |p| p.links as Real, |o| o.state.links > 0),
-            ("seconds", &seconds, |p| p.seconds, |_| true),
-        ];
+        let units = Unit::ALL.into_iter().filter(|u| u.paid()).map(Axis::Spent);
+        let axes: Vec<Axis> = std::iter::once(Axis::Steps).chain(units).chain([Axis::Seconds]).collect();
         let metric = self.metric();
         let what = if self.has_reference() { "e_rms" } else { "certified bound" };
         let mut written = Vec::new();
-        for (axis, x_label, x, shown) in axes {
-            let stem = format!("{metric}-{axis}");
+        for axis in axes {
+            let stem = format!("{metric}-{}", axis.key());
+            let x_label = match axis {
+                Axis::Steps => "shooting steps",
+                Axis::Spent(unit) => unit.spent(),
+                Axis::Seconds => &seconds,
+            };
             let curves: Vec<Curve> = self
                 .outcomes
                 .iter()
-                .filter(|o| shown(o))
+                .filter(|o| axis.shows(o))
                 .map(|o| Curve {
                     label: o.solver.clone(),
-                    points: o.points.iter().map(|p| (x(p), self.value(p))).filter(|(_, y)| y.is_finite()).collect(),
+                    points: o
+                        .points
+                        .iter()
+                        .map(|p| (axis.x(p), self.value(p)))
+                        .filter(|(_, y)| y.is_finite())
+                        .collect(),
                     // A band of standard errors belongs beside e_rms, never on an axis of
                     // certified bounds (a comparison without a reference).
                     spread: if self.has_reference() {
-                        o.points.iter().map(|p| (x(p), p.std_error)).filter(|(_, s)| s.is_finite()).collect()
+                        o.points.iter().map(|p| (axis.x(p), p.std_error)).filter(|(_, s)| s.is_finite()).collect()
                     } else {
                         Vec::new()
                     },
@@ -182,40 +187,39 @@ impl Comparison {
              run) are measured.\n",
             self.clock.name()
         );
-        let rays = self.casts_rays();
-        let links = self.touches_links();
+        // Columns (with those reused) always, then every other paid unit some run spent.
+        let units: Vec<Unit> = Unit::ALL
+            .into_iter()
+            .filter(|&u| u.paid() && u != Unit::Columns && self.outcomes.iter().any(|o| o.state.cost[u] > 0))
+            .collect();
         if let Some(transport) = &self.transport {
             let _ = writeln!(md, "Rays: {transport}; a ray's seconds are form-factor seconds, measured.\n");
         }
-        if links {
+        if units.contains(&Unit::Links) {
             let _ = writeln!(
                 md,
                 "Links: those of the hierarchy each solver touched, a column the links of its patch's leaf and \
                  ancestors, a product every link, a round of node shooting its nodes' links.\n"
             );
         }
+        let heads: String = units.iter().map(|u| format!(" {} |", u.name())).collect();
+        let rules = "--:|".repeat(units.len());
         let _ = writeln!(
             md,
-            "| solver | steps | columns (reused) | products |{}{} form factors ({}) | solving | of which groups | \
-             measurement | stopped |\n|---|--:|--:|--:|{}{}--:|--:|--:|--:|---|",
-            if rays { " rays |" } else { "" },
-            if links { " links |" } else { "" },
+            "| solver | steps | columns (reused) |{heads} form factors ({}) | solving | of which groups | \
+             measurement | stopped |\n|---|--:|--:|{rules}--:|--:|--:|--:|---|",
             self.clock.name(),
-            if rays { "--:|" } else { "" },
-            if links { "--:|" } else { "" },
         );
         for o in &self.outcomes {
-            let s = &o.state;
+            let s = &o.state.cost;
+            let counts: String = units.iter().map(|&u| format!(" {} |", s[u])).collect();
             let _ = writeln!(
                 md,
-                "| `{}` | {} | {} ({}) | {} |{}{} {:.3} s | {:.3} s | {:.3} s | {:.3} s | {} |",
+                "| `{}` | {} | {} ({}) |{counts} {:.3} s | {:.3} s | {:.3} s | {:.3} s | {} |",
                 o.solver,
-                s.step,
-                s.columns,
-                s.columns_reused,
-                s.products,
-                if rays { format!(" {} |", s.rays) } else { String::new() },
-                if links { format!(" {} |", s.links) } else { String::new() },
+                o.state.step,
+                s[Unit::Columns],
+                s[Unit::Reused],
                 s.ff_seconds,
                 s.solve_seconds,
                 s.group_seconds,
@@ -253,8 +257,9 @@ impl Comparison {
 
     /// The compact table for the terminal: with a reference, e_rms and the certified bound;
     /// without, the bound alone; when a solver cast rays or has a standard error, its rays and
-    /// its standard error too. `1e-3 at` counts columns, or rays for a solver that cast them, or
-    /// links for a solver over a hierarchy that computed no column.
+    /// its standard error too. `1e-3 at` counts what the run spent in the unit its cost is read
+    /// in ([`radiosity_solvers::Cost::principal`]): columns, or rays for a solver that cast them,
+    /// or links for a solver over a hierarchy that computed no column.
     pub fn summary(&self) -> String {
         let metric = self.metric();
         let bound = if self.has_reference() { format!(" {:>10}", "bound end") } else { String::new() };
@@ -274,7 +279,7 @@ impl Comparison {
         for o in &self.outcomes {
             let bound = if self.has_reference() { format!(" {:>10}", cell(o.last.bound)) } else { String::new() };
             let rays = if sampled {
-                format!(" {:>12} {:>10}", o.state.rays, cell(o.last.standard_error))
+                format!(" {:>12} {:>10}", o.state.cost[Unit::Rays], cell(o.last.standard_error))
             } else {
                 String::new()
             };
@@ -283,15 +288,13 @@ impl Comparison {
                 "{:<24} {:>8} {:>8}{rays} {:>10} {:>10}{bound} {:>10} {:>width$.3}",
                 o.solver,
                 o.state.step,
-                o.state.columns,
+                o.state.cost[Unit::Columns],
                 cell(o.at_columns_point(self.n).map(|p| self.value(&p))),
                 cell(o.points.last().map(|p| self.value(p))),
-                self.reached(o, 1e-3).map_or("—".into(), |p| if casts_only(o) {
-                    format!("{} rays", p.rays)
-                } else if p.columns == 0 && p.links > 0 {
-                    format!("{:.2e} links", p.links as Real)
-                } else {
-                    p.columns.to_string()
+                self.reached(o, 1e-3).map_or("—".into(), |p| match o.state.cost.principal() {
+                    Unit::Columns => p.cost[Unit::Columns].to_string(),
+                    Unit::Links => format!("{:.2e} links", p.cost[Unit::Links] as Real),
+                    unit => format!("{} {}", p.cost[unit], unit.name()),
                 }),
                 o.seconds()
             );
@@ -301,12 +304,7 @@ impl Comparison {
 
     /// Whether some run cast rays.
     fn casts_rays(&self) -> bool {
-        self.outcomes.iter().any(|o| o.state.rays > 0)
-    }
-
-    /// Whether some run touched links of a hierarchy (its source shows them).
-    fn touches_links(&self) -> bool {
-        self.outcomes.iter().any(|o| o.state.links > 0)
+        self.outcomes.iter().any(|o| o.state.cost[Unit::Rays] > 0)
     }
 
     /// `report.md`'s section on each run's error bar: the certified bound beside the standard
@@ -344,34 +342,53 @@ impl Comparison {
                 cell(o.points.last().map(|p| self.value(p))),
                 cell(o.last.bound),
                 cell(o.record.real("unshot_power")),
-                o.state.rays
+                o.state.cost[Unit::Rays]
             );
         }
     }
 
     fn reached_cell(&self, o: &Outcome, target: Real) -> String {
-        self.reached(o, target).map_or("—".into(), |p| {
-            if p.rays > 0 && p.columns == 0 && p.products == 0 {
-                return format!("{} rays / {:.3} s", p.rays, p.seconds);
-            }
-            let mut cost = p.columns.to_string();
-            if p.products > 0 {
-                cost += &format!(" + {} products", p.products);
-            }
-            if p.rays > 0 {
-                cost += &format!(" + {} rays", p.rays);
-            }
-            if p.links > 0 {
-                cost += &format!(" ({} links)", p.links);
-            }
-            format!("{cost} / {:.3} s", p.seconds)
-        })
+        self.reached(o, target).map_or("—".into(), |p| format!("{} / {:.3} s", p.cost, p.cost.seconds()))
     }
 }
 
-/// Whether `o` cast rays and computed no column or product: a solver that samples transport.
-fn casts_only(o: &Outcome) -> bool {
-    o.state.rays > 0 && o.state.columns == 0 && o.state.products == 0
+/// The x axis of a plot: steps, a paid unit of cost, or seconds.
+#[derive(Clone, Copy)]
+enum Axis {
+    Steps,
+    Spent(Unit),
+    Seconds,
+}
+
+impl Axis {
+    /// The plot's file stem after the metric: `e_rms-rays`.
+    fn key(self) -> &'static str {
+        match self {
+            Axis::Steps => "steps",
+            Axis::Spent(unit) => unit.key(),
+            Axis::Seconds => "seconds",
+        }
+    }
+
+    /// Where `p` lies on this axis.
+    fn x(self, p: &Point) -> Real {
+        match self {
+            Axis::Steps => p.step as Real,
+            Axis::Spent(unit) => p.cost[unit] as Real,
+            Axis::Seconds => p.cost.seconds(),
+        }
+    }
+
+    /// Whether the plot holds `o`: every run against steps and seconds, the runs that spent a
+    /// unit against it, and against columns also those that spent nothing (their error at 0
+    /// columns), a solver that only cast rays apart.
+    fn shows(self, o: &Outcome) -> bool {
+        match self {
+            Axis::Steps | Axis::Seconds => true,
+            Axis::Spent(Unit::Columns) => !o.state.cost.only_rays(),
+            Axis::Spent(unit) => o.state.cost[unit] > 0,
+        }
+    }
 }
 
 /// `text` with its first letter in capitals.

@@ -7,6 +7,7 @@
 
 use crate::lab::compare::Comparison;
 use radiosity_core::Real;
+use radiosity_solvers::Unit;
 use std::fmt::Write as _;
 
 /// The stop rule of every run: n shooting steps, the paper's axis.
@@ -53,7 +54,7 @@ pub fn claims(figure: &Figure, c: &Comparison) -> Vec<(String, String, bool)> {
             beats(c, "xu-g30-m480", "xu-g30"),
         ],
         "labyrinth" => {
-            let within = c.outcome("xu-g50-m500").and_then(|o| c.reached(o, 1e-2)).map(|p| p.columns);
+            let within = c.outcome("xu-g50-m500").and_then(|o| c.reached(o, 1e-2)).map(|p| p.cost[Unit::Columns]);
             vec![
                 (
                     format!("`xu-g50-m500` reaches {} ≤ 1e-2 within n columns", c.metric()),
@@ -104,7 +105,9 @@ pub fn section(figure: &Figure, c: &Comparison) -> String {
     );
     let _ = writeln!(md, "|---|--:|--:|--:|--:|--:|");
     for o in &c.outcomes {
-        let reach = |t: Real| c.reached(o, t).map_or("—".into(), |p| format!("{} / {:.2} s", p.columns, p.seconds));
+        let reach = |t: Real| {
+            c.reached(o, t).map_or("—".into(), |p| format!("{} / {:.2} s", p.cost[Unit::Columns], p.cost.seconds()))
+        };
         let _ = writeln!(
             md,
             "| `{}` | {} | {} | {} | {} | {:.1}% |",

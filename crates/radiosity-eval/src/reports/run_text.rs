@@ -4,6 +4,7 @@
 use crate::lab::summary::RunSummary;
 use crate::reports::report_text::human_bytes;
 use crate::reports::table::round_significant;
+use radiosity_solvers::Unit;
 use std::fmt::Write as _;
 
 impl RunSummary {
@@ -25,32 +26,20 @@ impl RunSummary {
             },
         );
         line("stopped", self.termination.clone());
-        let count = |k: u64, what: &str| if k == 0 { String::new() } else { format!(", {k} {what}") };
-        let reused = if self.columns_reused == 0 {
-            String::new()
-        } else {
-            format!(" (and {} served again from memory)", self.columns_reused)
-        };
-        let (rays, in_ff) = match (self.rays, &self.transport) {
-            (0, _) => (String::new(), "in form factors"),
-            (r, t) => (format!(", {r} rays ({})", t.as_deref().unwrap_or_default()), "in form factors and rays"),
-        };
-        line(
-            "work",
-            format!(
-                "{} steps, {} columns{reused}{}{}{rays}, {:.3} s ({:.3} s {in_ff}; {} seconds)",
-                self.steps,
-                self.columns,
-                count(self.products, "products"),
-                count(self.links, "links"),
-                self.seconds,
-                self.ff_seconds,
-                self.clock
-            ),
-        );
-        if self.group_seconds > 0.0 {
-            let share = 100.0 * self.group_seconds / self.seconds;
-            line("groups", format!("{:.3} s solving groups, {share:.2}% of the run", self.group_seconds));
+        let c = &self.cost;
+        let mut work = format!("{} steps, {} columns", self.steps, c[Unit::Columns]);
+        for (unit, k) in Unit::ALL.into_iter().map(|u| (u, c[u])).filter(|&(u, k)| u != Unit::Columns && k > 0) {
+            let _ = match unit {
+                Unit::Reused => write!(work, " (and {k} served again from memory)"),
+                Unit::Rays => write!(work, ", {k} rays ({})", self.transport.as_deref().unwrap_or_default()),
+                other => write!(work, ", {k} {}", other.name()),
+            };
+        }
+        let in_ff = if c[Unit::Rays] > 0 { "in form factors and rays" } else { "in form factors" };
+        line("work", format!("{work}, {:.3} s ({:.3} s {in_ff}; {} seconds)", c.seconds(), c.ff_seconds, c.clock));
+        if c.group_seconds > 0.0 {
+            let share = 100.0 * c.group_seconds / c.seconds();
+            line("groups", format!("{:.3} s solving groups, {share:.2}% of the run", c.group_seconds));
         }
         let residual = match self.residual {
             Some(r) if self.residual_of == "displayed radiosity" => format!("residual power {r:.4e}"),
@@ -74,8 +63,7 @@ impl RunSummary {
             line("spread", format!("standard error {s:.4e}, relative as e_rms is{replicates} (a spread, not a bound)"));
         }
         for r in &self.reached {
-            let text =
-                format!("e_rms {:.0e} after {} steps, {} columns, {:.3} s", r.e_rms, r.steps, r.columns, r.seconds);
+            let text = format!("e_rms {:.0e} after {} steps, {}, {:.3} s", r.e_rms, r.steps, r.cost, r.cost.seconds());
             line("reached", text);
         }
         if !self.record.is_empty() {

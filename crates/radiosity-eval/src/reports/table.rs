@@ -1,50 +1,60 @@
 //! Convergence tables: one row per measured step of a run, written as CSV or Markdown.
 //!
-//! A row records where a solver stood (step, columns computed, the run's and the form factors'
-//! seconds, with the clock they were counted on: `measured` or `charged`, [`Clock::name`]) and
-//! its metrics ([`crate::reference::metrics`]). Floats are rounded to a fixed number of
+//! A row records where a solver stood (step, what it spent, [`radiosity_solvers::Cost`]: the
+//! columns computed, the run's and the form factors' seconds, with the clock they were counted
+//! on: `measured` or `charged`, [`Clock::name`]) and its metrics
+//! ([`crate::reference::metrics`]). Floats are rounded to a fixed number of
 //! significant digits (default 4), so tables under snapshot tests stay stable across platforms
 //! and round-off. Tables write to any [`std::io::Write`]; opening files is the caller's business.
 //! Timings vary from run to run, so a table can leave them out
-//! ([`ConvergenceTable::without_timings`]) and stay deterministic. The `products` column (the
-//! products by F a source computed itself, which the Krylov solvers and `jacobi:sweep=product`
-//! make) is written only when some row made one, so tables of column methods read as before;
-//! likewise `rays` (rays cast by a solver that samples transport) and `std_error` (its standard
-//! error, relative as e_rms is, NaN for the solvers without one), written only when some row
-//! cast rays or has a standard error. `bound` is a promise, `std_error` a spread: an unbiased
+//! ([`ConvergenceTable::without_timings`]) and stay deterministic. Every other unit of cost
+//! than columns (`products`, the products by F a source computed itself, which the Krylov
+//! solvers and `jacobi:sweep=product` make; `rays`, cast by a solver that samples transport;
+//! `links` of a hierarchy) has a column only when some row spent it, so tables of column
+//! methods read as before; likewise `std_error` (the standard error, relative as e_rms is, NaN
+//! for the solvers without one), written only when some row has one. `bound` is a promise, `std_error` a spread: an unbiased
 //! estimate's e_rms is expected near its standard error, and exceeds it now and then.
 
 use crate::lab::recorder::TableRow;
 use radiosity_core::{Clock, Real};
+use radiosity_solvers::Unit;
 use std::io::{self, Write};
 
-/// The columns of a table, in order; `clock` names the clock of `seconds` and `ff_seconds`
-/// ([`Clock::name`]).
-pub const HEADER: [&str; 13] = [
-    "solver",
-    "step",
-    "columns",
-    "products",
-    "rays",
-    "seconds",
-    "ff_seconds",
-    "clock",
-    "e_rms",
-    "e_max",
-    "residual",
-    "bound",
-    "std_error",
-];
+/// One column of a table.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Column {
+    Solver,
+    Step,
+    /// What the run spent in a unit of cost ([`Unit::key`] heads it).
+    Spent(Unit),
+    Seconds,
+    FfSeconds,
+    /// The clock of `seconds` and `ff_seconds` ([`Clock::name`]).
+    Clock,
+    ERms,
+    EMax,
+    Residual,
+    Bound,
+    StdError,
+}
 
-/// The position in [`HEADER`] of `products`.
-const PRODUCTS_COLUMN: usize = 3;
-
-/// The positions in [`HEADER`] of the columns of the solvers that sample transport, `rays`
-/// and `std_error`.
-const SAMPLED_COLUMNS: [usize; 2] = [4, 12];
-
-/// The positions in [`HEADER`] of the timing columns, `seconds`, `ff_seconds` and `clock`.
-const TIMING_COLUMNS: [usize; 3] = [5, 6, 7];
+impl Column {
+    fn name(self) -> &'static str {
+        match self {
+            Column::Solver => "solver",
+            Column::Step => "step",
+            Column::Spent(unit) => unit.key(),
+            Column::Seconds => "seconds",
+            Column::FfSeconds => "ff_seconds",
+            Column::Clock => "clock",
+            Column::ERms => "e_rms",
+            Column::EMax => "e_max",
+            Column::Residual => "residual",
+            Column::Bound => "bound",
+            Column::StdError => "std_error",
+        }
+    }
+}
 
 /// Rows of convergence data, the clock of their seconds, the precision they are written
 /// with, and whether their timings are written.
@@ -102,42 +112,48 @@ impl ConvergenceTable {
         &self.rows
     }
 
-    /// The columns written, in order: [`HEADER`], less the timings if left out, `products` if
-    /// no row made one, and `rays` and `std_error` if no row cast rays or has a standard
-    /// error.
-    fn header(&self) -> Vec<&'static str> {
-        self.written(HEADER)
+    /// The columns written, in order: `solver`, `step`, `columns`, then each other paid unit
+    /// of cost some row spent (`products`, `rays`, `links`), the timings `seconds`,
+    /// `ff_seconds` and `clock` unless left out, the metrics `e_rms`, `e_max`, `residual`,
+    /// `bound`, and `std_error` when some row has a standard error.
+    fn columns(&self) -> Vec<Column> {
+        let mut out = vec![Column::Solver, Column::Step, Column::Spent(Unit::Columns)];
+        out.extend(
+            Unit::ALL
+                .into_iter()
+                .filter(|&u| u.paid() && u != Unit::Columns && self.rows.iter().any(|r| r.cost[u] > 0))
+                .map(Column::Spent),
+        );
+        if self.timings {
+            out.extend([Column::Seconds, Column::FfSeconds, Column::Clock]);
+        }
+        out.extend([Column::ERms, Column::EMax, Column::Residual, Column::Bound]);
+        if self.rows.iter().any(|r| r.std_error.is_finite()) {
+            out.push(Column::StdError);
+        }
+        out
     }
 
-    /// The entries of `all` (one per column of [`HEADER`]) that are written.
-    fn written<T>(&self, all: [T; 13]) -> Vec<T> {
-        let products = self.rows.iter().any(|r| r.products > 0);
-        let sampled = self.rows.iter().any(|r| r.rays > 0 || r.std_error.is_finite());
-        let keep = |i: &usize| {
-            (self.timings || !TIMING_COLUMNS.contains(i))
-                && (products || *i != PRODUCTS_COLUMN)
-                && (sampled || !SAMPLED_COLUMNS.contains(i))
-        };
-        all.into_iter().enumerate().filter(|(i, _)| keep(i)).map(|(_, cell)| cell).collect()
+    fn header(&self) -> Vec<&'static str> {
+        self.columns().into_iter().map(Column::name).collect()
     }
 
     fn cells(&self, row: &TableRow) -> Vec<String> {
         let d = self.digits;
-        self.written([
-            row.solver.clone(),
-            row.step.to_string(),
-            row.columns.to_string(),
-            row.products.to_string(),
-            row.rays.to_string(),
-            round_significant(row.seconds, d),
-            round_significant(row.ff_seconds, d),
-            self.clock.name().to_string(),
-            round_significant(row.e_rms, d),
-            round_significant(row.e_max, d),
-            round_significant(row.residual, d),
-            round_significant(row.bound, d),
-            round_significant(row.std_error, d),
-        ])
+        let cell = |column| match column {
+            Column::Solver => row.solver.clone(),
+            Column::Step => row.step.to_string(),
+            Column::Spent(unit) => row.cost[unit].to_string(),
+            Column::Seconds => round_significant(row.cost.seconds(), d),
+            Column::FfSeconds => round_significant(row.cost.ff_seconds, d),
+            Column::Clock => self.clock.name().to_string(),
+            Column::ERms => round_significant(row.e_rms, d),
+            Column::EMax => round_significant(row.e_max, d),
+            Column::Residual => round_significant(row.residual, d),
+            Column::Bound => round_significant(row.bound, d),
+            Column::StdError => round_significant(row.std_error, d),
+        };
+        self.columns().into_iter().map(cell).collect()
     }
 
     /// Writes the table as CSV (RFC 4180, with a header line).

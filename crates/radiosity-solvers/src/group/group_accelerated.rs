@@ -95,6 +95,7 @@ use crate::group::group_shooting::shoot_group;
 use crate::group::group_step::{GroupShot, GroupStats, InnerSolve};
 use crate::group::memory::ColumnMemory;
 use crate::naming::{ParseSolverError, SolverParams, named, split_params, split_size, validated};
+use crate::run::cost::Unit;
 use crate::run::executor::Solver;
 use crate::run::problem::Problem;
 use crate::run::record::Record;
@@ -431,7 +432,7 @@ impl GroupAccelerated {
             done = Some(shot);
         }
         let seconds = start.elapsed().as_secs_f64();
-        state.group_seconds += seconds;
+        state.cost.group_seconds += seconds;
         self.operations += operations;
         self.since_group = 0;
         self.period = match self.params.frequency {
@@ -441,7 +442,7 @@ impl GroupAccelerated {
                 period(operations as Real / (target * column))
             }
             Frequency::Timed { target } => {
-                let columns = problem.columns_fetched().max(1) as Real;
+                let columns = problem.spent(Unit::Columns).max(1) as Real;
                 let column_seconds = problem.ff_seconds() / columns;
                 if column_seconds > 0.0 { period(seconds / (target * column_seconds)) } else { u64::MAX }
             }

@@ -40,7 +40,7 @@
 //!
 //! A step gathers one group: `m` rows, so `m` columns ([`Problem::row`]), and one `m × m` LU
 //! per channel (`O(m³)`, the paper's "`m³` operations"; with the all-ones right-hand side of
-//! the recorded condition number), its time `state.group_seconds`. A
+//! the recorded condition number), its time `state.cost.group_seconds`. A
 //! sweep is `⌈n/m⌉` steps and `n` columns, as for point Jacobi and Gauss–Seidel. With `m ≥ n`
 //! the one group is the whole system: one step solves it exactly.
 //!
@@ -268,7 +268,7 @@ impl Solver for GroupGathering {
                 self.delta[a * k + c] = v;
             }
         }
-        state.group_seconds += timer.elapsed().as_secs_f64();
+        state.cost.group_seconds += timer.elapsed().as_secs_f64();
         let shot = GroupShot { size, condition, fell_back: false, operations: 0 };
         self.stats.add(&shot);
         // For group Jacobi the group's B is still its value at the start of the sweep: no

@@ -170,7 +170,7 @@ impl Solver for GroupShooting {
             self.memory.column(problem, g, &mut scratch);
         }
         let (shot, seconds) = shoot_group(problem, state, &mut self.tracker, &self.memory, &group, InnerSolve::Lu)?;
-        state.group_seconds += seconds;
+        state.cost.group_seconds += seconds;
         self.stats.add(&shot);
         Ok(shot.figures())
     }

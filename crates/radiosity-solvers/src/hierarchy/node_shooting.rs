@@ -361,7 +361,7 @@ impl Solver for NodeShooting {
         let pipeline = Pipeline::start(problem, state);
         let start = Instant::now();
         self.groups = Groups::prepare(problem, &pipeline, self.params.grouping, state.channels);
-        state.group_seconds += start.elapsed().as_secs_f64();
+        state.cost.group_seconds += start.elapsed().as_secs_f64();
         self.pipeline = Some(pipeline);
         (self.rounds, self.nodes_shot, self.released) = (0, 0, 0);
         Ok(())
@@ -373,7 +373,7 @@ impl Solver for NodeShooting {
         let shot = self.sending.iter().filter(|s| **s).count() as u64;
         let touched = pipeline.shoot(problem, &self.sending);
         pipeline.push(problem, &mut self.brought);
-        state.group_seconds += self.take(problem, &pipeline);
+        state.cost.group_seconds += self.take(problem, &pipeline);
         let pulled = pipeline.pull(problem, state, &self.brought, &self.taken);
         self.pipeline = Some(pipeline);
         pulled?;

@@ -57,6 +57,7 @@
 //! sum overflowed, the run ends as diverged, with an infinite residual.
 
 use crate::error::SolverError;
+use crate::run::cost::Unit;
 use crate::run::problem::Problem;
 use crate::run::record::Record;
 use crate::run::residual_bound::ResidualBound;
@@ -137,7 +138,7 @@ pub enum StepKind {
     Product,
     /// One round of shooting on a hierarchy ([`crate::NodeShooting`]): some nodes shoot
     /// through their links, then one push and one pull over every node. Its cost is counted in
-    /// links ([`Problem::links_touched`]); the step cap counts it as one step, and a lab
+    /// links ([`Problem::spent`]); the step cap counts it as one step, and a lab
     /// records every such step.
     Round,
 }
@@ -414,7 +415,7 @@ impl<'a> Executor<'a> {
             return u64::MAX;
         }
         let explicit = self.rules.rules.iter().filter_map(|r| match *r {
-            StopRule::Steps(c) | StopRule::Columns(c) => Some(c.resolve(n)),
+            StopRule::Steps(c) | StopRule::Spent(Unit::Columns, c) => Some(c.resolve(n)),
             _ => None,
         });
         let per_step = if self.solver.step_kind() == StepKind::Product { n.max(1) as f64 } else { 1.0 };
@@ -465,13 +466,13 @@ impl<'a> Executor<'a> {
     /// and its wall time less the source's measured time as solving.
     fn account(&self, problem: &Problem<'_>, state: &mut State, wall: f64, ff_before: Spent) {
         let now = Spent::of(problem);
-        state.columns = problem.columns_fetched();
-        state.columns_reused = problem.columns_reused();
-        state.products = problem.products();
-        state.rays = problem.rays_cast();
-        state.links = problem.links_touched();
-        state.ff_seconds += now.clock - ff_before.clock;
-        state.solve_seconds += (wall - (now.measured - ff_before.measured)).max(0.0);
+        let cost = &mut state.cost;
+        for unit in Unit::ALL {
+            cost[unit] = problem.spent(unit);
+        }
+        cost.clock = problem.clock();
+        cost.ff_seconds += now.clock - ff_before.clock;
+        cost.solve_seconds += (wall - (now.measured - ff_before.measured)).max(0.0);
     }
 
     /// The decisions that may read a clock: whether an observer wants the run stopped, then
@@ -479,7 +480,7 @@ impl<'a> Executor<'a> {
     /// 0's on every rank ([`radiosity_core::Collective::agree_all`]), so that every rank stops
     /// at the same step.
     fn clocked(&self, problem: &Problem<'_>, state: &State) -> Vec<bool> {
-        let spent = Duration::from_secs_f64(state.ff_seconds + state.solve_seconds);
+        let spent = Duration::from_secs_f64(state.cost.seconds());
         let mut flags = vec![self.observers.iter().any(|(o, _)| o.wants_stop())];
         flags.extend(self.rules.rules.iter().filter_map(|r| match *r {
             StopRule::Time(limit) => Some(spent >= limit),
@@ -515,10 +516,10 @@ impl<'a> Executor<'a> {
         }
         for rule in &self.rules.rules {
             let reason = match *rule {
-                StopRule::Columns(c) if state.columns >= c.resolve(n) => TerminationReason::Columns(state.columns),
+                StopRule::Spent(unit, c) if state.cost[unit] >= c.resolve(n) => {
+                    TerminationReason::Spent(unit, state.cost[unit])
+                }
                 StopRule::Steps(c) if state.step >= c.resolve(n) => TerminationReason::Steps(state.step),
-                StopRule::Rays(c) if state.rays >= c.resolve(n) => TerminationReason::Rays(state.rays),
-                StopRule::Links(c) if state.links >= c.resolve(n) => TerminationReason::Links(state.links),
                 StopRule::Rms(target) if error.is_some_and(|e| e <= target) => TerminationReason::Rms(error.unwrap()),
                 StopRule::Residual(target) if residual.is_some_and(|r| r <= target) => {
                     TerminationReason::Residual(residual.unwrap())

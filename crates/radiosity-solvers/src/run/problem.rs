@@ -35,13 +35,14 @@
 //! ([`Problem::through_links`], timed as form-factor seconds, measured). Over such a source the
 //! problem also counts the links every column, row and product touches (a column or a row
 //! those of its patch's leaf and ancestors, a product every link), so that every solver over
-//! it has one cost axis beside columns and products ([`Problem::links_touched`]).
+//! it has one cost axis beside columns and products ([`Problem::spent`]).
 //!
 //! A problem may also carry a spatially coherent order of the patches
 //! ([`Problem::with_patch_order`]), for solvers that group patches by proximity
 //! (`group-gs-gM:groups=spatial`, `h-xu:groups=spatial`); the others ignore it.
 
 use crate::error::SolverError;
+use crate::run::cost::Unit;
 use radiosity_core::operator::{Product, multiply_by_columns};
 use radiosity_core::{
     Clock, ColumnSource, LineTransfers, LinearSystem, LinkSource, NO_PARENT, Real, SampleCost, TransportSampler,
@@ -54,21 +55,17 @@ use std::time::Instant;
 pub struct Problem<'a> {
     system: &'a LinearSystem,
     columns: Columns<'a>,
-    fetched: Cell<u64>,
-    products: Cell<u64>,
-    reused: Cell<u64>,
+    /// What was spent in each unit ([`Unit`]), atomically: rays are cast in parallel.
+    spent: [AtomicU64; Unit::ALL.len()],
     /// Seconds spent in the source, measured.
     ff_seconds: Cell<f64>,
     /// What the source had charged when the problem was made, when it charges (module doc).
     charged_from: Option<Real>,
     order: Option<&'a [usize]>,
     transport: Option<&'a dyn TransportSampler>,
-    rays: AtomicU64,
     /// Seconds spent casting rays or shooting through links, measured (also in `ff_seconds`):
     /// on a charged clock they are added to the charge, since no source charges for them.
     uncharged_seconds: Cell<f64>,
-    /// Links touched by columns, rows, products and shots ([`Problem::links_touched`]).
-    links: Cell<u64>,
     /// The links each patch's column touches, and all the links: counted once, when the
     /// source shows its links.
     link_costs: OnceCell<(Vec<u64>, u64)>,
@@ -164,16 +161,12 @@ impl<'a> Problem<'a> {
         Problem {
             system,
             columns,
-            fetched: Cell::new(0),
-            products: Cell::new(0),
-            reused: Cell::new(0),
+            spent: Default::default(),
             ff_seconds: Cell::new(0.0),
             charged_from,
             order: None,
             transport: None,
-            rays: AtomicU64::new(0),
             uncharged_seconds: Cell::new(0.0),
-            links: Cell::new(0),
             link_costs: OnceCell::new(),
         }
     }
@@ -220,16 +213,11 @@ impl<'a> Problem<'a> {
                 .into(),
         })?;
         let start = Instant::now();
-        let out = cast(&Rays { sampler, count: &self.rays });
+        let out = cast(&Rays { sampler, count: &self.spent[Unit::Rays.at()] });
         let seconds = start.elapsed().as_secs_f64();
         self.ff_seconds.set(self.ff_seconds.get() + seconds);
         self.uncharged_seconds.set(self.uncharged_seconds.get() + seconds);
         Ok(out)
-    }
-
-    /// Rays cast so far ([`Problem::cast`]).
-    pub fn rays_cast(&self) -> u64 {
-        self.rays.load(Ordering::Relaxed)
     }
 
     /// The problem with a spatially coherent order of its patches (patches near each other
@@ -289,7 +277,7 @@ impl<'a> Problem<'a> {
         let start = Instant::now();
         self.columns.source().fill_column(j, out);
         self.ff_seconds.set(self.ff_seconds.get() + start.elapsed().as_secs_f64());
-        self.fetched.set(self.fetched.get() + 1);
+        self.spend(Unit::Columns, 1);
         self.count_line_links(j);
     }
 
@@ -297,7 +285,7 @@ impl<'a> Problem<'a> {
     /// links of `p`'s leaf and of its ancestors.
     fn count_line_links(&self, p: usize) {
         if let Some(costs) = self.link_costs() {
-            self.links.set(self.links.get() + costs.0[p]);
+            self.spend(Unit::Links, costs.0[p]);
         }
     }
 
@@ -331,15 +319,8 @@ impl<'a> Problem<'a> {
         let seconds = start.elapsed().as_secs_f64();
         self.ff_seconds.set(self.ff_seconds.get() + seconds);
         self.uncharged_seconds.set(self.uncharged_seconds.get() + seconds);
-        self.links.set(self.links.get() + touched);
+        self.spend(Unit::Links, touched);
         Some(out)
-    }
-
-    /// Links touched so far, when the source shows its links: a column or a row touches those
-    /// of its patch's leaf and ancestors, a product every link, a shot its nodes' links
-    /// ([`Problem::through_links`]). Zero over a source that shows none.
-    pub fn links_touched(&self) -> u64 {
-        self.links.get()
     }
 
     /// Row `i` of F (`F_ij` for every `j`) into `out`: one column computed. The row is exact
@@ -350,7 +331,7 @@ impl<'a> Problem<'a> {
         let exact = self.columns.source().fill_row(i, out);
         if exact {
             self.ff_seconds.set(self.ff_seconds.get() + start.elapsed().as_secs_f64());
-            self.fetched.set(self.fetched.get() + 1);
+            self.spend(Unit::Columns, 1);
             self.count_line_links(i);
             return;
         }
@@ -365,9 +346,9 @@ impl<'a> Problem<'a> {
         let start = Instant::now();
         if self.columns.source().multiply(x, self.channels(), out) {
             self.ff_seconds.set(self.ff_seconds.get() + start.elapsed().as_secs_f64());
-            self.products.set(self.products.get() + 1);
-            if let Some((_, all)) = self.link_costs() {
-                self.links.set(self.links.get() + all);
+            self.spend(Unit::Products, 1);
+            if let Some(&(_, all)) = self.link_costs() {
+                self.spend(Unit::Links, all);
             }
             return Product::native();
         }
@@ -389,25 +370,25 @@ impl<'a> Problem<'a> {
         self.columns.source().reciprocity_bound()
     }
 
-    /// Columns computed so far.
-    pub fn columns_fetched(&self) -> u64 {
-        self.fetched.get()
+    /// What was spent so far in `unit`: columns (and rows) computed, products the source
+    /// computed itself ([`Problem::multiply`]), rays cast ([`Problem::cast`]), columns served
+    /// again from memory ([`Problem::note_reuse`]), and links touched when the source shows
+    /// its links (a column or a row those of its patch's leaf and ancestors, a product every
+    /// link, a shot its nodes' links, [`Problem::through_links`]; zero over a source that shows
+    /// none).
+    pub fn spent(&self, unit: Unit) -> u64 {
+        self.spent[unit.at()].load(Ordering::Relaxed)
     }
 
-    /// Products the source computed itself so far ([`Problem::multiply`]).
-    pub fn products(&self) -> u64 {
-        self.products.get()
+    /// Counts `k` more of `unit` spent.
+    fn spend(&self, unit: Unit, k: u64) {
+        self.spent[unit.at()].fetch_add(k, Ordering::Relaxed);
     }
 
     /// Records that a solver served a column from its own memory instead of computing it
     /// ([`crate::ColumnMemory`] calls this): it costs no column, and is counted apart.
     pub fn note_reuse(&self) {
-        self.reused.set(self.reused.get() + 1);
-    }
-
-    /// Columns served again from memory so far.
-    pub fn columns_reused(&self) -> u64 {
-        self.reused.get()
+        self.spend(Unit::Reused, 1);
     }
 
     /// The clock the run's seconds are counted on (module doc).

@@ -1,10 +1,10 @@
 //! Stop rules (docs/cli.md, "Stop rules") and why a run ended.
 //!
-//! Rules are a comma list, and the first that holds stops the run: `columns=N`, `columns=2n`
-//! (a multiple of the patch count), `steps=N` (also `steps=3n`), `rays=1e7` (rays cast by a
-//! solver that samples transport, [`crate::Problem::cast`]; also `rays=100n`), `links=1e9` (links
-//! of a hierarchy touched, [`crate::Problem::links_touched`]; also `links=1000n`), `rms=1e-3`,
-//! `residual=1e-4`,
+//! Rules are a comma list, and the first that holds stops the run: a count of any paid unit
+//! of cost ([`Unit`]: `columns=N`, `columns=2n` (a multiple of the patch count), `products=40`,
+//! `rays=1e7` (rays cast by a solver that samples transport), `links=1e9` (links of a
+//! hierarchy touched), each also as a multiple of `n`), `steps=N` (also `steps=3n`),
+//! `rms=1e-3`, `residual=1e-4`,
 //! `time=30s` (`ms`, `s` or `min`, on the run's clock: measured, or charged by the source,
 //! [`crate::Problem::clock`]). Every run ends even if no rule can hold any more: at
 //! round-off convergence (nothing left to shoot or gather), at a step cap of `20n` steps,
@@ -12,6 +12,7 @@
 //! when the residual power shows that the iteration diverges ([`crate::run::executor`]).
 
 use crate::error::SolverError;
+use crate::run::cost::Unit;
 use radiosity_core::Real;
 use std::time::Duration;
 
@@ -57,15 +58,11 @@ impl Count {
 /// One stop rule.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum StopRule {
-    /// Stop once this many columns were computed.
-    Columns(Count),
+    /// Stop once this much was spent in a paid unit ([`Unit::paid`]): columns computed,
+    /// products, rays cast, links touched ([`crate::Problem::spent`]).
+    Spent(Unit, Count),
     /// Stop after this many steps.
     Steps(Count),
-    /// Stop once this many rays were cast ([`crate::Problem::cast`]).
-    Rays(Count),
-    /// Stop once this many links of a hierarchy were touched
-    /// ([`crate::Problem::links_touched`]).
-    Links(Count),
     /// Stop once the observed `e_rms` is at most this.
     Rms(Real),
     /// Stop once the solver's residual power is at most this.
@@ -97,10 +94,8 @@ impl std::fmt::Display for Count {
 impl std::fmt::Display for StopRule {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match *self {
-            StopRule::Columns(c) => write!(f, "columns={c}"),
+            StopRule::Spent(unit, c) => write!(f, "{}={c}", unit.key()),
             StopRule::Steps(c) => write!(f, "steps={c}"),
-            StopRule::Rays(c) => write!(f, "rays={c}"),
-            StopRule::Links(c) => write!(f, "links={c}"),
             StopRule::Rms(e) => write!(f, "rms={}", short(e)),
             StopRule::Residual(r) => write!(f, "residual={}", short(r)),
             StopRule::Time(t) => write!(f, "time={}s", short(t.as_secs_f64())),
@@ -123,8 +118,8 @@ impl Default for StopRules {
     }
 }
 
-/// The rules' keys, for a typo's suggestion.
-const RULE_KEYS: [&str; 7] = ["columns", "steps", "rays", "links", "rms", "residual", "time"];
+/// The rules' keys that are not a unit of cost, for a typo's suggestion.
+const OTHER_KEYS: [&str; 4] = ["steps", "rms", "residual", "time"];
 
 fn bad(rule: &str, reason: &str) -> SolverError {
     SolverError::BadRule { rule: rule.to_string(), reason: reason.to_string() }
@@ -162,16 +157,19 @@ impl StopRules {
         let mut rules = Vec::new();
         for rule in list.split(',').map(str::trim).filter(|r| !r.is_empty()) {
             let (key, value) = rule.split_once('=').ok_or_else(|| bad(rule, "expected key=value"))?;
-            rules.push(match key.trim() {
-                "columns" => StopRule::Columns(parse_count(rule, value.trim())?),
+            let key = key.trim();
+            if let Some(unit) = Unit::from_key(key) {
+                rules.push(StopRule::Spent(unit, parse_count(rule, value.trim())?));
+                continue;
+            }
+            rules.push(match key {
                 "steps" => StopRule::Steps(parse_count(rule, value.trim())?),
-                "rays" => StopRule::Rays(parse_count(rule, value.trim())?),
-                "links" => StopRule::Links(parse_count(rule, value.trim())?),
                 "rms" => StopRule::Rms(parse_positive(rule, value.trim())?),
                 "residual" => StopRule::Residual(parse_positive(rule, value.trim())?),
                 "time" => StopRule::Time(parse_duration(rule, value.trim())?),
                 other => {
-                    let guess = radiosity_core::suggest::did_you_mean(other, RULE_KEYS);
+                    let units = Unit::ALL.into_iter().filter(|u| u.paid()).map(Unit::key);
+                    let guess = radiosity_core::suggest::did_you_mean(other, units.chain(OTHER_KEYS));
                     return Err(bad(rule, &format!("unknown rule{guess}")));
                 }
             });
@@ -188,14 +186,10 @@ impl StopRules {
 /// Why a run ended.
 #[derive(Clone, Debug, PartialEq)]
 pub enum TerminationReason {
-    /// `columns=` reached.
-    Columns(u64),
+    /// A rule on a unit of cost reached (`columns=`, `rays=`), with what was spent.
+    Spent(Unit, u64),
     /// `steps=` reached.
     Steps(u64),
-    /// `rays=` reached.
-    Rays(u64),
-    /// `links=` reached.
-    Links(u64),
     /// `rms=` reached.
     Rms(Real),
     /// `residual=` reached.
@@ -236,10 +230,8 @@ pub enum TerminationReason {
 impl std::fmt::Display for TerminationReason {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            TerminationReason::Columns(k) => write!(f, "{k} columns computed"),
+            TerminationReason::Spent(unit, k) => write!(f, "{k} {}", unit.spent()),
             TerminationReason::Steps(k) => write!(f, "{k} steps taken"),
-            TerminationReason::Rays(k) => write!(f, "{k} rays cast"),
-            TerminationReason::Links(k) => write!(f, "{k} links touched"),
             TerminationReason::Rms(e) => write!(f, "e_rms reached {e:e}"),
             TerminationReason::Residual(r) => write!(f, "residual power reached {r:e}"),
             TerminationReason::Time(t) => write!(f, "time limit of {:.3} s reached", t.as_secs_f64()),

@@ -23,6 +23,7 @@ use crate::suites::bench::json::E2eJson;
 use radiosity_core::{Clock, ColumnSource, LinearSystem, Real};
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
+use radiosity_solvers::Unit;
 use radiosity_solvers::{Executor, ObserverMode, Problem, Run, Solver, StopRules};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
@@ -116,14 +117,14 @@ pub fn time_to_accuracy_over(
     let mut reached = Vec::new();
     for threshold in THRESHOLDS {
         let Some(p) = recorder.points().iter().find(|p| p.e_rms <= threshold) else { break };
-        reached.push(Reached { e_rms: threshold, seconds: p.wall, columns: p.columns, steps: p.step });
+        reached.push(Reached { e_rms: threshold, seconds: p.wall, columns: p.cost[Unit::Columns], steps: p.step });
     }
     let e_rms = errors_against(&system, star, &run.state.radiosity)?.e_rms;
     Ok(EndToEndReport {
         setup: Setup { scene: scene_seconds, backend: backend_seconds },
         reached,
         e_rms,
-        columns: run.state.columns,
+        columns: run.state.cost[Unit::Columns],
         steps: run.state.step,
         termination: run.termination.to_string(),
         seconds,

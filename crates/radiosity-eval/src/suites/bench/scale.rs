@@ -29,6 +29,7 @@ use crate::reports::report_text::{duration, human_bytes, sig};
 use radiosity_core::Real;
 use radiosity_ff::BackendSpec;
 use radiosity_geom::PreparedScene;
+use radiosity_solvers::Unit;
 use radiosity_solvers::{Solver, StopRules};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
@@ -115,16 +116,17 @@ pub fn scale_run(
     let backend_seconds = start.elapsed().as_secs_f64() - scene_seconds;
     let setup = start.elapsed().as_secs_f64();
     let o = lab.run(solver, &rules, &RecordPlan::errors_only(), &NoProgress)?;
-    let reached = BOUNDS.iter().filter_map(|&b| o.bound_reached(b).map(|p| (b, setup + p.wall, p.columns))).collect();
+    let reached =
+        BOUNDS.iter().filter_map(|&b| o.bound_reached(b).map(|p| (b, setup + p.wall, p.cost[Unit::Columns]))).collect();
     Ok(ScaleReport {
         patches: lab.n(),
         scene_seconds,
         backend_seconds,
-        columns: o.state.columns,
-        products: o.state.products,
+        columns: o.state.cost[Unit::Columns],
+        products: o.state.cost[Unit::Products],
         operator,
         seconds: o.seconds(),
-        ff_seconds: o.state.ff_seconds,
+        ff_seconds: o.state.cost.ff_seconds,
         bound: o.last.bound.unwrap_or(Real::NAN),
         reached,
         peak_rss: peak_rss(),

@@ -27,6 +27,7 @@ use crate::suites::bench::e2e::{Recorded, ReferenceNote, Setup, check_reference,
 use radiosity_core::{LinearSystem, Real};
 use radiosity_ff::{BackendSpec, SceneTransport};
 use radiosity_geom::PreparedScene;
+use radiosity_solvers::Unit;
 use radiosity_solvers::{Problem, Solver, SolverError, StopRules};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
@@ -153,7 +154,13 @@ pub fn sampled_run(
         .iter()
         .map_while(|&t| {
             let p = recorder.points().iter().find(|p| p.e_rms <= t)?;
-            Some(ReachedRays { e_rms: t, seconds: p.wall, rays: p.rays, columns: p.columns, products: p.products })
+            Some(ReachedRays {
+                e_rms: t,
+                seconds: p.wall,
+                rays: p.cost[Unit::Rays],
+                columns: p.cost[Unit::Columns],
+                products: p.cost[Unit::Products],
+            })
         })
         .collect();
     let standard_error =
@@ -163,9 +170,9 @@ pub fn sampled_run(
         reached,
         e_rms: errors_against(&system, star, &run.state.radiosity)?.e_rms,
         standard_error,
-        rays: run.state.rays,
-        columns: run.state.columns,
-        products: run.state.products,
+        rays: run.state.cost[Unit::Rays],
+        columns: run.state.cost[Unit::Columns],
+        products: run.state.cost[Unit::Products],
         steps: run.state.step,
         termination: run.termination.to_string(),
         seconds,

@@ -21,6 +21,7 @@ use radiosity_core::dense_lu::solve_m_matrix;
 use radiosity_core::{ColumnTransport, LinearSystem, Real, TransportSampler};
 use radiosity_ff::BackendRegistry;
 use radiosity_geom::PreparedScene;
+use radiosity_solvers::Unit;
 use radiosity_solvers::{
     Count, Executor, ObserverMode, Problem, Record, SolverRegistry, State, StepKind, StopRule, StopRules,
     TerminationReason,
@@ -275,7 +276,7 @@ fn run_solver(
             None => return Err(LabError::Invalid(format!("{name} samples transport and no sampler was built"))),
         };
         // The rays budget ends the run; the step cap only guards it.
-        let rays = StopRule::Rays(Count::PerPatch(STOCHASTIC_RAYS_PER_PATCH));
+        let rays = StopRule::Spent(Unit::Rays, Count::PerPatch(STOCHASTIC_RAYS_PER_PATCH));
         (Problem::sampled(system, sampler)?, StopRules { rules: vec![rays], step_cap: 1e6 })
     } else {
         (
@@ -314,7 +315,7 @@ fn run_solver(
         termination: run.termination,
         reached: [1e-3, 1e-6].map(|target| {
             let points = recorder.as_ref().map_or(&[][..], |r| r.points());
-            points.iter().find(|p| p.e_rms <= target).map(|p| p.columns)
+            points.iter().find(|p| p.e_rms <= target).map(|p| p.cost[Unit::Columns])
         }),
         e_reference: error(reference),
         e_exact: error(exact),
@@ -336,7 +337,7 @@ mod tests {
     /// A stochastic run's end with standard error `spread` and e_rms `e_rms`.
     fn sampled(spread: Real, e_rms: Real) -> Ended {
         Ended {
-            termination: TerminationReason::Rays(1),
+            termination: TerminationReason::Spent(Unit::Rays, 1),
             state: State::from_emission(&[1.0], 1),
             record: Record::new(),
             reached: [None, None],

@@ -10,6 +10,7 @@ use crate::suites::stress::cases::{
 use crate::suites::stress::judge::{BackendResult, CaseResult, Outcome, StressReport, Unsettled};
 use radiosity_core::Real;
 use radiosity_solvers::TerminationReason;
+use radiosity_solvers::Unit;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -64,10 +65,7 @@ fn count(v: Option<u64>) -> String {
 /// A short name for how a run ended.
 fn stop_kind(t: &TerminationReason) -> &'static str {
     match t {
-        TerminationReason::Columns(_)
-        | TerminationReason::Steps(_)
-        | TerminationReason::Rays(_)
-        | TerminationReason::Links(_) => "budget",
+        TerminationReason::Spent(..) | TerminationReason::Steps(_) => "budget",
         TerminationReason::Rms(_) => "rms",
         TerminationReason::Residual(_) => "residual",
         TerminationReason::Time(_) => "time",
@@ -346,7 +344,7 @@ fn write_csv(path: &Path, results: &[CaseResult]) -> Result<(), csv::Error> {
                             e.termination.to_string(),
                             e.converged().to_string(),
                             e.state.step.to_string(),
-                            e.state.columns.to_string(),
+                            e.state.cost[Unit::Columns].to_string(),
                             count(e.reached[0]),
                             count(e.reached[1]),
                             raw(e.e_reference),
@@ -357,7 +355,7 @@ fn write_csv(path: &Path, results: &[CaseResult]) -> Result<(), csv::Error> {
                             raw(e.energy),
                             raw(e.record.real("group_condition").or(Some(0.0))),
                             e.record.count("group_fallbacks").unwrap_or(0).to_string(),
-                            e.state.rays.to_string(),
+                            e.state.cost[Unit::Rays].to_string(),
                             raw(e.spread.map(|(s, _)| s)),
                             e.spread.map_or_else(String::new, |(_, r)| r.to_string()),
                         ]);

@@ -20,8 +20,9 @@
 //! - **Closure.** Whether every ray leaving a patch meets the front of another patch, so that
 //!   each row of the form-factor matrix should sum to 1 (a ray that meets a back is lost, since
 //!   the kernel is zero behind a patch). Measured, not assumed: `RAYS_PER_PATCH` cosine-weighted
-//!   rays per patch from seeded random points ([`ChaCha8Rng`], seed 0), traced against the BVH.
-//!   One escaping ray makes the scene open, with the escaping fraction reported; closure
+//!   rays per patch from seeded random points ([`ChaCha8Rng`], seed 0), traced against the BVH
+//!   on every thread (each patch's rays are read from the one stream at its own position, so
+//!   they are the same whatever the thread count). One escaping ray makes the scene open, with the escaping fraction reported; closure
 //!   checks (rows summing to 1) apply only to closed scenes.
 
 use crate::hidden::{HiddenGeometry, HiddenParams};
@@ -30,6 +31,7 @@ use radiosity_core::math::cosine_direction;
 use radiosity_core::{Channels, Real, Scene};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 use std::collections::HashSet;
 
 /// Rays traced per patch by the closure test.
@@ -264,21 +266,27 @@ fn emitters(scene: &Scene) -> Decision<Vec<usize>> {
 }
 
 fn closure(scene: &Scene, visibility: &Visibility) -> Decision<Closure> {
-    let mut rng = ChaCha8Rng::seed_from_u64(0);
-    let mut escaped = 0;
-    let mut first_escape = None;
-    for (i, patch) in scene.patches().iter().enumerate() {
-        for _ in 0..RAYS_PER_PATCH {
-            let origin = patch.point_at(rng.random::<Real>(), rng.random::<Real>());
-            let direction = cosine_direction(patch.normal(), rng.random::<Real>(), rng.random::<Real>());
-            // A ray that meets the back of a patch is lost too: the kernel is zero behind a
-            // patch, so the row of F misses what such rays carry.
-            if visibility.first_hit(origin, direction, Some(i)).is_none_or(|h| !h.front) {
-                escaped += 1;
-                first_escape.get_or_insert(i);
-            }
-        }
-    }
+    // One seeded stream, as if drawn patch after patch: patch `i` starts where patch `i − 1`
+    // ends (four draws of two words a ray), so the patches run on every thread and the rays
+    // are those of one serial pass, whatever the thread count.
+    let stream = ChaCha8Rng::seed_from_u64(0);
+    let words = (RAYS_PER_PATCH * 4 * 2) as u128;
+    let lost = |(i, patch): (usize, &radiosity_core::Patch)| {
+        let mut rng = stream.clone();
+        rng.set_word_pos(words * i as u128);
+        (0..RAYS_PER_PATCH)
+            .filter(|_| {
+                let origin = patch.point_at(rng.random::<Real>(), rng.random::<Real>());
+                let direction = cosine_direction(patch.normal(), rng.random::<Real>(), rng.random::<Real>());
+                // A ray that meets the back of a patch is lost too: the kernel is zero behind
+                // a patch, so the row of F misses what such rays carry.
+                visibility.first_hit(origin, direction, Some(i)).is_none_or(|h| !h.front)
+            })
+            .count()
+    };
+    let per_patch: Vec<usize> = scene.patches().par_iter().enumerate().map(lost).collect();
+    let escaped: usize = per_patch.iter().sum();
+    let first_escape = per_patch.iter().position(|&k| k > 0);
     let sampled = scene.len() * RAYS_PER_PATCH;
     match first_escape {
         None => Decision {

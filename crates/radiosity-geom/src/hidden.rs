@@ -22,6 +22,12 @@
 //!   of this one;
 //! - **view**: `r` cosine-weighted rays from `x` (seeded by the patch index, so the answer does
 //!   not depend on threads), each landing on the front of some patch, on a back, or nowhere.
+//!   They are cast after the contact and overlap rays of every point, and only until the
+//!   verdict below is known: a patch with a point out of contact (or a far front seen) cannot
+//!   be pressed, one with a view ray that met no back cannot be enclosed, and once both hold
+//!   no further ray could change the answer. A typical visible patch so needs one view ray, not
+//!   `k² r`: 19 probe rays instead of 54 at the default `k = 3`, `r = 4`; the rays reported are
+//!   those traced.
 //!
 //! A patch is **hidden** when no light can arrive on its front:
 //!
@@ -47,7 +53,7 @@
 use crate::coplanar::ResolvedOverlaps;
 use crate::visibility::Visibility;
 use radiosity_core::math::cosine_direction;
-use radiosity_core::{Real, Scene};
+use radiosity_core::{Real, Scene, Vec3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -135,8 +141,13 @@ pub struct HiddenGeometry {
     pub resolved: ResolvedOverlaps,
 }
 
-/// What the probes of one patch found.
-enum Probe {
+/// What the probes of one patch found, and the rays they traced.
+struct Probe {
+    verdict: Verdict,
+    rays: usize,
+}
+
+enum Verdict {
     Hidden(HiddenReason, Option<usize>),
     Visible { touching: Option<(usize, Real)>, overlapping: Option<(usize, Real)> },
 }
@@ -152,7 +163,8 @@ impl HiddenGeometry {
             .into_par_iter()
             .map(|i| probe(scene, visibility, diagonal, i, grid, rays_per_point))
             .collect();
-        let mut found = HiddenGeometry { rays: scene.len() * grid * grid * (2 + rays_per_point), ..Default::default() };
+        let rays = probes.iter().map(|p| p.rays).sum();
+        let mut found = HiddenGeometry { rays, ..Default::default() };
         let object = |i: usize| scene.object_of(i).to_string();
         let contact = |patch: usize, (other, fraction): (usize, Real)| PartialContact {
             patch,
@@ -162,15 +174,15 @@ impl HiddenGeometry {
             fraction,
         };
         for (patch, p) in probes.into_iter().enumerate() {
-            match p {
-                Probe::Hidden(reason, against) => found.hidden.push(HiddenPatch {
+            match p.verdict {
+                Verdict::Hidden(reason, against) => found.hidden.push(HiddenPatch {
                     patch,
                     object: object(patch),
                     area: scene.patches()[patch].area(),
                     reason,
                     against: against.map(object),
                 }),
-                Probe::Visible { touching, overlapping } => {
+                Verdict::Visible { touching, overlapping } => {
                     found.touching.extend(touching.map(|t| contact(patch, t)));
                     found.overlapping.extend(overlapping.map(|o| contact(patch, o)));
                 }
@@ -228,50 +240,60 @@ fn probe(
     let patch = &scene.patches()[i];
     let n = patch.normal();
     let (delta, gap) = (OFFSET * diagonal, CONTACT_GAP * diagonal);
-    let mut rng = ChaCha8Rng::seed_from_u64(0x6869_6464_656e ^ i as u64);
-    let points = grid * grid;
+    let points: Vec<Vec3> = (0..grid * grid)
+        .map(|k| patch.point_at(((k / grid) as Real + 0.5) / grid as Real, ((k % grid) as Real + 0.5) / grid as Real))
+        .collect();
     let (mut contacts, mut overlaps) = (0, 0);
     let (mut first_contact, mut first_overlap) = (None, None);
-    let (mut far_fronts, mut backs, mut view_rays) = (0, 0, 0);
-    for a in 0..grid {
-        for b in 0..grid {
-            let x = patch.point_at((a as Real + 0.5) / grid as Real, (b as Real + 0.5) / grid as Real);
-            if let Some(h) = visibility.first_hit(x - delta * n, n, Some(i)) {
-                let other = scene.patches()[h.patch].normal();
-                if h.front && h.t <= delta + gap && other.dot(n) < -PARALLEL {
-                    contacts += 1;
-                    first_contact.get_or_insert(h.patch);
-                }
+    for &x in &points {
+        if let Some(h) = visibility.first_hit(x - delta * n, n, Some(i)) {
+            let other = scene.patches()[h.patch].normal();
+            if h.front && h.t <= delta + gap && other.dot(n) < -PARALLEL {
+                contacts += 1;
+                first_contact.get_or_insert(h.patch);
             }
-            if let Some(h) = visibility.first_hit(x + delta * n, -n, Some(i)) {
-                let other = scene.patches()[h.patch].normal();
-                if h.front && h.t <= 2.0 * delta && other.dot(n) > PARALLEL {
-                    overlaps += 1;
-                    first_overlap.get_or_insert(h.patch);
-                }
-            }
-            for _ in 0..rays_per_point {
-                let d = cosine_direction(n, rng.random::<Real>(), rng.random::<Real>());
-                view_rays += 1;
-                match visibility.first_hit(x, d, Some(i)) {
-                    // A front farther above the patch's plane than the contact gap.
-                    Some(h) if h.front && h.t * d.dot(n) > gap => far_fronts += 1,
-                    Some(h) if h.front => {}
-                    Some(_) => backs += 1,
-                    None => {}
-                }
+        }
+        if let Some(h) = visibility.first_hit(x + delta * n, -n, Some(i)) {
+            let other = scene.patches()[h.patch].normal();
+            if h.front && h.t <= 2.0 * delta && other.dot(n) > PARALLEL {
+                overlaps += 1;
+                first_overlap.get_or_insert(h.patch);
             }
         }
     }
-    if contacts == points && far_fronts == 0 {
-        return Probe::Hidden(HiddenReason::Pressed, first_contact);
+    // View rays, in point order from the patch's own seed, until the verdict is known: a
+    // patch is visible as soon as it can be neither pressed (a point out of contact, or a far
+    // front seen) nor enclosed (a ray that met no back), and the rays left could change nothing.
+    let mut rng = ChaCha8Rng::seed_from_u64(0x6869_6464_656e ^ i as u64);
+    let (mut far_fronts, mut backs, mut view_rays) = (0, 0, 0);
+    'points: for &x in &points {
+        for _ in 0..rays_per_point {
+            if (contacts < points.len() || far_fronts > 0) && backs < view_rays {
+                break 'points;
+            }
+            let d = cosine_direction(n, rng.random::<Real>(), rng.random::<Real>());
+            view_rays += 1;
+            match visibility.first_hit(x, d, Some(i)) {
+                // A front farther above the patch's plane than the contact gap.
+                Some(h) if h.front && h.t * d.dot(n) > gap => far_fronts += 1,
+                Some(h) if h.front => {}
+                Some(_) => backs += 1,
+                None => {}
+            }
+        }
     }
-    if backs == view_rays {
-        return Probe::Hidden(HiddenReason::Enclosed, None);
-    }
-    let share = |k: usize| k as Real / points as Real;
-    Probe::Visible {
-        touching: first_contact.map(|j| (j, share(contacts))),
-        overlapping: first_overlap.map(|j| (j, share(overlaps))),
-    }
+    let points = points.len();
+    let rays = 2 * points + view_rays;
+    let verdict = if contacts == points && far_fronts == 0 {
+        Verdict::Hidden(HiddenReason::Pressed, first_contact)
+    } else if backs == view_rays {
+        Verdict::Hidden(HiddenReason::Enclosed, None)
+    } else {
+        let share = |k: usize| k as Real / points as Real;
+        Verdict::Visible {
+            touching: first_contact.map(|j| (j, share(contacts))),
+            overlapping: first_overlap.map(|j| (j, share(overlaps))),
+        }
+    };
+    Probe { verdict, rays }
 }

@@ -45,7 +45,7 @@ pub use scenes::{BuiltinScene, builtin_scenes};
 pub use spatial_order::spatial_order;
 pub use spec::{KeyValueParams, ParamDoc};
 pub use third_party::ScenesFolder;
-pub use visibility::{RayHit, Visibility};
+pub use visibility::{BvhBuild, RayHit, Visibility};
 
 use radiosity_core::Scene;
 

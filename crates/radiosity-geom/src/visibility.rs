@@ -4,9 +4,10 @@
 //! ## How
 //!
 //! Every patch is split into its fan triangles and put into an obvhs compressed wide BVH
-//! built with `BvhBuildParams::very_slow_build()`, the slowest build for the fastest traversal
-//! (obvhs's compressed wide BVH rather than its BVH2; the bench's `columns` section measures
-//! the rays traced, docs/bench-office.md). Occlusion
+//! (rather than its BVH2; the bench's `columns` section measures the rays traced,
+//! docs/bench-office.md), built on every thread with `BvhBuildParams::very_fast_build()`
+//! ([`BvhBuild`]): on the million-patch office its tree traces rays as fast as the slowest
+//! preset's, built in a quarter of the time (docs/scale.md). Occlusion
 //! queries use `ray_traverse_miss`, which stops at the first hit (`ray_traverse_anyhit` would
 //! call back on every hit).
 //!
@@ -37,6 +38,7 @@ use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::ray::Ray;
 use obvhs::triangle::Triangle;
 use radiosity_core::{Real, Scene, Vec3};
+use rayon::prelude::*;
 use std::time::Duration;
 
 /// Parametric margin at both ends of a segment (relative, so scale-free).
@@ -85,6 +87,7 @@ pub struct RayHit {
 }
 
 /// A BVH over the scene's patches answering occlusion and ray queries.
+#[derive(Clone, PartialEq)]
 pub struct Visibility {
     bvh: CwBvh,
     triangles: Vec<[Vec3; 3]>,
@@ -100,9 +103,66 @@ impl std::fmt::Debug for Visibility {
     }
 }
 
+/// How much a BVH build invests in the tree's quality (obvhs's presets, from the fastest
+/// build to the fastest traversal): `cargo run --release -p radiosity-geom --example
+/// bvh_presets` measures each build's seconds beside its rays per second (docs/scale.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum BvhBuild {
+    /// `BvhBuildParams::fastest_build`.
+    Fastest,
+    /// `BvhBuildParams::very_fast_build`: the default.
+    #[default]
+    VeryFast,
+    /// `BvhBuildParams::fast_build`.
+    Fast,
+    /// `BvhBuildParams::medium_build`.
+    Medium,
+    /// `BvhBuildParams::slow_build`.
+    Slow,
+    /// `BvhBuildParams::very_slow_build`.
+    VerySlow,
+}
+
+impl BvhBuild {
+    /// Every preset, from the fastest build.
+    pub const ALL: [BvhBuild; 6] =
+        [BvhBuild::Fastest, BvhBuild::VeryFast, BvhBuild::Fast, BvhBuild::Medium, BvhBuild::Slow, BvhBuild::VerySlow];
+
+    /// The preset's name, as obvhs's function without `_build`.
+    pub fn name(self) -> &'static str {
+        match self {
+            BvhBuild::Fastest => "fastest",
+            BvhBuild::VeryFast => "very_fast",
+            BvhBuild::Fast => "fast",
+            BvhBuild::Medium => "medium",
+            BvhBuild::Slow => "slow",
+            BvhBuild::VerySlow => "very_slow",
+        }
+    }
+
+    fn params(self) -> BvhBuildParams {
+        match self {
+            BvhBuild::Fastest => BvhBuildParams::fastest_build(),
+            BvhBuild::VeryFast => BvhBuildParams::very_fast_build(),
+            BvhBuild::Fast => BvhBuildParams::fast_build(),
+            BvhBuild::Medium => BvhBuildParams::medium_build(),
+            BvhBuild::Slow => BvhBuildParams::slow_build(),
+            BvhBuild::VerySlow => BvhBuildParams::very_slow_build(),
+        }
+    }
+}
+
 impl Visibility {
-    /// Builds the BVH over every patch of `scene`.
+    /// Builds the BVH over every patch of `scene`, with the default preset
+    /// ([`BvhBuild::default`]).
     pub fn new(scene: &Scene) -> Visibility {
+        Visibility::with_build(scene, BvhBuild::default())
+    }
+
+    /// Builds the BVH over every patch of `scene` with the preset `build`, on every thread of
+    /// the current rayon pool; the tree is the same whatever the thread count.
+    pub fn with_build(scene: &Scene, build: BvhBuild) -> Visibility {
         let (lo, hi) = scene.bounds();
         let centre = (lo + hi) * 0.5;
         let half = ((hi - lo) * 0.5).max_element();
@@ -116,7 +176,7 @@ impl Visibility {
             }
         }
         let bvh_tris: Vec<Triangle> = triangles
-            .iter()
+            .par_iter()
             .map(|t| {
                 let t = t.map(|v| (v - centre) * inv_scale);
                 let c = (t[0] + t[1] + t[2]) / 3.0;
@@ -124,7 +184,7 @@ impl Visibility {
                 Triangle { v0: out(t[0]), v1: out(t[1]), v2: out(t[2]) }
             })
             .collect();
-        let bvh = build_cwbvh_from_tris(&bvh_tris, BvhBuildParams::very_slow_build(), &mut Duration::default());
+        let bvh = build_cwbvh_from_tris(&bvh_tris, build.params(), &mut Duration::default());
         Visibility { bvh, triangles, triangle_patch, centre, inv_scale, diagonal: scene.diagonal() }
     }
 

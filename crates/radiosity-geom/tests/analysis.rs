@@ -81,3 +81,46 @@ fn open_convex_box_and_coloured_materials() {
     assert_eq!(a.patches, 17);
     assert!((a.mean_reflectivity - (4.0 * 1.0 / 3.0) / 5.0).abs() < 1e-12);
 }
+
+/// `f` on a rayon pool of `threads` threads.
+fn on_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(f)
+}
+
+#[test]
+fn the_set_up_is_the_same_on_any_number_of_threads() {
+    // The BVH's build, the closure probe and the hidden-geometry probe run on every thread:
+    // the tree, every decision and every count are the same on one thread as on three.
+    for arg in ["cornell", "office:size=0.6"] {
+        let scene = load_scene(arg).unwrap().scene;
+        let one = on_threads(1, || Visibility::new(&scene));
+        let three = on_threads(3, || Visibility::new(&scene));
+        assert!(one == three, "{arg}: the BVH depends on the thread count");
+        let analyse = |threads| on_threads(threads, || SceneAnalysis::new(&scene, &one));
+        assert_eq!(analyse(1), analyse(3), "{arg}");
+    }
+}
+
+#[test]
+fn the_closure_probe_casts_the_rays_of_one_serial_stream() {
+    // Each patch reads its rays at its own place in the seeded stream: the rays, and so the
+    // count of lost ones, are those of one pass drawing patch after patch.
+    use radiosity_core::Real;
+    use radiosity_core::math::cosine_direction;
+    use rand::{Rng, SeedableRng};
+    let scene = load_scene("cornell:front=true").unwrap().scene;
+    let visibility = Visibility::new(&scene);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0);
+    let mut escaped = 0;
+    for (i, patch) in scene.patches().iter().enumerate() {
+        for _ in 0..radiosity_geom::analysis::RAYS_PER_PATCH {
+            let origin = patch.point_at(rng.random::<Real>(), rng.random::<Real>());
+            let direction = cosine_direction(patch.normal(), rng.random::<Real>(), rng.random::<Real>());
+            escaped += usize::from(visibility.first_hit(origin, direction, Some(i)).is_none_or(|h| !h.front));
+        }
+    }
+    let a = SceneAnalysis::new(&scene, &visibility);
+    let Closure::Open { escaped: found, .. } = a.closure.value else { panic!("{}", a.closure.reason) };
+    assert!(escaped > 0);
+    assert_eq!(found, escaped);
+}

@@ -4,11 +4,13 @@
 
 use crate::bars::Bars;
 use anyhow::{Result, bail};
+use radiosity_eval::Phases;
 use radiosity_eval::ReferenceKind;
 use radiosity_eval::{Cache, ColumnCost, FinalMetrics, Lab, LabOptions, Progress, Transport};
 use radiosity_ff::{BackendRegistry, BackendSpec};
 use radiosity_geom::PreparedScene;
 use radiosity_solvers::{Solver, SolverError, SolverRegistry, StopRules};
+use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use std::time::SystemTime;
 
@@ -128,11 +130,18 @@ pub fn check_measurable(rules: &StopRules, kind: ReferenceKind) -> Result<()> {
 /// Loads and prepares a scene with a spinner for each stage, printing its load warnings (the
 /// loaders name the file).
 pub fn prepare(arg: &str) -> Result<PreparedScene> {
+    prepare_timed(arg, &RefCell::new(Phases::new()))
+}
+
+/// As [`prepare`], each stage a phase of `phases`.
+pub fn prepare_timed(arg: &str, phases: &RefCell<Phases>) -> Result<PreparedScene> {
     let bars = Bars::new();
     let prepared = PreparedScene::load_reporting(arg, &|stage| {
         bars.end();
         bars.begin(stage, 0, "");
+        phases.borrow_mut().begin(stage);
     });
+    phases.borrow_mut().end();
     bars.end();
     let prepared = prepared?;
     for w in &prepared.loaded.warnings {

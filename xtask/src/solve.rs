@@ -11,12 +11,13 @@
 //! certified bound. The run's columns, steps and seconds are the solver's alone.
 
 use crate::bars::Bars;
-use crate::experiment::{SolveArgs, check_output_file, lab, prepare};
+use crate::experiment::{SolveArgs, check_output_file, lab, prepare_timed};
 use anyhow::{Context, Result};
 use radiosity_core::Real;
 use radiosity_eval::rgb;
-use radiosity_eval::{RecordPlan, RunSummary};
+use radiosity_eval::{Phase, Phases, RecordPlan, RunSummary};
 use serde::Serialize;
+use std::cell::RefCell;
 use std::path::PathBuf;
 
 /// Arguments of `solve`.
@@ -32,6 +33,9 @@ pub struct Args {
     /// Write the JSON to this file instead of printing a summary.
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
+    /// Print on stderr where the time and memory went, phase by phase (also in the JSON).
+    #[arg(long)]
+    verbose: bool,
 }
 
 #[derive(Serialize)]
@@ -52,6 +56,8 @@ struct SolveJson<'a> {
     ff: String,
     patches: Vec<PatchJson>,
     stats: &'a RunSummary,
+    /// Every phase before the output: its seconds and the peak memory when it ended.
+    phases: &'a [Phase],
 }
 
 /// Runs `solve`.
@@ -60,12 +66,15 @@ pub fn run(args: &Args, ranks: &crate::ranks::Ranks) -> Result<()> {
     if let Some(out) = &args.out {
         check_output_file(out)?;
     }
-    let prepared = prepare(&args.run.scene)?;
+    let phases = RefCell::new(Phases::new());
+    let prepared = prepare_timed(&args.run.scene, &phases)?;
+    phases.borrow_mut().begin("setting up the backend and reference");
     // One solver's run: its columns are computed (and timed), whether or not the reference
     // was cached and the matrix assembled.
     let transport = args.run.transport.transport;
     let lab = lab(&prepared, &spec, false, kind, radiosity_eval::ColumnCost::Computed, transport)?;
     let traffic = lab.traffic();
+    phases.borrow_mut().begin("solving");
     let (summary, state) = match solver {
         // `reference` is the exact solution itself: its cost is assembling F and solving it.
         None => {
@@ -83,8 +92,16 @@ pub fn run(args: &Args, ranks: &crate::ranks::Ranks) -> Result<()> {
     let summary =
         RunSummary { ranks: traffic.and_then(|before| lab.rank_reports(before, state.cost.ff_seconds)), ..summary };
     let scene = prepared.scene();
+    phases.borrow_mut().begin("writing the output");
+    let verbose = || {
+        phases.borrow_mut().end();
+        if args.verbose && ranks.reports() {
+            eprint!("{}", phases.borrow().text());
+        }
+    };
     if !args.json && args.out.is_none() {
         print!("{}", summary.text(&args.run.scene, scene.len(), lab.backend()));
+        verbose();
         return Ok(());
     }
     let patches = scene
@@ -102,12 +119,14 @@ pub fn run(args: &Args, ranks: &crate::ranks::Ranks) -> Result<()> {
             radiosity,
         })
         .collect();
+    let done = phases.borrow().list().to_vec();
     let json = SolveJson {
         scene: &args.run.scene,
         solver: &summary.solver,
         ff: lab.backend().to_string(),
         patches,
         stats: &summary,
+        phases: &done,
     };
     let text = serde_json::to_string(&json)?;
     match &args.out {
@@ -118,5 +137,6 @@ pub fn run(args: &Args, ranks: &crate::ranks::Ranks) -> Result<()> {
         Some(_) => {}
         None => println!("{text}"),
     }
+    verbose();
     Ok(())
 }

@@ -555,6 +555,39 @@ fn solve_reference_is_the_exact_solution_and_group_methods_run() {
 }
 
 #[test]
+fn solve_tells_where_the_time_and_memory_went() {
+    // `--json` holds every phase before the output, in order, its seconds adding up to no more
+    // than the command's; `--verbose` prints the same phases on stderr, the output's too.
+    let start = std::time::Instant::now();
+    let args = ["solve", "--scene", "cornell:res=2", "--solver", "pr", "--until", "steps=40"];
+    let r = stdout_json(&[&args[..], &["--json"]].concat());
+    let wall = start.elapsed().as_secs_f64();
+    let phases = r["phases"].as_array().unwrap();
+    let names: Vec<&str> = phases.iter().map(|p| p["name"].as_str().unwrap()).collect();
+    assert_eq!(
+        names,
+        [
+            "loading",
+            "building the BVH",
+            "probing for hidden geometry",
+            "analysing the scene",
+            "setting up the backend and reference",
+            "solving"
+        ]
+    );
+    let seconds: Vec<f64> = phases.iter().map(|p| p["seconds"].as_f64().unwrap()).collect();
+    assert!(seconds.iter().all(|&s| s >= 0.0) && seconds.iter().sum::<f64>() <= wall, "{seconds:?} in {wall} s");
+    let peaks: Vec<u64> = phases.iter().filter_map(|p| p["peak_bytes"].as_u64()).collect();
+    assert!(peaks.windows(2).all(|w| w[0] <= w[1]), "a peak only grows: {peaks:?}");
+    let out = xtask(&[&args[..], &["--verbose"]].concat()).success().get_output().clone();
+    let err = String::from_utf8_lossy(&out.stderr);
+    for name in names.iter().chain(&["writing the output", "total"]) {
+        assert!(err.lines().any(|l| l.starts_with(name)), "{name} missing from:\n{err}");
+    }
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("peak memory"), "the table goes to stderr");
+}
+
+#[test]
 fn solve_stops_at_every_kind_of_rule() {
     let stats = |rules: &str| {
         let r = quick_pr(rules);

@@ -58,14 +58,14 @@ impl Phases {
 
     /// The phases ended so far as a table: a line each, then their total.
     pub fn text(&self) -> String {
-        let mut out = format!("{:<30} {:>10} {:>12}\n", "phase", "seconds", "peak memory");
+        let mut out = format!("{:<38} {:>8} {:>12}\n", "phase", "seconds", "peak memory");
         let bytes = |b: Option<u64>| b.map_or("n/a".into(), human_bytes);
         for p in &self.done {
-            let _ = writeln!(out, "{:<30} {:>10.3} {:>12}", p.name, p.seconds, bytes(p.peak_bytes));
+            let _ = writeln!(out, "{:<38} {:>8.3} {:>12}", p.name, p.seconds, bytes(p.peak_bytes));
         }
         let total: f64 = self.done.iter().map(|p| p.seconds).sum();
         let _ =
-            writeln!(out, "{:<30} {:>10.3} {:>12}", "total", total, bytes(self.done.last().and_then(|p| p.peak_bytes)));
+            writeln!(out, "{:<38} {:>8.3} {:>12}", "total", total, bytes(self.done.last().and_then(|p| p.peak_bytes)));
         out
     }
 }

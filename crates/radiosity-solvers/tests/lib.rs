@@ -1314,7 +1314,7 @@ fn a_cost_counts_each_unit_apart_and_reads_in_its_own() {
 #[test]
 fn stop_rules_show_as_written() {
     let list = "columns=2n, steps=100, rms=1e-3, residual=1e-4, time=30s, steps=n, rms=0.05, time=0.25s, products=4, \
-                rays=500, links=10n";
+                rays=500, links=10n, std_error=0.01";
     let rules = StopRules::parse(list).unwrap();
     let shown: Vec<String> = rules.rules.iter().map(ToString::to_string).collect();
     assert_eq!(shown.join(", "), list);

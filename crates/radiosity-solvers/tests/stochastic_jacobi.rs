@@ -146,6 +146,40 @@ fn rays_are_the_cost_and_the_rays_rule_stops_the_run() {
 }
 
 #[test]
+fn the_std_error_rule_stops_at_the_first_step_whose_standard_error_meets_it() {
+    // With a spread observer: every step's standard error, so the stop is seen to be the first
+    // step at or below the target, and the reason carries the value it read.
+    struct Spreads<'a>(&'a LinearSystem, Vec<Real>);
+    impl Observer for Spreads<'_> {
+        fn observe_step(&mut self, _: &State, _: &Record) {}
+        fn wants_standard_error(&self) -> bool {
+            true
+        }
+        fn observe_standard_error(&mut self, state: &State, error: Option<&StandardError>) {
+            self.1.push(error.map_or(Real::NAN, |e| e.relative_rms(self.0, &state.radiosity)));
+        }
+    }
+    let (system, f) = twelve();
+    let transport = ColumnTransport::new(&f, system.areas()).unwrap();
+    let problem = Problem::new(&system, &f).unwrap().with_transport(&transport).unwrap();
+    let mut solver = solver_by_name("stochastic-jacobi:batch=200").unwrap();
+    let mut spreads = Spreads(&system, Vec::new());
+    let rules = StopRules { step_cap: 1e6, ..StopRules::parse("std_error=2e-2").unwrap() };
+    let run =
+        Executor::new(solver.as_mut(), rules).add_observer(&mut spreads, ObserverMode::Always).run(&problem).unwrap();
+    let TerminationReason::StdError(s) = run.termination else { panic!("{}", run.termination) };
+    let seen = &spreads.1;
+    assert_eq!(s, *seen.last().unwrap(), "the reason holds the standard error of the final state");
+    assert!(s <= 2e-2 && seen.len() > 2, "{seen:?}");
+    assert!(seen[..seen.len() - 1].iter().all(|e| !(*e <= 2e-2)), "it stops at the first step that meets it: {seen:?}");
+    // A solver without a standard error never meets the rule: the step cap ends it.
+    let mut pr = solver_by_name("pr").unwrap();
+    let rules = StopRules { step_cap: 3.0, ..StopRules::parse("std_error=1").unwrap() };
+    let run = Executor::new(pr.as_mut(), rules).run(&problem).unwrap();
+    assert!(matches!(run.termination, TerminationReason::StepCap(_)), "{}", run.termination);
+}
+
+#[test]
 fn a_problem_without_transport_and_bad_parameters_are_refused_in_one_sentence() {
     let (system, f) = twelve();
     let problem = Problem::new(&system, &f).unwrap();

@@ -280,8 +280,19 @@ pub fn rgb(state: &State) -> Vec<[Real; 3]> {
 
 /// Refuses, before any work, a solver that samples transport under rules that only count
 /// other units than rays (`columns=`, `products=`, `links=`): it spends none of them, so they
-/// could never stop it, and its step cap (`20n` steps of rays over every patch) is far off.
+/// could never stop it, and its step cap (`20n` steps of rays over every patch) is far off; and
+/// a solver whose answer is not an estimate under rules that only read a standard error
+/// (`std_error=`), which it has not.
 pub fn check_rules(solver: &dyn Solver, rules: &StopRules) -> Result<(), LabError> {
+    let spread_only = !rules.rules.is_empty() && rules.rules.iter().all(|r| matches!(r, StopRule::StdError(_)));
+    if solver.step_kind() != StepKind::Sampled && spread_only {
+        return Err(LabError::Invalid(format!(
+            "{} is not an estimate and has no standard error, so {} would never stop it: add a columns=, steps=, \
+             time=, residual= or rms= rule",
+            solver.name(),
+            rules.rules.iter().map(ToString::to_string).collect::<Vec<_>>().join(",")
+        )));
+    }
     let other = |r: &StopRule| matches!(r, StopRule::Spent(u, _) if *u != Unit::Rays);
     if solver.step_kind() == StepKind::Sampled && rules.rules.iter().all(other) {
         let written: Vec<String> = rules.rules.iter().map(ToString::to_string).collect();

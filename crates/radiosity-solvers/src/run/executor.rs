@@ -514,6 +514,13 @@ impl<'a> Executor<'a> {
                 return Ok(Some(diverged));
             }
         }
+        // The solver's standard error, only when a rule reads it: it costs O(n k R).
+        let spread = self
+            .rules
+            .needs_standard_error()
+            .then(|| self.solver.standard_error(problem, state))
+            .flatten()
+            .map(|s| s.relative_rms(problem.system(), &state.radiosity));
         for rule in &self.rules.rules {
             let reason = match *rule {
                 StopRule::Spent(unit, c) if state.cost[unit] >= c.resolve(n) => {
@@ -523,6 +530,9 @@ impl<'a> Executor<'a> {
                 StopRule::Rms(target) if error.is_some_and(|e| e <= target) => TerminationReason::Rms(error.unwrap()),
                 StopRule::Residual(target) if residual.is_some_and(|r| r <= target) => {
                     TerminationReason::Residual(residual.unwrap())
+                }
+                StopRule::StdError(target) if spread.is_some_and(|s| s <= target) => {
+                    TerminationReason::StdError(spread.unwrap())
                 }
                 StopRule::Time(limit) if time_up.next() == Some(&true) => TerminationReason::Time(limit),
                 _ => continue,

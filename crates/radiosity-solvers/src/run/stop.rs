@@ -4,7 +4,9 @@
 //! of cost ([`Unit`]: `columns=N`, `columns=2n` (a multiple of the patch count), `products=40`,
 //! `rays=1e7` (rays cast by a solver that samples transport), `links=1e9` (links of a
 //! hierarchy touched), each also as a multiple of `n`), `steps=N` (also `steps=3n`),
-//! `rms=1e-3`, `residual=1e-4`,
+//! `rms=1e-3`, `residual=1e-4`, `std_error=1e-2` (the solver's own standard error, for a
+//! solver whose answer is an estimate, [`crate::Solver::standard_error`]; never met by one
+//! without),
 //! `time=30s` (`ms`, `s` or `min`, on the run's clock: measured, or charged by the source,
 //! [`crate::Problem::clock`]). Every run ends even if no rule can hold any more: at
 //! round-off convergence (nothing left to shoot or gather), at a step cap of `20n` steps,
@@ -67,6 +69,10 @@ pub enum StopRule {
     Rms(Real),
     /// Stop once the solver's residual power is at most this.
     Residual(Real),
+    /// Stop once the solver's standard error, relative as e_rms is
+    /// ([`crate::StandardError::relative_rms`]), is at most this: for the solvers whose answer
+    /// is an estimate; a solver without one never meets it.
+    StdError(Real),
     /// Stop once the run's time (form factors and solving) reaches this, on the run's clock
     /// ([`crate::Problem::clock`]): the seconds every report of the run prints.
     Time(Duration),
@@ -98,6 +104,7 @@ impl std::fmt::Display for StopRule {
             StopRule::Steps(c) => write!(f, "steps={c}"),
             StopRule::Rms(e) => write!(f, "rms={}", short(e)),
             StopRule::Residual(r) => write!(f, "residual={}", short(r)),
+            StopRule::StdError(s) => write!(f, "std_error={}", short(s)),
             StopRule::Time(t) => write!(f, "time={}s", short(t.as_secs_f64())),
         }
     }
@@ -119,7 +126,7 @@ impl Default for StopRules {
 }
 
 /// The rules' keys that are not a unit of cost, for a typo's suggestion.
-const OTHER_KEYS: [&str; 4] = ["steps", "rms", "residual", "time"];
+const OTHER_KEYS: [&str; 5] = ["steps", "rms", "residual", "std_error", "time"];
 
 fn bad(rule: &str, reason: &str) -> SolverError {
     SolverError::BadRule { rule: rule.to_string(), reason: reason.to_string() }
@@ -166,6 +173,7 @@ impl StopRules {
                 "steps" => StopRule::Steps(parse_count(rule, value.trim())?),
                 "rms" => StopRule::Rms(parse_positive(rule, value.trim())?),
                 "residual" => StopRule::Residual(parse_positive(rule, value.trim())?),
+                "std_error" => StopRule::StdError(parse_positive(rule, value.trim())?),
                 "time" => StopRule::Time(parse_duration(rule, value.trim())?),
                 other => {
                     let units = Unit::ALL.into_iter().filter(|u| u.paid()).map(Unit::key);
@@ -181,6 +189,11 @@ impl StopRules {
     pub fn needs_error(&self) -> bool {
         self.rules.iter().any(|r| matches!(r, StopRule::Rms(_)))
     }
+
+    /// Whether any rule needs the solver's standard error (`std_error=`).
+    pub fn needs_standard_error(&self) -> bool {
+        self.rules.iter().any(|r| matches!(r, StopRule::StdError(_)))
+    }
 }
 
 /// Why a run ended.
@@ -194,6 +207,8 @@ pub enum TerminationReason {
     Rms(Real),
     /// `residual=` reached.
     Residual(Real),
+    /// `std_error=` reached, with the standard error then.
+    StdError(Real),
     /// `time=` reached.
     Time(Duration),
     /// Nothing left to do: the residual is zero or at round-off.
@@ -234,6 +249,7 @@ impl std::fmt::Display for TerminationReason {
             TerminationReason::Steps(k) => write!(f, "{k} steps taken"),
             TerminationReason::Rms(e) => write!(f, "e_rms reached {e:e}"),
             TerminationReason::Residual(r) => write!(f, "residual power reached {r:e}"),
+            TerminationReason::StdError(s) => write!(f, "standard error reached {s:e}"),
             TerminationReason::Time(t) => write!(f, "time limit of {:.3} s reached", t.as_secs_f64()),
             TerminationReason::RoundOff => write!(f, "converged to round-off"),
             TerminationReason::StepCap(k) => write!(f, "step cap of {k} steps reached before any rule held"),

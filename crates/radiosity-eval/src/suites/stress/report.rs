@@ -68,6 +68,7 @@ fn stop_kind(t: &TerminationReason) -> &'static str {
         TerminationReason::Spent(..) | TerminationReason::Steps(_) => "budget",
         TerminationReason::Rms(_) => "rms",
         TerminationReason::Residual(_) => "residual",
+        TerminationReason::StdError(_) => "standard error",
         TerminationReason::Time(_) => "time",
         TerminationReason::RoundOff => "round-off",
         TerminationReason::StepCap(_) => "step cap",

@@ -66,6 +66,8 @@ pub struct Plan {
     transport: Transport,
     /// Whether this process writes the results: rank 0, or a single process.
     writes: bool,
+    /// The ranks this process is one of, when it is one of several.
+    world: Option<std::sync::Arc<dyn radiosity_core::Collective>>,
 }
 
 impl Plan {
@@ -109,6 +111,7 @@ impl Plan {
             columns: ColumnCost::default(),
             transport: Transport::default(),
             writes: ranks.reports(),
+            world: ranks.world(),
         })
     }
 
@@ -135,7 +138,10 @@ impl Plan {
         radiosity_eval::require_emitters(&prepared)?;
         let report = prepared.report();
         eprintln!("{}: {} patches; left out: {}", report.scene, report.patches, report.left_out_phrase());
-        let lab = lab(&prepared, &self.spec, true, self.kind, self.columns, self.transport)?;
+        let mut lab = lab(&prepared, &self.spec, true, self.kind, self.columns, self.transport)?;
+        if let Some(world) = self.world {
+            lab = lab.over_ranks(world);
+        }
         let comparison = lab.compare(self.solvers, &self.rules, &Bars::new())?;
         for note in &comparison.notes {
             eprintln!("warning: {note}");

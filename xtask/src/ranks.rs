@@ -3,7 +3,8 @@
 //!
 //! Under `mpirun -np K`, every rank runs the same command (SPMD): it loads the scene, builds
 //! its part of the hierarchical operator (`BackendRegistry::builtin_split`) and runs the same
-//! solvers, meeting the other ranks in the operator's sums. Rank 0 alone prints and writes:
+//! solvers, meeting the other ranks in the operator's sums; the solvers that sample transport
+//! deal their replicates to the ranks instead (`Lab::over_ranks`). Rank 0 alone prints and writes:
 //! the other ranks' standard output and error go to `/dev/null`, except a panic's message.
 //! Only `solve` and `compare` run distributed; the other commands refuse a world of several
 //! ranks instead of running K times.
@@ -45,6 +46,11 @@ impl Ranks {
             );
         }
         Ok(Ranks { world: Some(start_mpi(rank, ranks)?) })
+    }
+
+    /// The ranks this process is one of, when it is one of several.
+    pub fn world(&self) -> Option<Arc<dyn Collective>> {
+        self.world.clone()
     }
 
     /// Whether this process prints and writes: rank 0, or a single process.

@@ -72,7 +72,11 @@ pub fn run(args: &Args, ranks: &crate::ranks::Ranks) -> Result<()> {
     // One solver's run: its columns are computed (and timed), whether or not the reference
     // was cached and the matrix assembled.
     let transport = args.run.transport.transport;
-    let lab = lab(&prepared, &spec, false, kind, radiosity_eval::ColumnCost::Computed, transport)?;
+    let mut lab = lab(&prepared, &spec, false, kind, radiosity_eval::ColumnCost::Computed, transport)?;
+    if let Some(world) = ranks.world() {
+        // The solvers that sample transport deal their replicates to the ranks.
+        lab = lab.over_ranks(world);
+    }
     let traffic = lab.traffic();
     phases.borrow_mut().begin("solving");
     let (summary, state) = match solver {

@@ -134,3 +134,70 @@ fn a_time_rule_stops_every_rank_at_rank_zeros_step() {
         assert!(matches!(runs[1].termination, TerminationReason::Time(_)), "{name}: {:?}", runs[1].termination);
     }
 }
+
+/// `ColumnTransport` over `f`, counting the rays cast through it.
+struct Counted {
+    inner: radiosity_core::ColumnTransport,
+    cast: std::sync::atomic::AtomicU64,
+}
+
+impl radiosity_core::TransportSampler for Counted {
+    fn patch_count(&self) -> usize {
+        self.inner.patch_count()
+    }
+
+    fn cast(&self, from: usize, u: [Real; 4]) -> Option<usize> {
+        self.cast.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.inner.cast(from, u)
+    }
+
+    fn ray_weight(&self, from: usize) -> Real {
+        self.inner.ray_weight(from)
+    }
+
+    fn row_sum(&self, i: usize) -> Option<Real> {
+        self.inner.row_sum(i)
+    }
+
+    fn cost(&self) -> radiosity_core::SampleCost {
+        self.inner.cost()
+    }
+}
+
+#[test]
+fn the_solvers_that_sample_deal_their_replicates_to_the_ranks() {
+    // Over 2 and 3 ranks (threads standing in for MPI ranks), every rank ends with the single
+    // process's bits, steps and rays: each replicate is walked on one rank with its own
+    // streams, then shared. Each rank casts only its replicates' rays, and together the
+    // world's.
+    let (system, f) = twelve();
+    let run = |name: &str, collective: Option<&dyn Collective>| {
+        let sampler = Counted {
+            inner: radiosity_core::ColumnTransport::new(&f, system.areas()).unwrap(),
+            cast: Default::default(),
+        };
+        let mut problem = Problem::new(&system, &f).unwrap().with_transport(&sampler).unwrap();
+        if let Some(c) = collective {
+            problem = problem.with_collective(c);
+        }
+        let mut solver = solver_by_name(name).unwrap();
+        let rules = StopRules { step_cap: 1e6, ..StopRules::parse("rays=30000").unwrap() };
+        let run = Executor::new(solver.as_mut(), rules).run(&problem).unwrap();
+        (run, sampler.cast.into_inner())
+    };
+    for name in
+        ["stochastic-jacobi:seq=sobol", "stochastic-jacobi:form=gathering", "random-walk", "random-walk:form=gathering"]
+    {
+        let (one, cast) = run(name, None);
+        assert_eq!(one.state.cost[Unit::Rays], cast, "{name}");
+        for ranks in [2, 3] {
+            let runs = InProcessRanks::run(ranks, |c| run(name, Some(&*c)));
+            for (rank, (r, here)) in runs.iter().enumerate() {
+                assert_eq!(r.state.radiosity, one.state.radiosity, "{name}, rank {rank} of {ranks}");
+                assert_eq!((r.state.step, r.state.cost[Unit::Rays]), (one.state.step, cast), "{name}, rank {rank}");
+                assert!(*here > 0 && *here < cast, "{name}: rank {rank} of {ranks} cast {here} of {cast}");
+            }
+            assert_eq!(runs.iter().map(|(_, here)| here).sum::<u64>(), cast, "{name}, {ranks} ranks");
+        }
+    }
+}

@@ -43,6 +43,9 @@ impl Lab<'_> {
         if let Some(sampler) = sampler {
             problem = problem.with_transport(sampler)?;
         }
+        if let Some(ranks) = self.ranks.as_deref() {
+            problem = problem.with_collective(ranks);
+        }
         for solver in &solvers {
             check_rules(solver.as_ref(), rules)?;
             solver.applicable(&problem)?;

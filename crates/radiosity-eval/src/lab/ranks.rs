@@ -3,8 +3,9 @@
 
 use super::setup::Lab;
 use crate::memory::peak_rss;
-use radiosity_core::{Real, Traffic};
+use radiosity_core::{Collective, Real, Traffic};
 use serde::Serialize;
+use std::sync::Arc;
 
 /// One rank's part of a distributed run.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -39,6 +40,15 @@ pub struct RankReport {
 }
 
 impl Lab<'_> {
+    /// The lab with its runs solved over `ranks` where its source is not split itself: the
+    /// solvers that sample transport then deal their replicates to the ranks
+    /// ([`radiosity_solvers::Problem::with_collective`]), and every solver's decisions that
+    /// read a clock are rank 0's. Every rank builds the same lab and makes the same runs.
+    pub fn over_ranks(mut self, ranks: Arc<dyn Collective>) -> Self {
+        self.ranks = Some(ranks);
+        self
+    }
+
     /// What this rank's sums have cost so far, when the lab's source is split over ranks: take
     /// it before a run, for [`Lab::rank_reports`].
     pub fn traffic(&self) -> Option<Traffic> {

@@ -140,6 +140,9 @@ impl Lab<'_> {
         if let Some(sampler) = sampler {
             problem = problem.with_transport(sampler)?;
         }
+        if let Some(ranks) = self.ranks.as_deref() {
+            problem = problem.with_collective(ranks);
+        }
         let mut monitor = recorder.monitor();
         let mut executor = Executor::new(solver, rules.clone());
         if let Some(monitor) = monitor.as_mut() {

@@ -14,7 +14,7 @@ use crate::reference::matrix::{F32Columns, FormFactors};
 use crate::reference::metrics::Evaluator;
 use crate::reference::shooting::solve_by_shooting;
 use crate::reference::solution::ReferenceSolution;
-use radiosity_core::{Clock, ColumnSource, LinearSystem, Real};
+use radiosity_core::{Clock, Collective, ColumnSource, LinearSystem, Real};
 use radiosity_ff::{BackendFigures, BackendSpec, FormFactorBackend};
 use radiosity_geom::{PreparedScene, SceneReport};
 use std::sync::Arc;
@@ -73,6 +73,9 @@ pub struct Lab<'p> {
     pub(super) figures: Option<BackendFigures>,
     /// Where the solvers that sample transport cast their rays ([`LabOptions::transport`]).
     pub(super) transport: Transport,
+    /// The ranks the lab's runs are solved over when its source is not split itself
+    /// ([`Lab::over_ranks`]).
+    pub(super) ranks: Option<Arc<dyn Collective>>,
 }
 
 /// How the matrix of a lab's source is obtained, when a `matrix` reference needs it.
@@ -204,6 +207,7 @@ impl<'p> Lab<'p> {
             charged,
             figures: None,
             transport,
+            ranks: None,
         }
     }
 

@@ -45,7 +45,8 @@ use crate::error::SolverError;
 use crate::run::cost::Unit;
 use radiosity_core::operator::{Product, multiply_by_columns};
 use radiosity_core::{
-    Clock, ColumnSource, LineTransfers, LinearSystem, LinkSource, NO_PARENT, Real, SampleCost, TransportSampler,
+    Clock, Collective, ColumnSource, LineTransfers, LinearSystem, LinkSource, NO_PARENT, Real, SampleCost,
+    TransportSampler,
 };
 use std::cell::{Cell, OnceCell};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -69,6 +70,9 @@ pub struct Problem<'a> {
     /// The links each patch's column touches, and all the links: counted once, when the
     /// source shows its links.
     link_costs: OnceCell<(Vec<u64>, u64)>,
+    /// The ranks the problem is solved over when its source is not split itself
+    /// ([`Problem::with_collective`]).
+    collective: Option<&'a dyn Collective>,
 }
 
 /// Where a problem's columns come from.
@@ -168,6 +172,7 @@ impl<'a> Problem<'a> {
             transport: None,
             uncharged_seconds: Cell::new(0.0),
             link_costs: OnceCell::new(),
+            collective: None,
         }
     }
 
@@ -252,9 +257,20 @@ impl<'a> Problem<'a> {
         self.order
     }
 
-    /// The ranks the problem's source is split over, when it is ([`ColumnSource::collective`]).
-    pub fn collective(&self) -> Option<&dyn radiosity_core::Collective> {
-        self.columns.source().collective()
+    /// The ranks the problem is solved over: those its source is split over
+    /// ([`ColumnSource::collective`]), or else those given ([`Problem::with_collective`]).
+    pub fn collective(&self) -> Option<&dyn Collective> {
+        self.columns.source().collective().or(self.collective)
+    }
+
+    /// The problem solved over the ranks of `collective`, its source not split: every rank
+    /// holds the whole problem, and a solver that divides its own work between ranks (the
+    /// solvers that sample transport deal their replicates, [`crate::StochasticJacobi`])
+    /// meets the others in `collective`'s sums. Decisions that read a clock are rank 0's
+    /// ([`crate::Executor`]). A source split over ranks keeps its own.
+    pub fn with_collective(mut self, collective: &'a dyn Collective) -> Problem<'a> {
+        self.collective = Some(collective);
+        self
     }
 
     /// The system.
@@ -383,6 +399,13 @@ impl<'a> Problem<'a> {
     /// Counts `k` more of `unit` spent.
     fn spend(&self, unit: Unit, k: u64) {
         self.spent[unit.at()].fetch_add(k, Ordering::Relaxed);
+    }
+
+    /// Counts `k` of `unit` that the other ranks spent ([`Problem::collective`]): a solver that
+    /// divides its work between ranks adds what they spent, so that every rank's counts, and
+    /// the stop rules that read them, are the whole world's.
+    pub fn spent_elsewhere(&self, unit: Unit, k: u64) {
+        self.spend(unit, k);
     }
 
     /// Records that a solver served a column from its own memory instead of computing it

@@ -4,5 +4,6 @@
 
 pub(crate) mod estimate;
 pub(crate) mod random_walk;
+pub(crate) mod ranks;
 pub(crate) mod sequence;
 pub(crate) mod stochastic_jacobi;

@@ -109,12 +109,14 @@
 
 use crate::error::SolverError;
 use crate::naming::{ParseSolverError, SolverParams, split_params};
+use crate::run::cost::Unit;
 use crate::run::executor::{Solver, StepKind};
 use crate::run::problem::{Problem, Rays};
 use crate::run::record::Record;
 use crate::run::standard_error::StandardError;
 use crate::run::state::State;
 use crate::run::stop::Count;
+use crate::stochastic::ranks::Deal;
 use crate::stochastic::sequence::Sequence;
 use radiosity_core::{LinearSystem, Real};
 use rayon::prelude::*;
@@ -499,7 +501,9 @@ impl RandomWalk {
         let (n, k) = (problem.n(), problem.channels());
         let (per_step, step, emitters) = (self.per_step, self.steps, &self.emitters);
         let batches = per_step.div_ceil(RandomWalk::WALKS_PER_BATCH);
-        let tasks: Vec<(usize, u64)> = (0..params.replicates).flat_map(|r| (0..batches).map(move |b| (r, b))).collect();
+        let deal = Deal::of(problem);
+        let tasks: Vec<(usize, u64)> =
+            (0..params.replicates).filter(|&r| deal.mine(r)).flat_map(|r| (0..batches).map(move |b| (r, b))).collect();
         for wave in tasks.chunks(WAVE) {
             let tallies: Vec<Tally> = problem.cast(&name, |rays| {
                 let walker = Walker { rays, system, params: &params };
@@ -530,11 +534,13 @@ impl RandomWalk {
         let (n, k) = (problem.n(), problem.channels());
         let (per_patch, step) = (self.per_patch(n), self.steps);
         let sums = &mut self.sums;
+        let deal = Deal::of(problem);
         let casts: u64 = problem.cast(&name, |rays| {
             let walker = Walker { rays, system, params: &params };
             sums.par_chunks_mut(k)
                 .enumerate()
                 .with_min_len(16)
+                .filter(|(idx, _)| deal.mine(idx / n))
                 .map(|(idx, sum)| {
                     walker.gather(Batch { replicate: idx / n, step, id: (idx % n) as u64 }, per_patch, sum)
                 })
@@ -580,6 +586,7 @@ impl Solver for RandomWalk {
             return Ok(Record::new());
         }
         let (n, k, r) = (problem.n(), problem.channels(), self.params.replicates);
+        let (before, rays_before) = (problem.spent(Unit::Rays), self.rays);
         let walks_each = match self.params.form {
             WalkForm::Shooting => {
                 self.shoot_step(problem)?;
@@ -590,6 +597,15 @@ impl Solver for RandomWalk {
                 self.per_patch(n)
             }
         };
+        // Over ranks, every replicate's sums from the rank that walked it (module doc of
+        // `stochastic::ranks`), and the walks' rays of every rank.
+        let deal = Deal::of(problem);
+        if deal.split() {
+            let mut parts: Vec<Vec<Real>> = self.sums.chunks_exact(n * k).map(<[Real]>::to_vec).collect();
+            let world = deal.share(problem, &mut parts, problem.spent(Unit::Rays) - before);
+            self.sums = parts.concat();
+            self.rays = rays_before + world;
+        }
         self.steps += 1;
         let starts = if self.params.form == WalkForm::Gathering { n as u64 } else { 1 };
         self.walks += walks_each * starts * r as u64;

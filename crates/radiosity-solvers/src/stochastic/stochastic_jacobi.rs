@@ -62,6 +62,7 @@
 
 use crate::error::SolverError;
 use crate::naming::{ParseSolverError, SolverParams, split_params, validated};
+use crate::run::cost::Unit;
 use crate::run::executor::{Solver, StepKind};
 use crate::run::problem::Problem;
 use crate::run::record::Record;
@@ -69,6 +70,7 @@ use crate::run::standard_error::StandardError;
 use crate::run::state::State;
 use crate::run::stop::Count;
 use crate::stochastic::estimate::{Streams, gather, lines, shoot};
+use crate::stochastic::ranks::Deal;
 use crate::stochastic::sequence::Sequence;
 use radiosity_core::Real;
 use std::str::FromStr;
@@ -246,6 +248,32 @@ struct Chain {
     iteration: u64,
     /// Points each patch has drawn from its stream ([`crate::stochastic::estimate`]).
     drawn: Vec<u64>,
+}
+
+impl Chain {
+    /// The chain as one vector, to be shared between ranks ([`Deal::share`]): its estimate,
+    /// unshot radiosity and streams' positions, then its weight, phase, unshot power and
+    /// iteration (counts are exact as reals below 2^53).
+    fn pack(&self) -> Vec<Real> {
+        let mut v = Vec::with_capacity(2 * self.estimate.len() + self.drawn.len() + 4);
+        v.extend_from_slice(&self.estimate);
+        v.extend_from_slice(&self.unshot);
+        v.extend(self.drawn.iter().map(|&d| d as Real));
+        v.extend([self.weight, Real::from(u8::from(self.regular)), self.left, self.iteration as Real]);
+        v
+    }
+
+    /// The chain as [`Chain::pack`] wrote it.
+    fn unpack(&mut self, v: &[Real]) {
+        let (m, n) = (self.estimate.len(), self.drawn.len());
+        self.estimate.copy_from_slice(&v[..m]);
+        self.unshot.copy_from_slice(&v[m..2 * m]);
+        for (d, x) in self.drawn.iter_mut().zip(&v[2 * m..2 * m + n]) {
+            *d = *x as u64;
+        }
+        let tail = &v[2 * m + n..];
+        (self.weight, self.regular, self.left, self.iteration) = (tail[0], tail[1] > 0.0, tail[2], tail[3] as u64);
+    }
 }
 
 /// Stochastic Jacobi (module doc).
@@ -474,8 +502,19 @@ impl Solver for StochasticJacobi {
         if self.emitted == 0.0 {
             return Ok(Record::new());
         }
+        let deal = Deal::of(problem);
+        let before = problem.spent(Unit::Rays);
         for r in 0..self.chains.len() {
-            self.advance(problem, r)?;
+            if deal.mine(r) {
+                self.advance(problem, r)?;
+            }
+        }
+        if deal.split() {
+            let mut parts: Vec<Vec<Real>> = self.chains.iter().map(Chain::pack).collect();
+            deal.share(problem, &mut parts, problem.spent(Unit::Rays) - before);
+            for (chain, part) in self.chains.iter_mut().zip(&parts) {
+                chain.unpack(part);
+            }
         }
         let r = self.chains.len() as Real;
         for (idx, b) in state.radiosity.iter_mut().enumerate() {

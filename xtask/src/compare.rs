@@ -8,7 +8,7 @@
 //! by the rules that count what it spends (`--until columns=2n,rays=1e7`).
 
 use crate::bars::Bars;
-use crate::experiment::{ReferenceArg, check_measurable, check_out_dir, default_out, lab, prepare};
+use crate::experiment::{ReferenceArg, check_measurable, check_out_dir, default_out, lab, prepare_over};
 use crate::ranks::Ranks;
 use anyhow::{Result, bail};
 use radiosity_eval::ReferenceKind;
@@ -134,7 +134,8 @@ impl Plan {
 
     /// Runs every solver and writes the report, table and plots into `out`.
     pub fn execute(self, out: &Path) -> Result<Comparison> {
-        let prepared = prepare(&self.scene)?;
+        let phases = std::cell::RefCell::new(radiosity_eval::Phases::new());
+        let prepared = prepare_over(&self.scene, &phases, self.world.as_deref())?;
         radiosity_eval::require_emitters(&prepared)?;
         let report = prepared.report();
         eprintln!("{}: {} patches; left out: {}", report.scene, report.patches, report.left_out_phrase());

@@ -125,5 +125,11 @@ fn explain_text(r: &SceneReport, arg: &str) -> String {
         1e3 * r.seconds.bvh,
         1e3 * r.seconds.analysis
     );
+    let per_patch = |b: usize| b as f64 / r.patches.max(1) as f64;
+    out += &format!(
+        "memory      scene {:.0} bytes a patch, BVH {:.0} bytes a patch (held after the set-up)\n",
+        per_patch(r.memory.scene),
+        per_patch(r.memory.bvh)
+    );
     out
 }

@@ -11,7 +11,7 @@
 //! certified bound. The run's columns, steps and seconds are the solver's alone.
 
 use crate::bars::Bars;
-use crate::experiment::{SolveArgs, check_output_file, lab, prepare_timed};
+use crate::experiment::{SolveArgs, check_output_file, lab, prepare_over};
 use anyhow::{Context, Result};
 use radiosity_core::Real;
 use radiosity_eval::rgb;
@@ -67,13 +67,14 @@ pub fn run(args: &Args, ranks: &crate::ranks::Ranks) -> Result<()> {
         check_output_file(out)?;
     }
     let phases = RefCell::new(Phases::new());
-    let prepared = prepare_timed(&args.run.scene, &phases)?;
+    let world = ranks.world();
+    let prepared = prepare_over(&args.run.scene, &phases, world.as_deref())?;
     phases.borrow_mut().begin("setting up the backend and reference");
     // One solver's run: its columns are computed (and timed), whether or not the reference
     // was cached and the matrix assembled.
     let transport = args.run.transport.transport;
     let mut lab = lab(&prepared, &spec, false, kind, radiosity_eval::ColumnCost::Computed, transport)?;
-    if let Some(world) = ranks.world() {
+    if let Some(world) = world {
         // The solvers that sample transport deal their replicates to the ranks.
         lab = lab.over_ranks(world);
     }

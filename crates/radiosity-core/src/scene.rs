@@ -82,6 +82,14 @@ impl Scene {
         &self.name
     }
 
+    /// The bytes the scene holds on the heap: its patches, materials and object names.
+    pub fn heap_bytes(&self) -> usize {
+        self.patches.capacity() * size_of::<Patch>()
+            + self.materials.capacity() * size_of::<Material>()
+            + self.objects.iter().map(|o| o.capacity() + size_of::<String>()).sum::<usize>()
+            + self.name.capacity()
+    }
+
     /// The patches, indexed by patch id.
     pub fn patches(&self) -> &[Patch] {
         &self.patches

@@ -28,7 +28,7 @@
 use crate::hidden::{HiddenGeometry, HiddenParams};
 use crate::visibility::Visibility;
 use radiosity_core::math::cosine_direction;
-use radiosity_core::{Channels, Real, Scene};
+use radiosity_core::{Channels, Collective, Real, Scene};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -109,6 +109,18 @@ impl SceneAnalysis {
     /// by [`HiddenGeometry::find`] on this scene, or on the scene as loaded and then
     /// [renumbered](HiddenGeometry::renumbered) for `scene`, which leaves the hidden patches out.
     pub fn with_hidden(scene: &Scene, visibility: &Visibility, hidden: HiddenGeometry) -> SceneAnalysis {
+        SceneAnalysis::with_hidden_over(scene, visibility, hidden, None)
+    }
+
+    /// As [`SceneAnalysis::with_hidden`], the closure probe's patches dealt to `ranks` when
+    /// there are several (patch `i` to rank `i mod K`) and its counts summed between them:
+    /// every rank gets one process's analysis.
+    pub fn with_hidden_over(
+        scene: &Scene,
+        visibility: &Visibility,
+        hidden: HiddenGeometry,
+        ranks: Option<&dyn Collective>,
+    ) -> SceneAnalysis {
         SceneAnalysis {
             hidden: hidden_decision(scene, hidden),
             patches: scene.len(),
@@ -118,7 +130,7 @@ impl SceneAnalysis {
             occlusion: occlusion(scene),
             channels: channels(scene),
             emitters: emitters(scene),
-            closure: closure(scene, visibility),
+            closure: closure(scene, visibility, ranks),
         }
     }
 
@@ -265,7 +277,7 @@ fn emitters(scene: &Scene) -> Decision<Vec<usize>> {
     Decision { value: list, reason }
 }
 
-fn closure(scene: &Scene, visibility: &Visibility) -> Decision<Closure> {
+fn closure(scene: &Scene, visibility: &Visibility, ranks: Option<&dyn Collective>) -> Decision<Closure> {
     // One seeded stream, as if drawn patch after patch: patch `i` starts where patch `i − 1`
     // ends (four draws of two words a ray), so the patches run on every thread and the rays
     // are those of one serial pass, whatever the thread count.
@@ -284,7 +296,15 @@ fn closure(scene: &Scene, visibility: &Visibility) -> Decision<Closure> {
             })
             .count()
     };
-    let per_patch: Vec<usize> = scene.patches().par_iter().enumerate().map(lost).collect();
+    let mine = |i: usize| ranks.is_none_or(|c| i % c.ranks() == c.rank());
+    let mut per_patch: Vec<usize> =
+        scene.patches().par_iter().enumerate().map(|(i, p)| if mine(i) { lost((i, p)) } else { 0 }).collect();
+    if let Some(c) = ranks {
+        // Each patch's count from its own rank, zeros from the others.
+        let mut all: Vec<Real> = per_patch.iter().map(|&k| k as Real).collect();
+        c.sum(&mut all);
+        per_patch = all.into_iter().map(|k| k as usize).collect();
+    }
     let escaped: usize = per_patch.iter().sum();
     let first_escape = per_patch.iter().position(|&k| k > 0);
     let sampled = scene.len() * RAYS_PER_PATCH;

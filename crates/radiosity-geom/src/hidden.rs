@@ -53,7 +53,7 @@
 use crate::coplanar::ResolvedOverlaps;
 use crate::visibility::Visibility;
 use radiosity_core::math::cosine_direction;
-use radiosity_core::{Real, Scene, Vec3};
+use radiosity_core::{Collective, Real, Scene, Vec3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -147,6 +147,40 @@ struct Probe {
     rays: usize,
 }
 
+impl Probe {
+    /// The findings as six numbers, to be summed between ranks (patch indices and counts are
+    /// exact as reals below 2^53): the verdict (1 pressed, 2 enclosed, 3 visible), the patch
+    /// pressed against or touched plus one (0 for none) and the touching share, the patch
+    /// overlapped plus one and the overlapped share, the rays.
+    fn encode(&self) -> [Real; 6] {
+        let id = |p: Option<usize>| p.map_or(0.0, |p| (p + 1) as Real);
+        let rays = self.rays as Real;
+        match self.verdict {
+            Verdict::Hidden(HiddenReason::Pressed, against) => [1.0, id(against), 0.0, 0.0, 0.0, rays],
+            Verdict::Hidden(HiddenReason::Enclosed, against) => [2.0, id(against), 0.0, 0.0, 0.0, rays],
+            Verdict::Visible { touching, overlapping } => [
+                3.0,
+                id(touching.map(|t| t.0)),
+                touching.map_or(0.0, |t| t.1),
+                id(overlapping.map(|o| o.0)),
+                overlapping.map_or(0.0, |o| o.1),
+                rays,
+            ],
+        }
+    }
+
+    /// The findings [`Probe::encode`] wrote.
+    fn decode(v: &[Real]) -> Probe {
+        let id = |x: Real| (x > 0.0).then(|| x as usize - 1);
+        let verdict = match v[0] as u8 {
+            1 => Verdict::Hidden(HiddenReason::Pressed, id(v[1])),
+            2 => Verdict::Hidden(HiddenReason::Enclosed, id(v[1])),
+            _ => Verdict::Visible { touching: id(v[1]).map(|p| (p, v[2])), overlapping: id(v[3]).map(|p| (p, v[4])) },
+        };
+        Probe { verdict, rays: v[5] as usize }
+    }
+}
+
 enum Verdict {
     Hidden(HiddenReason, Option<usize>),
     Visible { touching: Option<(usize, Real)>, overlapping: Option<(usize, Real)> },
@@ -155,14 +189,37 @@ enum Verdict {
 impl HiddenGeometry {
     /// Probes every patch of `scene` against `visibility` (built over the same scene).
     pub fn find(scene: &Scene, visibility: &Visibility, params: HiddenParams) -> HiddenGeometry {
+        HiddenGeometry::find_over(scene, visibility, params, None)
+    }
+
+    /// As [`HiddenGeometry::find`], the patches dealt to `ranks` when there are several (patch
+    /// `i` to rank `i mod K`, each probed on every thread of its rank) and the findings summed
+    /// between them: every rank gets the same findings, one process's, whatever `K`.
+    pub fn find_over(
+        scene: &Scene,
+        visibility: &Visibility,
+        params: HiddenParams,
+        ranks: Option<&dyn Collective>,
+    ) -> HiddenGeometry {
         let grid = params.grid.max(1);
         let rays_per_point = params.rays_per_point.max(1);
         // The scene's scale, once: it is a pass over every vertex.
         let diagonal = scene.diagonal();
-        let probes: Vec<Probe> = (0..scene.len())
+        let mine = |i: usize| ranks.is_none_or(|c| i % c.ranks() == c.rank());
+        let probes: Vec<Option<Probe>> = (0..scene.len())
             .into_par_iter()
-            .map(|i| probe(scene, visibility, diagonal, i, grid, rays_per_point))
+            .map(|i| mine(i).then(|| probe(scene, visibility, diagonal, i, grid, rays_per_point)))
             .collect();
+        let probes: Vec<Probe> = match ranks {
+            None => probes.into_iter().flatten().collect(),
+            Some(c) => {
+                // Each patch's findings from its own rank, zeros from the others: one sum.
+                let mut all: Vec<Real> =
+                    probes.iter().flat_map(|p| p.as_ref().map_or([0.0; 6], Probe::encode)).collect();
+                c.sum(&mut all);
+                all.chunks_exact(6).map(Probe::decode).collect()
+            }
+        };
         let rays = probes.iter().map(|p| p.rays).sum();
         let mut found = HiddenGeometry { rays, ..Default::default() };
         let object = |i: usize| scene.object_of(i).to_string();

@@ -38,7 +38,7 @@ pub use coplanar::{CoveredPatch, CutPatch, ResolvedOverlaps};
 pub use error::GeomError;
 pub use hidden::{HiddenGeometry, HiddenParams, HiddenPatch, HiddenReason, PartialContact};
 pub use mesh::SceneBuilder;
-pub use prepared::{DecisionReport, GeometryReport, PreparedScene, SceneReport, SetupSeconds};
+pub use prepared::{DecisionReport, GeometryReport, PreparedScene, SceneMemory, SceneReport, SetupSeconds};
 pub use scene_spec::{SceneSource, SceneSpec};
 pub use scenes::camera::CameraPreset;
 pub use scenes::{BuiltinScene, builtin_scenes};

@@ -7,7 +7,7 @@ use crate::error::GeomError;
 use crate::hidden::{HiddenGeometry, HiddenParams, HiddenReason};
 use crate::visibility::Visibility;
 use crate::{LoadedScene, load_scene};
-use radiosity_core::{Channels, PatchShape, Scene};
+use radiosity_core::{Channels, Collective, PatchShape, Scene};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -20,6 +20,15 @@ pub struct SetupSeconds {
     pub bvh: f64,
     /// The scene analysis, the search for hidden geometry included.
     pub analysis: f64,
+}
+
+/// What a prepared scene holds on the heap, in bytes ([`PreparedScene::memory`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct SceneMemory {
+    /// The scene: patches, materials, object names.
+    pub scene: usize,
+    /// The BVH: exact triangles, their patches, obvhs's tree.
+    pub bvh: usize,
 }
 
 /// A scene with its BVH and analysis: what form-factor backends and experiments start from.
@@ -38,7 +47,7 @@ pub struct PreparedScene {
 impl LoadedScene {
     /// Builds the BVH and analyses the scene.
     pub fn prepare(self) -> PreparedScene {
-        PreparedScene::from_loaded(self, 0.0, &|_| {})
+        PreparedScene::from_loaded(self, 0.0, &|_| {}, None)
     }
 }
 
@@ -52,20 +61,38 @@ impl PreparedScene {
     /// (`loading`, `building the BVH`, `probing for hidden geometry`, `analysing the scene`):
     /// each takes seconds at `10⁵` patches, and a command line shows them.
     pub fn load_reporting(arg: &str, stage: &dyn Fn(&str)) -> Result<PreparedScene, GeomError> {
+        PreparedScene::load_over(arg, stage, None)
+    }
+
+    /// As [`PreparedScene::load_reporting`], on one of several `ranks` when there are: every
+    /// rank loads the scene and builds its BVH, and the probes of the analysis (hidden
+    /// geometry, closure) are dealt between them, patch `i` to rank `i mod K`, their findings
+    /// summed, so that every rank holds one process's prepared scene. Every rank calls it with
+    /// the same argument.
+    pub fn load_over(
+        arg: &str,
+        stage: &dyn Fn(&str),
+        ranks: Option<&dyn Collective>,
+    ) -> Result<PreparedScene, GeomError> {
         let start = Instant::now();
         stage("loading");
         let loaded = load_scene(arg)?;
-        Ok(PreparedScene::from_loaded(loaded, start.elapsed().as_secs_f64(), stage))
+        Ok(PreparedScene::from_loaded(loaded, start.elapsed().as_secs_f64(), stage, ranks))
     }
 
-    fn from_loaded(mut loaded: LoadedScene, load: f64, stage: &dyn Fn(&str)) -> PreparedScene {
+    fn from_loaded(
+        mut loaded: LoadedScene,
+        load: f64,
+        stage: &dyn Fn(&str),
+        ranks: Option<&dyn Collective>,
+    ) -> PreparedScene {
         let start = Instant::now();
         stage("building the BVH");
         let mut visibility = Visibility::new(&loaded.scene);
         let mut bvh = start.elapsed().as_secs_f64();
         let start = Instant::now();
         stage("probing for hidden geometry");
-        let mut hidden = HiddenGeometry::find(&loaded.scene, &visibility, HiddenParams::default());
+        let mut hidden = HiddenGeometry::find_over(&loaded.scene, &visibility, HiddenParams::default(), ranks);
         let mut is_hidden = vec![false; loaded.scene.len()];
         for h in &hidden.hidden {
             is_hidden[h.patch] = true;
@@ -96,7 +123,7 @@ impl PreparedScene {
         }
         let start = Instant::now();
         stage("analysing the scene");
-        let analysis = SceneAnalysis::with_hidden(&loaded.scene, &visibility, hidden);
+        let analysis = SceneAnalysis::with_hidden_over(&loaded.scene, &visibility, hidden, ranks);
         analysis_seconds += start.elapsed().as_secs_f64();
         PreparedScene { loaded, visibility, analysis, seconds: SetupSeconds { load, bvh, analysis: analysis_seconds } }
     }
@@ -104,6 +131,12 @@ impl PreparedScene {
     /// The scene.
     pub fn scene(&self) -> &Scene {
         &self.loaded.scene
+    }
+
+    /// What the scene and its BVH hold on the heap (the analysis's lists are small beside
+    /// them: a few values a hidden, touching or overlapping patch, and the emitters' indices).
+    pub fn memory(&self) -> SceneMemory {
+        SceneMemory { scene: self.loaded.scene.heap_bytes(), bvh: self.visibility.heap_bytes() }
     }
 
     /// The report of this scene.
@@ -150,6 +183,7 @@ impl PreparedScene {
             left_out: a.left_out(),
             warnings: self.loaded.warnings.clone(),
             seconds: self.seconds,
+            memory: self.memory(),
         }
     }
 }
@@ -228,6 +262,8 @@ pub struct SceneReport {
     pub warnings: Vec<String>,
     /// Where the preparation time went.
     pub seconds: SetupSeconds,
+    /// What the scene and its BVH hold, in bytes.
+    pub memory: SceneMemory,
 }
 
 /// Hidden, touching and overlapping geometry as shown to users: counts, and a few examples

@@ -188,6 +188,16 @@ impl Visibility {
         Visibility { bvh, triangles, triangle_patch, centre, inv_scale, diagonal: scene.diagonal() }
     }
 
+    /// The bytes the structure holds on the heap: the exact `f64` triangles, the patch of each,
+    /// and obvhs's tree (its nodes and primitive indices).
+    pub fn heap_bytes(&self) -> usize {
+        self.triangles.capacity() * size_of::<[Vec3; 3]>()
+            + self.triangle_patch.capacity() * size_of::<u32>()
+            + self.bvh.nodes.capacity() * size_of::<obvhs::cwbvh::node::CwBvhNode>()
+            + self.bvh.primitive_indices.capacity() * size_of::<u32>()
+            + self.bvh.exact_node_aabbs.as_ref().map_or(0, |a| a.capacity() * size_of::<obvhs::aabb::Aabb>())
+    }
+
     /// The number of triangles in the BVH (one per triangle patch, two per quad).
     pub fn triangle_count(&self) -> usize {
         self.triangles.len()

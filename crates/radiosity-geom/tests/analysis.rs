@@ -124,3 +124,38 @@ fn the_closure_probe_casts_the_rays_of_one_serial_stream() {
     assert!(escaped > 0);
     assert_eq!(found, escaped);
 }
+
+#[test]
+fn the_probes_dealt_to_ranks_give_one_process_analysis() {
+    // Threads standing in for MPI ranks: each probes its share of the patches for hidden
+    // geometry and closure, and one sum each hands every rank one process's findings, on a
+    // scene with hidden patches, an open one and a closed one.
+    use radiosity_core::InProcessRanks;
+    use radiosity_geom::PreparedScene;
+    for arg in ["cornell", "cornell:front=true", "furnace:block=true"] {
+        let one = PreparedScene::load(arg).unwrap();
+        for ranks in [2, 3] {
+            let split = InProcessRanks::run(ranks, |c| PreparedScene::load_over(arg, &|_| {}, Some(&*c)).unwrap());
+            for (rank, p) in split.iter().enumerate() {
+                assert_eq!(p.analysis, one.analysis, "{arg}: rank {rank} of {ranks}");
+                assert_eq!(p.scene().len(), one.scene().len(), "{arg}: rank {rank} of {ranks}");
+            }
+        }
+    }
+}
+
+#[test]
+fn a_prepared_scene_counts_what_it_holds() {
+    // The scene holds at least its patches, the BVH at least its exact f64 triangles (two a
+    // quad) and a patch index each: the floor of what a process holds per patch.
+    use radiosity_core::{Patch, PatchShape};
+    use radiosity_geom::PreparedScene;
+    let p = PreparedScene::load("office:size=0.6").unwrap();
+    let scene = p.scene();
+    let triangles: usize = scene.patches().iter().map(|q| if q.shape() == PatchShape::Quad { 2 } else { 1 }).sum();
+    let m = p.memory();
+    assert!(m.scene >= scene.len() * size_of::<Patch>(), "{m:?}");
+    assert!(m.bvh >= triangles * (3 * 3 * 8 + 4), "{m:?}");
+    assert!(m.bvh < 4 * triangles * (3 * 3 * 8 + 4), "the tree is a fraction of the triangles: {m:?}");
+    assert_eq!(p.report().memory, m);
+}

@@ -48,6 +48,13 @@ pub trait Collective: Send + Sync {
     /// What this rank has sent and waited for so far.
     fn traffic(&self) -> Traffic;
 
+    /// Whether item `i` of a list dealt round-robin between the ranks (item `i` to rank
+    /// `i mod K`) is this rank's: how the analysis's probes and a sampling solver's replicates
+    /// are dealt.
+    fn deals(&self, i: usize) -> bool {
+        i % self.ranks() == self.rank()
+    }
+
     /// Rank 0's `flag`, on every rank: for decisions that may differ between ranks, such as
     /// one that reads a clock.
     fn agree(&self, flag: bool) -> bool {

@@ -296,7 +296,7 @@ fn closure(scene: &Scene, visibility: &Visibility, ranks: Option<&dyn Collective
             })
             .count()
     };
-    let mine = |i: usize| ranks.is_none_or(|c| i % c.ranks() == c.rank());
+    let mine = |i: usize| ranks.is_none_or(|c| c.deals(i));
     let mut per_patch: Vec<usize> =
         scene.patches().par_iter().enumerate().map(|(i, p)| if mine(i) { lost((i, p)) } else { 0 }).collect();
     if let Some(c) = ranks {

@@ -205,7 +205,7 @@ impl HiddenGeometry {
         let rays_per_point = params.rays_per_point.max(1);
         // The scene's scale, once: it is a pass over every vertex.
         let diagonal = scene.diagonal();
-        let mine = |i: usize| ranks.is_none_or(|c| i % c.ranks() == c.rank());
+        let mine = |i: usize| ranks.is_none_or(|c| c.deals(i));
         let probes: Vec<Option<Probe>> = (0..scene.len())
             .into_par_iter()
             .map(|i| mine(i).then(|| probe(scene, visibility, diagonal, i, grid, rays_per_point)))

@@ -32,7 +32,7 @@ impl<'p> Deal<'p> {
 
     /// Whether this rank advances replicate `r`.
     pub(crate) fn mine(&self, r: usize) -> bool {
-        self.collective.is_none_or(|c| r % c.ranks() == c.rank())
+        self.collective.is_none_or(|c| c.deals(r))
     }
 
     /// Every replicate's `parts` (indexed by replicate) as its own rank left them, on every

@@ -8,7 +8,10 @@
 //! value and zeros is the value, so every rank holds the same bits, and those of one process,
 //! whatever `K`. The rays each rank cast travel in the same sum, so every rank counts the
 //! world's ([`crate::Problem::spent_elsewhere`]) and stops at the same step. With `R`
-//! replicates, `K ≤ R` ranks share the rays; a rank beyond `R` casts none.
+//! replicates, `K ≤ R` ranks share the rays; a rank beyond `R` casts none. What a step sends
+//! is the replicates' state: for stochastic Jacobi `R (n k + n)` values a step once its
+//! incremental series is shot (its unshot radiosity, zero for good, is left out), `R (2 n k +
+//! n)` before; for random walks their `R n k` sums.
 
 use crate::run::cost::Unit;
 use crate::run::problem::Problem;

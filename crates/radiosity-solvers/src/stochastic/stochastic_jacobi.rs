@@ -252,26 +252,35 @@ struct Chain {
 
 impl Chain {
     /// The chain as one vector, to be shared between ranks ([`Deal::share`]): its estimate,
-    /// unshot radiosity and streams' positions, then its weight, phase, unshot power and
-    /// iteration (counts are exact as reals below 2^53).
-    fn pack(&self) -> Vec<Real> {
+    /// its unshot radiosity when `incremental` (the chain was in its incremental series before
+    /// the step, which every rank knows alike; the unshot radiosity is zero for good after), its
+    /// streams' positions, then its weight, phase, unshot power and iteration (counts are exact
+    /// as reals below 2^53).
+    fn pack(&self, incremental: bool) -> Vec<Real> {
         let mut v = Vec::with_capacity(2 * self.estimate.len() + self.drawn.len() + 4);
         v.extend_from_slice(&self.estimate);
-        v.extend_from_slice(&self.unshot);
+        if incremental {
+            v.extend_from_slice(&self.unshot);
+        }
         v.extend(self.drawn.iter().map(|&d| d as Real));
         v.extend([self.weight, Real::from(u8::from(self.regular)), self.left, self.iteration as Real]);
         v
     }
 
     /// The chain as [`Chain::pack`] wrote it.
-    fn unpack(&mut self, v: &[Real]) {
+    fn unpack(&mut self, v: &[Real], incremental: bool) {
         let (m, n) = (self.estimate.len(), self.drawn.len());
         self.estimate.copy_from_slice(&v[..m]);
-        self.unshot.copy_from_slice(&v[m..2 * m]);
-        for (d, x) in self.drawn.iter_mut().zip(&v[2 * m..2 * m + n]) {
+        let at = if incremental {
+            self.unshot.copy_from_slice(&v[m..2 * m]);
+            2 * m
+        } else {
+            m
+        };
+        for (d, x) in self.drawn.iter_mut().zip(&v[at..at + n]) {
             *d = *x as u64;
         }
-        let tail = &v[2 * m + n..];
+        let tail = &v[at + n..];
         (self.weight, self.regular, self.left, self.iteration) = (tail[0], tail[1] > 0.0, tail[2], tail[3] as u64);
     }
 }
@@ -504,16 +513,18 @@ impl Solver for StochasticJacobi {
         }
         let deal = Deal::of(problem);
         let before = problem.spent(Unit::Rays);
+        let incremental: Vec<bool> = self.chains.iter().map(|c| !c.regular).collect();
         for r in 0..self.chains.len() {
             if deal.mine(r) {
                 self.advance(problem, r)?;
             }
         }
         if deal.split() {
-            let mut parts: Vec<Vec<Real>> = self.chains.iter().map(Chain::pack).collect();
+            let mut parts: Vec<Vec<Real>> =
+                self.chains.iter().zip(&incremental).map(|(chain, &inc)| chain.pack(inc)).collect();
             deal.share(problem, &mut parts, problem.spent(Unit::Rays) - before);
-            for (chain, part) in self.chains.iter_mut().zip(&parts) {
-                chain.unpack(part);
+            for ((chain, part), &inc) in self.chains.iter_mut().zip(&parts).zip(&incremental) {
+                chain.unpack(part, inc);
             }
         }
         let r = self.chains.len() as Real;

@@ -81,11 +81,21 @@ impl Unit {
         Unit::ALL.into_iter().find(|u| u.paid() && u.key() == key)
     }
 
-    /// The unit's place in [`Unit::ALL`].
+    /// The unit's place in [`Unit::ALL`]: its discriminant, since `ALL` lists the variants in
+    /// order (checked at compile time below).
     pub(crate) fn at(self) -> usize {
-        Unit::ALL.iter().position(|&u| u == self).unwrap_or_default()
+        self as usize
     }
 }
+
+// `ALL` lists the variants in declaration order, so a unit's discriminant is its place in it.
+const _: () = {
+    let mut i = 0;
+    while i < Unit::ALL.len() {
+        assert!(Unit::ALL[i] as usize == i);
+        i += 1;
+    }
+};
 
 impl fmt::Display for Unit {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {

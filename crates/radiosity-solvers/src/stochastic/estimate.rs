@@ -94,36 +94,45 @@ fn cast_per_patch(
     rays: &Rays<'_>,
     n: usize,
     streams: &mut Streams<'_>,
-    count: &(dyn Fn(usize, &mut crate::stochastic::sequence::PointStream) -> usize + Sync),
+    count: &(dyn Fn(usize, &mut dyn FnMut() -> Real) -> usize + Sync),
     mut land: impl FnMut(usize, Option<usize>),
 ) -> Cast {
-    let blocks: Vec<Vec<(usize, Vec<Option<usize>>)>> = (0..n.div_ceil(BLOCK))
+    // A block's patches with their numbers of rays, and all their landings in one list.
+    type Landed = (Vec<(usize, usize)>, Vec<Option<usize>>);
+    let blocks: Vec<Landed> = (0..n.div_ceil(BLOCK))
         .into_par_iter()
         .map(|b| {
-            let mut out = Vec::new();
+            let (mut patches, mut landings) = (Vec::new(), Vec::new());
             let mut points = Vec::new();
             for j in b * BLOCK..((b + 1) * BLOCK).min(n) {
-                let mut stream = streams.of(j);
-                let k = count(j, &mut stream);
+                // A patch's stream is keyed only when it is drawn from: most patches cast no
+                // ray in most iterations of the incremental series.
+                let mut stream = None;
+                let k = count(j, &mut || stream.get_or_insert_with(|| streams.of(j)).uniform());
                 if k == 0 {
                     continue;
                 }
+                let stream = stream.get_or_insert_with(|| streams.of(j));
                 points.clear();
                 points.extend((0..k).map(|_| stream.next_point()));
-                let mut landings = vec![None; k];
-                rays.cast_batch(j, &points, &mut landings);
-                out.push((j, landings));
+                let at = landings.len();
+                landings.resize(at + k, None);
+                rays.cast_batch(j, &points, &mut landings[at..]);
+                patches.push((j, k));
             }
-            out
+            (patches, landings)
         })
         .collect();
     let mut cast = Cast::default();
-    for (j, landings) in blocks.into_iter().flatten() {
-        cast.rays += landings.len() as u64;
-        // The next iteration's rays go on from the next point.
-        streams.drawn[j] += landings.len() as u64;
-        for landing in landings {
-            land(j, landing);
+    for (patches, landings) in blocks {
+        let mut landings = landings.into_iter();
+        for (j, k) in patches {
+            cast.rays += k as u64;
+            // The next iteration's rays go on from the next point.
+            streams.drawn[j] += k as u64;
+            for landing in landings.by_ref().take(k) {
+                land(j, landing);
+            }
         }
     }
     cast
@@ -156,19 +165,26 @@ pub(crate) fn shoot(
     // Rays due at least one are cast in their rounded number, carrying the patch's power
     // between them; the others one at a time, at random.
     let cast_count = |m: Real| if m >= 1.0 { m.round() } else { m };
-    let count = |j: usize, stream: &mut crate::stochastic::sequence::PointStream| {
+    let count = |j: usize, uniform: &mut dyn FnMut() -> Real| {
         let m = expected(j);
         match m {
             m if m >= 1.0 => m.round() as usize,
-            m if m > 0.0 => round_at_random(m, stream.uniform()),
+            m if m > 0.0 => round_at_random(m, uniform()),
             _ => 0,
         }
     };
+    // What each of a patch's rays carries per unit of its power, worked out once a patch.
+    let scale: Vec<Real> = (0..n)
+        .into_par_iter()
+        .map(|j| {
+            let m = expected(j);
+            if m > 0.0 { rays.ray_weight(j) / cast_count(m) } else { 0.0 }
+        })
+        .collect();
     cast_per_patch(rays, n, streams, &count, |j, landing| {
         if let Some(i) = landing {
-            let scale = rays.ray_weight(j) / cast_count(expected(j));
             for c in 0..k {
-                incoming[i * k + c] += x[j * k + c] * scale;
+                incoming[i * k + c] += x[j * k + c] * scale[j];
             }
         }
     })
@@ -195,7 +211,7 @@ pub(crate) fn gather(
     if area.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Cast::default();
     }
-    let count = |i: usize, _: &mut crate::stochastic::sequence::PointStream| {
+    let count = |i: usize, _: &mut dyn FnMut() -> Real| {
         if reflects(i) { ((n_rays as Real * areas[i] / area).ceil() as usize).max(1) } else { 0 }
     };
     let mut cast_from = vec![0usize; n];

@@ -73,6 +73,7 @@ use crate::stochastic::estimate::{Streams, gather, lines, shoot};
 use crate::stochastic::ranks::Deal;
 use crate::stochastic::sequence::Sequence;
 use radiosity_core::Real;
+use rayon::prelude::*;
 use std::str::FromStr;
 
 /// Where the regular iterations take their transport from.
@@ -317,8 +318,9 @@ impl StochasticJacobi {
 
     /// `Σ_ic A_i |v_ic|`.
     fn power(problem: &Problem<'_>, v: &[Real]) -> Real {
-        let k = problem.channels();
-        v.iter().enumerate().map(|(idx, x)| problem.system().areas()[idx / k] * x.abs()).sum()
+        // Element by element in order, as one sum, without a division an element.
+        let areas = problem.system().areas();
+        v.chunks(problem.channels()).zip(areas).flat_map(|(x, &a)| x.iter().map(move |x| a * x.abs())).sum()
     }
 
     /// One iteration of chain `r`.
@@ -355,10 +357,10 @@ impl StochasticJacobi {
                 streams.iteration = chain.iteration;
                 chain.iteration += 1;
                 let n_rays = ((batch as Real * unshot / emitted).ceil() as u64).max(1);
-                // Power shot: A_j ΔB_j.
-                for (idx, (p, b)) in x.iter_mut().zip(&chain.unshot).enumerate() {
-                    *p = areas[idx / k] * b;
-                }
+                // Power shot: A_j ΔB_j (each entry on its own, so on every thread).
+                x.par_chunks_mut(k).zip(chain.unshot.par_chunks(k)).zip(areas.par_iter()).for_each(|((p, b), a)| {
+                    p.iter_mut().zip(b).for_each(|(p, b)| *p = a * b);
+                });
                 let cast = if params.global_lines {
                     problem
                         .cast(&name, |rays| lines(rays, &chain.unshot, k, n_rays, &streams, &mut incoming))?
@@ -366,12 +368,16 @@ impl StochasticJacobi {
                 } else {
                     problem.cast(&name, |rays| shoot(rays, &x, k, n_rays, &mut streams, &mut incoming))?
                 };
-                for (idx, power) in incoming.iter().enumerate() {
-                    let (i, c) = (idx / k, idx % k);
-                    let delta = system.rho(i, c) * power / areas[i];
-                    chain.unshot[idx] = delta;
-                    chain.estimate[idx] += delta;
-                }
+                (chain.unshot.par_chunks_mut(k), chain.estimate.par_chunks_mut(k), incoming.par_chunks(k))
+                    .into_par_iter()
+                    .enumerate()
+                    .for_each(|(i, (unshot, estimate, power))| {
+                        for c in 0..k {
+                            let delta = system.rho(i, c) * power[c] / areas[i];
+                            unshot[c] = delta;
+                            estimate[c] += delta;
+                        }
+                    });
                 chain.weight += cast.rays as Real;
             }
         }
@@ -413,22 +419,23 @@ impl StochasticJacobi {
                         .cast(&name, |rays| lines(rays, &chain.estimate, k, batch, &streams, &mut incoming))?
                         .ok_or_else(|| no_lines(&name))?
                 } else {
-                    let x: Vec<Real> = chain.estimate.iter().enumerate().map(|(idx, b)| areas[idx / k] * b).collect();
+                    let x: Vec<Real> =
+                        chain.estimate.par_iter().enumerate().map(|(idx, b)| areas[idx / k] * b).collect();
                     problem.cast(&name, |rays| shoot(rays, &x, k, batch, &mut streams, &mut incoming))?
                 };
-                for (idx, power) in incoming.iter().enumerate() {
-                    let (i, c) = (idx / k, idx % k);
-                    fresh[idx] = system.e(i, c) + system.rho(i, c) * power / areas[i];
-                }
+                fresh.par_chunks_mut(k).zip(incoming.par_chunks(k)).enumerate().for_each(|(i, (fresh, power))| {
+                    for c in 0..k {
+                        fresh[c] = system.e(i, c) + system.rho(i, c) * power[c] / areas[i];
+                    }
+                });
                 cast
             }
         };
         let w = cast.rays as Real;
         if w > 0.0 {
             let total = chain.weight + w;
-            for (b, f) in chain.estimate.iter_mut().zip(&fresh) {
-                *b = (chain.weight * *b + w * f) / total;
-            }
+            let before = chain.weight;
+            chain.estimate.par_iter_mut().zip(&fresh).for_each(|(b, f)| *b = (before * *b + w * f) / total);
             chain.weight = total;
         }
         Ok(())

@@ -213,6 +213,47 @@ fn columns_and_products_are_the_same_on_one_and_two_threads() {
 }
 
 #[test]
+fn a_tree_and_products_built_on_several_threads_are_those_of_one() {
+    // 9,201 patches: the tree's subtrees and a product's passes up and down it split between
+    // threads above 4,096 patches, so both run here, on 1 and 3 threads, and must agree to the
+    // bit; the product must also be what the operator's rows give.
+    let p = prepared("office:size=0.2");
+    assert!(p.scene().len() > 2 * 4096);
+    let build = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| {
+            let f = hierarchical(&p, 0.2);
+            let n = f.patch_count();
+            let x: Vec<Real> = (0..3 * n).map(|k| 0.1 + ((k * 7919) % 101) as Real / 101.0).collect();
+            let mut product = vec![0.0; 3 * n];
+            assert!(f.multiply(&x, 3, &mut product));
+            // The passes against rows, which read each entry off its link directly.
+            let mut row = vec![0.0; n];
+            for i in (0..n).step_by(457) {
+                assert!(f.fill_row(i, &mut row));
+                for c in 0..3 {
+                    let direct: Real = (0..n).map(|j| row[j] * x[3 * j + c]).sum();
+                    let (got, scale) = (product[3 * i + c], direct.abs().max(1e-300));
+                    assert!((got - direct).abs() <= 1e-12 * scale, "row {i}, channel {c}: {got} against {direct}");
+                }
+            }
+            let mut column = vec![0.0; n];
+            let columns: Vec<Vec<u64>> = [0, n / 3, n - 1]
+                .iter()
+                .map(|&j| {
+                    f.fill_column(j, &mut column);
+                    column.iter().map(|v| v.to_bits()).collect()
+                })
+                .collect();
+            (f.links(), product.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), columns)
+        })
+    };
+    let (one, three) = (build(1), build(3));
+    assert!(one.0.len() > 1000, "{} links", one.0.len());
+    assert!(one == three, "the operators built on 1 and 3 threads differ");
+}
+
+#[test]
 fn the_operator_read_back_from_its_bytes_is_the_one_written() {
     // Its links written and read back over the same scene: every column, a product and the
     // figures the same to the bit; a wrong key, another scene, a changed byte and a truncated

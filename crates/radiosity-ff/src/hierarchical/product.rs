@@ -159,31 +159,50 @@ impl HierarchicalColumns {
     }
 
     /// Every node's moments of `x` (`k` channels), each sender weighed by `weights`: gathered
-    /// up the tree (children come after their parent, so a backward pass sees them first).
+    /// up the tree, subtrees on rayon's threads (each node's from its children's alone, so
+    /// the same whatever their number).
     pub(super) fn gathered_moments(&self, x: &[Real], k: usize, weights: &[Real]) -> Vec<Moments> {
+        let mut moments = vec![Moments::default(); self.tree.nodes.len() * k];
+        if !moments.is_empty() {
+            self.gather_up(0, &mut moments, x, k, weights);
+        }
+        moments
+    }
+
+    /// The moments of `node`'s subtree into `moments` (its nodes × `k`, in pre-order from
+    /// `node`: a subtree over `m` patches is `2m − 1` nodes in a row, its first child's
+    /// subtree after it, then its second's).
+    fn gather_up(&self, node: usize, moments: &mut [Moments], x: &[Real], k: usize, weights: &[Real]) {
         let nodes = &self.tree.nodes;
-        let mut moments = vec![Moments::default(); nodes.len() * k];
-        for node in (0..nodes.len()).rev() {
-            match nodes[node].children {
-                None => {
-                    let p = self.tree.order[nodes[node].first as usize] as usize;
-                    let offset = self.centroids[p] - nodes[node].centre;
-                    for ch in 0..k {
-                        let w = self.areas[p] * weights[p] * x[p * k + ch];
-                        moments[node * k + ch] = Moments::of(self.normals[p] * w, offset);
-                    }
+        match nodes[node].children {
+            None => {
+                let p = self.tree.order[nodes[node].first as usize] as usize;
+                let offset = self.centroids[p] - nodes[node].centre;
+                for ch in 0..k {
+                    let w = self.areas[p] * weights[p] * x[p * k + ch];
+                    moments[ch] = Moments::of(self.normals[p] * w, offset);
                 }
-                Some([a, b]) => {
-                    let (da, db) =
-                        (nodes[a as usize].centre - nodes[node].centre, nodes[b as usize].centre - nodes[node].centre);
-                    for ch in 0..k {
-                        moments[node * k + ch] =
-                            moments[a as usize * k + ch].shifted(da).plus(&moments[b as usize * k + ch].shifted(db));
-                    }
+            }
+            Some([a, b]) => {
+                let (a, b) = (a as usize, b as usize);
+                debug_assert_eq!((a, b), (node + 1, node + 2 * nodes[a].count as usize));
+                let (here, below) = moments.split_at_mut(k);
+                let (under_a, under_b) = below.split_at_mut((b - a) * k);
+                if nodes[node].count as usize > PARALLEL_PATCHES {
+                    rayon::join(
+                        || self.gather_up(a, under_a, x, k, weights),
+                        || self.gather_up(b, under_b, x, k, weights),
+                    );
+                } else {
+                    self.gather_up(a, under_a, x, k, weights);
+                    self.gather_up(b, under_b, x, k, weights);
+                }
+                let (da, db) = (nodes[a].centre - nodes[node].centre, nodes[b].centre - nodes[node].centre);
+                for ch in 0..k {
+                    here[ch] = under_a[ch].shifted(da).plus(&under_b[ch].shifted(db));
                 }
             }
         }
-        moments
     }
 
     /// Adds to `forms` (one per channel) what node `node` receives through its far links from
@@ -202,31 +221,58 @@ impl HierarchicalColumns {
     }
 
     /// Pushes `forms` (nodes × `k` channels) down the tree, a parent's shifted into its
-    /// children's, and writes each leaf's form evaluated at its patch into `out`.
+    /// children's, subtrees on rayon's threads, and writes each leaf's form evaluated at its
+    /// patch into `out`.
     pub(super) fn pushed_down(&self, forms: &mut [Form], k: usize, out: &mut [Real]) {
+        // The leaves' values in tree order first, where a subtree's patches are a range.
+        let mut values = vec![0.0; out.len()];
+        if !forms.is_empty() {
+            self.push_down(0, forms, k, &mut values);
+        }
         let nodes = &self.tree.nodes;
-        for node in 0..nodes.len() {
-            match nodes[node].children {
-                None => {
-                    let p = self.tree.order[nodes[node].first as usize] as usize;
-                    let offset = self.centroids[p] - nodes[node].centre;
+        out.par_chunks_mut(k).enumerate().for_each(|(p, out)| {
+            let at = nodes[self.tree.leaf[p] as usize].first as usize * k;
+            out.copy_from_slice(&values[at..at + k]);
+        });
+    }
+
+    /// Pushes the forms of `node`'s subtree (`forms`, its nodes × `k` in pre-order from
+    /// `node`) down, writing its leaves' values into `values` (its patches × `k`, in tree
+    /// order).
+    fn push_down(&self, node: usize, forms: &mut [Form], k: usize, values: &mut [Real]) {
+        let nodes = &self.tree.nodes;
+        match nodes[node].children {
+            None => {
+                let p = self.tree.order[nodes[node].first as usize] as usize;
+                let offset = self.centroids[p] - nodes[node].centre;
+                for ch in 0..k {
+                    values[ch] = forms[ch].at(self.normals[p], offset);
+                }
+            }
+            Some([a, b]) => {
+                let (a, b) = (a as usize, b as usize);
+                let (here, below) = forms.split_at_mut(k);
+                let (under_a, under_b) = below.split_at_mut((b - a) * k);
+                for (c, under) in [(a, &mut *under_a), (b, &mut *under_b)] {
+                    let delta = nodes[c].centre - nodes[node].centre;
                     for ch in 0..k {
-                        out[p * k + ch] = forms[node * k + ch].at(self.normals[p], offset);
+                        under[ch].add(&here[ch].shifted(delta));
                     }
                 }
-                Some(children) => {
-                    for c in children {
-                        let delta = nodes[c as usize].centre - nodes[node].centre;
-                        for ch in 0..k {
-                            let shifted = forms[node * k + ch].shifted(delta);
-                            forms[c as usize * k + ch].add(&shifted);
-                        }
-                    }
+                let (values_a, values_b) = values.split_at_mut(nodes[a].count as usize * k);
+                if nodes[node].count as usize > PARALLEL_PATCHES {
+                    rayon::join(|| self.push_down(a, under_a, k, values_a), || self.push_down(b, under_b, k, values_b));
+                } else {
+                    self.push_down(a, under_a, k, values_a);
+                    self.push_down(b, under_b, k, values_b);
                 }
             }
         }
     }
 }
+
+/// Subtrees over more patches than this have their passes run beside each other.
+const PARALLEL_PATCHES: usize = 4096;
 
 /// What a node sends through its far links: `M0 = Σ w m` and `M1 = Σ w m bᵀ` (rows `k` of
 /// `M1` are `Σ w m_k b`) over its patches, `w = A x`, `m` the normal and `b` the offset of the

@@ -20,10 +20,11 @@
 //! [`ClusterTree::order`].
 
 use radiosity_core::{Real, Scene, Vec3};
+use rayon::prelude::*;
 use std::f64::consts::PI;
 
 /// A node: the patches `order[first .. first + count]`.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub(crate) struct Node {
     /// The centre of the bounding sphere of the patches' vertices.
     pub centre: Vec3,
@@ -77,51 +78,78 @@ pub(crate) struct ClusterTree {
 }
 
 impl ClusterTree {
-    /// Builds the tree over every patch of `scene` (at least one).
+    /// Builds the tree over every patch of `scene` (at least one), subtrees on rayon's
+    /// threads: the same tree whatever their number.
     pub fn new(scene: &Scene) -> ClusterTree {
         let n = scene.len();
         let mut order: Vec<u32> = (0..n as u32).collect();
-        let mut tree = ClusterTree { nodes: Vec::with_capacity(2 * n), order: Vec::new(), leaf: vec![0; n] };
-        let centroids: Vec<Vec3> = scene.patches().iter().map(|p| p.centroid()).collect();
-        tree.split(scene, &centroids, &mut order, 0);
-        tree.order = order;
-        for (k, node) in tree.nodes.iter().enumerate() {
+        let centroids: Vec<Vec3> = scene.patches().par_iter().map(|p| p.centroid()).collect();
+        let classes: Vec<u8> = (0..n as u32).into_par_iter().map(|i| class(scene, i)).collect();
+        // A node over `m` patches heads a subtree of `2m − 1` nodes (every split is in two):
+        // each subtree's place in pre-order is known before it is built.
+        let mut nodes = vec![Node::default(); (2 * n).saturating_sub(1)];
+        let at = Subtree { scene, centroids: &centroids, classes: &classes };
+        at.fill(&mut order, 0, &mut nodes, 0);
+        let mut leaf = vec![0; n];
+        for (k, node) in nodes.iter().enumerate() {
             if node.is_leaf() {
-                tree.leaf[tree.order[node.first as usize] as usize] = k as u32;
+                leaf[order[node.first as usize] as usize] = k as u32;
             }
         }
-        tree
-    }
-
-    /// Adds the node over `patches` (which start at `first` in tree order) and its subtree;
-    /// returns its index.
-    fn split(&mut self, scene: &Scene, centroids: &[Vec3], patches: &mut [u32], first: usize) -> u32 {
-        let index = self.nodes.len() as u32;
-        self.nodes.push(bounds(scene, patches, first));
-        if patches.len() > 1 && !one_class(scene, patches) {
-            // Patches facing different ways first: clusters that face one way can link far
-            // more often (every cosine of a far link must be non-negative).
-            patches.sort_unstable_by_key(|&i| (class(scene, i), i));
-            let boundaries = (1..patches.len()).filter(|&k| class(scene, patches[k - 1]) != class(scene, patches[k]));
-            let mid = boundaries.min_by_key(|&k| k.abs_diff(patches.len() / 2)).unwrap();
-            let (left, right) = patches.split_at_mut(mid);
-            let a = self.split(scene, centroids, left, first);
-            let b = self.split(scene, centroids, right, first + mid);
-            self.nodes[index as usize].children = Some([a, b]);
-        } else if patches.len() > 1 {
-            let mid = split_at_median(patches, centroids);
-            let (left, right) = patches.split_at_mut(mid);
-            let a = self.split(scene, centroids, left, first);
-            let b = self.split(scene, centroids, right, first + mid);
-            self.nodes[index as usize].children = Some([a, b]);
-        }
-        index
+        ClusterTree { nodes, order, leaf }
     }
 
     /// The patches of node `k`, in tree order.
     pub fn patches_of(&self, k: u32) -> &[u32] {
         let node = &self.nodes[k as usize];
         &self.order[node.first as usize..(node.first + node.count) as usize]
+    }
+}
+
+/// What building a subtree reads: the scene, its patches' centroids and classes.
+struct Subtree<'s> {
+    scene: &'s Scene,
+    centroids: &'s [Vec3],
+    classes: &'s [u8],
+}
+
+/// Subtrees over more patches than this are built beside each other on rayon's threads.
+const PARALLEL_PATCHES: usize = 4096;
+
+impl Subtree<'_> {
+    /// Writes the node over `patches` (which start at `first` in tree order) and its subtree
+    /// into `nodes` (exactly `2 · patches.len() − 1` of them, in pre-order), the node's index
+    /// in the whole tree being `index`. Patches of more than one orientation class are split
+    /// between classes first, at the class boundary nearest the middle: clusters that face
+    /// one way can link far more often (every cosine of a far link must be non-negative).
+    fn fill(&self, patches: &mut [u32], first: usize, nodes: &mut [Node], index: u32) {
+        debug_assert_eq!(nodes.len(), 2 * patches.len() - 1);
+        let mut node = bounds(self.scene, patches, first);
+        if patches.len() > 1 {
+            let classes = self.classes;
+            let mid = if patches.iter().any(|&i| classes[i as usize] != classes[patches[0] as usize]) {
+                patches.sort_unstable_by_key(|&i| (classes[i as usize], i));
+                let boundaries =
+                    (1..patches.len()).filter(|&k| classes[patches[k - 1] as usize] != classes[patches[k] as usize]);
+                boundaries.min_by_key(|&k| k.abs_diff(patches.len() / 2)).unwrap()
+            } else {
+                split_at_median(patches, self.centroids)
+            };
+            let (left, right) = patches.split_at_mut(mid);
+            let (here, below) = nodes.split_first_mut().unwrap();
+            let (left_nodes, right_nodes) = below.split_at_mut(2 * mid - 1);
+            let (a, b) = (index + 1, index + 2 * mid as u32);
+            node.children = Some([a, b]);
+            *here = node;
+            if left.len() + right.len() > PARALLEL_PATCHES {
+                rayon::join(|| self.fill(left, first, left_nodes, a), || self.fill(right, first + mid, right_nodes, b));
+            } else {
+                self.fill(left, first, left_nodes, a);
+                self.fill(right, first + mid, right_nodes, b);
+            }
+        } else {
+            nodes[0] = node;
+        }
     }
 }
 
@@ -177,6 +205,7 @@ fn largest_axis(v: Vec3) -> usize {
 }
 
 /// True when every patch of `patches` has the class of the first.
+#[cfg(test)]
 fn one_class(scene: &Scene, patches: &[u32]) -> bool {
     let first = class(scene, patches[0]);
     patches.iter().all(|&i| class(scene, i) == first)

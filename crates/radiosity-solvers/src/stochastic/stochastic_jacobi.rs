@@ -572,7 +572,8 @@ impl Solver for StochasticJacobi {
     fn record(&self) -> Record {
         let mut record = Record::new();
         record.set("replicates", self.chains.len());
-        record.set("regular_iterations", self.chains.iter().filter(|c| c.regular).count());
+        // How many replicates have shot their incremental series and iterate regularly.
+        record.set("replicates_regular", self.chains.iter().filter(|c| c.regular).count());
         record.set("unshot_power", self.unshot_power());
         record
     }

@@ -88,8 +88,9 @@ impl ClusterTree {
         // A node over `m` patches heads a subtree of `2m − 1` nodes (every split is in two):
         // each subtree's place in pre-order is known before it is built.
         let mut nodes = vec![Node::default(); (2 * n).saturating_sub(1)];
-        let at = Subtree { scene, centroids: &centroids, classes: &classes };
-        at.fill(&mut order, 0, &mut nodes, 0);
+        if n > 0 {
+            Subtree { scene, centroids: &centroids, classes: &classes }.fill(&mut order, 0, &mut nodes, 0);
+        }
         let mut leaf = vec![0; n];
         for (k, node) in nodes.iter().enumerate() {
             if node.is_leaf() {

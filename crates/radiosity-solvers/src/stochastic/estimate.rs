@@ -23,9 +23,8 @@
 //!   adds `b_a W / N` to `in_b`, `W` the area a transfer stands for.
 //!
 //! Rays are cast in parallel over fixed blocks of patches, each patch's rays from its own
-//! stream, and landings are summed in patch order afterwards (when shooting, each thread over
-//! its own range of receivers, still in that order): the same seed gives the same numbers
-//! whatever the thread count. A patch's stream is keyed by the seed, the replicate and
+//! stream, and landings are summed in patch order afterwards: the same seed gives the same
+//! numbers whatever the thread count. A patch's stream is keyed by the seed, the replicate and
 //! the patch, and continues from one iteration to the next ([`Streams::drawn`] counts the
 //! points each patch used): with a quasi-random sequence, the rays a patch casts over a whole
 //! run are one low-discrepancy sequence, not a short one each iteration (where a patch casts
@@ -88,33 +87,18 @@ pub(crate) struct Cast {
     pub rays: u64,
 }
 
-/// A block of patches' rays: each patch that cast with its number of rays, and where they all
-/// landed, in patch order, then ray order.
-struct Landed {
-    patches: Vec<(usize, usize)>,
-    landings: Vec<Option<usize>>,
-}
-
-impl Landed {
-    /// Every ray of the blocks that landed, as (caster, receiver), in patch order, then ray
-    /// order.
-    fn pairs(blocks: &[Landed]) -> impl Iterator<Item = (usize, usize)> + '_ {
-        blocks.iter().flat_map(|block| {
-            let casters = block.patches.iter().flat_map(|&(j, k)| std::iter::repeat_n(j, k));
-            casters.zip(&block.landings).filter_map(|(j, landing)| landing.map(|i| (j, i)))
-        })
-    }
-}
-
-/// The rays from each patch in `0..n`, cast in parallel blocks: `count(j, uniform)` says how
-/// many rays patch `j` casts (drawing any rounding from its stream through `uniform`). Returns
-/// what they cost and the blocks' landings; the streams go on from the next point.
+/// The rays from each patch in `0..n`, cast in parallel blocks: `count(j, stream)` says how
+/// many rays patch `j` casts (drawing any rounding from its stream), and the landings are
+/// handed to `land(j, landing)` in patch order, then ray order.
 fn cast_per_patch(
     rays: &Rays<'_>,
     n: usize,
     streams: &mut Streams<'_>,
     count: &(dyn Fn(usize, &mut dyn FnMut() -> Real) -> usize + Sync),
-) -> (Cast, Vec<Landed>) {
+    mut land: impl FnMut(usize, Option<usize>),
+) -> Cast {
+    // A block's patches with their numbers of rays, and all their landings in one list.
+    type Landed = (Vec<(usize, usize)>, Vec<Option<usize>>);
     let blocks: Vec<Landed> = (0..n.div_ceil(BLOCK))
         .into_par_iter()
         .map(|b| {
@@ -136,16 +120,22 @@ fn cast_per_patch(
                 rays.cast_batch(j, &points, &mut landings[at..]);
                 patches.push((j, k));
             }
-            Landed { patches, landings }
+            (patches, landings)
         })
         .collect();
     let mut cast = Cast::default();
-    for &(j, k) in blocks.iter().flat_map(|b| &b.patches) {
-        cast.rays += k as u64;
-        // The next iteration's rays go on from the next point.
-        streams.drawn[j] += k as u64;
+    for (patches, landings) in blocks {
+        let mut landings = landings.into_iter();
+        for (j, k) in patches {
+            cast.rays += k as u64;
+            // The next iteration's rays go on from the next point.
+            streams.drawn[j] += k as u64;
+            for landing in landings.by_ref().take(k) {
+                land(j, landing);
+            }
+        }
     }
-    (cast, blocks)
+    cast
 }
 
 /// `⌊m⌋` or `⌈m⌉`, with expectation `m`, from `u` uniform in `[0, 1)`.
@@ -191,20 +181,13 @@ pub(crate) fn shoot(
             if m > 0.0 { rays.ray_weight(j) / cast_count(m) } else { 0.0 }
         })
         .collect();
-    let (cast, blocks) = cast_per_patch(rays, n, streams, &count);
-    // Each thread adds up the landings on its own range of patches, every landing in the
-    // order of one serial pass: each sum is the same whatever the threads.
-    let span = n.div_ceil(rayon::current_num_threads().max(1)).max(1);
-    incoming.par_chunks_mut(span * k).enumerate().for_each(|(r, out)| {
-        let range = r * span..r * span + out.len() / k;
-        for (j, i) in Landed::pairs(&blocks).filter(|(_, i)| range.contains(i)) {
-            let at = (i - range.start) * k;
+    cast_per_patch(rays, n, streams, &count, |j, landing| {
+        if let Some(i) = landing {
             for c in 0..k {
-                out[at + c] += x[j * k + c] * scale[j];
+                incoming[i * k + c] += x[j * k + c] * scale[j];
             }
         }
-    });
-    cast
+    })
 }
 
 /// `g_i = Σ_j F_ij b_j` for every patch where `reflects(i)`, by about `n_rays` rays in
@@ -231,17 +214,16 @@ pub(crate) fn gather(
     let count = |i: usize, _: &mut dyn FnMut() -> Real| {
         if reflects(i) { ((n_rays as Real * areas[i] / area).ceil() as usize).max(1) } else { 0 }
     };
-    let (cast, blocks) = cast_per_patch(rays, n, streams, &count);
     let mut cast_from = vec![0usize; n];
-    for &(i, k) in blocks.iter().flat_map(|b| &b.patches) {
-        cast_from[i] = k;
-    }
-    // A ray that escapes gathers nothing, also against the control variate.
-    for (i, j) in Landed::pairs(&blocks) {
-        for c in 0..k {
-            gathered[i * k + c] += b[j * k + c] - beta.map_or(0.0, |beta| beta[c]);
+    let cast = cast_per_patch(rays, n, streams, &count, |i, landing| {
+        cast_from[i] += 1;
+        // A ray that escapes gathers nothing, also against the control variate.
+        if let Some(j) = landing {
+            for c in 0..k {
+                gathered[i * k + c] += b[j * k + c] - beta.map_or(0.0, |beta| beta[c]);
+            }
         }
-    }
+    });
     for i in (0..n).filter(|&i| cast_from[i] > 0) {
         let weight = rays.ray_weight(i);
         let row = beta.map_or(0.0, |_| rays.row_sum(i).unwrap_or(0.0));

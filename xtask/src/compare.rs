@@ -134,8 +134,7 @@ impl Plan {
 
     /// Runs every solver and writes the report, table and plots into `out`.
     pub fn execute(self, out: &Path) -> Result<Comparison> {
-        let phases = std::cell::RefCell::new(radiosity_eval::Phases::new());
-        let prepared = prepare_over(&self.scene, &phases, self.world.as_deref())?;
+        let prepared = prepare_over(&self.scene, None, self.world.as_deref())?;
         radiosity_eval::require_emitters(&prepared)?;
         let report = prepared.report();
         eprintln!("{}: {} patches; left out: {}", report.scene, report.patches, report.left_out_phrase());

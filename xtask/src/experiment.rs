@@ -130,24 +130,28 @@ pub fn check_measurable(rules: &StopRules, kind: ReferenceKind) -> Result<()> {
 /// Loads and prepares a scene with a spinner for each stage, printing its load warnings (the
 /// loaders name the file).
 pub fn prepare(arg: &str) -> Result<PreparedScene> {
-    prepare_over(arg, &RefCell::new(Phases::new()), None)
+    prepare_over(arg, None, None)
 }
 
-/// As [`prepare`], each stage a phase of `phases`, the analysis's probes dealt to `ranks` when
-/// this process is one of several (`PreparedScene::load_over`).
+/// As [`prepare`], each stage a phase of `phases` where given, the analysis's probes dealt to
+/// `ranks` when this process is one of several (`PreparedScene::load_over`).
 pub fn prepare_over(
     arg: &str,
-    phases: &RefCell<Phases>,
+    phases: Option<&RefCell<Phases>>,
     ranks: Option<&dyn radiosity_core::Collective>,
 ) -> Result<PreparedScene> {
     let bars = Bars::new();
     let stage = |stage: &str| {
         bars.end();
         bars.begin(stage, 0, "");
-        phases.borrow_mut().begin(stage);
+        if let Some(phases) = phases {
+            phases.borrow_mut().begin(stage);
+        }
     };
     let prepared = PreparedScene::load_over(arg, &stage, ranks);
-    phases.borrow_mut().end();
+    if let Some(phases) = phases {
+        phases.borrow_mut().end();
+    }
     bars.end();
     let prepared = prepared?;
     for w in &prepared.loaded.warnings {

@@ -68,7 +68,7 @@ pub fn run(args: &Args, ranks: &crate::ranks::Ranks) -> Result<()> {
     }
     let phases = RefCell::new(Phases::new());
     let world = ranks.world();
-    let prepared = prepare_over(&args.run.scene, &phases, world.as_deref())?;
+    let prepared = prepare_over(&args.run.scene, Some(&phases), world.as_deref())?;
     phases.borrow_mut().begin("setting up the backend and reference");
     // One solver's run: its columns are computed (and timed), whether or not the reference
     // was cached and the matrix assembled.

@@ -12,44 +12,65 @@ use crate::experiment::{ReferenceArg, check_measurable, check_out_dir, default_o
 use crate::ranks::Ranks;
 use anyhow::{Result, bail};
 use radiosity_eval::ReferenceKind;
-use radiosity_eval::{ColumnCost, Comparison, Transport};
+use radiosity_eval::{ColumnCost, Comparison, ComparisonWatch, Lab, Transport};
 use radiosity_ff::BackendSpec;
+use radiosity_geom::PreparedScene;
 use radiosity_solvers::{Solver, SolverRegistry, StopRules};
 use std::path::{Path, PathBuf};
 
 /// The paper's multi-cubes comparison (its figure 1).
 pub const DEFAULT_SOLVERS: &str = "pr,xu,pr-g30,xu-g30,pr-g30-m480,xu-g30-m480";
 
-/// Arguments of `compare`.
+/// What `compare` and `watch` both take: the comparison to run.
 #[derive(Debug, clap::Args)]
-pub struct Args {
+pub struct ComparisonArgs {
     /// The scene: a built-in name with `:key=value` parameters, or a .gltf, .glb or .mgf path.
     #[arg(long, default_value = "multi-cubes")]
-    scene: String,
+    pub scene: String,
     /// The solvers, comma-separated (names as for `solve`).
     #[arg(long, default_value = DEFAULT_SOLVERS)]
-    solvers: String,
+    pub solvers: String,
     /// The form-factor backend, with `:key=value` parameters.
     #[arg(long = "ff", value_name = "BACKEND", default_value = "analytic", long_help = crate::experiment::backend_help())]
-    ff: String,
+    pub ff: String,
     #[command(flatten)]
-    transport: crate::experiment::TransportArg,
+    pub transport: crate::experiment::TransportArg,
     /// Stop rules for every solver (a solver that samples transport computes no columns: give
     /// it a rays=, steps=, time= or rms= rule too, e.g. columns=2n,rays=1e7).
     #[arg(long, value_name = "RULES", default_value = "columns=2n")]
-    until: String,
+    pub until: String,
     #[command(flatten)]
-    reference: ReferenceArg,
-    /// The output folder (default `results/<scene>-<date-time>/`).
-    #[arg(long, value_name = "DIR")]
-    out: Option<PathBuf>,
+    pub reference: ReferenceArg,
     /// How solvers pay for their columns, which names the clock of every seconds figure:
     /// `computed` computes every column when a solver asks for it (the `measured` clock, wall
     /// time); `charged` reads them from the stored matrix of a `matrix` reference and charges
     /// each the backend's measured cost (the `charged` clock: several times faster, but its
     /// seconds do not rank the default comparison's solvers as measured ones do).
     #[arg(long, value_name = "HOW", default_value_t = ColumnCost::default(), value_parser = parse_columns)]
-    columns: ColumnCost,
+    pub columns: ColumnCost,
+}
+
+impl ComparisonArgs {
+    /// The plan these arguments make, checked before any geometry is built.
+    pub fn plan(&self, ranks: &Ranks) -> Result<Plan> {
+        Ok(Plan::on_ranks(&self.scene, &self.solvers, &self.ff, &self.until, self.reference.parse()?, ranks)?
+            .with_columns(self.columns)
+            .with_transport(self.transport.transport))
+    }
+}
+
+/// Arguments of `compare`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    #[command(flatten)]
+    run: ComparisonArgs,
+    /// The output folder (default `results/<scene>-<date-time>/`).
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Also writes `page.html` into the output folder: the page of `watch`, kept as one file
+    /// that opens from disk, with a slider over each run.
+    #[arg(long)]
+    html: bool,
     #[command(flatten)]
     pub ranks: crate::ranks::RanksArg,
 }
@@ -134,6 +155,16 @@ impl Plan {
 
     /// Runs every solver and writes the report, table and plots into `out`.
     pub fn execute(self, out: &Path) -> Result<Comparison> {
+        Ok(self.execute_with(out, |_, _, _| Ok(()))?.0)
+    }
+
+    /// [`Plan::execute`], watched by what `watch` makes of the prepared scene, the lab and
+    /// the solvers' names once the lab is set up; the watch is handed back with the comparison.
+    pub fn execute_with<W: ComparisonWatch>(
+        self,
+        out: &Path,
+        watch: impl FnOnce(&PreparedScene, &Lab<'_>, Vec<String>) -> Result<W>,
+    ) -> Result<(Comparison, W)> {
         let prepared = prepare_over(&self.scene, None, self.world.as_deref())?;
         radiosity_eval::require_emitters(&prepared)?;
         let report = prepared.report();
@@ -142,7 +173,8 @@ impl Plan {
         if let Some(world) = self.world {
             lab = lab.over_ranks(world);
         }
-        let comparison = lab.compare(self.solvers, &self.rules, &Bars::new())?;
+        let mut watch = watch(&prepared, &lab, self.solvers.iter().map(|s| s.name()).collect())?;
+        let comparison = lab.compare_watched(self.solvers, &self.rules, &Bars::new(), &mut watch)?;
         for note in &comparison.notes {
             eprintln!("warning: {note}");
         }
@@ -150,7 +182,7 @@ impl Plan {
         if self.writes {
             comparison.write(out)?;
         }
-        Ok(comparison)
+        Ok((comparison, watch))
     }
 }
 
@@ -161,19 +193,34 @@ pub(crate) fn parse_columns(value: &str) -> Result<ColumnCost, String> {
 
 /// Runs `compare`.
 pub fn run(args: &Args, ranks: &Ranks) -> Result<()> {
-    let plan = Plan::on_ranks(&args.scene, &args.solvers, &args.ff, &args.until, args.reference.parse()?, ranks)?
-        .with_columns(args.columns)
-        .with_transport(args.transport.transport);
-    let out = args.out.clone().unwrap_or_else(|| default_out(&args.scene));
+    let plan = args.run.plan(ranks)?;
+    let out = args.out.clone().unwrap_or_else(|| default_out(&args.run.scene));
     if ranks.reports() {
         check_out_dir(&out)?;
     }
-    let comparison = plan.execute(&out)?;
+    let comparison = if args.html {
+        let (scene, until) = (args.run.scene.clone(), args.run.until.clone());
+        let (comparison, watch) = plan.execute_with(&out, |prepared, lab, solvers| {
+            let feed = crate::page::feed(&scene, &until, prepared, lab, solvers)?;
+            Ok(radiosity_eval::FeedWatch::new(feed, Default::default()))
+        })?;
+        if ranks.reports() {
+            crate::page::write_kept(&watch.feed(), &comparison, &out, &out.join("page.html"))?;
+        }
+        comparison
+    } else {
+        plan.execute(&out)?
+    };
     print!("{}", comparison.summary());
     println!("{}: {}", comparison.clock.seconds_label(), comparison.seconds_phrase());
     if let Some(build) = &comparison.backend_build {
         println!("form factors {}: {build}, outside every solver's seconds", comparison.backend);
     }
-    println!("wrote {} (report.md, convergence.csv and plots)", out.display());
+    let what = if args.html {
+        "report.md, convergence.csv, plots and page.html"
+    } else {
+        "report.md, convergence.csv and plots"
+    };
+    println!("wrote {} ({what})", out.display());
     Ok(())
 }

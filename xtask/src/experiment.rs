@@ -312,3 +312,24 @@ pub fn backend_help() -> String {
         BackendRegistry::builtin().help().trim_end()
     )
 }
+
+/// The camera a picture of `prepared` (the scene argument `scene`) starts from, for an image
+/// of aspect `aspect`: `given` with the scene's up axis, or the default framing; with how it
+/// was chosen and why its up axis is up.
+pub fn start_camera(
+    scene: &str,
+    prepared: &PreparedScene,
+    given: Option<radiosity_eval::Camera>,
+    aspect: radiosity_core::Real,
+) -> Result<(radiosity_eval::Camera, &'static str, String)> {
+    let spec = radiosity_geom::SceneSpec::parse(scene)?;
+    let (up, why) = radiosity_eval::up_axis(&spec, &prepared.loaded.scene);
+    Ok(match given {
+        Some(camera) => (camera.with_up(up), "as given", why.to_string()),
+        None => {
+            let framing = radiosity_eval::default_view(&spec, &prepared.loaded.scene, &prepared.visibility, aspect);
+            let how = if framing.inside { "the default, inside the enclosure" } else { "the default, from outside" };
+            (framing.camera, how, why.to_string())
+        }
+    })
+}

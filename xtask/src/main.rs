@@ -9,6 +9,7 @@ mod compare;
 mod experiment;
 mod export;
 mod ff;
+mod page;
 mod paper;
 mod ranks;
 mod render;
@@ -16,6 +17,7 @@ mod scenes;
 mod solve;
 mod stress;
 mod validate;
+mod watch;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -38,6 +40,8 @@ enum Command {
     Solve(solve::Args),
     /// Compare solvers on a scene: convergence table, report and plots under results/.
     Compare(compare::Args),
+    /// Run a comparison and watch it in the browser: a live page on 127.0.0.1.
+    Watch(watch::Args),
     /// Run the paper's figures 1–3 and set each of its claims beside our measurement.
     Paper(paper::Args),
     /// Render the solved scene to a PNG image.
@@ -62,6 +66,7 @@ fn main() -> ExitCode {
     let (name, distributed, ranks) = match &cli.command {
         Command::Solve(args) => ("solve", true, args.ranks.ranks),
         Command::Compare(args) => ("compare", true, args.ranks.ranks),
+        Command::Watch(_) => ("watch", false, None),
         Command::Scenes(_) => ("scenes", false, None),
         Command::Ff(_) => ("ff", false, None),
         Command::Paper(_) => ("paper", false, None),
@@ -88,6 +93,7 @@ fn main() -> ExitCode {
         Command::Ff(args) => ff::run(&args),
         Command::Solve(args) => solve::run(&args, &ranks),
         Command::Compare(args) => compare::run(&args, &ranks),
+        Command::Watch(args) => watch::run(&args),
         Command::Paper(args) => paper::run(&args),
         Command::Render(args) => render::run(&args),
         Command::Export(args) => export::run(&args),

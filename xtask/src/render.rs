@@ -10,11 +10,10 @@
 //! This command checks its arguments before any geometry is built, solves the scene, and
 //! writes the PNG.
 
-use crate::experiment::{SolveArgs, check_output_file, prepare, solved_rgb};
+use crate::experiment::{SolveArgs, check_output_file, prepare, solved_rgb, start_camera};
 use anyhow::{Result, bail};
 use radiosity_core::Real;
 use radiosity_eval::{MAX_SIDE, RenderParams, render};
-use radiosity_geom::SceneSpec;
 use std::path::PathBuf;
 
 /// A coordinate as `--camera` takes it, to four significant digits.
@@ -62,19 +61,10 @@ pub fn run(args: &Args) -> Result<()> {
     }
     let camera = args.camera.as_deref().map(str::parse::<radiosity_eval::Camera>).transpose()?;
 
-    let scene_spec = SceneSpec::parse(&args.run.scene)?;
     let prepared = prepare(&args.run.scene)?;
     let scene = &prepared.loaded.scene;
     let aspect = Real::from(args.width) / Real::from(args.height);
-    let (up, why) = radiosity_eval::up_axis(&scene_spec, scene);
-    let (camera, how) = match camera {
-        Some(camera) => (camera.with_up(up), "as given"),
-        None => {
-            let framing = radiosity_eval::default_view(&scene_spec, scene, &prepared.visibility, aspect);
-            let how = if framing.inside { "the default, inside the enclosure" } else { "the default, from outside" };
-            (framing.camera, how)
-        }
-    };
+    let (camera, how, why) = start_camera(&args.run.scene, &prepared, camera, aspect)?;
     let (e, t) = (camera.eye(), camera.target());
     eprintln!(
         "camera {},{},{}:{},{},{}:{} ({how}; up {why})",

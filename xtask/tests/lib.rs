@@ -12,6 +12,7 @@ mod readme;
 mod render;
 mod sampled;
 mod stress;
+mod watch;
 
 /// The cache every test run shares: its own folder, so that tests never read what an
 /// earlier build cached.

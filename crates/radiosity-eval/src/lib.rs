@@ -69,6 +69,7 @@
 mod error;
 pub mod exchange;
 mod lab;
+mod live;
 mod memory;
 mod phases;
 mod progress;
@@ -84,7 +85,7 @@ pub use lab::backends::{
     obtain_matrix,
 };
 pub use lab::calibration::Calibration;
-pub use lab::compare::Comparison;
+pub use lab::compare::{Comparison, ComparisonWatch};
 pub use lab::options::{ColumnCharge, ColumnCost, LabOptions, Transport};
 pub use lab::outcome::{FinalMetrics, Outcome};
 pub use lab::ranks::RankReport;
@@ -93,6 +94,10 @@ pub use lab::run::{check_rules, rgb};
 pub use lab::setup::{ChosenReference, Lab, ReferenceOrigin, require_emitters};
 pub use lab::summary::{OperatorSummary, Reached, ReferenceSummary, RunSummary};
 pub use lab::transport::TransportBuilt;
+pub use live::feed::{FRAME_INTERVAL, Feed, FeedWatch, Frame, KEPT_FACTOR, KEPT_MOST, Sent};
+pub use live::page::write_page;
+pub use live::scene_view::{LiveHeader, LiveScene, PROBE_SIZE};
+pub use live::server::Server;
 pub use phases::{Phase, Phases};
 pub use progress::{NoProgress, Progress};
 pub use radiosity_core::Clock;
@@ -122,5 +127,7 @@ pub use truth::validate::{
 pub use view::framing::{Framing, INSIDE_FOV, default_view, up_axis};
 pub use view::gltf_export::{ExportInfo, Glb, export_glb, exposure};
 pub use view::png_image::{Rgb8, write_rgb8};
-pub use view::render::{Camera, DEFAULT_FOV, Image, MAX_SIDE, RenderParams, corner_weights, render, srgb_byte};
-pub use view::shading::{SMOOTH_COSINE, vertex_radiosity};
+pub use view::render::{
+    Camera, DEFAULT_FOV, ExposureProbe, Image, MAX_SIDE, RenderParams, corner_weights, render, srgb_byte,
+};
+pub use view::shading::{CornerTable, SMOOTH_COSINE, vertex_radiosity};

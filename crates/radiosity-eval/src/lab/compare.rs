@@ -31,6 +31,19 @@ impl Lab<'_> {
         rules: &StopRules,
         progress: &dyn Progress,
     ) -> Result<Comparison, LabError> {
+        self.compare_watched(solvers, rules, progress, &mut ())
+    }
+
+    /// [`Lab::compare`], showing `watch` each run's start, every point recorded with its state,
+    /// and each run's outcome ([`ComparisonWatch`]). A `Break` from the watch ends the run it
+    /// watches and the comparison: solvers not yet started are left out, and a note says so.
+    pub fn compare_watched(
+        &self,
+        solvers: Vec<Box<dyn Solver>>,
+        rules: &StopRules,
+        progress: &dyn Progress,
+        watch: &mut dyn ComparisonWatch,
+    ) -> Result<Comparison, LabError> {
         // A solver whose hypothesis these form factors break is refused before any runs, on
         // the problem it will have: with the lab's sampler when it samples transport.
         // The sampler is built once, before any run, only when some solver casts rays.
@@ -52,11 +65,33 @@ impl Lab<'_> {
         }
         let mut outcomes = Vec::with_capacity(solvers.len());
         let plan = RecordPlan::default();
-        for mut solver in solvers {
-            let mut watch = |_: &Point, _: &State| ControlFlow::Continue(());
-            outcomes.push(self.run_on(solver.as_mut(), rules, &plan, progress, &mut watch, sampler)?);
+        let names: Vec<String> = solvers.iter().map(|s| s.name()).collect();
+        let mut interrupted = None;
+        for (index, mut solver) in solvers.into_iter().enumerate() {
+            watch.begin(index, &names[index]);
+            let mut stopped = false;
+            let mut on_point = |p: &Point, s: &State| {
+                let flow = watch.point(index, p, s);
+                stopped |= flow.is_break();
+                flow
+            };
+            let outcome = self.run_on(solver.as_mut(), rules, &plan, progress, &mut on_point, sampler)?;
+            watch.end(index, &outcome);
+            outcomes.push(outcome);
+            if stopped {
+                interrupted = Some(index);
+                break;
+            }
         }
         let mut comparison = Comparison::new(self, rules, outcomes);
+        if let Some(index) = interrupted {
+            let left = &names[index + 1..];
+            let rest = match left.is_empty() {
+                true => String::new(),
+                false => format!("; not run: {}", left.join(", ")),
+            };
+            comparison.notes.push(format!("the comparison was stopped during {}'s run{rest}", names[index]));
+        }
         comparison.transport = built.as_ref().map(|b| {
             let mixed = (self.transport() == Transport::Scene && comparison.has_reference()).then(|| {
                 format!(
@@ -71,6 +106,28 @@ impl Lab<'_> {
         Ok(comparison)
     }
 }
+
+/// What watches a comparison as it runs ([`Lab::compare_watched`]): each run's start, its points
+/// with the state they were measured on, and its outcome. `()` watches nothing.
+pub trait ComparisonWatch {
+    /// The run of solver `index` (in the order given), called `name`, starts.
+    fn begin(&mut self, index: usize, name: &str) {
+        let _ = (index, name);
+    }
+
+    /// Solver `index` recorded `point` on `state`; `Break` ends its run and the comparison.
+    fn point(&mut self, index: usize, point: &Point, state: &State) -> ControlFlow<()> {
+        let _ = (index, point, state);
+        ControlFlow::Continue(())
+    }
+
+    /// The run of solver `index` ended with `outcome`.
+    fn end(&mut self, index: usize, outcome: &Outcome) {
+        let _ = (index, outcome);
+    }
+}
+
+impl ComparisonWatch for () {}
 
 /// What a comparison measured, with what it needs to report it.
 #[derive(Clone, Debug)]

@@ -311,9 +311,77 @@ pub fn render(
     let corners = vertex_radiosity(scene, rgb)?;
     let view = params.camera.view(params.width, params.height)?;
     let tracer = Tracer { scene, visibility, corners: &corners, view };
-    let exposure = tracer.exposure();
+    let exposure = ExposureProbe::through(scene, visibility, view).exposure(&|i, v| corners[i][v]);
     let pixels = tracer.pixels(exposure);
     Ok(Image { width: params.width, height: params.height, pixels, exposure })
+}
+
+/// Where the rays through the pixel centres of an image land on the fronts of patches: what
+/// the exposure of [`render`] reads. Kept, it sets the exposure of any radiosity of the same
+/// scene seen through the same camera without casting a ray again (the live page of
+/// [`crate::live`] re-exposes every update this way).
+#[derive(Clone, Debug)]
+pub struct ExposureProbe {
+    /// Each front hit: the patch and its corners' weights at the hit point.
+    hits: Vec<(usize, [Real; 4])>,
+}
+
+impl ExposureProbe {
+    /// The probe of a `width × height` image of `scene` through `camera`.
+    pub fn new(
+        scene: &Scene,
+        visibility: &Visibility,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Result<ExposureProbe, EvalError> {
+        RenderParams { camera: *camera, width, height }.validate()?;
+        Ok(ExposureProbe::through(scene, visibility, camera.view(width, height)?))
+    }
+
+    fn through(scene: &Scene, visibility: &Visibility, view: View) -> ExposureProbe {
+        let hits = (0..view.height)
+            .into_par_iter()
+            .flat_map_iter(|y| {
+                (0..view.width).filter_map(move |x| {
+                    let direction = view.direction(Real::from(x) + 0.5, Real::from(y) + 0.5);
+                    let hit = visibility.first_hit(view.eye, direction, None).filter(|h| h.front)?;
+                    let patch = scene.patches().get(hit.patch)?;
+                    Some((hit.patch, corner_weights(patch, view.eye + direction * hit.t)))
+                })
+            })
+            .collect();
+        ExposureProbe { hits }
+    }
+
+    /// The exposure that maps the 95th percentile of the visible luminance, one ray through
+    /// each pixel centre, to 0.8, for the radiosity `corner(i, v)` at corner `v` of patch `i`.
+    /// When that percentile is zero the brightest pixel is used instead; with nothing lit at
+    /// all, the exposure is 1.
+    pub fn exposure(&self, corner: &(dyn Fn(usize, usize) -> [Real; 3] + Sync)) -> Real {
+        let mut luminance: Vec<Real> = self
+            .hits
+            .par_iter()
+            .map(|&(patch, weights)| {
+                let mut rgb = [0.0; 3];
+                for (v, w) in weights.iter().enumerate().filter(|(_, w)| **w != 0.0) {
+                    let value = corner(patch, v);
+                    for c in 0..3 {
+                        rgb[c] += w * value[c];
+                    }
+                }
+                luminance_of(rgb)
+            })
+            .collect();
+        if luminance.is_empty() {
+            return 1.0;
+        }
+        let k = ((PERCENTILE * luminance.len() as Real).ceil() as usize).clamp(1, luminance.len()) - 1;
+        let (_, &mut percentile, _) = luminance.select_nth_unstable_by(k, Real::total_cmp);
+        let max = luminance.iter().copied().fold(0.0, Real::max);
+        let reference = if percentile > 0.0 { percentile } else { max };
+        if reference > 0.0 && reference.is_finite() { PERCENTILE_TARGET / reference } else { 1.0 }
+    }
 }
 
 /// A camera's rays for an image of a given size.
@@ -377,30 +445,6 @@ impl Tracer<'_> {
             }
         }
         Sample::Front(rgb)
-    }
-
-    /// The exposure that maps the 95th percentile of the visible luminance, one ray through
-    /// each pixel centre, to 0.8. When that percentile is zero the brightest pixel is used
-    /// instead; with nothing lit at all, the exposure is 1.
-    fn exposure(&self) -> Real {
-        let (w, h) = (self.view.width, self.view.height);
-        let mut luminance: Vec<Real> = (0..h)
-            .into_par_iter()
-            .flat_map_iter(|y| {
-                (0..w).filter_map(move |x| match self.trace(Real::from(x) + 0.5, Real::from(y) + 0.5) {
-                    Sample::Front(rgb) => Some(luminance_of(rgb)),
-                    _ => None,
-                })
-            })
-            .collect();
-        if luminance.is_empty() {
-            return 1.0;
-        }
-        let k = ((PERCENTILE * luminance.len() as Real).ceil() as usize).clamp(1, luminance.len()) - 1;
-        let (_, &mut percentile, _) = luminance.select_nth_unstable_by(k, Real::total_cmp);
-        let max = luminance.iter().copied().fold(0.0, Real::max);
-        let reference = if percentile > 0.0 { percentile } else { max };
-        if reference > 0.0 && reference.is_finite() { PERCENTILE_TARGET / reference } else { 1.0 }
     }
 
     /// The 8-bit sRGB pixels, row by row from the top, each the mean of its 2 × 2 rays.

@@ -53,6 +53,7 @@ pub struct ComparisonArgs {
 impl ComparisonArgs {
     /// The plan these arguments make, checked before any geometry is built.
     pub fn plan(&self, ranks: &Ranks) -> Result<Plan> {
+        radiosity_geom::SceneSpec::parse(&self.scene)?;
         Ok(Plan::on_ranks(&self.scene, &self.solvers, &self.ff, &self.until, self.reference.parse()?, ranks)?
             .with_columns(self.columns)
             .with_transport(self.transport.transport))

@@ -220,3 +220,83 @@ fn the_live_page_shows_the_comparison_as_render_and_compare_do() {
     assert!(differ == 0, "the kept page differs from the live one at {differ} pixels of the first view");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn watch_refuses_bad_input_before_any_work() {
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = taken.local_addr().unwrap().port().to_string();
+    let e = super::failure(&["watch", "--scene", "cornell:res=2", "--solvers", "pr", "--port", &port]);
+    assert!(e.contains(&format!("127.0.0.1:{port}")) && e.contains("in use") && e.contains("--port"), "{e}");
+    let e = super::failure(&["watch", "--scene", "cornell:res=2", "--solvers", "pr,xyz"]);
+    assert!(e.contains("xyz"), "{e}");
+    let e = super::failure(&["watch", "--scene", "cornel", "--solvers", "pr"]);
+    assert!(e.contains("cornel") && e.contains("cornell"), "{e}");
+    let e = super::failure(&["watch", "--scene", "cornell:res=2", "--solvers", "pr", "--out", "page.png"]);
+    assert!(e.contains(".html"), "{e}");
+}
+
+#[test]
+fn ctrl_c_during_the_run_stops_it_and_writes_what_ran() {
+    let dir = std::env::temp_dir().join(format!("radiosity-watch-stop-{}", std::process::id()));
+    let results = dir.join("results");
+    // A run far longer than the test: Ctrl-C ends it.
+    let mut child = Command::new(assert_cmd::cargo::cargo_bin("xtask"))
+        .args(["watch", "--scene", "cornell:res=4", "--solvers", "pr,xu", "--until", "columns=1000n"])
+        .args(["--results", results.to_str().unwrap()])
+        .env("RADIOSITY_CACHE_DIR", cache_dir())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
+    let watch = Watch(child);
+    let first = lines.next().unwrap().unwrap();
+    let url = first.strip_prefix("watch the comparison at ").unwrap_or_else(|| panic!("{first}")).to_string();
+    // Once the page's events say pr runs, Ctrl-C.
+    let address = url.trim_start_matches("http://").trim_end_matches('/').to_string();
+    let mut events = std::net::TcpStream::connect(&address).unwrap();
+    write!(events, "GET /events HTTP/1.1\r\nHost: {address}\r\n\r\n").unwrap();
+    let mut seen = BufReader::new(events).lines();
+    assert!(seen.by_ref().map_while(Result::ok).any(|l| l == "event: points"), "no points were streamed");
+    let mut watch = watch;
+    Command::new("kill").args(["-INT", &watch.0.id().to_string()]).status().unwrap();
+    let status = watch.0.wait().unwrap();
+    assert_eq!(status.code(), Some(130), "watch did not stop with code 130");
+    let printed: Vec<String> = lines.map_while(Result::ok).collect();
+    assert!(printed.iter().any(|l| l == "stopped by Ctrl-C"), "{printed:?}");
+    let report = std::fs::read_to_string(results.join("report.md")).unwrap();
+    assert!(report.contains("stopped during pr's run; not run: xu"), "{report}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn compare_html_writes_a_page_that_needs_nothing_else() {
+    let dir = std::env::temp_dir().join(format!("radiosity-watch-html-{}", std::process::id()));
+    let out = dir.to_str().unwrap();
+    let args =
+        ["compare", "--scene", "cornell:res=2", "--solvers", "pr,xu", "--until", "columns=n", "--html", "--out", out];
+    let stdout = String::from_utf8(xtask(&args).success().get_output().stdout.clone()).unwrap();
+    assert!(stdout.contains("page.html"), "{stdout}");
+    let page = std::fs::read_to_string(dir.join("page.html")).unwrap();
+    // Nothing fetched: no address, no source or link outside the file.
+    for outside in ["http:", "https:", "src=", "href=", "@import"] {
+        assert!(!page.contains(outside), "the kept page refers to something outside it ({outside})");
+    }
+    let start = page.find("<script id=\"data\" type=\"application/json\">").unwrap();
+    let json = &page[start..];
+    let json = &json[json.find('>').unwrap() + 1..json.find("</script>").unwrap()];
+    let data: serde_json::Value = serde_json::from_str(json).unwrap();
+    // The geometry once, each run's points and the radiosity at its kept moments.
+    let patches = data["meta"]["patches"].as_u64().unwrap() as usize;
+    let channels = data["meta"]["channels"].as_u64().unwrap() as usize;
+    let geometry = data["geometry"].as_str().unwrap();
+    assert_eq!(geometry.len(), data["meta"]["geometry_bytes"].as_u64().unwrap().div_ceil(3) as usize * 4);
+    for run in data["runs"].as_array().unwrap() {
+        let kept = run["kept"].as_array().unwrap();
+        assert!(kept.len() > 3, "too few moments kept for a slider: {}", kept.len());
+        let last = kept.last().unwrap();
+        assert_eq!(last["values"].as_str().unwrap().len(), (patches * channels * 4).div_ceil(3) * 4);
+        assert_eq!(last["point"], run["end"]["last"], "the last moment kept is not the run's end");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

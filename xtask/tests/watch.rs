@@ -300,3 +300,57 @@ fn compare_html_writes_a_page_that_needs_nothing_else() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn pages_that_come_and_go_change_nothing_in_the_run() {
+    let dir = std::env::temp_dir().join(format!("radiosity-watch-leave-{}", std::process::id()));
+    let args = ["--scene", "cornell:res=4", "--solvers", "pr,xu", "--until", "columns=2n"];
+    let mut child = Command::new(assert_cmd::cargo::cargo_bin("xtask"))
+        .arg("watch")
+        .args(args)
+        .args(["--results", dir.join("watched").to_str().unwrap()])
+        .env("RADIOSITY_CACHE_DIR", cache_dir())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
+    let mut watch = Watch(child);
+    let first = lines.next().unwrap().unwrap();
+    let url = first.strip_prefix("watch the comparison at ").unwrap_or_else(|| panic!("{first}")).to_string();
+    let address = url.trim_start_matches("http://").trim_end_matches('/').to_string();
+    // Clients that read a little of the events and leave, again and again, while it runs.
+    let leaving = std::thread::spawn(move || {
+        for _ in 0..20 {
+            if let Ok(mut s) = std::net::TcpStream::connect(&address) {
+                let _ = write!(s, "GET /events HTTP/1.1\r\nHost: {address}\r\n\r\n");
+                let _ = s.read(&mut [0u8; 4096]);
+            }
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+    });
+    let printed: Vec<String> = lines
+        .by_ref()
+        .map_while(Result::ok)
+        .skip_while(|l| !l.starts_with("solver "))
+        .take_while(|l| !l.starts_with("seconds"))
+        .collect();
+    leaving.join().unwrap();
+    Command::new("kill").args(["-INT", &watch.0.id().to_string()]).status().unwrap();
+    assert!(watch.0.wait().unwrap().success());
+    // The table watch printed is compare's, but for the seconds.
+    let out = dir.join("compared");
+    let stdout = xtask(&[&["compare"][..], &args, &["--out", out.to_str().unwrap()]].concat())
+        .success()
+        .get_output()
+        .stdout
+        .clone();
+    let compared: Vec<String> =
+        String::from_utf8(stdout).unwrap().lines().take(printed.len()).map(String::from).collect();
+    let without_seconds = |l: &String| l.rsplit_once(' ').map_or(l.clone(), |(a, _)| a.trim_end().to_string());
+    assert_eq!(
+        printed.iter().map(without_seconds).collect::<Vec<_>>(),
+        compared.iter().map(without_seconds).collect::<Vec<_>>()
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

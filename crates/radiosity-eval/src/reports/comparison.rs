@@ -108,10 +108,8 @@ impl Comparison {
                 continue;
             }
             let spec = PlotSpec {
-                title: format!("{}: {what} against {x_label}", self.scene.scene),
-                x_label: x_label.into(),
-                size: (800, 500),
                 certified_bound: !self.has_reference(),
+                ..PlotSpec::new(format!("{}: {what} against {x_label}", self.scene.scene), x_label)
             };
             let svg = dir.join(format!("{stem}.svg"));
             write_svg(&curves, &spec, create(&svg)?)?;

@@ -1,7 +1,9 @@
 //! Solvers that sample transport in the lab: the lab gives their problem its transport
 //! sampler (the stored matrix sampled exactly here), built only for them; every step is
 //! recorded with its rays and the solver's standard error; a comparison that mixes them with a
-//! deterministic solver gives one table and one set of plots, with a rays plot of its own.
+//! deterministic solver gives one table and one set of plots, with a log–log rays plot of its
+//! own; a plot or table names whom it leaves out, and no plot is drawn against a unit nobody
+//! spent.
 //!
 //! The solver is this file's own, [`DirectByRays`]: direct lighting `E + ρ F E` estimated by
 //! rays from the emitters, in two replicates, each step adding rays to both.
@@ -255,6 +257,75 @@ fn a_comparison_mixing_deterministic_and_sampled_solvers_gives_one_table_and_one
     // The terminal summary gives the rays and the standard error beside the bound.
     let summary = comparison.summary();
     assert!(summary.lines().next().unwrap().contains("std error"), "{summary}");
+    // The rays plot is log–log, with the slope a Monte Carlo error falls at drawn and named.
+    assert!(holds(&svg("e_rms-rays"), "rays cast (log scale)") && holds(&svg("e_rms-rays"), "slope −½"));
+    assert!(holds(&svg("e_rms-columns"), "columns computed") && !holds(&svg("e_rms-columns"), "slope −½"));
+    // Whoever a plot or the table at n columns leaves out is named, with why and what it
+    // spent instead, in its own unit; under the plot and in the report.
+    let (pr_cost, rays_cost) = (pr.state.cost[Unit::Columns], rays.state.cost[Unit::Rays]);
+    let no_columns = format!("`direct-rays` (no columns computed; its cost: {} rays cast)", grouped(rays_cost));
+    let no_rays = format!("`pr` (no rays cast; its cost: {pr_cost} columns computed)");
+    let under = |stem: &str| svg_text(&svg(stem));
+    assert!(under("e_rms-columns").contains(&format!("Left out: {}.", no_columns.replace('`', ""))), "{no_columns}");
+    assert!(
+        under("e_rms-rays").contains(&format!("Left out: {}.", no_rays.replace('`', ""))),
+        "{}",
+        under("e_rms-rays")
+    );
+    assert!(!under("e_rms-steps").contains("Left out") && !under("e_rms-seconds").contains("Left out"));
+    let section = |head: &str| report.split(head).nth(1).unwrap().split("\n## ").next().unwrap().to_string();
+    let at_n = section("## e_rms at n/4, n/2, n and 2n columns");
+    assert!(at_n.contains("| `pr` |") && !at_n.contains("| `direct-rays` |"), "{at_n}");
+    assert!(at_n.contains(&format!("Left out: {no_columns}.")), "{at_n}");
+    let plots = section("## Plots");
+    for (stem, left) in [("e_rms-columns", &no_columns), ("e_rms-rays", &no_rays)] {
+        let after = plots.split(&format!("({stem}.png)")).nth(1).unwrap();
+        assert!(after.trim_start().starts_with(&format!("Left out: {left}.")), "{stem}: {plots}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `k` with thousands separators, as reports write counts.
+fn grouped(k: u64) -> String {
+    let digits = k.to_string();
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// The texts of an SVG, trimmed, joined by spaces (a wrapped note reads as one).
+fn svg_text(svg: &str) -> String {
+    let texts: Vec<&str> =
+        svg.split("<text").skip(1).filter_map(|t| Some(t.split_once('>')?.1.split_once("</text>")?.0.trim())).collect();
+    texts.join(" ")
+}
+
+#[test]
+fn a_comparison_where_no_solver_computes_columns_draws_no_columns_plot_and_says_so() {
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let lab = lab(&scene, ReferenceKind::Matrix, Transport::Matrix).unwrap();
+    let rules = StopRules::parse("rays=2e4").unwrap();
+    let comparison = lab.compare(vec![Box::new(DirectByRays::new(500, 3))], &rules, &NoProgress).unwrap();
+    let dir = std::env::temp_dir().join(format!("radiosity-eval-no-columns-{}", std::process::id()));
+    let written = comparison.write(&dir).unwrap();
+    let names: Vec<String> =
+        written.files.iter().map(|f| f.file_name().unwrap().to_string_lossy().into_owned()).collect();
+    // Steps, rays and seconds; no plot against a unit nobody spent.
+    for stem in ["e_rms-steps", "e_rms-rays", "e_rms-seconds"] {
+        assert!(names.contains(&format!("{stem}.png")), "{names:?}");
+    }
+    assert!(!names.iter().any(|n| n.starts_with("e_rms-columns")), "{names:?}");
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(report.contains("No plot against columns computed: no solver computed one."), "{report}");
+    assert!(!report.contains("e_rms-columns"), "{report}");
+    // The table at n columns has no row, and says whom it leaves out.
+    let at_n = report.split("## e_rms at n/4, n/2, n and 2n columns").nth(1).unwrap().split("\n## ").next().unwrap();
+    assert!(!at_n.contains("| solver |") && at_n.contains("Left out: `direct-rays` (no columns computed"), "{at_n}");
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -2,8 +2,8 @@
 //! sampler (the stored matrix sampled exactly here), built only for them; every step is
 //! recorded with its rays and the solver's standard error; a comparison that mixes them with a
 //! deterministic solver gives one table and one set of plots, with a log–log rays plot of its
-//! own; a plot or table names whom it leaves out, and no plot is drawn against a unit nobody
-//! spent.
+//! own; a plot or table names whom it leaves out, no plot is drawn against a unit nobody spent,
+//! and each solver's cost is counted in its own unit, named.
 //!
 //! The solver is this file's own, [`DirectByRays`]: direct lighting `E + ρ F E` estimated by
 //! rays from the emitters, in two replicates, each step adding rays to both.
@@ -282,6 +282,9 @@ fn a_comparison_mixing_deterministic_and_sampled_solvers_gives_one_table_and_one
         let after = plots.split(&format!("({stem}.png)")).nth(1).unwrap();
         assert!(after.trim_start().starts_with(&format!("Left out: {left}.")), "{stem}: {plots}");
     }
+    // The summary says at n columns what a solver without columns has there.
+    let row = summary.lines().find(|l| l.starts_with("direct-rays ")).unwrap();
+    assert!(row.contains(" no columns "), "{summary}");
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -327,6 +330,29 @@ fn a_comparison_where_no_solver_computes_columns_draws_no_columns_plot_and_says_
     let at_n = report.split("## e_rms at n/4, n/2, n and 2n columns").nth(1).unwrap().split("\n## ").next().unwrap();
     assert!(!at_n.contains("| solver |") && at_n.contains("Left out: `direct-rays` (no columns computed"), "{at_n}");
     std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn each_solvers_cost_is_counted_in_its_own_unit_and_named() {
+    // A deterministic and a stochastic solver both reach e_rms 1e-3: the summary gives the
+    // columns of one and the rays of the other, each named, never a bare count.
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let lab = lab(&scene, ReferenceKind::Matrix, Transport::Matrix).unwrap();
+    let registry = SolverRegistry::builtin();
+    let solvers = vec![registry.build("pr").unwrap(), registry.build("stochastic-jacobi").unwrap()];
+    let rules = StopRules::parse("columns=4n,rays=1.5e6").unwrap();
+    let comparison = lab.compare(solvers, &rules, &NoProgress).unwrap();
+    let summary = comparison.summary();
+    assert!(summary.lines().next().unwrap().contains("1e-3 at seconds"), "{summary}");
+    for (solver, unit) in [("pr", Unit::Columns), ("stochastic-jacobi", Unit::Rays)] {
+        let o = comparison.outcome(solver).unwrap();
+        let reached = comparison.reached(o, 1e-3).unwrap_or_else(|| panic!("{solver} reaches 1e-3: {summary}"));
+        let row = summary.lines().find(|l| l.starts_with(&format!("{solver} "))).unwrap();
+        // The two words before the seconds, the row's last.
+        let words: Vec<&str> = row.split_whitespace().collect();
+        let field = words[words.len() - 3..words.len() - 1].join(" ");
+        assert_eq!(field, format!("{} {}", grouped(reached.cost[unit]), unit.name()), "{summary}");
+    }
 }
 
 #[test]

@@ -9,8 +9,9 @@
 //! when some run spent that unit, and holds the runs that did (against columns, also a run
 //! that spent nothing at all); the steps and seconds plots hold every run. Whoever a plot or
 //! the table at n/4 … 2n columns leaves out is named, with why and what it spent instead, in
-//! `report.md` and under the plot. Titles name the scene by its short
-//! name (a file's name without its folders).
+//! `report.md` and under the plot. A cost is always given in its run's own unit, named
+//! (`659 columns`, `8,594,170 rays`), never as a bare count beside another unit's. Titles name
+//! the scene by its short name (a file's name without its folders).
 //!
 //! **Solvers that sample transport** sit in the same table and plots as the others. Their
 //! cost is counted in rays, and the rays plot is log–log with a reference slope of −½, the
@@ -316,9 +317,10 @@ impl Comparison {
 
     /// The compact table for the terminal: with a reference, e_rms and the certified bound;
     /// without, the bound alone; when a solver cast rays or has a standard error, its rays and
-    /// its standard error too. `1e-3 at` counts what the run spent in the unit its cost is read
-    /// in ([`radiosity_solvers::Cost::principal`]): columns, or rays for a solver that cast them,
-    /// or links for a solver over a hierarchy that computed no column.
+    /// its standard error too. `@n` is at n columns, `no columns` for a run that computed none.
+    /// `1e-3 at` counts what the run spent in the unit its cost is read in
+    /// ([`radiosity_solvers::Cost::principal`]), named: `659 columns`, or `8,594,170 rays` for
+    /// a solver that cast them, or links for a solver over a hierarchy that computed no column.
     pub fn summary(&self) -> String {
         let metric = self.metric();
         let bound = if self.has_reference() { format!(" {:>10}", "bound end") } else { String::new() };
@@ -327,7 +329,7 @@ impl Comparison {
         let seconds = self.clock.seconds_label();
         let width = seconds.len();
         let mut out = format!(
-            "{:<24} {:>8} {:>8}{rays} {:>10} {:>10}{bound} {:>10} {seconds}\n",
+            "{:<24} {:>8} {:>8}{rays} {:>10} {:>10}{bound} {:>16} {seconds}\n",
             "solver",
             "steps",
             "columns",
@@ -342,19 +344,21 @@ impl Comparison {
             } else {
                 String::new()
             };
+            // At n columns: said so for a run that computed none (module doc).
+            let at_n = match Axis::Spent(Unit::Columns).absence(o) {
+                Some(_) => "no columns".into(),
+                None => cell(o.at_columns_point(self.n).map(|p| self.value(&p))),
+            };
+            let unit = o.state.cost.principal();
             let _ = writeln!(
                 out,
-                "{:<24} {:>8} {:>8}{rays} {:>10} {:>10}{bound} {:>10} {:>width$.3}",
+                "{:<24} {:>8} {:>8}{rays} {:>10} {:>10}{bound} {:>16} {:>width$.3}",
                 o.solver,
                 o.state.step,
                 o.state.cost[Unit::Columns],
-                cell(o.at_columns_point(self.n).map(|p| self.value(&p))),
+                at_n,
                 cell(o.points.last().map(|p| self.value(p))),
-                self.reached(o, 1e-3).map_or("—".into(), |p| match o.state.cost.principal() {
-                    Unit::Columns => p.cost[Unit::Columns].to_string(),
-                    Unit::Links => format!("{:.2e} links", p.cost[Unit::Links] as Real),
-                    unit => format!("{} {}", p.cost[unit], unit.name()),
-                }),
+                self.reached(o, 1e-3).map_or("—".into(), |p| format!("{} {}", count(p.cost[unit]), unit.name())),
                 o.seconds()
             );
         }

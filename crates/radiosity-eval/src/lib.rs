@@ -107,8 +107,8 @@ pub use reference::solution::{Certificate, Method, ReferenceParams, ReferenceSol
 pub use reports::comparison::{Written, value_cell};
 pub use reports::paper;
 pub use reports::plot::{
-    BAND_LABEL, BAND_STANDARD_ERRORS, BOUND_LABEL, BOUND_LABEL_SHORT, Curve, MONTE_CARLO_SLOPE, Marker, PlotSpec,
-    Scale, Style, Variant, Y_LABEL, Y_LABEL_SHORT, slope_label, style_of, write_png, write_svg,
+    AxisScale, BAND_LABEL, BAND_STANDARD_ERRORS, BOUND_LABEL, BOUND_LABEL_SHORT, Curve, MONTE_CARLO_SLOPE, Marker,
+    PlotSpec, Style, Variant, Y_LABEL, Y_LABEL_SHORT, slope_label, style_of, write_png, write_svg,
 };
 pub use reports::table::{ConvergenceTable, round_significant};
 pub use suites::{bench, stress};

@@ -8,7 +8,7 @@
 use radiosity_eval::EvalError;
 use radiosity_eval::Rgb8;
 use radiosity_eval::{
-    BOUND_LABEL, Curve, MONTE_CARLO_SLOPE, Marker, PlotSpec, Scale, Variant, Y_LABEL, Y_LABEL_SHORT, slope_label,
+    AxisScale, BOUND_LABEL, Curve, MONTE_CARLO_SLOPE, Marker, PlotSpec, Variant, Y_LABEL, Y_LABEL_SHORT, slope_label,
     style_of, write_png, write_svg,
 };
 use std::collections::HashSet;
@@ -308,7 +308,7 @@ fn monte_carlo() -> Vec<Curve> {
 
 fn log_log() -> PlotSpec {
     PlotSpec {
-        x_scale: Scale::Log,
+        x_scale: AxisScale::Log,
         slope: Some(MONTE_CARLO_SLOPE),
         ..PlotSpec::new("classroom.mgf", "rays cast (log scale)")
     }
@@ -356,7 +356,7 @@ fn a_power_law_on_a_log_x_axis_is_a_straight_line_beside_its_named_reference_slo
 
     // On a linear axis the same curve bends, and no reference slope is drawn or named.
     let mut out = Vec::new();
-    write_svg(&curves, &PlotSpec { x_scale: Scale::Linear, ..log_log() }, &mut out).unwrap();
+    write_svg(&curves, &PlotSpec { x_scale: AxisScale::Linear, ..log_log() }, &mut out).unwrap();
     let svg = String::from_utf8(out).unwrap();
     let curve = polylines(&svg, &hex(style_of("stochastic-jacobi").colour)).into_iter().max_by_key(|p| p.len());
     assert!(straight(&curve.unwrap()).1 > 50.0, "a power law on a linear axis is no line");

@@ -30,7 +30,7 @@ use crate::lab::compare::Comparison;
 use crate::lab::outcome::Outcome;
 use crate::lab::recorder::Point;
 use crate::lab::setup::ReferenceOrigin;
-use crate::reports::plot::{Curve, MONTE_CARLO_SLOPE, PlotSpec, Scale, write_png, write_svg};
+use crate::reports::plot::{AxisScale, Curve, MONTE_CARLO_SLOPE, PlotSpec, write_png, write_svg};
 use crate::reports::report_text::sig;
 use crate::reports::table::{ConvergenceTable, round_significant};
 use radiosity_core::{Clock, Real};
@@ -134,8 +134,8 @@ impl Comparison {
                 continue;
             }
             let x_label = match axis.scale() {
-                Scale::Linear => label.to_string(),
-                Scale::Log => format!("{label} (log scale)"),
+                AxisScale::Linear => label.to_string(),
+                AxisScale::Log => format!("{label} (log scale)"),
             };
             plots.push(Plot {
                 axis,
@@ -457,16 +457,16 @@ impl Axis {
 
     /// The x axis's scale: logarithmic for rays, against which a Monte Carlo estimate's error
     /// falls as a power law; linear for the rest.
-    fn scale(self) -> Scale {
+    fn scale(self) -> AxisScale {
         match self {
-            Axis::Spent(Unit::Rays) => Scale::Log,
-            _ => Scale::Linear,
+            Axis::Spent(Unit::Rays) => AxisScale::Log,
+            _ => AxisScale::Linear,
         }
     }
 
     /// The reference slope drawn on the axis: a Monte Carlo estimate's against rays.
     fn slope(self) -> Option<Real> {
-        (self.scale() == Scale::Log).then_some(MONTE_CARLO_SLOPE)
+        (self.scale() == AxisScale::Log).then_some(MONTE_CARLO_SLOPE)
     }
 }
 

@@ -15,7 +15,7 @@
 //!
 //! ## Power laws
 //!
-//! The x axis is linear or logarithmic ([`Scale`]). On a logarithmic one the plot is log–log,
+//! The x axis is linear or logarithmic ([`AxisScale`]). On a logarithmic one the plot is log–log,
 //! where a power law is a straight line: the caller asks for it where one is expected (a Monte
 //! Carlo estimate's error falls as `1/√rays`), with a **reference slope** ([`PlotSpec::slope`],
 //! [`MONTE_CARLO_SLOPE`]). That slope is drawn as a dashed grey line across the data, below
@@ -124,7 +124,7 @@ const GUIDE_BELOW: Real = 2.0;
 
 /// How an axis is scaled.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Scale {
+pub enum AxisScale {
     /// Linear: steps, columns, seconds.
     #[default]
     Linear,
@@ -145,7 +145,7 @@ pub struct PlotSpec {
     /// a reference) rather than e_rms: the y axis says which ([`BOUND_LABEL`]).
     pub certified_bound: bool,
     /// The scale of the x axis (the y axis is always logarithmic).
-    pub x_scale: Scale,
+    pub x_scale: AxisScale,
     /// The slope of a dashed reference line (module doc, "Power laws"), drawn only on a
     /// logarithmic x axis and named in the legend ([`slope_label`]).
     pub slope: Option<Real>,
@@ -162,7 +162,7 @@ impl PlotSpec {
             x_label: x_label.into(),
             size: (800, 500),
             certified_bound: false,
-            x_scale: Scale::Linear,
+            x_scale: AxisScale::Linear,
             slope: None,
             notes: Vec::new(),
         }
@@ -368,17 +368,17 @@ fn plot_error(e: impl std::fmt::Display) -> EvalError {
 
 /// Whether a point can go on a plot whose x axis is on `scale`: a logarithmic axis has no
 /// place for x = 0.
-fn drawable(scale: Scale) -> impl Fn(&(Real, Real)) -> bool {
-    move |&(x, y)| x.is_finite() && y.is_finite() && y > 0.0 && (scale == Scale::Linear || x > 0.0)
+fn drawable(scale: AxisScale) -> impl Fn(&(Real, Real)) -> bool {
+    move |&(x, y)| x.is_finite() && y.is_finite() && y > 0.0 && (scale == AxisScale::Linear || x > 0.0)
 }
 
 /// The drawable points of a curve.
-fn curve_points(curve: &Curve, scale: Scale) -> impl Iterator<Item = (Real, Real)> + '_ {
+fn curve_points(curve: &Curve, scale: AxisScale) -> impl Iterator<Item = (Real, Real)> + '_ {
     curve.points.iter().copied().filter(drawable(scale))
 }
 
 /// The tops of a curve's band: `(x, 2 s)` for its drawable standard errors.
-fn band_tops(curve: &Curve, scale: Scale) -> impl Iterator<Item = (Real, Real)> + '_ {
+fn band_tops(curve: &Curve, scale: AxisScale) -> impl Iterator<Item = (Real, Real)> + '_ {
     curve.spread.iter().map(|&(x, s)| (x, BAND_STANDARD_ERRORS * s)).filter(drawable(scale))
 }
 
@@ -408,12 +408,12 @@ fn frame(curves: &[Curve], spec: &PlotSpec) -> Option<Frame> {
     }
     if x_max <= x_min {
         x_max = match scale {
-            Scale::Linear => x_min + 1.0,
-            Scale::Log => x_min * 10.0,
+            AxisScale::Linear => x_min + 1.0,
+            AxisScale::Log => x_min * 10.0,
         };
     }
     // The power law of the reference slope through the lowest of the curves' ends, lowered.
-    let guide = spec.slope.filter(|_| scale == Scale::Log).and_then(|slope| {
+    let guide = spec.slope.filter(|_| scale == AxisScale::Log).and_then(|slope| {
         let c = curves
             .iter()
             .filter_map(|c| curve_points(c, scale).last())
@@ -617,11 +617,11 @@ where
     let (bold, light) = log_ticks(lo, hi, most_labels(plot_height.saturating_sub(100), 28));
     let y_axis = (lo..hi).log_scale().with_key_points(bold).with_light_points(light);
     match scale {
-        Scale::Linear => {
+        AxisScale::Linear => {
             let chart = builder.build_cartesian_2d(x_min..x_max, y_axis).map_err(plot_error)?;
             draw_data(chart, &plot_area, curves, spec, &frame)?;
         }
-        Scale::Log => {
+        AxisScale::Log => {
             let (bold, light) = log_ticks(x_min, x_max, most_labels(plot_width.saturating_sub(100), 50));
             let x_axis = (x_min..x_max).log_scale().with_key_points(bold).with_light_points(light);
             let chart = builder.build_cartesian_2d(x_axis, y_axis).map_err(plot_error)?;
@@ -701,9 +701,9 @@ where
     let long = plot_area.estimate_text_size(full, &font).map_err(plot_error)?.0;
     let y_label = if long + 8 <= data_height { full } else { short };
     let x_format = |x: &Real| match scale {
-        Scale::Linear if span >= 20.0 => format!("{x:.0}"),
-        Scale::Linear => format!("{x:.2}"),
-        Scale::Log => tick_label(*x),
+        AxisScale::Linear if span >= 20.0 => format!("{x:.0}"),
+        AxisScale::Linear => format!("{x:.2}"),
+        AxisScale::Log => tick_label(*x),
     };
     let y_format = |y: &Real| tick_label(*y);
     chart

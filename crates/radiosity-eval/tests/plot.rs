@@ -426,3 +426,24 @@ fn overlapping_bands_stay_light_and_each_shows_its_top() {
         .collect();
     assert_eq!(tops.len(), 3, "{tops:?}");
 }
+
+#[test]
+fn markers_spread_along_a_curve_as_drawn_on_a_log_axis_too() {
+    // Points evenly spaced in rays crowd to the right of a log axis: the markers still spread
+    // along the curve, not after its points.
+    let points: Vec<(f64, f64)> = (1..=2000).map(|k| (5e3 * k as f64, 1.0 / (5e3 * k as f64).sqrt())).collect();
+    let mut out = Vec::new();
+    write_svg(&[Curve::new("pr", points)], &log_log(), &mut out).unwrap();
+    let svg = String::from_utf8(out).unwrap();
+    let mut centres: Vec<f64> =
+        svg.split("<circle").skip(1).filter_map(|c| c.split_once("cx=\"")?.1.split_once('"')?.0.parse().ok()).collect();
+    centres.sort_by(f64::total_cmp);
+    // The rightmost is the legend's; the data runs from the first to the last x label.
+    centres.pop();
+    let labels = svg_texts(&svg);
+    assert!(labels.iter().any(|t| t == "1e4") && labels.iter().any(|t| t == "1e7"), "{labels:?}");
+    let curve = polylines(&svg, &hex(style_of("pr").colour)).into_iter().max_by_key(|p| p.len()).unwrap();
+    let (left, right) = (curve[0].0, curve[curve.len() - 1].0);
+    assert!(centres.len() >= 6, "{centres:?}");
+    assert!(centres[1] < left + 0.5 * (right - left), "markers crowd to the right: {centres:?} in {left}..{right}");
+}

@@ -739,17 +739,38 @@ where
         let style = style_of(&curve.label);
         let points: Vec<(Real, Real)> = curve_points(curve, scale).map(pixel).collect();
         draw_line(&area, &points, style)?;
-        // About seven markers per curve, at points that depend on the name, so that curves
+        // About seven markers per curve, evenly spaced along it as drawn (on a log axis the
+        // points crowd to the right), from a place that depends on the name, so that curves
         // running together do not hide each other's markers.
-        if !points.is_empty() {
-            let step = points.len().div_ceil(7).max(1);
-            let phase = (fnv1a(&curve.label) % step as u64) as usize;
-            for &(x, y) in points.iter().skip(phase).step_by(step) {
-                draw_marker(&area, (x.round() as i32, y.round() as i32), style)?;
-            }
+        let phase = (fnv1a(&curve.label) % 1000) as Real / 1000.0;
+        for (x, y) in marker_points(&points, phase) {
+            draw_marker(&area, (x.round() as i32, y.round() as i32), style)?;
         }
     }
     Ok(())
+}
+
+/// Where the markers of the polyline `points` (pixels) go: at about seven of its points,
+/// evenly spaced along its length, the first `phase` (a fraction of the spacing) along it.
+fn marker_points(points: &[(Real, Real)], phase: Real) -> Vec<(Real, Real)> {
+    let step = |a: (Real, Real), b: (Real, Real)| (b.0 - a.0).hypot(b.1 - a.1);
+    let gap = points.windows(2).map(|w| step(w[0], w[1])).sum::<Real>() / 7.0;
+    if gap <= 0.0 {
+        return points.first().copied().into_iter().collect();
+    }
+    let (mut walked, mut next, mut marked) = (0.0, phase * gap, Vec::new());
+    for (k, &p) in points.iter().enumerate() {
+        if k > 0 {
+            walked += step(points[k - 1], p);
+        }
+        if walked >= next {
+            marked.push(p);
+            while next <= walked {
+                next += gap;
+            }
+        }
+    }
+    marked
 }
 
 /// Fills the band under `tops` (pixels of `area`, in order of x) down to `bottom`, in the

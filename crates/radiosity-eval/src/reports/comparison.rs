@@ -328,8 +328,10 @@ impl Comparison {
         let rays = if sampled { format!(" {:>12} {:>10}", "rays", "std error") } else { String::new() };
         let seconds = self.clock.seconds_label();
         let width = seconds.len();
+        // The solvers' names in a column wide enough for the longest.
+        let names = self.outcomes.iter().map(|o| o.solver.chars().count()).max().unwrap_or(0).max(24);
         let mut out = format!(
-            "{:<24} {:>8} {:>8}{rays} {:>10} {:>10}{bound} {:>16} {seconds}\n",
+            "{:<names$} {:>8} {:>8}{rays} {:>10} {:>10}{bound} {:>16} {seconds}\n",
             "solver",
             "steps",
             "columns",
@@ -344,7 +346,7 @@ impl Comparison {
             } else {
                 String::new()
             };
-            // At n columns: said so for a run that computed none (module doc).
+            // At n columns; a run that computed none says so rather than `—`.
             let at_n = match Axis::Spent(Unit::Columns).absence(o) {
                 Some(_) => "no columns".into(),
                 None => cell(o.at_columns_point(self.n).map(|p| self.value(&p))),
@@ -352,7 +354,7 @@ impl Comparison {
             let unit = o.state.cost.principal();
             let _ = writeln!(
                 out,
-                "{:<24} {:>8} {:>8}{rays} {:>10} {:>10}{bound} {:>16} {:>width$.3}",
+                "{:<names$} {:>8} {:>8}{rays} {:>10} {:>10}{bound} {:>16} {:>width$.3}",
                 o.solver,
                 o.state.step,
                 o.state.cost[Unit::Columns],

@@ -328,7 +328,7 @@ fn a_comparison_where_no_solver_computes_columns_draws_no_columns_plot_and_says_
     assert!(!report.contains("e_rms-columns"), "{report}");
     // The table at n columns has no row, and says whom it leaves out.
     let at_n = report.split("## e_rms at n/4, n/2, n and 2n columns").nth(1).unwrap().split("\n## ").next().unwrap();
-    assert!(!at_n.contains("| solver |") && at_n.contains("Left out: `direct-rays` (no columns computed"), "{at_n}");
+    assert!(at_n.starts_with("\n\nLeft out: `direct-rays` (no columns computed"), "{at_n:?}");
     std::fs::remove_dir_all(&dir).ok();
 }
 

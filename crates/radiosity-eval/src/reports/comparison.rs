@@ -208,7 +208,8 @@ impl Comparison {
         let columns = Axis::Spent(Unit::Columns);
         let (at_n, left): (Vec<&Outcome>, Vec<&Outcome>) =
             self.outcomes.iter().partition(|o| columns.absence(o).is_none());
-        if !at_n.is_empty() {
+        let table = !at_n.is_empty();
+        if table {
             let _ = writeln!(md, "| solver | n/4 | n/2 | n | 2n |\n|---|--:|--:|--:|--:|");
         }
         for o in at_n {
@@ -218,7 +219,8 @@ impl Comparison {
         let left: Vec<(&str, String)> =
             left.iter().filter_map(|o| Some((o.solver.as_str(), columns.absence(o)?))).collect();
         if let Some(sentence) = left_out_sentence(&left, |name| format!("`{name}`")) {
-            let _ = writeln!(md, "\n{sentence}");
+            // After the table, a paragraph of its own; in its place, the section's only line.
+            let _ = writeln!(md, "{}{sentence}", if table { "\n" } else { "" });
         }
         let _ = writeln!(
             md,

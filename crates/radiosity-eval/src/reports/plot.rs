@@ -169,11 +169,11 @@ impl PlotSpec {
     }
 }
 
-/// The legend's entry for a reference slope: `slope −½`; halves and whole numbers as
-/// fractions, other slopes to two decimals, with a true minus sign.
+/// The legend's entry for a reference slope: `slope −½`; a half as `½`, a whole number as
+/// it is, any other to two decimals, with a true minus sign.
 pub fn slope_label(slope: Real) -> String {
     let magnitude = match slope.abs() {
-        m if m == 0.5 => "½".to_string(),
+        0.5 => "½".to_string(),
         m if m.fract() == 0.0 => format!("{m:.0}"),
         m => format!("{m:.2}"),
     };

@@ -506,3 +506,28 @@ fn a_stochastic_run_shows_no_bound_from_f_and_no_band_on_a_bound_axis() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn without_a_reference_a_stochastic_run_is_named_as_left_out_of_every_plot_of_bounds() {
+    // A run that samples transport has no certified bound: with `--reference none` every plot
+    // shows bounds, so it has nothing on any of them, and each says so.
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let lab = lab(&scene, ReferenceKind::None, Transport::Scene).unwrap();
+    let registry = SolverRegistry::builtin();
+    let solvers = vec![registry.build("pr").unwrap(), registry.build("stochastic-jacobi").unwrap()];
+    let comparison = lab.compare(solvers, &StopRules::parse("columns=n,rays=2e4").unwrap(), &NoProgress).unwrap();
+    let dir = std::env::temp_dir().join(format!("radiosity-eval-sampled-none-{}", std::process::id()));
+    let written = comparison.write(&dir).unwrap();
+    let names: Vec<String> =
+        written.files.iter().map(|f| f.file_name().unwrap().to_string_lossy().into_owned()).collect();
+    // Nothing to draw against rays: no plot.
+    assert!(!names.iter().any(|n| n.starts_with("bound-rays")), "{names:?}");
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    for stem in ["bound-steps", "bound-seconds"] {
+        let svg = std::fs::read_to_string(dir.join(format!("{stem}.svg"))).unwrap();
+        assert!(svg_text(&svg).contains("Left out: stochastic-jacobi (no certified bound to show)."), "{stem}");
+        let after = report.split(&format!("({stem}.png)")).nth(1).unwrap();
+        assert!(after.trim_start().starts_with("Left out: `stochastic-jacobi` (no certified bound to show)."));
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -15,13 +15,13 @@
 //!
 //! ## Power laws
 //!
-//! The x axis is linear or logarithmic ([`AxisScale`]). On a logarithmic one the plot is log–log,
-//! where a power law is a straight line: the caller asks for it where one is expected (a Monte
-//! Carlo estimate's error falls as `1/√rays`), with a **reference slope** ([`PlotSpec::slope`],
-//! [`MONTE_CARLO_SLOPE`]). That slope is drawn as a dashed grey line across the data, below
-//! the lowest curve's end, named in the legend (`slope −½`), so that a curve parallel to it
-//! converges at that rate, and one steeper or flatter than it does not. Points at x = 0 have no
-//! place on a logarithmic axis and are left out.
+//! The x axis is linear or logarithmic ([`AxisScale`]). On a logarithmic one the plot is
+//! log–log, where a power law is a straight line: the caller asks for it where one is expected
+//! (a Monte Carlo estimate's error falls as `1/√rays`), with a **reference slope**
+//! ([`PlotSpec::slope`], [`MONTE_CARLO_SLOPE`]). That slope is drawn as a dashed grey line
+//! across the data, below the lowest curve's end, named in the legend (`slope −½`), so that a
+//! curve parallel to it converges at that rate, and one steeper or flatter than it does not.
+//! Points at x = 0 have no place on a logarithmic axis and are left out.
 //!
 //! ## Styles
 //!

@@ -21,7 +21,8 @@
 //! - **reports**: a comparison's `convergence.csv`, `report.md`, plots and terminal summary
 //!   ([`Comparison::write`], [`Comparison::summary`]); [`ConvergenceTable`], rows written as
 //!   CSV or Markdown with floats rounded to fixed significant digits; plots of e_rms against
-//!   steps, columns, rays or seconds, standard errors as bands ([`write_svg`], [`write_png`]);
+//!   steps, columns, rays or seconds, standard errors as bands, log–log with a reference
+//!   slope where a power law is expected ([`write_svg`], [`write_png`], [`PlotSpec`]);
 //!   the paper's figures and claims
 //!   ([`paper`]);
 //! - **truth**: each object's area-mean radiosity by Monte Carlo path tracing
@@ -111,8 +112,8 @@ pub use reference::solution::{Certificate, Method, ReferenceParams, ReferenceSol
 pub use reports::comparison::{Written, value_cell};
 pub use reports::paper;
 pub use reports::plot::{
-    BAND_LABEL, BAND_STANDARD_ERRORS, BOUND_LABEL, BOUND_LABEL_SHORT, Curve, Marker, PlotSpec, Style, Variant, Y_LABEL,
-    Y_LABEL_SHORT, style_of, write_png, write_svg,
+    AxisScale, BAND_LABEL, BAND_STANDARD_ERRORS, BOUND_LABEL, BOUND_LABEL_SHORT, Curve, MONTE_CARLO_SLOPE, Marker,
+    PlotSpec, Style, Variant, Y_LABEL, Y_LABEL_SHORT, slope_label, style_of, write_png, write_svg,
 };
 pub use reports::table::{ConvergenceTable, round_significant};
 pub use suites::{bench, stress};

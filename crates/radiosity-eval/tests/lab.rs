@@ -3,7 +3,8 @@
 //! matrix against the memory budget, the shooting and stored-matrix references agree with
 //! dense LU within their certificates, the cache tells reference kinds apart and keeps the
 //! hierarchical operator; charged columns give the computed runs' numbers, and the clock a
-//! `time=` rule and `:f=timed` read is the one the report prints.
+//! `time=` rule and `:f=timed` read is the one the report prints; plot titles name the scene
+//! by its short name.
 
 use radiosity_core::{Clock, ColumnSource};
 use radiosity_eval::ShootingParams;
@@ -554,4 +555,31 @@ fn a_budget_a_last_step_overshoots_is_said_and_a_capped_run_is_not_converged() {
     let comparison =
         lab.compare(vec![registry.build("pr").unwrap()], &StopRules::parse("columns=0.5n").unwrap(), &NoProgress);
     assert!(comparison.unwrap().notes.is_empty());
+}
+
+#[test]
+fn plot_titles_name_the_scene_by_its_short_name() {
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let lab = lab(&scene, LabOptions::default());
+    let registry = SolverRegistry::builtin();
+    let rules = StopRules::parse("columns=n").unwrap();
+    let mut comparison = lab.compare(vec![registry.build("pr").unwrap()], &rules, &NoProgress).unwrap();
+    let dir = std::env::temp_dir().join(format!("radiosity-lab-titles-{}", std::process::id()));
+    // The title of a plot, its first text.
+    let title = |stem: &str| {
+        let svg = std::fs::read_to_string(dir.join(format!("{stem}.svg"))).unwrap();
+        let text = svg.split("<text").nth(1).unwrap().split_once('>').unwrap().1;
+        text.split_once("</text>").unwrap().0.trim().to_string()
+    };
+    // A built-in scene as written, with its parameters.
+    comparison.write(&dir).unwrap();
+    assert_eq!(title("e_rms-steps"), "cornell:res=2: e_rms against shooting steps");
+    // A file by its name alone, without its folders, on every plot.
+    comparison.scene.scene = "/home/someone/scenes/mgf/salon/classroom.mgf:size=0.1".into();
+    comparison.write(&dir).unwrap();
+    for (stem, axis) in [("e_rms-steps", "shooting steps"), ("e_rms-columns", "columns computed")] {
+        assert_eq!(title(stem), format!("classroom.mgf:size=0.1: e_rms against {axis}"));
+    }
+    assert!(title("e_rms-seconds").starts_with("classroom.mgf:size=0.1: e_rms against measured seconds"));
+    std::fs::remove_dir_all(&dir).unwrap();
 }

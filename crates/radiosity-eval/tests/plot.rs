@@ -1,12 +1,15 @@
 //! Convergence plots: SVG with the solvers' names and what e_rms is, PNG of the right size
 //! with lines drawn and the legend beside the data, one style per solver name whatever else
 //! is plotted, axes that start where the data starts, standard errors as bands named in the
-//! legend, and a clear error when nothing can go on a log scale.
+//! legend that stay light where they overlap, a power law straight on log–log axes beside its
+//! named reference slope, notes wrapped under the plot, and a clear error when nothing can go
+//! on a log scale.
 
 use radiosity_eval::EvalError;
 use radiosity_eval::Rgb8;
 use radiosity_eval::{
-    BOUND_LABEL, Curve, Marker, PlotSpec, Variant, Y_LABEL, Y_LABEL_SHORT, style_of, write_png, write_svg,
+    AxisScale, BOUND_LABEL, Curve, MONTE_CARLO_SLOPE, Marker, PlotSpec, Variant, Y_LABEL, Y_LABEL_SHORT, slope_label,
+    style_of, write_png, write_svg,
 };
 use std::collections::HashSet;
 
@@ -22,7 +25,7 @@ fn curves() -> Vec<Curve> {
 }
 
 fn spec() -> PlotSpec {
-    PlotSpec { title: "multi-cubes".into(), x_label: "shooting steps".into(), size: (480, 320), certified_bound: false }
+    PlotSpec { size: (480, 320), ..PlotSpec::new("multi-cubes", "shooting steps") }
 }
 
 fn png(curves: &[Curve], spec: &PlotSpec) -> Rgb8 {
@@ -259,8 +262,8 @@ fn a_standard_error_is_a_band_up_to_twice_it_named_in_the_legend() {
     assert!(texts.iter().any(|t| t == radiosity_eval::BAND_LABEL), "{texts:?}");
     assert!(texts.iter().any(|t| t == "2e-2"), "the band's top is on the axis: {texts:?}");
     let colour = style_of("stochastic-jacobi").colour;
-    // The colour at 15% over white, as the band is filled, give or take rounding.
-    let blend = |c: usize| 255.0 - 0.15 * (255.0 - f64::from(colour[c]));
+    // The colour at 8% over white, as the band is filled, give or take rounding.
+    let blend = |c: usize| 255.0 - 0.08 * (255.0 - f64::from(colour[c]));
     let tint = |p: [u8; 3]| (0..3).all(|c| (f64::from(p[c]) - blend(c)).abs() <= 3.0);
     let img = png(&banded, &spec());
     let tinted = img.enumerate().filter(|(_, _, p)| tint(*p)).count();
@@ -272,4 +275,175 @@ fn a_standard_error_is_a_band_up_to_twice_it_named_in_the_legend() {
     assert!(!svg_texts(&String::from_utf8(out).unwrap()).iter().any(|t| t == radiosity_eval::BAND_LABEL));
     let tinted = png(&plain, &spec()).enumerate().filter(|(_, _, p)| tint(*p)).count();
     assert!(tinted < 500, "{tinted} pixels tinted without a band");
+}
+
+/// The points of every SVG polyline drawn in `stroke` (`#RRGGBB`), one list per polyline.
+fn polylines(svg: &str, stroke: &str) -> Vec<Vec<(f64, f64)>> {
+    svg.split("<polyline")
+        .skip(1)
+        .filter(|p| p.contains(&format!("stroke=\"{stroke}\"")))
+        .filter_map(|p| {
+            let points = p.split_once("points=\"")?.1.split_once('"')?.0;
+            let pairs = points.split_whitespace().filter_map(|xy| {
+                let (x, y) = xy.split_once(',')?;
+                Some((x.parse().ok()?, y.parse().ok()?))
+            });
+            Some(pairs.collect())
+        })
+        .collect()
+}
+
+fn hex([r, g, b]: [u8; 3]) -> String {
+    format!("#{r:02X}{g:02X}{b:02X}")
+}
+
+/// A Monte Carlo estimate's error, `1/√rays` from 1e3 to 1e7 rays, with its first point at 0.
+fn monte_carlo() -> Vec<Curve> {
+    let points = std::iter::once((0.0, 1.0)).chain((0..=40).map(|k| {
+        let rays = 1e3 * 10f64.powf(k as f64 / 10.0);
+        (rays, 1.0 / rays.sqrt())
+    }));
+    vec![Curve::new("stochastic-jacobi", points.collect())]
+}
+
+fn log_log() -> PlotSpec {
+    PlotSpec {
+        x_scale: AxisScale::Log,
+        slope: Some(MONTE_CARLO_SLOPE),
+        ..PlotSpec::new("classroom.mgf", "rays cast (log scale)")
+    }
+}
+
+/// The slope of the straight line through `points` (pixels, y down) by least squares, and
+/// the largest distance in pixels of a point from it.
+fn straight(points: &[(f64, f64)]) -> (f64, f64) {
+    let n = points.len() as f64;
+    let (mx, my) = (points.iter().map(|p| p.0).sum::<f64>() / n, points.iter().map(|p| p.1).sum::<f64>() / n);
+    let sxy: f64 = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let sxx: f64 = points.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let slope = sxy / sxx;
+    let off = points.iter().map(|p| (p.1 - my - slope * (p.0 - mx)).abs()).fold(0.0, f64::max);
+    (slope, off)
+}
+
+#[test]
+fn a_power_law_on_a_log_x_axis_is_a_straight_line_beside_its_named_reference_slope() {
+    let curves = monte_carlo();
+    let mut out = Vec::new();
+    write_svg(&curves, &log_log(), &mut out).unwrap();
+    let svg = String::from_utf8(out).unwrap();
+    let texts = svg_texts(&svg);
+    // The x axis in decades; the reference slope named in the legend.
+    for label in ["1e4", "1e5", "1e6", "1e7", slope_label(MONTE_CARLO_SLOPE).as_str()] {
+        assert!(texts.iter().any(|t| t == label), "{label} missing: {texts:?}");
+    }
+    assert_eq!(slope_label(MONTE_CARLO_SLOPE), "slope −½");
+    // 1/√rays is a straight line (the point at 0 rays has no place on the axis) …
+    let curve: Vec<(f64, f64)> =
+        polylines(&svg, &hex(style_of("stochastic-jacobi").colour)).into_iter().max_by_key(|p| p.len()).unwrap();
+    let (slope, off) = straight(&curve);
+    assert!(off <= 1.5 && curve.len() >= 40, "{} points, {off} pixels off a line", curve.len());
+    // … and the dashed reference runs parallel to it, below it.
+    // Its dashes in the data; the legend's sample is level.
+    let dashes: Vec<Vec<(f64, f64)>> =
+        polylines(&svg, "#6E6E6E").into_iter().filter(|d| d[0].1 != d[d.len() - 1].1).collect();
+    let guide: Vec<(f64, f64)> = dashes.iter().flatten().copied().collect();
+    assert!(dashes.len() > 10, "{} dashes", dashes.len());
+    let (guide_slope, guide_off) = straight(&guide);
+    assert!(guide_off <= 1.5 && (guide_slope - slope).abs() < 0.02 * slope.abs(), "{guide_slope} against {slope}");
+    let below = |x: f64| curve.iter().min_by(|a, b| (a.0 - x).abs().total_cmp(&(b.0 - x).abs())).unwrap().1;
+    assert!(guide.iter().all(|&(x, y)| y > below(x)), "the reference runs below the curve");
+
+    // On a linear axis the same curve bends, and no reference slope is drawn or named.
+    let mut out = Vec::new();
+    write_svg(&curves, &PlotSpec { x_scale: AxisScale::Linear, ..log_log() }, &mut out).unwrap();
+    let svg = String::from_utf8(out).unwrap();
+    let curve = polylines(&svg, &hex(style_of("stochastic-jacobi").colour)).into_iter().max_by_key(|p| p.len());
+    assert!(straight(&curve.unwrap()).1 > 50.0, "a power law on a linear axis is no line");
+    assert!(polylines(&svg, "#6E6E6E").is_empty() && !svg_texts(&svg).iter().any(|t| t.starts_with("slope")));
+}
+
+#[test]
+fn notes_go_under_the_plot_wrapped_to_its_width() {
+    let note = "Left out: stochastic-jacobi (no columns computed; its cost: 8,594,170 rays cast), \
+                random-walk (no columns computed; its cost: 9,000,000 rays cast).";
+    let spec = PlotSpec { notes: vec![note.into()], ..spec() };
+    let mut out = Vec::new();
+    write_svg(&curves(), &spec, &mut out).unwrap();
+    let svg = String::from_utf8(out).unwrap();
+    // Each line a text of its own, in order, the words as written; below the x axis's label.
+    let lines: Vec<&str> = svg.split("<text").skip(1).collect();
+    let at = |t: &str| -> (f64, String) {
+        let y = t.split_once("y=\"").unwrap().1.split_once('"').unwrap().0.parse().unwrap();
+        (y, t.split_once('>').unwrap().1.split_once("</text>").unwrap().0.trim().to_string())
+    };
+    let texts: Vec<(f64, String)> = lines.iter().map(|t| at(t)).collect();
+    let first = texts.iter().position(|(_, t)| t.starts_with("Left out:")).unwrap();
+    let wrapped: Vec<&(f64, String)> = texts[first..].iter().take_while(|(_, t)| !t.is_empty()).collect();
+    let joined = wrapped.iter().map(|(_, t)| t.as_str()).collect::<Vec<_>>().join(" ");
+    assert_eq!(joined.split_whitespace().collect::<Vec<_>>(), note.split_whitespace().collect::<Vec<_>>());
+    assert!(wrapped.len() >= 2, "a note wider than 480 pixels is wrapped: {wrapped:?}");
+    let axis = texts.iter().find(|(_, t)| t == "shooting steps").unwrap().0;
+    assert!(wrapped.windows(2).all(|w| w[1].0 > w[0].0) && wrapped[0].0 > axis, "{wrapped:?} below {axis}");
+}
+
+#[test]
+fn overlapping_bands_stay_light_and_each_shows_its_top() {
+    // Three solvers of one method (one colour) with the same band: where all three overlap the
+    // fill is still light enough to read the lines over it, and each band's top is its own line.
+    let flat = |v: f64| (0..=10).map(|k| (k as f64, v)).collect::<Vec<_>>();
+    let names = ["stochastic-jacobi", "stochastic-jacobi:seq=sobol", "stochastic-jacobi:seq=halton"];
+    let curves: Vec<Curve> = names
+        .iter()
+        .enumerate()
+        .map(|(k, n)| Curve { label: n.to_string(), points: flat(1e-3), spread: flat(2e-3 * (k + 1) as f64) })
+        .collect();
+    let img = png(&curves, &PlotSpec { size: (800, 500), ..spec() });
+    // A row 60 pixels above the curves at the data area's bottom (the x labels' 40 pixels
+    // and the margin's 12 below it), across the middle of the data: under all three bands,
+    // tinted but light.
+    let y = 500 - 40 - 12 - 60;
+    let row: Vec<[u8; 3]> =
+        img.enumerate().filter(|&(x, py, _)| py == y && (150..400).contains(&x)).map(|p| p.2).collect();
+    // The fill is the row's commonest colour (grid lines cross it here and there).
+    let mut counts = std::collections::HashMap::new();
+    for p in &row {
+        *counts.entry(*p).or_insert(0) += 1;
+    }
+    let fill = counts.into_iter().max_by_key(|&(_, k)| k).unwrap().0;
+    assert!(fill != [255, 255, 255] && fill.iter().all(|&c| c > 180), "{fill:?} under three bands");
+    let mut out = Vec::new();
+    write_svg(&curves, &spec(), &mut out).unwrap();
+    let svg = String::from_utf8(out).unwrap();
+    let colour = hex(style_of(names[0]).colour);
+    // A band's top is a thin line at twice its standard error: three, at three heights.
+    let tops: HashSet<i64> = svg
+        .split("<polyline")
+        .skip(1)
+        .filter(|p| p.contains(&format!("stroke=\"{colour}\"")) && p.contains("stroke-width=\"1\""))
+        .filter_map(|p| p.split_once("points=\"")?.1.split_once(',')?.1.split_whitespace().next()?.parse::<f64>().ok())
+        .map(|y| y.round() as i64)
+        .collect();
+    assert_eq!(tops.len(), 3, "{tops:?}");
+}
+
+#[test]
+fn markers_spread_along_a_curve_as_drawn_on_a_log_axis_too() {
+    // Points evenly spaced in rays crowd to the right of a log axis: the markers still spread
+    // along the curve, not after its points.
+    let points: Vec<(f64, f64)> = (1..=2000).map(|k| (5e3 * k as f64, 1.0 / (5e3 * k as f64).sqrt())).collect();
+    let mut out = Vec::new();
+    write_svg(&[Curve::new("pr", points)], &log_log(), &mut out).unwrap();
+    let svg = String::from_utf8(out).unwrap();
+    let mut centres: Vec<f64> =
+        svg.split("<circle").skip(1).filter_map(|c| c.split_once("cx=\"")?.1.split_once('"')?.0.parse().ok()).collect();
+    centres.sort_by(f64::total_cmp);
+    // The rightmost is the legend's; the data runs from the first to the last x label.
+    centres.pop();
+    let labels = svg_texts(&svg);
+    assert!(labels.iter().any(|t| t == "1e4") && labels.iter().any(|t| t == "1e7"), "{labels:?}");
+    let curve = polylines(&svg, &hex(style_of("pr").colour)).into_iter().max_by_key(|p| p.len()).unwrap();
+    let (left, right) = (curve[0].0, curve[curve.len() - 1].0);
+    assert!(centres.len() >= 6, "{centres:?}");
+    assert!(centres[1] < left + 0.5 * (right - left), "markers crowd to the right: {centres:?} in {left}..{right}");
 }

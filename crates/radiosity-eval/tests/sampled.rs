@@ -1,7 +1,9 @@
 //! Solvers that sample transport in the lab: the lab gives their problem its transport
 //! sampler (the stored matrix sampled exactly here), built only for them; every step is
 //! recorded with its rays and the solver's standard error; a comparison that mixes them with a
-//! deterministic solver gives one table and one set of plots, with a rays plot of its own.
+//! deterministic solver gives one table and one set of plots, with a log–log rays plot of its
+//! own; a plot or table names whom it leaves out, no plot is drawn against a unit nobody spent,
+//! and each solver's cost is counted in its own unit, named.
 //!
 //! The solver is this file's own, [`DirectByRays`]: direct lighting `E + ρ F E` estimated by
 //! rays from the emitters, in two replicates, each step adding rays to both.
@@ -255,7 +257,102 @@ fn a_comparison_mixing_deterministic_and_sampled_solvers_gives_one_table_and_one
     // The terminal summary gives the rays and the standard error beside the bound.
     let summary = comparison.summary();
     assert!(summary.lines().next().unwrap().contains("std error"), "{summary}");
+    // The rays plot is log–log, with the slope a Monte Carlo error falls at drawn and named.
+    assert!(holds(&svg("e_rms-rays"), "rays cast (log scale)") && holds(&svg("e_rms-rays"), "slope −½"));
+    assert!(holds(&svg("e_rms-columns"), "columns computed") && !holds(&svg("e_rms-columns"), "slope −½"));
+    // Whoever a plot or the table at n columns leaves out is named, with why and what it
+    // spent instead, in its own unit; under the plot and in the report.
+    let (pr_cost, rays_cost) = (pr.state.cost[Unit::Columns], rays.state.cost[Unit::Rays]);
+    let no_columns = format!("`direct-rays` (no columns computed; its cost: {} rays cast)", grouped(rays_cost));
+    let no_rays = format!("`pr` (no rays cast; its cost: {pr_cost} columns computed)");
+    let under = |stem: &str| svg_text(&svg(stem));
+    assert!(under("e_rms-columns").contains(&format!("Left out: {}.", no_columns.replace('`', ""))), "{no_columns}");
+    assert!(
+        under("e_rms-rays").contains(&format!("Left out: {}.", no_rays.replace('`', ""))),
+        "{}",
+        under("e_rms-rays")
+    );
+    assert!(!under("e_rms-steps").contains("Left out") && !under("e_rms-seconds").contains("Left out"));
+    let section = |head: &str| report.split(head).nth(1).unwrap().split("\n## ").next().unwrap().to_string();
+    let at_n = section("## e_rms at n/4, n/2, n and 2n columns");
+    assert!(at_n.contains("| `pr` |") && !at_n.contains("| `direct-rays` |"), "{at_n}");
+    assert!(at_n.contains(&format!("Left out: {no_columns}.")), "{at_n}");
+    let plots = section("## Plots");
+    for (stem, left) in [("e_rms-columns", &no_columns), ("e_rms-rays", &no_rays)] {
+        let after = plots.split(&format!("({stem}.png)")).nth(1).unwrap();
+        assert!(after.trim_start().starts_with(&format!("Left out: {left}.")), "{stem}: {plots}");
+    }
+    // The summary says at n columns what a solver without columns has there.
+    let row = summary.lines().find(|l| l.starts_with("direct-rays ")).unwrap();
+    assert!(row.contains(" no columns "), "{summary}");
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `k` with thousands separators, as reports write counts.
+fn grouped(k: u64) -> String {
+    let digits = k.to_string();
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// The texts of an SVG, trimmed, joined by spaces (a wrapped note reads as one).
+fn svg_text(svg: &str) -> String {
+    let texts: Vec<&str> =
+        svg.split("<text").skip(1).filter_map(|t| Some(t.split_once('>')?.1.split_once("</text>")?.0.trim())).collect();
+    texts.join(" ")
+}
+
+#[test]
+fn a_comparison_where_no_solver_computes_columns_draws_no_columns_plot_and_says_so() {
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let lab = lab(&scene, ReferenceKind::Matrix, Transport::Matrix).unwrap();
+    let rules = StopRules::parse("rays=2e4").unwrap();
+    let comparison = lab.compare(vec![Box::new(DirectByRays::new(500, 3))], &rules, &NoProgress).unwrap();
+    let dir = std::env::temp_dir().join(format!("radiosity-eval-no-columns-{}", std::process::id()));
+    let written = comparison.write(&dir).unwrap();
+    let names: Vec<String> =
+        written.files.iter().map(|f| f.file_name().unwrap().to_string_lossy().into_owned()).collect();
+    // Steps, rays and seconds; no plot against a unit nobody spent.
+    for stem in ["e_rms-steps", "e_rms-rays", "e_rms-seconds"] {
+        assert!(names.contains(&format!("{stem}.png")), "{names:?}");
+    }
+    assert!(!names.iter().any(|n| n.starts_with("e_rms-columns")), "{names:?}");
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(report.contains("No plot against columns computed: no solver computed one."), "{report}");
+    assert!(!report.contains("e_rms-columns"), "{report}");
+    // The table at n columns has no row, and says whom it leaves out.
+    let at_n = report.split("## e_rms at n/4, n/2, n and 2n columns").nth(1).unwrap().split("\n## ").next().unwrap();
+    assert!(at_n.starts_with("\n\nLeft out: `direct-rays` (no columns computed"), "{at_n:?}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn each_solvers_cost_is_counted_in_its_own_unit_and_named() {
+    // A deterministic and a stochastic solver both reach e_rms 1e-3: the summary gives the
+    // columns of one and the rays of the other, each named, never a bare count.
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let lab = lab(&scene, ReferenceKind::Matrix, Transport::Matrix).unwrap();
+    let registry = SolverRegistry::builtin();
+    let solvers = vec![registry.build("pr").unwrap(), registry.build("stochastic-jacobi").unwrap()];
+    let rules = StopRules::parse("columns=4n,rays=1.5e6").unwrap();
+    let comparison = lab.compare(solvers, &rules, &NoProgress).unwrap();
+    let summary = comparison.summary();
+    assert!(summary.lines().next().unwrap().contains("1e-3 at seconds"), "{summary}");
+    for (solver, unit) in [("pr", Unit::Columns), ("stochastic-jacobi", Unit::Rays)] {
+        let o = comparison.outcome(solver).unwrap();
+        let reached = comparison.reached(o, 1e-3).unwrap_or_else(|| panic!("{solver} reaches 1e-3: {summary}"));
+        let row = summary.lines().find(|l| l.starts_with(&format!("{solver} "))).unwrap();
+        // The two words before the seconds, the row's last.
+        let words: Vec<&str> = row.split_whitespace().collect();
+        let field = words[words.len() - 3..words.len() - 1].join(" ");
+        assert_eq!(field, format!("{} {}", grouped(reached.cost[unit]), unit.name()), "{summary}");
+    }
 }
 
 #[test]
@@ -406,6 +503,31 @@ fn a_stochastic_run_shows_no_bound_from_f_and_no_band_on_a_bound_axis() {
     for svg in svgs {
         let text = std::fs::read_to_string(svg).unwrap();
         assert!(!text.contains(radiosity_eval::BAND_LABEL), "a band on {}", svg.display());
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn without_a_reference_a_stochastic_run_is_named_as_left_out_of_every_plot_of_bounds() {
+    // A run that samples transport has no certified bound: with `--reference none` every plot
+    // shows bounds, so it has nothing on any of them, and each says so.
+    let scene = PreparedScene::load("cornell:res=2").unwrap();
+    let lab = lab(&scene, ReferenceKind::None, Transport::Scene).unwrap();
+    let registry = SolverRegistry::builtin();
+    let solvers = vec![registry.build("pr").unwrap(), registry.build("stochastic-jacobi").unwrap()];
+    let comparison = lab.compare(solvers, &StopRules::parse("columns=n,rays=2e4").unwrap(), &NoProgress).unwrap();
+    let dir = std::env::temp_dir().join(format!("radiosity-eval-sampled-none-{}", std::process::id()));
+    let written = comparison.write(&dir).unwrap();
+    let names: Vec<String> =
+        written.files.iter().map(|f| f.file_name().unwrap().to_string_lossy().into_owned()).collect();
+    // Nothing to draw against rays: no plot.
+    assert!(!names.iter().any(|n| n.starts_with("bound-rays")), "{names:?}");
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    for stem in ["bound-steps", "bound-seconds"] {
+        let svg = std::fs::read_to_string(dir.join(format!("{stem}.svg"))).unwrap();
+        assert!(svg_text(&svg).contains("Left out: stochastic-jacobi (no certified bound to show)."), "{stem}");
+        let after = report.split(&format!("({stem}.png)")).nth(1).unwrap();
+        assert!(after.trim_start().starts_with("Left out: `stochastic-jacobi` (no certified bound to show)."));
     }
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -5,9 +5,17 @@
 //! paper's axis), columns, every other unit of cost some solver spent (products, rays, links:
 //! [`Unit`]) and seconds, as SVG and PNG, and a summary table for the terminal.
 //!
+//! **Plots and tables show what each run spent.** A plot against a unit of cost is drawn only
+//! when some run spent that unit, and holds the runs that did (against columns, also a run
+//! that spent nothing at all); the steps and seconds plots hold every run. Whoever a plot or
+//! the table at n/4 … 2n columns leaves out is named, with why and what it spent instead, in
+//! `report.md` and under the plot. A cost is always given in its run's own unit, named
+//! (`659 columns`, `8,594,170 rays`), never as a bare count beside another unit's. Titles name
+//! the scene by its short name (a file's name without its folders).
+//!
 //! **Solvers that sample transport** sit in the same table and plots as the others. Their
-//! cost is counted in rays: the rays plot holds the solvers that cast rays, the columns plot
-//! those that computed columns (or cast none), and the steps and seconds plots every solver.
+//! cost is counted in rays, and the rays plot is log–log with a reference slope of −½, the
+//! rate at which a Monte Carlo estimate's error falls ([`crate::reports::plot`]'s module doc).
 //! Their error bar is a standard error (the spread of independent replicates, summarised as
 //! e_rms is), reported beside the certified bound of the deterministic solvers: a bound is a
 //! promise that holds every time, a standard error a spread that the true error exceeds now
@@ -22,11 +30,12 @@ use crate::lab::compare::Comparison;
 use crate::lab::outcome::Outcome;
 use crate::lab::recorder::Point;
 use crate::lab::setup::ReferenceOrigin;
-use crate::reports::plot::{Curve, PlotSpec, write_png, write_svg};
+use crate::reports::plot::{AxisScale, Curve, MONTE_CARLO_SLOPE, PlotSpec, write_png, write_svg};
+use crate::reports::report_text::sig;
 use crate::reports::table::{ConvergenceTable, round_significant};
 use radiosity_core::{Clock, Real};
-use radiosity_solvers::Unit;
 use radiosity_solvers::Value;
+use radiosity_solvers::{Cost, Unit};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -63,64 +72,96 @@ impl Comparison {
         Ok(Written { dir: dir.to_path_buf(), files })
     }
 
-    /// Writes the plots as SVG and PNG (against steps, columns, rays, links and seconds, each that
-    /// has a solver to show: module doc); returns their file stems and titles.
+    /// Writes the plots as SVG and PNG ([`Comparison::plots`]); returns their file stems and
+    /// titles.
     fn write_plots(&self, dir: &Path, files: &mut Vec<PathBuf>) -> Result<Vec<(String, String)>, LabError> {
-        // Steps (the paper's axis), every paid unit of cost, and seconds.
+        let mut written = Vec::new();
+        for plot in self.plots() {
+            let spec = PlotSpec {
+                title: plot.title,
+                x_label: plot.x_label,
+                size: (800, 500),
+                certified_bound: !self.has_reference(),
+                x_scale: plot.axis.scale(),
+                slope: plot.axis.slope(),
+                notes: left_out_sentence(&plot.left_out, |name| name.to_string()).into_iter().collect(),
+            };
+            let svg = dir.join(format!("{}.svg", plot.stem));
+            write_svg(&plot.curves, &spec, create(&svg)?)?;
+            let png = dir.join(format!("{}.png", plot.stem));
+            write_png(&plot.curves, &spec, create(&png)?)?;
+            files.extend([svg, png]);
+            written.push((plot.stem, spec.title));
+        }
+        Ok(written)
+    }
+
+    /// The plots the comparison draws (module doc): against steps, every paid unit of cost
+    /// some run spent, and seconds, each with the runs it shows and those it leaves out.
+    fn plots(&self) -> Vec<Plot<'_>> {
         let seconds = format!("{} seconds (form factors and solving)", self.clock.name());
         let units = Unit::ALL.into_iter().filter(|u| u.paid()).map(Axis::Spent);
-        let axes: Vec<Axis> = std::iter::once(Axis::Steps).chain(units).chain([Axis::Seconds]).collect();
-        let metric = self.metric();
+        let axes = std::iter::once(Axis::Steps).chain(units).chain([Axis::Seconds]);
         let what = if self.has_reference() { "e_rms" } else { "certified bound" };
-        let mut written = Vec::new();
+        let mut plots = Vec::new();
         for axis in axes {
-            let stem = format!("{metric}-{}", axis.key());
-            let x_label = match axis {
+            // No plot against a unit nobody spent: it would be a line at 0.
+            if let Axis::Spent(unit) = axis {
+                if self.outcomes.iter().all(|o| o.state.cost[unit] == 0) {
+                    continue;
+                }
+            }
+            let label = match axis {
                 Axis::Steps => "shooting steps",
                 Axis::Spent(unit) => unit.spent(),
                 Axis::Seconds => &seconds,
             };
-            let curves: Vec<Curve> = self
-                .outcomes
-                .iter()
-                .filter(|o| axis.shows(o))
-                .map(|o| Curve {
-                    label: o.solver.clone(),
-                    points: o
-                        .points
-                        .iter()
-                        .map(|p| (axis.x(p), self.value(p)))
-                        .filter(|(_, y)| y.is_finite())
-                        .collect(),
-                    // A band of standard errors belongs beside e_rms, never on an axis of
-                    // certified bounds (a comparison without a reference).
-                    spread: if self.has_reference() {
-                        o.points.iter().map(|p| (axis.x(p), p.std_error)).filter(|(_, s)| s.is_finite()).collect()
-                    } else {
-                        Vec::new()
-                    },
-                })
-                // A run with nothing to show on this axis (a stochastic run has no bound) is
-                // left out of the plot.
-                .filter(|c| !c.points.is_empty() || !c.spread.is_empty())
-                .collect();
+            let mut curves = Vec::new();
+            let mut left_out = Vec::new();
+            for o in &self.outcomes {
+                if let Some(why) = axis.absence(o) {
+                    left_out.push((o.solver.as_str(), why));
+                    continue;
+                }
+                let curve = self.curve(axis, o);
+                if curve.points.is_empty() && curve.spread.is_empty() {
+                    left_out.push((o.solver.as_str(), format!("no {what} to show")));
+                } else {
+                    curves.push(curve);
+                }
+            }
             if curves.is_empty() {
                 continue;
             }
-            let spec = PlotSpec {
-                title: format!("{}: {what} against {x_label}", self.scene.scene),
-                x_label: x_label.into(),
-                size: (800, 500),
-                certified_bound: !self.has_reference(),
+            let x_label = match axis.scale() {
+                AxisScale::Linear => label.to_string(),
+                AxisScale::Log => format!("{label} (log scale)"),
             };
-            let svg = dir.join(format!("{stem}.svg"));
-            write_svg(&curves, &spec, create(&svg)?)?;
-            let png = dir.join(format!("{stem}.png"));
-            write_png(&curves, &spec, create(&png)?)?;
-            files.extend([svg, png]);
-            written.push((stem, spec.title));
+            plots.push(Plot {
+                axis,
+                stem: format!("{}-{}", self.metric(), axis.key()),
+                title: format!("{}: {what} against {label}", short_name(&self.scene.scene)),
+                x_label,
+                curves,
+                left_out,
+            });
         }
-        Ok(written)
+        plots
+    }
+
+    /// The curve of `o` against `axis`: its shown metric, and its standard errors beside e_rms.
+    fn curve(&self, axis: Axis, o: &Outcome) -> Curve {
+        Curve {
+            label: o.solver.clone(),
+            points: o.points.iter().map(|p| (axis.x(p), self.value(p))).filter(|(_, y)| y.is_finite()).collect(),
+            // A band of standard errors belongs beside e_rms, never on an axis of certified
+            // bounds (a comparison without a reference).
+            spread: if self.has_reference() {
+                o.points.iter().map(|p| (axis.x(p), p.std_error)).filter(|(_, s)| s.is_finite()).collect()
+            } else {
+                Vec::new()
+            },
+        }
     }
 
     /// The Markdown report, linking the plots `plots` (file stems and titles).
@@ -163,10 +204,23 @@ impl Comparison {
         }
         let metric = self.metric();
         let _ = writeln!(md, "## {metric} at n/4, n/2, n and 2n columns\n");
-        let _ = writeln!(md, "| solver | n/4 | n/2 | n | 2n |\n|---|--:|--:|--:|--:|");
-        for o in &self.outcomes {
+        // Only the runs that computed columns (or spent nothing): the others are named.
+        let columns = Axis::Spent(Unit::Columns);
+        let (at_n, left): (Vec<&Outcome>, Vec<&Outcome>) =
+            self.outcomes.iter().partition(|o| columns.absence(o).is_none());
+        let table = !at_n.is_empty();
+        if table {
+            let _ = writeln!(md, "| solver | n/4 | n/2 | n | 2n |\n|---|--:|--:|--:|--:|");
+        }
+        for o in at_n {
             let at = |c: u64| cell(o.at_columns_point(c).map(|p| self.value(&p)));
             let _ = writeln!(md, "| `{}` | {} | {} | {} | {} |", o.solver, at(n / 4), at(n / 2), at(n), at(2 * n));
+        }
+        let left: Vec<(&str, String)> =
+            left.iter().filter_map(|o| Some((o.solver.as_str(), columns.absence(o)?))).collect();
+        if let Some(sentence) = left_out_sentence(&left, |name| format!("`{name}`")) {
+            // After the table, a paragraph of its own; in its place, the section's only line.
+            let _ = writeln!(md, "{}{sentence}", if table { "\n" } else { "" });
         }
         let _ = writeln!(
             md,
@@ -239,8 +293,16 @@ impl Comparison {
             }
         }
         let _ = writeln!(md, "\n## Plots\n");
+        if self.outcomes.iter().all(|o| o.state.cost[Unit::Columns] == 0) {
+            let _ = writeln!(md, "No plot against columns computed: no solver computed one.\n");
+        }
+        let drawn = self.plots();
         for (stem, title) in plots {
             let _ = writeln!(md, "![{title}]({stem}.png)\n");
+            let left = drawn.iter().find(|p| &p.stem == stem).map_or(&[][..], |p| &p.left_out[..]);
+            if let Some(sentence) = left_out_sentence(left, |name| format!("`{name}`")) {
+                let _ = writeln!(md, "{sentence}\n");
+            }
         }
         md
     }
@@ -257,9 +319,10 @@ impl Comparison {
 
     /// The compact table for the terminal: with a reference, e_rms and the certified bound;
     /// without, the bound alone; when a solver cast rays or has a standard error, its rays and
-    /// its standard error too. `1e-3 at` counts what the run spent in the unit its cost is read
-    /// in ([`radiosity_solvers::Cost::principal`]): columns, or rays for a solver that cast them,
-    /// or links for a solver over a hierarchy that computed no column.
+    /// its standard error too. `@n` is at n columns, `no columns` for a run that computed none.
+    /// `1e-3 at` counts what the run spent in the unit its cost is read in
+    /// ([`radiosity_solvers::Cost::principal`]), named: `659 columns`, or `8,594,170 rays` for
+    /// a solver that cast them, or links for a solver over a hierarchy that computed no column.
     pub fn summary(&self) -> String {
         let metric = self.metric();
         let bound = if self.has_reference() { format!(" {:>10}", "bound end") } else { String::new() };
@@ -267,8 +330,10 @@ impl Comparison {
         let rays = if sampled { format!(" {:>12} {:>10}", "rays", "std error") } else { String::new() };
         let seconds = self.clock.seconds_label();
         let width = seconds.len();
+        // The solvers' names in a column wide enough for the longest.
+        let names = self.outcomes.iter().map(|o| o.solver.chars().count()).max().unwrap_or(0).max(24);
         let mut out = format!(
-            "{:<24} {:>8} {:>8}{rays} {:>10} {:>10}{bound} {:>10} {seconds}\n",
+            "{:<names$} {:>8} {:>8}{rays} {:>10} {:>10}{bound} {:>16} {seconds}\n",
             "solver",
             "steps",
             "columns",
@@ -283,19 +348,21 @@ impl Comparison {
             } else {
                 String::new()
             };
+            // At n columns; a run that computed none says so rather than `—`.
+            let at_n = match Axis::Spent(Unit::Columns).absence(o) {
+                Some(_) => "no columns".into(),
+                None => cell(o.at_columns_point(self.n).map(|p| self.value(&p))),
+            };
+            let unit = o.state.cost.principal();
             let _ = writeln!(
                 out,
-                "{:<24} {:>8} {:>8}{rays} {:>10} {:>10}{bound} {:>10} {:>width$.3}",
+                "{:<names$} {:>8} {:>8}{rays} {:>10} {:>10}{bound} {:>16} {:>width$.3}",
                 o.solver,
                 o.state.step,
                 o.state.cost[Unit::Columns],
-                cell(o.at_columns_point(self.n).map(|p| self.value(&p))),
+                at_n,
                 cell(o.points.last().map(|p| self.value(p))),
-                self.reached(o, 1e-3).map_or("—".into(), |p| match o.state.cost.principal() {
-                    Unit::Columns => p.cost[Unit::Columns].to_string(),
-                    Unit::Links => format!("{:.2e} links", p.cost[Unit::Links] as Real),
-                    unit => format!("{} {}", p.cost[unit], unit.name()),
-                }),
+                self.reached(o, 1e-3).map_or("—".into(), |p| format!("{} {}", count(p.cost[unit]), unit.name())),
                 o.seconds()
             );
         }
@@ -379,16 +446,71 @@ impl Axis {
         }
     }
 
-    /// Whether the plot holds `o`: every run against steps and seconds, the runs that spent a
-    /// unit against it, and against columns also those that spent nothing (their error at 0
-    /// columns), a solver that only cast rays apart.
-    fn shows(self, o: &Outcome) -> bool {
+    /// Why the plot leaves `o` out, or `None` when it holds it: it holds every run against
+    /// steps and seconds, the runs that spent a unit against it, and against columns also
+    /// those that spent nothing at all (their error at 0 columns).
+    fn absence(self, o: &Outcome) -> Option<String> {
+        let cost = &o.state.cost;
         match self {
-            Axis::Steps | Axis::Seconds => true,
-            Axis::Spent(Unit::Columns) => !o.state.cost.only_rays(),
-            Axis::Spent(unit) => o.state.cost[unit] > 0,
+            Axis::Steps | Axis::Seconds => None,
+            Axis::Spent(Unit::Columns) if cost.paid().next().is_none() => None,
+            Axis::Spent(unit) if cost[unit] > 0 => None,
+            Axis::Spent(unit) => Some(format!("no {}; its cost: {}", unit.spent(), principal_cost(cost))),
         }
     }
+
+    /// The x axis's scale: logarithmic for rays, against which a Monte Carlo estimate's error
+    /// falls as a power law; linear for the rest.
+    fn scale(self) -> AxisScale {
+        match self {
+            Axis::Spent(Unit::Rays) => AxisScale::Log,
+            _ => AxisScale::Linear,
+        }
+    }
+
+    /// The reference slope drawn on the axis: a Monte Carlo estimate's against rays.
+    fn slope(self) -> Option<Real> {
+        (self.scale() == AxisScale::Log).then_some(MONTE_CARLO_SLOPE)
+    }
+}
+
+/// A plot a comparison draws ([`Comparison::plots`]).
+struct Plot<'c> {
+    axis: Axis,
+    /// The file stem: `e_rms-rays`.
+    stem: String,
+    title: String,
+    x_label: String,
+    /// One per run shown.
+    curves: Vec<Curve>,
+    /// Each run left out, by name, and why.
+    left_out: Vec<(&'c str, String)>,
+}
+
+/// The sentence that names the runs `left` out of a plot or table and why, each name written
+/// by `name`; `None` when none is.
+fn left_out_sentence(left: &[(&str, String)], name: impl Fn(&str) -> String) -> Option<String> {
+    let items: Vec<String> = left.iter().map(|(solver, why)| format!("{} ({why})", name(solver))).collect();
+    (!items.is_empty()).then(|| format!("Left out: {}.", items.join(", ")))
+}
+
+/// What a run spent in the unit its cost is read in ([`radiosity_solvers::Cost::principal`]),
+/// labelled: `659 columns computed`, `8,594,170 rays cast`.
+fn principal_cost(cost: &Cost) -> String {
+    let unit = cost.principal();
+    format!("{} {}", count(cost[unit]), unit.spent())
+}
+
+/// A count as reports write one: with thousands separators from 10,000 (`8,594,170`), three
+/// significant digits from 1e10 (as [`sig`] writes numbers).
+fn count(k: u64) -> String {
+    if k < 10_000 { k.to_string() } else { sig(k as Real, 3) }
+}
+
+/// A scene's name as a title gives it: a file's name without its folders (`office.glb`,
+/// `classroom.mgf:size=0.1`), a built-in scene's as written (`cornell:res=16`).
+pub(crate) fn short_name(scene: &str) -> &str {
+    scene.rfind(['/', '\\']).map_or(scene, |k| &scene[k + 1..])
 }
 
 /// `text` with its first letter in capitals.

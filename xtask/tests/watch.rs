@@ -273,8 +273,10 @@ fn ctrl_c_during_the_run_stops_it_and_writes_what_ran() {
 fn compare_html_writes_a_page_that_needs_nothing_else() {
     let dir = std::env::temp_dir().join(format!("radiosity-watch-html-{}", std::process::id()));
     let out = dir.to_str().unwrap();
-    let args =
-        ["compare", "--scene", "cornell:res=2", "--solvers", "pr,xu", "--until", "columns=n", "--html", "--out", out];
+    // A family a cost unit: columns, products over the hierarchy, rays, node rounds (links).
+    let (solvers, until) = ("pr,gmres-30,stochastic-jacobi,h-pr", "steps=40,rays=1e5");
+    let args = ["compare", "--scene", "cornell:res=2", "--ff", "hierarchical", "--solvers", solvers, "--until", until];
+    let args = [&args[..], &["--html", "--out", out]].concat();
     let stdout = String::from_utf8(xtask(&args).success().get_output().stdout.clone()).unwrap();
     assert!(stdout.contains("page.html"), "{stdout}");
     let page = std::fs::read_to_string(dir.join("page.html")).unwrap();
@@ -291,6 +293,7 @@ fn compare_html_writes_a_page_that_needs_nothing_else() {
     let channels = data["meta"]["channels"].as_u64().unwrap() as usize;
     let geometry = data["geometry"].as_str().unwrap();
     assert_eq!(geometry.len(), data["meta"]["geometry_bytes"].as_u64().unwrap().div_ceil(3) as usize * 4);
+    assert_eq!(data["runs"].as_array().unwrap().len(), 4);
     for run in data["runs"].as_array().unwrap() {
         let kept = run["kept"].as_array().unwrap();
         assert!(kept.len() > 3, "too few moments kept for a slider: {}", kept.len());

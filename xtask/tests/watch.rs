@@ -61,6 +61,24 @@ impl Drop for Watch {
     }
 }
 
+/// `xtask watch ARGS`, started; its stdout's lines after the first, and the page's address,
+/// which the first gives.
+fn start(args: &[&str]) -> (Watch, std::io::Lines<BufReader<std::process::ChildStdout>>, String) {
+    let mut child = Command::new(assert_cmd::cargo::cargo_bin("xtask"))
+        .arg("watch")
+        .args(args)
+        .env("RADIOSITY_CACHE_DIR", cache_dir())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
+    let watch = Watch(child);
+    let first = lines.next().unwrap().unwrap();
+    let url = first.strip_prefix("watch the comparison at ").unwrap_or_else(|| panic!("{first}")).to_string();
+    (watch, lines, url)
+}
+
 /// The 8-bit RGB pixels of the PNG at `path`, with its width.
 fn pixels(path: &Path) -> (usize, Vec<[u8; 3]>) {
     let image = radiosity_eval::Rgb8::decode(&std::fs::read(path).unwrap()).unwrap();
@@ -93,18 +111,14 @@ fn the_live_page_shows_the_comparison_as_render_and_compare_do() {
     let dir = std::env::temp_dir().join(format!("radiosity-watch-test-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let kept = dir.join("page.html");
-    let mut child = Command::new(assert_cmd::cargo::cargo_bin("xtask"))
-        .args(["watch", "--scene", SCENE, "--solvers", SOLVERS, "--until", UNTIL, "--port", "0"])
-        .args(["--results", dir.join("results").to_str().unwrap(), "--out", kept.to_str().unwrap()])
-        .env("RADIOSITY_CACHE_DIR", cache_dir())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
-    let watch = Watch(child);
-    let first = lines.next().unwrap().unwrap();
-    let url = first.strip_prefix("watch the comparison at ").unwrap_or_else(|| panic!("{first}")).to_string();
+    let results = dir.join("results");
+    let (watch, mut lines, url) = start(
+        &[
+            &["--scene", SCENE, "--solvers", SOLVERS, "--until", UNTIL, "--port", "0"][..],
+            &["--results", results.to_str().unwrap(), "--out", kept.to_str().unwrap()],
+        ]
+        .concat(),
+    );
 
     // The page holds its load event until it has drawn the comparison's end, so both wait.
     let live = dir.join("live.png");
@@ -240,18 +254,16 @@ fn ctrl_c_during_the_run_stops_it_and_writes_what_ran() {
     let dir = std::env::temp_dir().join(format!("radiosity-watch-stop-{}", std::process::id()));
     let results = dir.join("results");
     // A run far longer than the test: Ctrl-C ends it.
-    let mut child = Command::new(assert_cmd::cargo::cargo_bin("xtask"))
-        .args(["watch", "--scene", "cornell:res=4", "--solvers", "pr,xu", "--until", "columns=1000n"])
-        .args(["--results", results.to_str().unwrap()])
-        .env("RADIOSITY_CACHE_DIR", cache_dir())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
-    let watch = Watch(child);
-    let first = lines.next().unwrap().unwrap();
-    let url = first.strip_prefix("watch the comparison at ").unwrap_or_else(|| panic!("{first}")).to_string();
+    let (watch, lines, url) = start(&[
+        "--scene",
+        "cornell:res=4",
+        "--solvers",
+        "pr,xu",
+        "--until",
+        "columns=1000n",
+        "--results",
+        results.to_str().unwrap(),
+    ]);
     // Once the page's events say pr runs, Ctrl-C.
     let address = url.trim_start_matches("http://").trim_end_matches('/').to_string();
     let mut events = std::net::TcpStream::connect(&address).unwrap();
@@ -308,19 +320,8 @@ fn compare_html_writes_a_page_that_needs_nothing_else() {
 fn pages_that_come_and_go_change_nothing_in_the_run() {
     let dir = std::env::temp_dir().join(format!("radiosity-watch-leave-{}", std::process::id()));
     let args = ["--scene", "cornell:res=4", "--solvers", "pr,xu", "--until", "columns=2n"];
-    let mut child = Command::new(assert_cmd::cargo::cargo_bin("xtask"))
-        .arg("watch")
-        .args(args)
-        .args(["--results", dir.join("watched").to_str().unwrap()])
-        .env("RADIOSITY_CACHE_DIR", cache_dir())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
-    let mut watch = Watch(child);
-    let first = lines.next().unwrap().unwrap();
-    let url = first.strip_prefix("watch the comparison at ").unwrap_or_else(|| panic!("{first}")).to_string();
+    let watched = dir.join("watched");
+    let (mut watch, mut lines, url) = start(&[&args[..], &["--results", watched.to_str().unwrap()]].concat());
     let address = url.trim_start_matches("http://").trim_end_matches('/').to_string();
     // Clients that read a little of the events and leave, again and again, while it runs.
     let leaving = std::thread::spawn(move || {

@@ -1,7 +1,9 @@
 //! What a live page is sent once: geometry, the smoothing table, the reference and the
 //! header that names the run ([`LiveScene`]).
 
-use crate::error::EvalError;
+use crate::error::{EvalError, LabError};
+use crate::lab::setup::Lab;
+use crate::reports::comparison::short_name;
 use crate::reports::plot::style_of;
 use crate::view::render::{Camera, ExposureProbe};
 use crate::view::shading::CornerTable;
@@ -118,6 +120,35 @@ impl LiveScene {
             "geometry_bytes": bytes.0.len(),
         });
         Ok(LiveScene { meta, geometry: bytes.0, probe, table, channels, patches: n })
+    }
+
+    /// The live scene of a comparison on `lab`, run under the stop rules `rules` by `solvers`
+    /// in order, seen first through `camera`: the header from the lab (the scene's short name,
+    /// backend, clock, and why there is no error map when there is no reference), the lab's
+    /// reference for the error map.
+    pub fn of_lab(lab: &Lab<'_>, camera: &Camera, rules: &str, solvers: Vec<String>) -> Result<LiveScene, LabError> {
+        let report = lab.report();
+        let no_reference = lab.reference().is_none().then(|| match lab.chosen().why.as_str() {
+            "" => "there is no reference (--reference none)".to_string(),
+            why => format!("there is no reference ({why})"),
+        });
+        let header = LiveHeader {
+            scene: short_name(&report.scene).to_string(),
+            backend: lab.backend().to_string(),
+            rules: rules.to_string(),
+            clock: lab.clock().name().to_string(),
+            solvers,
+            no_reference,
+        };
+        let prepared = lab.prepared();
+        let channels = lab.system().channels().count();
+        let star = lab.reference().map(|r| r.values());
+        Ok(LiveScene::new(&prepared.loaded.scene, &prepared.visibility, camera, channels, star, &header)?)
+    }
+
+    /// The runs this scene's header names, in order.
+    pub fn runs(&self) -> usize {
+        self.meta["solvers"].as_array().map_or(0, Vec::len)
     }
 
     /// The exposure [`crate::render`] would choose at the start camera for the radiosity

@@ -30,9 +30,7 @@ const POINT_INTERVAL: Real = 0.05;
 pub struct Frame {
     /// A number that grows with every frame of the feed.
     pub serial: u64,
-    /// Steps done.
-    pub step: u64,
-    /// The point measured on this state.
+    /// The point measured on this state (its step, cost and metrics).
     pub point: Point,
     /// The exposure [`crate::render`] would choose for it at the start camera.
     pub exposure: Real,
@@ -147,7 +145,6 @@ impl Feed {
         let values: Vec<f32> = state.radiosity.iter().map(|&b| b as f32).collect();
         Arc::new(Frame {
             serial: self.serial.fetch_add(1, Ordering::Relaxed),
-            step: state.step,
             point: *point,
             exposure: self.scene.exposure(&values),
             values,
@@ -269,7 +266,7 @@ fn spaced(step: u64, factor: Real) -> u64 {
 
 /// Keeps `frame`, thinning `kept` to [`KEPT_MOST`].
 fn keep(kept: &mut Vec<Arc<Frame>>, frame: Arc<Frame>) {
-    if kept.last().is_some_and(|k| k.step == frame.step) {
+    if kept.last().is_some_and(|k| k.point.step == frame.point.step) {
         kept.pop();
     }
     kept.push(frame);

@@ -30,7 +30,7 @@ pub fn write_page(out: &mut dyn Write, feed: &Feed) -> Result<(), LabError> {
                 .iter()
                 .map(|f| {
                     let bytes: Vec<u8> = f.values.iter().flat_map(|v| v.to_le_bytes()).collect();
-                    json!({"step": f.step, "point": point_json(&f.point), "exposure": f.exposure, "values": base64(&bytes)})
+                    json!({"point": point_json(&f.point), "exposure": f.exposure, "values": base64(&bytes)})
                 })
                 .collect();
             let points: Vec<Value> = run.points.iter().map(point_json).collect();

@@ -156,7 +156,7 @@ fn events(out: &mut TcpStream, feed: &Feed) -> std::io::Result<()> {
         }
         for (index, frame) in frames {
             let encoded = base64(frame.values.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>().as_slice());
-            let data = json!({"run": index, "step": frame.step, "point": point_json(&frame.point),
+            let data = json!({"run": index, "point": point_json(&frame.point),
                 "exposure": frame.exposure, "values": encoded});
             let text = format!("event: frame\ndata: {data}\n\n");
             out.write_all(text.as_bytes())?;

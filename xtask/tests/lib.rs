@@ -440,7 +440,7 @@ fn ff_against_compares_sampled_rows_without_assembling() {
     let text = String::from_utf8(out).unwrap();
     for words in [
         "216 patches",
-        "hierarchical:eps=5e-2:shadows=0.05:rays=14:budget=512:order=8:tol=1e-3:seed=0:oracle=flux:floor=0.1:passes=1:closure=true built in",
+        "hierarchical:eps=5e-2:shadows=0.03:rays=14:trust=1.5:budget=512:order=8:tol=1e-3:seed=0:oracle=flux:floor=0.1:passes=1:closure=true built in",
         "far links",
         "natively",
         "3 sampled rows",

@@ -10,6 +10,10 @@ mod custom_solver;
 #[path = "../examples/time_backend.rs"]
 mod time_backend;
 
+#[allow(dead_code)]
+#[path = "../examples/refinement_curve.rs"]
+mod refinement_curve;
+
 // The timing example brings the backend of one's own with it.
 use time_backend::custom_backend;
 
@@ -124,4 +128,21 @@ fn automatic_frequency_is_reproducible() {
     assert_eq!(first.0, second.0);
     // The memory variants run past n on stored columns, so group steps happened.
     assert!(first.0.lines().count() > 20, "{}", first.0);
+}
+
+#[test]
+fn the_refinement_curve_measures_every_setting_and_draws_them() {
+    let dir = scratch("curve");
+    let cache = radiosity_eval::Cache::at(dir.join("cache"));
+    let series: &[(&str, &[&str])] =
+        &[("trust", &["eps=0.05:trust=1", "eps=0.05:trust=4096"]), ("eps", &["eps=0.1", "eps=0.02"])];
+    let points = refinement_curve::curve("cornell:res=4", series, &cache, &dir).unwrap();
+    assert_eq!(points.len(), 4);
+    // The Cornell box occludes: every operator traces rays, and each lies within a few percent of
+    // the analytic system's solution.
+    assert!(points.iter().all(|p| p.rays > 0.0 && p.links > 0.0 && p.e_rms > 0.0 && p.e_rms < 0.05), "{points:?}");
+    let csv = std::fs::read_to_string(dir.join("curve.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 5, "{csv}");
+    assert!(csv.lines().nth(1).unwrap().starts_with("trust,hierarchical:eps=5e-2:"), "{csv}");
+    assert!(std::fs::read(dir.join("curve.png")).unwrap().starts_with(b"\x89PNG"));
 }

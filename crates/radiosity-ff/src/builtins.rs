@@ -253,10 +253,11 @@ impl BackendParams for MonteCarloParams {
 impl BackendArgument for HierarchicalParams {
     fn canonical(&self) -> String {
         format!(
-            "hierarchical:eps={:e}:shadows={}:rays={}:budget={}:order={}:tol={:e}:seed={}:oracle={}:floor={}:passes={}:closure={}",
+            "hierarchical:eps={:e}:shadows={}:rays={}:trust={}:budget={}:order={}:tol={:e}:seed={}:oracle={}:floor={}:passes={}:closure={}",
             self.eps,
             self.shadows,
             self.rays,
+            self.trust,
             self.budget,
             self.order,
             self.tolerance,
@@ -312,6 +313,7 @@ impl BackendParams for HierarchicalParams {
             eps: p.real("eps", defaults.eps, |e| e > 0.0 && e <= 1.0, "a threshold in (0, 1]")?,
             shadows: p.real("shadows", defaults.shadows, |s| s > 0.0 && s <= 1.0, "a fraction in (0, 1]")?,
             rays: p.count("rays", defaults.rays, 1, 4096)?,
+            trust: p.real("trust", defaults.trust, |t| t > 0.0 && t <= 4096.0, "a number in (0, 4096]")?,
             budget: p.count("budget", defaults.budget, 0, 1 << 24)?,
             order: quadrature_order(p, defaults.order)?,
             tolerance: quadrature_tolerance(p, defaults.tolerance)?,

@@ -162,15 +162,17 @@ fn bad_backend_arguments_are_clear_errors() {
     assert!(e.contains("form-factor backend 'hemicube'") && e.contains("no parameter 'order'"), "{e}");
     assert_eq!(
         BackendSpec::parse("hierarchical").unwrap().canonical(),
-        "hierarchical:eps=3e-3:shadows=0.05:rays=14:budget=512:order=8:tol=1e-3:seed=0:oracle=flux:floor=0.1:passes=1:closure=true"
+        "hierarchical:eps=3e-3:shadows=0.03:rays=14:trust=1.5:budget=512:order=8:tol=1e-3:seed=0:oracle=flux:floor=0.1:passes=1:closure=true"
     );
     // The near pairs' quadrature is the analytic backend's, with its bounds.
     assert_eq!(
         BackendSpec::parse("hierarchical:order=2:tol=0.1").unwrap().canonical(),
-        "hierarchical:eps=3e-3:shadows=0.05:rays=14:budget=512:order=2:tol=1e-1:seed=0:oracle=flux:floor=0.1:passes=1:closure=true"
+        "hierarchical:eps=3e-3:shadows=0.03:rays=14:trust=1.5:budget=512:order=2:tol=1e-1:seed=0:oracle=flux:floor=0.1:passes=1:closure=true"
     );
     let e = err("hierarchical:order=33");
     assert!(e.contains("form-factor backend 'hierarchical'") && e.contains("order=33"), "{e}");
+    let e = err("hierarchical:trust=0");
+    assert!(e.contains("trust=0") && e.contains("(0, 4096]"), "{e}");
     let e = err("hierarchical:tol=2");
     assert!(e.contains("tol=2") && e.contains("(0, 1]"), "{e}");
     assert_eq!(

@@ -165,6 +165,7 @@ impl HierarchicalColumns {
             brightness: Brightness::estimate(scene, &tree, params.oracle, params.floor),
             eps: params.eps,
             shadows: params.shadows * params.eps,
+            trust: params.trust,
             strata: links::strata_order(params.rays.max(1)),
             seed: params.seed,
             shafts: shafts.as_ref(),

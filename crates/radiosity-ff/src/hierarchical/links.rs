@@ -33,20 +33,32 @@
 //! link is *small* when its weighted transfer bound (below) is at most `shadows` (the parameter
 //! times `eps`) or both ends are patches. A small link keeps what its probe saw: dropped when
 //! every ray is blocked, otherwise the probe's visible fraction. A larger link is only trusted
-//! on every ray: any disagreement splits it (at the first ray that disagrees: the rest could
-//! not change that), and one whose probe agrees traces the rest and is kept or dropped when all
-//! still agree. A split link hands the segments it traced to its children, each to the child its
-//! end lies in: a larger child counts them among its rays (uniform over its areas, as its own
-//! are), so a child that inherits a disagreement is split without a ray, and one that inherits
-//! agreement traces only the rest. A small child traces its own probe: the segments that made
-//! its parent split were selected by their disagreement, and a kept fraction counted from them
-//! would lean towards the sibling's side. The visible fraction is one number for every pair of
+//! when its rays agree: any disagreement splits it, and one whose probe agrees traces more and
+//! is kept or dropped when all still agree.
+//!
+//! **How many agreeing rays a larger link needs** (sequential testing, `trust`). A larger link
+//! whose bound is `q` times `shadows` would leak at most `q · shadows · f` through a blocked
+//! share `f` of its pairs that its rays all missed, and `n` agreeing rays miss it with chance
+//! `(1 − f)^n`: the expected leak, `q · shadows · f (1 − f)^n`, is largest at `f = 1/(n + 1)`,
+//! below `q · shadows / (e (n + 1))`. So the rays a link needs to hold that expectation to
+//! `shadows` grow with `q`: a larger link is trusted after `⌈trust · q⌉` agreeing rays, its
+//! segments inherited from its ancestors included, no fewer than its probe and no more than
+//! `rays`. A link just above `shadows` stops at its probe; one carrying 10 times as much traces
+//! every ray, as all did before (`trust` large).
+//!
+//! **Segments handed down.** A split link hands the segments it traced to its children, each to
+//! the child its end lies in. A larger child counts them all among its rays (uniform over its
+//! areas, as its own are), so a child that inherits a disagreement is split without a ray, and
+//! one that inherits agreement traces only the rest. A small child counts only the segments of
+//! its ancestors' probes, which are traced whole, a fixed number whatever they see: the rays
+//! after a probe stop at their first disagreement (the rest could not change the split), so
+//! those are selected by their outcome, and a kept fraction counted from them would lean
+//! towards the sibling's side. The visible fraction is one number for every pair of
 //! the link, so a partly visible link misplaces light between its lit and shadowed pairs (a
 //! light leak): `shadows` bounds how much of a row one link may misplace that way. A small
 //! link's fraction is noisy, but the noise is unbiased and averages over the hundreds of links
-//! of a row, so a small link does not trace all `rays`. A larger link does, whatever its
-//! transfer: a leak through a link taken as clear by mistake is systematic. (Both choices
-//! were measured: docs/hierarchical.md.)
+//! of a row, so a small link does not trace all `rays`. (Each choice was measured:
+//! docs/hierarchical.md.)
 //!
 //! **Shafts** (`shafts=true`, off by default). A larger link between two patches or flat
 //! clusters whose probe is all clear, and a near pair that would trace at least
@@ -192,6 +204,9 @@ pub(super) struct Segment {
     from: u32,
     to: u32,
     clear: bool,
+    /// Traced in a probe, which is traced whole whatever its rays see: a small descendant may
+    /// count it towards its own probe (module doc).
+    probe: bool,
 }
 
 /// A link split in two: each half's nodes and the segments it inherits, and where their
@@ -271,6 +286,9 @@ pub(crate) struct Refiner<'a> {
     pub eps: Real,
     /// The largest transfer bound of a partly visible far link.
     pub shadows: Real,
+    /// Agreeing rays a larger link needs per unit of its transfer bound over `shadows`
+    /// (module doc).
+    pub trust: Real,
     /// The strata of a far link's rays (as many as its rays) in the order they are traced:
     /// for each ray, its stratum of one end's area and its stratum of the other's
     /// ([`strata_order`]).
@@ -426,8 +444,10 @@ impl Refiner<'_> {
         };
         if let Some((order, bound)) = self.far_order(a, b) {
             let small = bound <= self.shadows || (leaf_a && leaf_b);
+            // The agreeing rays a larger link needs (module doc; `as` saturates), none for a small one.
+            let needs = if small { 0 } else { ((self.trust * bound / self.shadows).ceil() as usize).max(1) };
             let mut shaft = || shaft_clear(kept);
-            let seen = self.visible_fraction(a, b, small, &mut traced, out, &mut shaft);
+            let seen = self.visible_fraction(a, b, needs, &mut traced, out, &mut shaft);
             let visible = match seen {
                 Seen::Occluded => return self.settled(out, pairs, false),
                 Seen::Split => None,
@@ -554,17 +574,18 @@ impl Refiner<'_> {
             })
     }
 
-    /// What the rays of the link between `a` and `b` tell (module doc): a small link keeps what
-    /// its probe saw, a larger one is split as soon as its rays disagree and traces every ray
-    /// otherwise, counting the segments `traced` for the links it was split from; when its
-    /// probe is all clear and `shaft_clear` says its shaft is, it takes the rest as clear
-    /// without tracing them. When it is split, `traced` holds every segment traced between `a`
-    /// and `b`.
+    /// What the rays of the link between `a` and `b` tell (module doc): a small link (`needs`
+    /// 0) keeps what its probe saw, counting its ancestors' probes' segments among `traced`; a
+    /// larger one is split as soon as its rays disagree and is trusted after `needs` agreeing
+    /// rays otherwise (between its probe and `rays`), counting the segments `traced` for the
+    /// links it was split from; when its probe is all clear and `shaft_clear` says its shaft
+    /// is, it takes the rest as clear without tracing them. When it is split, `traced` holds
+    /// every segment traced between `a` and `b`.
     fn visible_fraction(
         &self,
         a: u32,
         b: u32,
-        small: bool,
+        needs: usize,
         traced: &mut Vec<Segment>,
         out: &mut Links,
         shaft_clear: &mut dyn FnMut() -> bool,
@@ -574,9 +595,14 @@ impl Refiner<'_> {
         let probe = (total / 4).max(1);
         let mut rng = self.rays_of(a, b);
         let unanimous = |s: &Sampled| s.clear == 0 || s.clear == s.count;
-        if small {
+        if needs == 0 {
             let mut seen = Sampled { count: 0, clear: 0 };
-            self.sample(a, b, &order[..probe], total, &mut rng, &mut seen, None, out);
+            for segment in traced.iter().filter(|s| s.probe).take(probe) {
+                seen.count += 1;
+                seen.clear += usize::from(segment.clear);
+            }
+            let fresh = probe - seen.count;
+            self.sample(a, b, &order[..fresh], total, &mut rng, &mut seen, None, out);
             return match seen.clear {
                 0 => {
                     out.occluded += 1;
@@ -590,9 +616,9 @@ impl Refiner<'_> {
         let clear = traced.iter().filter(|s| s.clear).count();
         let mut seen = Sampled { count: traced.len(), clear };
         if unanimous(&seen) {
-            let fresh = total.saturating_sub(traced.len());
+            let fresh = needs.clamp(probe, total).saturating_sub(traced.len());
             let (first, rest) = order[..fresh].split_at(probe.min(fresh));
-            self.sample(a, b, first, total, &mut rng, &mut seen, Some(traced), out);
+            self.sample(a, b, first, total, &mut rng, &mut seen, Some((traced, true)), out);
             if seen.clear == seen.count && !rest.is_empty() && shaft_clear() {
                 // Every segment the rest of the rays would draw is clear: their tally.
                 out.clear += 1;
@@ -600,7 +626,7 @@ impl Refiner<'_> {
                 return Seen::Visible { clear: count, count };
             }
             if unanimous(&seen) {
-                self.sample(a, b, rest, total, &mut rng, &mut seen, Some(traced), out);
+                self.sample(a, b, rest, total, &mut rng, &mut seen, Some((traced, false)), out);
             }
         }
         if !unanimous(&seen) {
@@ -659,8 +685,9 @@ impl Refiner<'_> {
 
     /// Adds to `seen` the segments `strata` of `total` between points of `a` and `b` drawn by
     /// area (stratified: each with its stratum of `a`'s area and of `b`'s), each traced when the
-    /// scene can occlude (all clear otherwise). With `traced`, records each segment there and
-    /// stops at the first that disagrees with those before it.
+    /// scene can occlude (all clear otherwise). With `traced`, records each segment there, and
+    /// unless they are a probe (`true`, traced whole) stops at the first that disagrees with
+    /// those before it.
     #[allow(clippy::too_many_arguments)]
     fn sample(
         &self,
@@ -670,7 +697,7 @@ impl Refiner<'_> {
         total: usize,
         rng: &mut Xoshiro256PlusPlus,
         seen: &mut Sampled,
-        mut traced: Option<&mut Vec<Segment>>,
+        mut traced: Option<(&mut Vec<Segment>, bool)>,
         out: &mut Links,
     ) {
         for &[s, t] in strata {
@@ -687,9 +714,9 @@ impl Refiner<'_> {
             let clear = visibility.unoccluded_between(x, i, y, j);
             seen.clear += usize::from(clear);
             out.rays += 1;
-            if let Some(traced) = traced.as_deref_mut() {
-                traced.push(Segment { from: from as u32, to: to as u32, clear });
-                if seen.clear != 0 && seen.clear != seen.count {
+            if let Some((traced, probe)) = traced.as_mut() {
+                traced.push(Segment { from: from as u32, to: to as u32, clear, probe: *probe });
+                if !*probe && seen.clear != 0 && seen.clear != seen.count {
                     return;
                 }
             }
@@ -761,4 +788,82 @@ pub(super) fn kernel_factor(span: &Span, (n, a): (Vec3, Vec3), (m, b): (Vec3, Ve
     let p_delta = delta - e * e.dot(delta);
     let (alpha, beta) = (n.dot(e), -m.dot(e));
     alpha * beta * (1.0 - 2.0 * e.dot(delta) / span.r) + (beta * n.dot(p_delta) - alpha * m.dot(p_delta)) / span.r
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analytic::AnalyticParams;
+    use crate::hierarchical::params::HierarchicalParams;
+    use radiosity_geom::PreparedScene;
+
+    /// The links of `arg` at threshold `eps` with `trust`, and the refiner that made them.
+    fn refined(arg: &str, eps: Real, trust: Real, check: impl Fn(&Refiner, &Links)) {
+        let p = PreparedScene::load(arg).unwrap();
+        let params = HierarchicalParams { eps, trust, ..HierarchicalParams::default() };
+        let scene = p.scene();
+        let tree = ClusterTree::new(scene);
+        let near = AnalyticParams { budget: params.budget, ..AnalyticParams::default() };
+        let analytic = AnalyticColumns::new(scene, &p.visibility, &p.analysis, near);
+        let mut cumulative = vec![0.0];
+        for &k in &tree.order {
+            cumulative.push(cumulative.last().unwrap() + scene.patches()[k as usize].area());
+        }
+        let refiner = Refiner {
+            scene,
+            tree: &tree,
+            visibility: p.analysis.occlusion.value.then_some(&p.visibility),
+            analytic: &analytic,
+            brightness: Brightness::estimate(scene, &tree, params.oracle, params.floor),
+            eps: params.eps,
+            shadows: params.shadows * params.eps,
+            trust: params.trust,
+            strata: strata_order(params.rays),
+            seed: params.seed,
+            shafts: None,
+            tolerance: 1e-9 * scene.diagonal(),
+            cumulative,
+            watch: Watch::new(scene.len(), &|_| {}),
+        };
+        let links = refiner.refine_all();
+        check(&refiner, &links);
+    }
+
+    #[test]
+    fn a_larger_link_is_trusted_only_after_as_many_agreeing_rays_as_its_bound_asks() {
+        // Scenes whose far links are blocked in part: boxes on a floor, a maze.
+        for (arg, eps) in [("cornell:res=8", 0.02), ("labyrinth:cells=4:size=0.5", 1e-2)] {
+            for trust in [0.5, 1.5, 4.0] {
+                refined(arg, eps, trust, |r, links| {
+                    let (total, probe) = (r.strata.len(), (r.strata.len() / 4).max(1));
+                    let (mut small, mut larger, mut short) = (0, 0, 0);
+                    for link in &links.far {
+                        let (_, bound) = r.far_order(link.a, link.b).unwrap();
+                        let count = usize::from(link.count & !ZEROTH);
+                        let clear = usize::from(link.clear);
+                        if bound <= r.shadows {
+                            // A small link keeps its probe, inherited or traced.
+                            assert_eq!(count, probe, "{arg}: a small link of {count} rays");
+                            small += 1;
+                        } else {
+                            // A larger one only when every ray agrees, after the rays its bound asks.
+                            let asked = ((trust * bound / r.shadows).ceil() as usize).clamp(probe, total);
+                            assert_eq!(clear, count, "{arg}, trust {trust}: a larger link kept on disagreeing rays");
+                            assert!(
+                                (asked..=total).contains(&count),
+                                "{arg}, trust {trust}: {count} rays where its bound asks {asked}"
+                            );
+                            larger += 1;
+                            short += usize::from(count < total);
+                        }
+                    }
+                    // Both kinds are made, and some larger links stop before every ray.
+                    assert!(
+                        small > 0 && larger > 0 && short > 0,
+                        "{arg}, trust {trust}: {small} small, {larger} larger, {short} short"
+                    );
+                });
+            }
+        }
+    }
 }

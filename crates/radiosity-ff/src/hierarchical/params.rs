@@ -15,8 +15,13 @@ pub struct HierarchicalParams {
     /// A far link larger than `shadows · eps` (in the same units) is split when its rays
     /// disagree: its visible fraction would be one number for all its pairs.
     pub shadows: Real,
-    /// Shadow rays per far link larger than `shadows · eps`; smaller ones trace a quarter.
+    /// The most shadow rays a far link larger than `shadows · eps` traces; smaller ones trace a
+    /// quarter.
     pub rays: usize,
+    /// Agreeing shadow rays a far link larger than `shadows · eps` needs before it is trusted,
+    /// per unit of its transfer bound over `shadows · eps` (sequential testing, `links`): at
+    /// least a quarter of `rays`, at most `rays`.
+    pub trust: Real,
     /// The near pairs' shadow-ray budget: the analytic backend's `budget` (rays per unit of a
     /// pair's unoccluded form factor), lower than that backend's own default: it trades the
     /// near pairs' visibility noise for build time (measured in `docs/hierarchical.md`).
@@ -51,8 +56,9 @@ impl Default for HierarchicalParams {
     fn default() -> Self {
         HierarchicalParams {
             eps: 3e-3,
-            shadows: 0.05,
+            shadows: 0.03,
             rays: 14,
+            trust: 1.5,
             budget: 512,
             order: 8,
             tolerance: 1e-3,
@@ -75,13 +81,18 @@ pub const HIERARCHICAL_PARAMS: &[ParamDoc] = &[
     },
     ParamDoc {
         key: "shadows",
-        default: "0.05",
+        default: "0.03",
         doc: "a far link larger than shadows·eps is split when its rays disagree, in (0, 1]",
     },
     ParamDoc {
         key: "rays",
         default: "14",
-        doc: "shadow rays per far link larger than shadows·eps (a quarter for smaller ones), 1 to 4096",
+        doc: "the most shadow rays a far link larger than shadows·eps traces (a quarter for smaller ones), 1 to 4096",
+    },
+    ParamDoc {
+        key: "trust",
+        default: "1.5",
+        doc: "agreeing rays a far link larger than shadows·eps needs, per unit of its bound over shadows·eps, in (0, 4096] (between a quarter of rays and rays; 4096: every ray)",
     },
     ParamDoc {
         key: "budget",

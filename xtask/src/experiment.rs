@@ -168,7 +168,8 @@ pub fn cache() -> Cache {
 }
 
 /// A lab on `prepared` with the backend `spec`, the cache, the reference `kind`, F kept when
-/// `residuals`, columns paid for as `columns` says and rays cast as `transport` says.
+/// `residuals`, columns paid for as `columns` says and rays cast as `transport` says, its
+/// progress shown by bars.
 pub fn lab<'p>(
     prepared: &'p PreparedScene,
     spec: &BackendSpec,
@@ -177,13 +178,26 @@ pub fn lab<'p>(
     columns: ColumnCost,
     transport: Transport,
 ) -> Result<Lab<'p>> {
+    lab_reporting(prepared, spec, residuals, kind, columns, transport, &Bars::new())
+}
+
+/// [`lab`], its progress reported to `progress`.
+pub fn lab_reporting<'p>(
+    prepared: &'p PreparedScene,
+    spec: &BackendSpec,
+    residuals: bool,
+    kind: ReferenceKind,
+    columns: ColumnCost,
+    transport: Transport,
+    progress: &dyn Progress,
+) -> Result<Lab<'p>> {
     let options = LabOptions::default()
         .with_residuals(residuals)
         .with_cache(Some(cache()))
         .with_reference(kind)
         .with_columns(columns)
         .with_transport(transport);
-    let lab = Lab::new(prepared, spec, options, &Bars::new())?;
+    let lab = Lab::new(prepared, spec, options, progress)?;
     let chosen = lab.chosen();
     // Only the choice that costs a long run is announced; reports say which was used.
     if kind == ReferenceKind::Auto && chosen.kind == ReferenceKind::Shooting {

@@ -11,11 +11,11 @@
 //! certified bound. The run's columns, steps and seconds are the solver's alone.
 
 use crate::bars::Bars;
-use crate::experiment::{SolveArgs, check_output_file, lab, prepare_over};
+use crate::experiment::{SolveArgs, check_output_file, lab_reporting, prepare_over};
 use anyhow::{Context, Result};
 use radiosity_core::Real;
 use radiosity_eval::rgb;
-use radiosity_eval::{Phase, Phases, RecordPlan, RunSummary};
+use radiosity_eval::{ColumnCost, Phase, Phases, RecordPlan, ReferenceMark, RunSummary};
 use serde::Serialize;
 use std::cell::RefCell;
 use std::path::PathBuf;
@@ -69,11 +69,16 @@ pub fn run(args: &Args, ranks: &crate::ranks::Ranks) -> Result<()> {
     let phases = RefCell::new(Phases::new());
     let world = ranks.world();
     let prepared = prepare_over(&args.run.scene, Some(&phases), world.as_deref())?;
-    phases.borrow_mut().begin("setting up the backend and reference");
+    phases.borrow_mut().begin("setting up the backend");
     // One solver's run: its columns are computed (and timed), whether or not the reference
     // was cached and the matrix assembled.
     let transport = args.run.transport.transport;
-    let mut lab = lab(&prepared, &spec, false, kind, radiosity_eval::ColumnCost::Computed, transport)?;
+    let bars = Bars::new();
+    let mark = ReferenceMark::new(&bars);
+    let mut lab = lab_reporting(&prepared, &spec, false, kind, ColumnCost::Computed, transport, &mark)?;
+    if let Some((at, peak)) = mark.began() {
+        phases.borrow_mut().begin_at("setting up the reference", at, peak);
+    }
     if let Some(world) = world {
         // The solvers that sample transport deal their replicates to the ranks.
         lab = lab.over_ranks(world);
@@ -102,6 +107,9 @@ pub fn run(args: &Args, ranks: &crate::ranks::Ranks) -> Result<()> {
         phases.borrow_mut().end();
         if args.verbose && ranks.reports() {
             eprint!("{}", phases.borrow().text());
+            let held = prepared.memory();
+            let per = |bytes: usize| bytes as f64 / prepared.scene().len().max(1) as f64;
+            eprintln!("held         the scene {:.0} and its BVH {:.0} bytes a patch", per(held.scene), per(held.bvh));
         }
     };
     if !args.json && args.out.is_none() {

@@ -572,7 +572,8 @@ fn solve_tells_where_the_time_and_memory_went() {
             "building the BVH",
             "probing for hidden geometry",
             "analysing the scene",
-            "setting up the backend and reference",
+            "setting up the backend",
+            "setting up the reference",
             "solving"
         ]
     );

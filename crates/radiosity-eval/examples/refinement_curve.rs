@@ -75,7 +75,7 @@ pub fn curve(scene: &str, series: &[(&str, &[&str])], cache: &Cache, out: &Path)
             let spec = BackendSpec::parse(&format!("hierarchical:{setting}"))?;
             let built = radiosity_eval::backend(&prepared, &spec, None, &NoProgress)?;
             let figures = built.figures().ok_or("the hierarchical operator reports its figures")?;
-            let count = |label: &str| figures.counts.iter().find(|(l, _)| l == label).map_or(0.0, |(_, v)| *v);
+            let count = |label: &str| figures.count(label).unwrap_or(0.0);
             let params = OperatorDistanceParams { rows: 1, ..OperatorDistanceParams::default() };
             let distance = operator_distance(&system, &built, &truth, Some(&star), params)?;
             let point = Point {

@@ -8,9 +8,11 @@
 //! peak is the one whose figure rose.
 
 use crate::memory::peak_rss;
+use crate::progress::Progress;
 use crate::reports::report_text::human_bytes;
 use serde::Serialize;
 use std::fmt::Write as _;
+use std::sync::Mutex;
 use std::time::Instant;
 
 /// One phase: its name, wall seconds and the peak resident bytes when it ended.
@@ -44,6 +46,17 @@ impl Phases {
         self.open = Some((name.to_string(), Instant::now()));
     }
 
+    /// Ends the phase under way at `at`, the peak memory then `peak`, and begins `name` from
+    /// `at`: a phase split after the fact, where a task under way said when its second part
+    /// began ([`ReferenceMark`]).
+    pub fn begin_at(&mut self, name: &str, at: Instant, peak: Option<u64>) {
+        if let Some((open, start)) = self.open.take() {
+            let seconds = at.saturating_duration_since(start).as_secs_f64();
+            self.done.push(Phase { name: open, seconds, peak_bytes: peak });
+        }
+        self.open = Some((name.to_string(), at));
+    }
+
     /// Ends the phase under way, if any.
     pub fn end(&mut self) {
         if let Some((name, start)) = self.open.take() {
@@ -67,5 +80,47 @@ impl Phases {
         let _ =
             writeln!(out, "{:<38} {:>8.3} {:>12}", "total", total, bytes(self.done.last().and_then(|p| p.peak_bytes)));
         out
+    }
+}
+
+/// Progress passed on to another, noting when the lab's reference began (its first task named
+/// `reference …` or `reading the reference`, as `Lab::new` names them) and the peak memory
+/// then: the set-up of the backend and that of the reference, one call apart, become two phases
+/// ([`Phases::begin_at`]).
+pub struct ReferenceMark<'a> {
+    inner: &'a dyn Progress,
+    began: Mutex<Option<(Instant, Option<u64>)>>,
+}
+
+impl<'a> ReferenceMark<'a> {
+    /// Passes everything on to `inner`.
+    pub fn new(inner: &'a dyn Progress) -> ReferenceMark<'a> {
+        ReferenceMark { inner, began: Mutex::new(None) }
+    }
+
+    /// When the reference began and the peak memory then, if it did.
+    pub fn began(&self) -> Option<(Instant, Option<u64>)> {
+        *self.began.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+impl Progress for ReferenceMark<'_> {
+    fn begin(&self, task: &str, total: u64, unit: &str) {
+        if task.starts_with("reference") || task == "reading the reference" {
+            self.began.lock().unwrap_or_else(|e| e.into_inner()).get_or_insert_with(|| (Instant::now(), peak_rss()));
+        }
+        self.inner.begin(task, total, unit);
+    }
+
+    fn advance(&self, position: u64, message: &str) {
+        self.inner.advance(position, message);
+    }
+
+    fn end(&self) {
+        self.inner.end();
+    }
+
+    fn warn(&self, message: &str) {
+        self.inner.warn(message);
     }
 }

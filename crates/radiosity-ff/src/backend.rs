@@ -118,6 +118,10 @@ pub struct BackendFigures {
     /// Each rank's part, in rank order, when the source is split over ranks (its `seconds`,
     /// `bytes` and `counts` the rank's own); empty for one process.
     pub ranks: Vec<BackendFigures>,
+    /// The build's seconds stage by stage, each with its name, where the backend times them.
+    pub stages: Vec<(String, f64)>,
+    /// The bytes held part by part, each with its name, where the backend counts them.
+    pub parts: Vec<(String, usize)>,
 }
 
 impl BackendFigures {

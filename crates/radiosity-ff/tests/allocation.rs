@@ -3,7 +3,8 @@
 //! on the stack, so a column's cost is its arithmetic and its rays.
 //!
 //! `allocation-counter` makes the test binary's allocator count the allocations of each
-//! thread; every other test of the binary allocates through it unchanged.
+//! thread; every other test of the binary allocates through it unchanged. The hierarchical
+//! operator's own count of the bytes it holds is checked against it too.
 
 use radiosity_core::{MaterialId, ObjectId, Patch, Real, Vec3};
 use radiosity_ff::pair_visibility::{RayBudget, visible_fraction};
@@ -75,4 +76,31 @@ fn analytic_pairs_allocate_nothing_on_an_occluded_scene() {
         }
     }
     assert!(nonzero > n, "{nonzero} non-zero pairs");
+}
+
+#[test]
+fn the_hierarchical_operator_counts_the_bytes_it_holds() {
+    // The bytes the operator says it holds (`scenes --explain` and `solve --verbose` print them
+    // part by part) against the bytes the allocator still holds for it once built: within 10%.
+    // The build runs on this thread alone, where the counter counts.
+    let p = radiosity_geom::PreparedScene::load("office:size=0.5").unwrap();
+    let params = radiosity_ff::HierarchicalParams::default();
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).use_current_thread().build().unwrap();
+    let mut built = None;
+    let info = pool.install(|| {
+        allocation_counter::measure(|| {
+            built = Some(radiosity_ff::HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, params));
+        })
+    });
+    let operator = built.unwrap();
+    let figures = operator.figures();
+    assert_eq!(figures.bytes, figures.held.total());
+    let held = info.bytes_current as f64;
+    let counted = figures.bytes as f64;
+    assert!(
+        (counted - held).abs() <= 0.1 * held,
+        "counted {counted} bytes, the allocator holds {held} for the operator ({:?})",
+        figures.held
+    );
+    drop(operator);
 }

@@ -95,6 +95,8 @@ pub struct ReferenceSummary {
 pub struct OperatorSummary {
     /// Seconds to build (the build's, when read back from the cache).
     pub build_seconds: Real,
+    /// Whether it was read back from the cache rather than built.
+    pub loaded: bool,
     /// Bytes held.
     pub bytes: usize,
     /// Of them, the links'.
@@ -102,6 +104,12 @@ pub struct OperatorSummary {
     pub link_bytes: Option<Real>,
     /// One line.
     pub summary: String,
+    /// The build's seconds stage by stage, where the backend times them.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub stages: Vec<(String, Real)>,
+    /// The bytes held part by part, where the backend counts them.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub parts: Vec<(String, usize)>,
 }
 
 /// A record value as JSON: counts and finite reals as numbers, anything else as text.
@@ -178,9 +186,12 @@ impl Lab<'_> {
             },
             operator: self.backend_figures().map(|f| OperatorSummary {
                 build_seconds: f.seconds,
+                loaded: f.loaded,
                 bytes: f.bytes,
                 link_bytes: f.count("link bytes"),
                 summary: f.summary.clone(),
+                stages: f.stages.clone(),
+                parts: f.parts.clone(),
             }),
             ranks: None,
         }

@@ -10,7 +10,9 @@ use std::fmt::Write as _;
 impl RunSummary {
     /// The summary as text: the scene (`scene`, its `patches`) and the backend (`backend`)
     /// head it; then how the run stopped, its work, its error and bound, its spread, where it
-    /// reached each power of ten, what the solver recorded, each rank's part, and the reference.
+    /// reached each power of ten, what the solver recorded, each rank's part, what the operator
+    /// cost and holds (where the backend says: its build stage by stage, its bytes a patch part
+    /// by part), and the reference.
     pub fn text(&self, scene: &str, patches: usize, backend: &str) -> String {
         let mut out = String::new();
         let mut line = |label: &str, text: String| {
@@ -93,6 +95,19 @@ impl RunSummary {
                     r.run_sums,
                     human_bytes(r.run_bytes_sent)
                 ),
+            );
+        }
+        if let Some(o) = &self.operator {
+            let stages: Vec<String> = o.stages.iter().map(|(stage, t)| format!("{stage} {t:.2} s")).collect();
+            let stages = if stages.is_empty() { String::new() } else { format!(": {}", stages.join(", ")) };
+            let built = if o.loaded { "read from the cache, built in" } else { "built in" };
+            line("operator", format!("{}; {built} {:.2} s{stages}", o.summary, o.build_seconds));
+            let per = |bytes: usize| bytes as f64 / patches.max(1) as f64;
+            let parts: Vec<String> = o.parts.iter().map(|(part, b)| format!("{part} {:.0}", per(*b))).collect();
+            let parts = if parts.is_empty() { String::new() } else { format!(" ({})", parts.join(", ")) };
+            line(
+                "held",
+                format!("{} by the operator, {:.0} bytes a patch{parts}", human_bytes(o.bytes as u64), per(o.bytes)),
             );
         }
         let r = &self.reference;

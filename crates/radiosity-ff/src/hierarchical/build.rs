@@ -18,7 +18,7 @@ use super::shaft::ShaftTree;
 use super::tree::{self, ClusterTree};
 use crate::analytic::{AnalyticColumns, AnalyticParams};
 use crate::backend::BackendFigures;
-use radiosity_core::{Collective, ColumnSource, Real, Scene};
+use radiosity_core::{Collective, ColumnSource, Real, Scene, Vec3};
 use radiosity_geom::{SceneAnalysis, Visibility};
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -49,8 +49,13 @@ pub struct HierarchyFigures {
     pub clear_shafts: u64,
     /// Seconds to build the tree and the links.
     pub seconds: f64,
-    /// Bytes held by the tree and the links.
+    /// The build's seconds, stage by stage.
+    pub stages: BuildStages,
+    /// Bytes held by the tree, the links and the patches' data.
     pub bytes: usize,
+    /// The same bytes, part by part (split over ranks, this rank's own parts, while `bytes`
+    /// adds up every rank's).
+    pub held: HeldBytes,
     /// Patches whose far links and far pairs closure weighs below 1: the rows that would
     /// otherwise sum above 1.
     pub capped: usize,
@@ -62,6 +67,67 @@ pub struct HierarchyFigures {
     /// Whether the links were read from disk ([`HierarchicalColumns::from_bytes`]) rather than
     /// built: the figures above are then the build's.
     pub loaded: bool,
+}
+
+/// The stages of a build, each in wall seconds: where a build's time went.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct BuildStages {
+    /// The cluster tree.
+    pub tree: f64,
+    /// The near field's set-up (the analytic backend the near pairs call) and the oracle.
+    pub near_field: f64,
+    /// The refinement into links, the near pairs' entries and every shadow ray included.
+    pub refinement: f64,
+    /// The link lists, each link in both its ends' lists.
+    pub lists: f64,
+    /// Closure: the rows' sums and their weights.
+    pub closure: f64,
+}
+
+impl BuildStages {
+    /// Each stage with its name, in order.
+    pub fn named(&self) -> [(&'static str, f64); 5] {
+        [
+            ("tree", self.tree),
+            ("near field set-up", self.near_field),
+            ("refinement", self.refinement),
+            ("link lists", self.lists),
+            ("closure", self.closure),
+        ]
+    }
+}
+
+/// The bytes an operator holds, part by part.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct HeldBytes {
+    /// The cluster tree's nodes, its order and the nodes' parents.
+    pub tree: usize,
+    /// The far links' lists (each link in both its nodes' lists) with their offsets.
+    pub far: usize,
+    /// The near links' lists, the same way.
+    pub near: usize,
+    /// The far pairs' lists, the same way.
+    pub pairs: usize,
+    /// The patches' areas, normals, centroids and closure weights.
+    pub patches: usize,
+}
+
+impl HeldBytes {
+    /// Each part with its name, in order.
+    pub fn named(&self) -> [(&'static str, usize); 5] {
+        [
+            ("tree", self.tree),
+            ("far links", self.far),
+            ("near links", self.near),
+            ("far pairs", self.pairs),
+            ("patch data", self.patches),
+        ]
+    }
+
+    /// Every part's bytes.
+    pub fn total(&self) -> usize {
+        self.named().iter().map(|(_, b)| b).sum()
+    }
 }
 
 impl From<HierarchyFigures> for BackendFigures {
@@ -102,6 +168,8 @@ impl From<HierarchyFigures> for BackendFigures {
             counts: counts.into_iter().map(|(l, v)| (l.to_string(), v)).collect(),
             summary,
             ranks: Vec::new(),
+            stages: h.stages.named().iter().map(|&(l, v)| (l.to_string(), v)).collect(),
+            parts: h.held.named().iter().map(|&(l, v)| (l.to_string(), v)).collect(),
         }
     }
 }
@@ -141,8 +209,15 @@ impl HierarchicalColumns {
         split: Option<(Arc<dyn Collective>, usize)>,
     ) -> HierarchicalColumns {
         let start = Instant::now();
+        let mut stages = BuildStages::default();
+        let mut lap = Instant::now();
+        let mut stage = |into: &mut f64| {
+            *into += lap.elapsed().as_secs_f64();
+            lap = Instant::now();
+        };
         let collective = split.as_ref().map(|(c, _)| c.clone());
         let tree = ClusterTree::new(scene);
+        stage(&mut stages.tree);
         let near_params = AnalyticParams {
             order: params.order,
             tolerance: params.tolerance,
@@ -173,6 +248,7 @@ impl HierarchicalColumns {
             cumulative,
             watch: Watch::new(scene.len(), observe),
         };
+        stage(&mut stages.near_field);
         // Split over ranks, each rank refines its share of the tasks; one rank refines all.
         let (mut links, tasks, estimated) = match split.as_ref().filter(|(c, _)| c.ranks() > 1) {
             None => (refiner.refine_all(), 1, 1.0),
@@ -181,6 +257,7 @@ impl HierarchicalColumns {
                 (share.links, share.tasks, share.estimated)
             }
         };
+        stage(&mut stages.refinement);
         let assemble = |tree: ClusterTree, links: &Links| {
             let mut operator = HierarchicalColumns::assemble(scene, tree, links, start);
             operator.distribution = collective.clone().map(Distribution::new);
@@ -203,13 +280,18 @@ impl HierarchicalColumns {
             (next.rays, next.occluded, next.clear) = (next.rays + rays, next.occluded + occluded, next.clear + clear);
             links = next;
         }
+        // Later passes count as refinement.
+        stage(&mut stages.refinement);
         // The tree moves into the operator: a copy would double its memory at the peak.
         let mut operator = assemble(tree, &links);
+        stage(&mut stages.lists);
         let near = operator.near_sums();
         operator.figures.near_above = near.iter().filter(|&&s| s > 1.0).count();
         if params.closure {
             operator.close(&near);
         }
+        stage(&mut stages.closure);
+        operator.figures.stages = stages;
         operator.figures.seconds = start.elapsed().as_secs_f64();
         let own = RankFigures::new(&operator, tasks, estimated);
         if let Some(distribution) = &mut operator.distribution {
@@ -226,6 +308,7 @@ impl HierarchicalColumns {
         let far = Adjacency::new(tree.nodes.len(), far_links, |l| (l.a, l.b, [l.clear, l.count]));
         let near = Adjacency::new(scene.len(), near_links, |l| (l.i, l.j, l.transfer));
         let pairs = Adjacency::new(scene.len(), pair_links, |l| (l.i, l.j, l.transfer));
+        let held = HierarchicalColumns::held_by(&tree, [far.bytes(), near.bytes(), pairs.bytes()], scene.len());
         let figures = HierarchyFigures {
             nodes: tree.nodes.len(),
             far_links: far_links.len(),
@@ -236,7 +319,9 @@ impl HierarchicalColumns {
             occluded: *occluded,
             clear_shafts: *clear,
             seconds: start.elapsed().as_secs_f64(),
-            bytes: HierarchicalColumns::bytes_of(&tree, &[far.bytes(), near.bytes(), pairs.bytes()], scene.len()),
+            stages: BuildStages::default(),
+            bytes: held.total(),
+            held,
             capped: 0,
             near_above: 0,
             lowest_weight: 1.0,
@@ -328,10 +413,17 @@ impl HierarchicalColumns {
         self.figures
     }
 
-    /// The bytes held by a tree, its link lists (`lists`, their bytes) and the patches' areas,
-    /// normals, centroids and weights.
-    pub(super) fn bytes_of(tree: &ClusterTree, lists: &[usize], patches: usize) -> usize {
-        tree.nodes.len() * (size_of::<tree::Node>() + 4) + lists.iter().sum::<usize>() + patches * 48
+    /// The bytes held by a tree (its nodes, order and parents), its link lists (`[far, near,
+    /// pairs]`, their bytes) and the patches' areas, normals, centroids and weights.
+    pub(super) fn held_by(tree: &ClusterTree, [far, near, pairs]: [usize; 3], patches: usize) -> HeldBytes {
+        HeldBytes {
+            tree: tree.nodes.len() * (size_of::<tree::Node>() + size_of::<u32>())
+                + (tree.order.len() + tree.leaf.len()) * size_of::<u32>(),
+            far,
+            near,
+            pairs,
+            patches: patches * (2 * size_of::<Vec3>() + 2 * size_of::<Real>()),
+        }
     }
 }
 

@@ -118,6 +118,8 @@ impl From<&RankFigures> for BackendFigures {
             ("estimated share", r.estimated_share),
         ];
         BackendFigures {
+            stages: Vec::new(),
+            parts: Vec::new(),
             seconds: r.seconds,
             bytes: r.bytes as usize,
             loaded: false,

@@ -170,7 +170,7 @@ impl Plan {
         radiosity_eval::require_emitters(&prepared)?;
         let report = prepared.report();
         eprintln!("{}: {} patches; left out: {}", report.scene, report.patches, report.left_out_phrase());
-        let mut lab = lab(&prepared, &self.spec, true, self.kind, self.columns, self.transport)?;
+        let mut lab = lab(&prepared, &self.spec, true, self.kind, self.columns, self.transport, &Bars::new())?;
         if let Some(world) = self.world {
             lab = lab.over_ranks(world);
         }

@@ -169,20 +169,8 @@ pub fn cache() -> Cache {
 
 /// A lab on `prepared` with the backend `spec`, the cache, the reference `kind`, F kept when
 /// `residuals`, columns paid for as `columns` says and rays cast as `transport` says, its
-/// progress shown by bars.
+/// progress reported to `progress` (bars, or bars behind a [`radiosity_eval::ReferenceMark`]).
 pub fn lab<'p>(
-    prepared: &'p PreparedScene,
-    spec: &BackendSpec,
-    residuals: bool,
-    kind: ReferenceKind,
-    columns: ColumnCost,
-    transport: Transport,
-) -> Result<Lab<'p>> {
-    lab_reporting(prepared, spec, residuals, kind, columns, transport, &Bars::new())
-}
-
-/// [`lab`], its progress reported to `progress`.
-pub fn lab_reporting<'p>(
     prepared: &'p PreparedScene,
     spec: &BackendSpec,
     residuals: bool,
@@ -277,7 +265,7 @@ pub fn solved_rgb(
         kind => kind,
     };
     // One solver's run: its columns are computed, whether or not the reference was cached.
-    let lab = lab(prepared, spec, false, kind, ColumnCost::Computed, transport)?;
+    let lab = lab(prepared, spec, false, kind, ColumnCost::Computed, transport, &Bars::new())?;
     let rgb = match solver {
         None => lab.radiosity_rgb(None, rules, &Bars::new())?,
         Some(mut solver) => {

@@ -11,7 +11,7 @@
 //! certified bound. The run's columns, steps and seconds are the solver's alone.
 
 use crate::bars::Bars;
-use crate::experiment::{SolveArgs, check_output_file, lab_reporting, prepare_over};
+use crate::experiment::{SolveArgs, check_output_file, lab, prepare_over};
 use anyhow::{Context, Result};
 use radiosity_core::Real;
 use radiosity_eval::rgb;
@@ -75,7 +75,7 @@ pub fn run(args: &Args, ranks: &crate::ranks::Ranks) -> Result<()> {
     let transport = args.run.transport.transport;
     let bars = Bars::new();
     let mark = ReferenceMark::new(&bars);
-    let mut lab = lab_reporting(&prepared, &spec, false, kind, ColumnCost::Computed, transport, &mark)?;
+    let mut lab = lab(&prepared, &spec, false, kind, ColumnCost::Computed, transport, &mark)?;
     if let Some((at, peak)) = mark.began() {
         phases.borrow_mut().begin_at("setting up the reference", at, peak);
     }

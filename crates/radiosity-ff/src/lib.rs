@@ -69,7 +69,7 @@ pub use analytic::{AnalyticColumns, AnalyticParams};
 /// entries for the same canonical argument (a change of rule, not of parameters), so that
 /// caches keyed by the canonical argument ([`BackendSpec::canonical`]) and this revision are
 /// not read across it. What each revision changed: docs/form-factors.md, "Entries revisions".
-pub const ENTRIES_REVISION: u32 = 5;
+pub const ENTRIES_REVISION: u32 = 6;
 pub use backend::{BackendFigures, BuildObserver, FormFactorBackend, FormFactorInput, PairEntries, Unobserved};
 pub use builtins::MatrixParams;
 pub use error::FfError;

@@ -91,9 +91,10 @@ fn a_falling_threshold_converges_to_the_analytic_backend() {
     // The furnace traces no shadow rays, so the only difference is the far links' kernel,
     // expanded to first order about the clusters' centres: the largest L1 distance of a row to
     // the analytic row falls with the threshold (measured 3.1e-2, 2.0e-2, 2.6e-3 and 7.1e-5 at
-    // 0.1, 0.01, 1e-3 and 1e-4), and at 1e-5 every link is a near one, the analytic entry.
-    // Without closure, which would cap the analytic rows that its quadrature puts a few 1e-5
-    // above 1.
+    // 0.1, 0.01, 1e-3 and 1e-4), and at 1e-5 every link is a near one, the analytic entry
+    // rounded to `f32` (at most 6e-8 of itself, so a row within 1e-7 of the analytic one in
+    // L1). Without closure, which would cap the analytic rows that its quadrature puts a few
+    // 1e-5 above 1.
     let p = prepared("furnace:res=12");
     let analytic = columns(&AnalyticColumns::new(p.scene(), &p.visibility, &p.analysis, AnalyticParams::default()));
     let n = analytic.len();
@@ -108,7 +109,7 @@ fn a_falling_threshold_converges_to_the_analytic_backend() {
         assert!(worst <= last, "eps {eps:e}: {worst:e} after {last:e}");
         last = worst;
     }
-    assert!(last < 1e-12, "{last:e}");
+    assert!(last < 1e-7, "{last:e}");
 }
 
 #[test]

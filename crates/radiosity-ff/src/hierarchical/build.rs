@@ -9,7 +9,7 @@
 //! coarsens.
 
 use super::HierarchicalColumns;
-use super::adjacency::{Adjacency, Lists};
+use super::adjacency::{Adjacency, Lists, Transfer};
 use super::brightness::Brightness;
 use super::distribution::{Distribution, RankFigures};
 use super::links::{self, BuildProgress, Links, Refiner, Watch};
@@ -258,14 +258,14 @@ impl HierarchicalColumns {
             }
         };
         stage(&mut stages.refinement);
-        let assemble = |tree: ClusterTree, links: &Links| {
+        let assemble = |tree: ClusterTree, links: Links| {
             let mut operator = HierarchicalColumns::assemble(scene, tree, links, start);
             operator.distribution = collective.clone().map(Distribution::new);
             operator
         };
         for _ in 1..params.passes {
             // Multigridding: the radiosity of this pass's operator weighs the next pass.
-            let b = assemble(tree.clone(), &links).radiosity(scene, SWEEPS);
+            let b = assemble(tree.clone(), links.clone()).radiosity(scene, SWEEPS);
             let again = Refiner {
                 brightness: Brightness::from_radiosity(scene, &tree, &b, params.floor),
                 watch: Watch::new(scene.len(), &|_| {}),
@@ -283,7 +283,7 @@ impl HierarchicalColumns {
         // Later passes count as refinement.
         stage(&mut stages.refinement);
         // The tree moves into the operator: a copy would double its memory at the peak.
-        let mut operator = assemble(tree, &links);
+        let mut operator = assemble(tree, std::mem::take(&mut links));
         stage(&mut stages.lists);
         let near = operator.near_sums();
         operator.figures.near_above = near.iter().filter(|&&s| s > 1.0).count();
@@ -302,22 +302,28 @@ impl HierarchicalColumns {
         operator
     }
 
-    /// The operator of `links` over `tree`, its figures timed from `start`.
-    fn assemble(scene: &Scene, tree: ClusterTree, links: &Links, start: Instant) -> HierarchicalColumns {
+    /// The operator of `links` over `tree`, its figures timed from `start`. Each kind of link is
+    /// dropped once its lists are built, so that the build's peak holds the links twice for
+    /// one kind at most.
+    fn assemble(scene: &Scene, tree: ClusterTree, links: Links, start: Instant) -> HierarchicalColumns {
         let Links { far: far_links, near: near_links, pairs: pair_links, rays, occluded, clear, zeroth, .. } = links;
-        let far = Adjacency::new(tree.nodes.len(), far_links, |l| (l.a, l.b, [l.clear, l.count]));
-        let near = Adjacency::new(scene.len(), near_links, |l| (l.i, l.j, l.transfer));
-        let pairs = Adjacency::new(scene.len(), pair_links, |l| (l.i, l.j, l.transfer));
+        let counts = (far_links.len(), near_links.len(), pair_links.len());
+        let far = Adjacency::new(tree.nodes.len(), &far_links, |l| (l.a, l.b, [l.clear, l.count]));
+        drop(far_links);
+        let near = Adjacency::new(scene.len(), &near_links, |l| (l.i, l.j, l.transfer as Transfer));
+        drop(near_links);
+        let pairs = Adjacency::new(scene.len(), &pair_links, |l| (l.i, l.j, l.transfer as Transfer));
+        drop(pair_links);
         let held = HierarchicalColumns::held_by(&tree, [far.bytes(), near.bytes(), pairs.bytes()], scene.len());
         let figures = HierarchyFigures {
             nodes: tree.nodes.len(),
-            far_links: far_links.len(),
-            zeroth_links: *zeroth as usize,
-            near_links: near_links.len() + pair_links.len(),
-            far_pairs: pair_links.len() as u64,
-            rays: *rays,
-            occluded: *occluded,
-            clear_shafts: *clear,
+            far_links: counts.0,
+            zeroth_links: zeroth as usize,
+            near_links: counts.1 + counts.2,
+            far_pairs: counts.2 as u64,
+            rays,
+            occluded,
+            clear_shafts: clear,
             seconds: start.elapsed().as_secs_f64(),
             stages: BuildStages::default(),
             bytes: held.total(),
@@ -385,7 +391,7 @@ impl HierarchicalColumns {
     pub(super) fn near_sums(&self) -> Vec<Real> {
         let mut sums: Vec<Real> = (0..self.areas.len())
             .into_par_iter()
-            .map(|i| self.near.of(i).map(|(_, &t)| t).sum::<Real>() / self.areas[i])
+            .map(|i| self.near.of(i).map(|(_, &t)| Real::from(t)).sum::<Real>() / self.areas[i])
             .collect();
         self.summed(&mut sums);
         sums

@@ -866,4 +866,26 @@ mod tests {
             }
         }
     }
+
+    #[test]
+    fn near_and_pair_entries_in_f32_move_no_row_of_a_product_by_a_millionth() {
+        // The lists hold each near link's and far pair's `A_i F_ij` as `f32`: every row's sum
+        // over them, against a positive vector, stays within 1e-6 of the same sum over the
+        // `f64` entries the refinement computed (each rounding is at most 6e-8 of its entry).
+        use crate::hierarchical::adjacency::{Adjacency, Transfer};
+        refined("cornell:res=8", 0.02, 1.5, |r, links| {
+            let n = r.scene.len();
+            let x: Vec<Real> = (0..n).map(|i| 0.1 + ((i * 7919) % 101) as Real / 101.0).collect();
+            assert!(!links.near.is_empty() && !links.pairs.is_empty());
+            for list in [&links.near, &links.pairs] {
+                let wide = Adjacency::new(n, list, |l| (l.i, l.j, l.transfer));
+                let narrow = Adjacency::new(n, list, |l| (l.i, l.j, l.transfer as Transfer));
+                for i in 0..n {
+                    let exact: Real = wide.of(i).map(|(&j, &t)| t * x[j as usize]).sum();
+                    let rounded: Real = narrow.of(i).map(|(&j, &t)| Real::from(t) * x[j as usize]).sum();
+                    assert!((rounded - exact).abs() <= 1e-6 * exact, "row {i}: {rounded} against {exact}");
+                }
+            }
+        });
+    }
 }

@@ -65,7 +65,7 @@ mod share;
 mod stored;
 mod tree;
 
-use adjacency::Adjacency;
+use adjacency::{Adjacency, Transfer};
 pub use brightness::Oracle;
 pub use build::{HierarchyFigures, HierarchyLink};
 pub use distribution::{Distribution, RankFigures};
@@ -84,10 +84,10 @@ pub struct HierarchicalColumns {
     /// found clear of the link's rays.
     far: Adjacency<[u16; 2]>,
     /// Near links by patch, each in the lists of both its patches: the other patches and the
-    /// links' `A_p F_pq`, the analytic backend's.
-    near: Adjacency<Real>,
+    /// links' `A_p F_pq`, the analytic backend's, rounded to `f32` ([`Transfer`]).
+    near: Adjacency<Transfer>,
     /// Far links between two patches, like `near`, with the far kernel's `A_p F_pq`.
-    pairs: Adjacency<Real>,
+    pairs: Adjacency<Transfer>,
     /// Each patch's closure weight: its far links' and far pairs' entries are weighed by the
     /// weights of both their patches (`closure`).
     weights: Vec<Real>,

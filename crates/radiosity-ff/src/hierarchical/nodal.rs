@@ -81,11 +81,13 @@ impl HierarchicalColumns {
     fn receive_near(&self, p: usize, value: impl Fn(usize) -> Option<Real>) -> Real {
         let mut s = 0.0;
         for (&q, &t) in self.near.of(p) {
+            let t = Real::from(t);
             if let Some(x) = value(q as usize) {
                 s += t / self.areas[p] * x;
             }
         }
         for (&q, &t) in self.pairs.of(p) {
+            let t = Real::from(t);
             if let Some(x) = value(q as usize) {
                 s += self.weights[p] * self.weights[q as usize] * (t / self.areas[p]) * x;
             }
@@ -251,9 +253,13 @@ impl LinkSource for HierarchicalColumns {
                 }
             });
             for (r, &i) in patches.iter().enumerate() {
-                let near = self.near.of(j).find(|(q, _)| **q as usize == i).map(|(_, &t)| t / self.areas[i]);
-                let pair =
-                    self.pairs.of(j).find(|(q, _)| **q as usize == i).map(|(_, &t)| w[i] * w[j] * (t / self.areas[i]));
+                let near =
+                    self.near.of(j).find(|(q, _)| **q as usize == i).map(|(_, &t)| Real::from(t) / self.areas[i]);
+                let pair = self
+                    .pairs
+                    .of(j)
+                    .find(|(q, _)| **q as usize == i)
+                    .map(|(_, &t)| w[i] * w[j] * (Real::from(t) / self.areas[i]));
                 if let Some(v) = near.or(pair) {
                     block[r * m + b] = v;
                 }

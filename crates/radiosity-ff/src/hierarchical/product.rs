@@ -51,10 +51,12 @@ impl HierarchicalColumns {
             }
         });
         for (&q, &transfer) in self.near.of(p) {
+            let transfer = Real::from(transfer);
             let q = q as usize;
             line[q] = transfer / if row { self.areas[p] } else { self.areas[q] };
         }
         for (&q, &transfer) in self.pairs.of(p) {
+            let transfer = Real::from(transfer);
             let q = q as usize;
             line[q] = w[p] * w[q] * (transfer / if row { self.areas[p] } else { self.areas[q] });
         }
@@ -93,6 +95,7 @@ impl ColumnSource for HierarchicalColumns {
             let w = self.weights[i];
             out.iter_mut().for_each(|o| *o *= w);
             for (&j, &transfer) in self.near.of(i) {
+                let transfer = Real::from(transfer);
                 let f = transfer / self.areas[i];
                 for ch in 0..channels {
                     out[ch] += f * x[j as usize * channels + ch];
@@ -150,6 +153,7 @@ impl HierarchicalColumns {
         self.pushed_down(&mut forms, k, out);
         out.par_chunks_mut(k).enumerate().for_each(|(i, out)| {
             for (&j, &transfer) in self.pairs.of(i) {
+                let transfer = Real::from(transfer);
                 let f = transfer / self.areas[i] * weights[j as usize];
                 for ch in 0..k {
                     out[ch] += f * x[j as usize * k + ch];

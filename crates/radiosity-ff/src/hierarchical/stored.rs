@@ -8,11 +8,11 @@
 //! layout: a postcard header (a magic string, the format version, the caller's key, the
 //! sizes, the build's figures, the body's length and checksum), then the body, the far, near
 //! and pair adjacency lists as raw little-endian arrays (offsets as `u64`, other ends as
-//! `u32`, far values as two `u16`, near and pair values as `f64`) and the closure
+//! `u32`, far values as two `u16`, near and pair values as `f32`) and the closure
 //! weights (`f64`), read back bit for bit.
 
 use super::HierarchicalColumns;
-use super::adjacency::{Adjacency, Lists};
+use super::adjacency::{Adjacency, Lists, Transfer};
 use super::build::HierarchyFigures;
 use super::tree::ClusterTree;
 use crate::error::FfError;
@@ -22,7 +22,8 @@ use serde::{Deserialize, Serialize};
 use xxhash_rust::xxh3::xxh3_64;
 
 const MAGIC: &str = "radiosity hierarchical operator";
-const FORMAT_VERSION: u32 = 4;
+/// 5: near and pair values as `f32` (4: as `f64`).
+const FORMAT_VERSION: u32 = 5;
 
 /// What the header holds besides the magic string and the version.
 #[derive(Serialize, Deserialize)]
@@ -109,8 +110,9 @@ impl HierarchicalColumns {
             [u16::from_le_bytes([b[0], b[1]]), u16::from_le_bytes([b[2], b[3]])]
         });
         let real = |b: &[u8]| Real::from_le_bytes(b.try_into().expect("slices of 8 bytes"));
-        let near = reader.adjacency(scene.len(), header.near_entries, 8, real);
-        let pairs = reader.adjacency(scene.len(), header.pair_entries, 8, real);
+        let transfer = |b: &[u8]| Transfer::from_le_bytes(b.try_into().expect("slices of 4 bytes"));
+        let near = reader.adjacency(scene.len(), header.near_entries, size_of::<Transfer>(), transfer);
+        let pairs = reader.adjacency(scene.len(), header.pair_entries, size_of::<Transfer>(), transfer);
         let weights: Option<Vec<Real>> = reader.take(scene.len() * 8).map(|b| b.chunks_exact(8).map(real).collect());
         let (Some(far), Some(near), Some(pairs), Some(weights)) = (far, near, pairs, weights) else {
             return Err(refuse("its link lists are inconsistent with their sizes".into()));

@@ -43,8 +43,10 @@
 //! below `q · shadows / (e (n + 1))`. So the rays a link needs to hold that expectation to
 //! `shadows` grow with `q`: a larger link is trusted after `⌈trust · q⌉` agreeing rays, its
 //! segments inherited from its ancestors included, no fewer than its probe and no more than
-//! `rays`. A link just above `shadows` stops at its probe; one carrying 10 times as much traces
-//! every ray, as all did before (`trust` large).
+//! `rays`. The expectation alone asks `trust = 1/e`; leaks add up over the links of a row, and
+//! the default, 1.5, was chosen by measurement (docs/hierarchical.md). At the defaults a link
+//! just above `shadows` stops at its probe (3 rays) and one carrying 10 times as much traces
+//! all 14, as every larger link did before (`trust=4096`).
 //!
 //! **Segments handed down.** A split link hands the segments it traced to its children, each to
 //! the child its end lies in. A larger child counts them all among its rays (uniform over its

@@ -100,7 +100,7 @@ impl BuildStages {
 /// The bytes an operator holds, part by part.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct HeldBytes {
-    /// The cluster tree's nodes, its order and the nodes' parents.
+    /// The cluster tree's nodes, its patch order, each patch's leaf and each node's parent.
     pub tree: usize,
     /// The far links' lists (each link in both its nodes' lists) with their offsets.
     pub far: usize,

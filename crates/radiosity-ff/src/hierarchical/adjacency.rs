@@ -1,68 +1,274 @@
 //! The operator's link lists in compressed sparse row form: for each node or patch, the other
 //! ends of its links and their values, ordered by the other end, so that a product reads its
-//! vector in order; each link is in the lists of both its ends.
+//! vector in order.
 //!
-//! A far link is stored as its two nodes and its rays' tally, 8 bytes an end; its direction,
-//! length and `g` are worked out again from the nodes' centres wherever it is used, to the
-//! same bits. A near link or far pair is its other end and its `A_i F_ij` in `f32`
-//! ([`Transfer`]), 8 bytes an end.
+//! A near link or far pair ([`Adjacency`]) is held once, with its `A_i F_ij` in `f32`
+//! ([`Transfer`]), in the list of its lower end; its higher end's list holds only the lower
+//! end, and finds the value by a binary search in the lower end's list (a few dozen entries).
+//! So it costs 12 bytes, not the 16 of a link in both its ends' lists with its value twice,
+//! and both ends read the same value, which keeps reciprocity exact.
+//!
+//! A far link ([`FarLists`]) is in both its nodes' lists: a product works out its geometry
+//! from both ends, and a search for it at one end would cost more than that arithmetic. It is
+//! the other node and its rays' tally, coded in a byte (two when the operator has more than
+//! 256 distinct tallies): 10 bytes a link. Its direction, length and `g` are worked out again
+//! from the nodes' centres wherever it is used, to the same bits.
+//!
+//! Lists are built on every thread: each end's place claimed by an atomic count, each list then
+//! sorted by itself, so the lists are the same whatever the number of threads.
 
 use radiosity_core::Real;
 use rayon::prelude::*;
+use std::collections::BTreeSet;
+use std::sync::atomic::{AtomicU16, AtomicU32, Ordering};
 
-/// Links by the node or patch at either end: for each of `len` keys, the other end and the
-/// link's value, ordered by the other end (so that a product reads its vector in order).
+/// Links by the node or patch at either end: for each of `len` keys, the other ends and the
+/// links' values, ordered by the other end (so that a product reads its vector in order).
 #[derive(Debug)]
 pub(super) struct Adjacency<T> {
+    /// Where each key's list of higher ends starts in `other` and `value` (`len + 1`).
     pub(super) start: Vec<usize>,
+    /// Each link once, in its lower end's list: the higher end,
     pub(super) other: Vec<u32>,
+    /// and the value.
     pub(super) value: Vec<T>,
+    /// Where each key's list of lower ends starts in `lower` (`len + 1`).
+    lower_start: Vec<usize>,
+    /// Each link again, in its higher end's list: the lower end alone.
+    lower: Vec<u32>,
 }
 
-impl<T: Copy + Default + Send> Adjacency<T> {
+impl<T: Copy + Default + Send + Sync> Adjacency<T> {
     /// The lists of `links` `(a, b, value)`, each in `a`'s list and in `b`'s. A pair is linked
-    /// once, so the order within a list is total.
-    pub(super) fn new<L>(len: usize, links: &[L], ends: impl Fn(&L) -> (u32, u32, T)) -> Adjacency<T> {
-        let mut start = vec![0usize; len + 1];
-        for (a, b, _) in links.iter().map(&ends) {
-            start[a as usize + 1] += 1;
-            start[b as usize + 1] += 1;
-        }
-        for k in 0..len {
-            start[k + 1] += start[k];
-        }
-        let mut next = start.clone();
-        let (mut other, mut value) = (vec![0u32; start[len]], vec![T::default(); start[len]]);
-        for (a, b, v) in links.iter().map(&ends) {
-            for (p, q) in [(a, b), (b, a)] {
-                (other[next[p as usize]], value[next[p as usize]]) = (q, v);
-                next[p as usize] += 1;
-            }
-        }
-        let (mut rest_other, mut rest_value) = (other.as_mut_slice(), value.as_mut_slice());
-        let mut lists = Vec::with_capacity(len);
-        for k in 0..len {
-            let count = start[k + 1] - start[k];
-            let (o, tail_o) = rest_other.split_at_mut(count);
-            let (v, tail_v) = rest_value.split_at_mut(count);
-            lists.push((o, v));
-            (rest_other, rest_value) = (tail_o, tail_v);
-        }
-        lists.into_par_iter().for_each_init(Vec::new, |entries, (o, v)| {
-            entries.clear();
-            entries.extend(o.iter().copied().zip(v.iter().copied()));
-            entries.sort_unstable_by_key(|e: &(u32, T)| e.0);
-            for (k, &(q, x)) in entries.iter().enumerate() {
-                (o[k], v[k]) = (q, x);
-            }
+    /// once, so the order within a list is total and the lists are the same whatever the
+    /// order of `links` and the number of threads. `links` is sorted in place.
+    pub(super) fn new<L: Send + Sync>(
+        len: usize,
+        links: &mut [L],
+        ends: impl Fn(&L) -> (u32, u32, T) + Sync,
+    ) -> Adjacency<T> {
+        let ordered = |l: &L| {
+            let (a, b, v) = ends(l);
+            (a.min(b), a.max(b), v)
+        };
+        links.par_sort_unstable_by_key(|l| {
+            let (lo, hi, _) = ordered(l);
+            (lo, hi)
         });
-        Adjacency { start, other, value }
+        let counts: Vec<AtomicU32> = (0..len).map(|_| AtomicU32::new(0)).collect();
+        links.par_iter().for_each(|l| {
+            counts[ordered(l).0 as usize].fetch_add(1, Ordering::Relaxed);
+        });
+        let start = offsets(counts);
+        let (other, value) = links.par_iter().map(|l| (ordered(l).1, ordered(l).2)).unzip();
+        Adjacency::from_higher(start, other, value)
     }
 
-    /// The list of `k`: the other ends and the values.
-    pub(super) fn of(&self, k: usize) -> impl Iterator<Item = (&u32, &T)> {
-        let at = self.start[k]..self.start[k + 1];
-        self.other[at.clone()].iter().zip(&self.value[at])
+    /// The lists whose higher ends and values are `other` and `value`, `start` giving where
+    /// each key's list starts, each list ordered and above its key (as
+    /// [`Adjacency::is_ordered`] checks); the lower ends' lists are worked out from them.
+    pub(super) fn from_higher(start: Vec<usize>, other: Vec<u32>, value: Vec<T>) -> Adjacency<T> {
+        let len = start.len() - 1;
+        let counts: Vec<AtomicU32> = (0..len).map(|_| AtomicU32::new(0)).collect();
+        other.par_iter().for_each(|&o| {
+            counts[o as usize].fetch_add(1, Ordering::Relaxed);
+        });
+        let lower_start = offsets(counts);
+        let next: Vec<AtomicU32> = lower_start[..len].iter().map(|&s| AtomicU32::new(s as u32)).collect();
+        let slots: Vec<AtomicU32> = (0..other.len()).map(|_| AtomicU32::new(0)).collect();
+        start.par_windows(2).enumerate().for_each(|(k, at)| {
+            for &o in &other[at[0]..at[1]] {
+                let slot = next[o as usize].fetch_add(1, Ordering::Relaxed);
+                slots[slot as usize].store(k as u32, Ordering::Relaxed);
+            }
+        });
+        let mut lower: Vec<u32> = slots.into_iter().map(AtomicU32::into_inner).collect();
+        // The slots were claimed in any order: each list sorted by itself.
+        let mut rest = lower.as_mut_slice();
+        let mut lists = Vec::with_capacity(len);
+        for at in lower_start.windows(2) {
+            let (list, tail) = rest.split_at_mut(at[1] - at[0]);
+            lists.push(list);
+            rest = tail;
+        }
+        lists.into_par_iter().for_each(|list| list.sort_unstable());
+        Adjacency { start, other, value, lower_start, lower }
+    }
+
+    /// The value of the link between `lo` and `hi > lo`, from `lo`'s list.
+    fn between(&self, lo: u32, hi: u32) -> T {
+        let at = self.start[lo as usize]..self.start[lo as usize + 1];
+        let place = self.other[at.clone()].partition_point(|&o| o < hi);
+        debug_assert_eq!(self.other[at.start + place], hi);
+        self.value[at.start + place]
+    }
+
+    /// The list of `k`: the other ends, in increasing order, and the values.
+    pub(super) fn of(&self, k: usize) -> impl Iterator<Item = (u32, T)> + '_ {
+        let lower = &self.lower[self.lower_start[k]..self.lower_start[k + 1]];
+        let higher = self.start[k]..self.start[k + 1];
+        (lower.iter().map(move |&o| (o, self.between(o, k as u32))))
+            .chain(self.other[higher.clone()].iter().copied().zip(self.value[higher].iter().copied()))
+    }
+
+    /// The number of links in the list of `k`.
+    pub(super) fn degree(&self, k: usize) -> usize {
+        self.start[k + 1] - self.start[k] + self.lower_start[k + 1] - self.lower_start[k]
+    }
+
+    /// Each link once: its ends, the lower first.
+    pub(super) fn ends(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+        self.start
+            .windows(2)
+            .enumerate()
+            .flat_map(move |(k, at)| self.other[at[0]..at[1]].iter().map(move |&o| (k as u32, o)))
+    }
+
+    /// The number of links.
+    pub(super) fn len(&self) -> usize {
+        self.other.len()
+    }
+
+    /// Whether `start`, over `keys` keys and `entries` links, runs from 0 to `entries` without
+    /// decreasing, and each key's higher ends, `other`, are above it, below `keys` and
+    /// increasing: lists that [`Adjacency::from_higher`] takes.
+    pub(super) fn is_ordered(keys: usize, entries: usize, start: &[usize], other: &[u32]) -> bool {
+        start.len() == keys + 1
+            && start.first() == Some(&0)
+            && start.last() == Some(&entries)
+            && other.len() == entries
+            && start.windows(2).all(|w| w[0] <= w[1])
+            && start.par_windows(2).enumerate().all(|(k, at)| {
+                let list = &other[at[0]..at[1]];
+                list.first().is_none_or(|&o| o as usize > k)
+                    && list.last().is_none_or(|&o| (o as usize) < keys)
+                    && list.windows(2).all(|w| w[0] < w[1])
+            })
+    }
+
+    /// The bytes the links' entries hold: each link's two ends and its value, not the offsets
+    /// every key has.
+    pub(super) fn entry_bytes(&self) -> usize {
+        self.other.len() * (size_of::<u32>() + size_of::<T>()) + self.lower.len() * size_of::<u32>()
+    }
+
+    /// The bytes the lists hold.
+    pub(super) fn bytes(&self) -> usize {
+        (self.start.len() + self.lower_start.len()) * size_of::<usize>() + self.entry_bytes()
+    }
+}
+
+/// Far links by node, each in the lists of both its nodes: the other node and the code of the
+/// link's rays' tally (`[clear, count]`) in `tallies` (module doc).
+#[derive(Debug)]
+pub(super) struct FarLists {
+    /// Where each node's list starts (`len + 1`).
+    start: Vec<usize>,
+    /// The other nodes.
+    other: Vec<u32>,
+    /// The links' tallies, as places in `tallies`.
+    codes: Codes,
+    /// The distinct tallies, in increasing order.
+    tallies: Vec<[u16; 2]>,
+}
+
+/// Places in a table of at most 256 entries, or of more.
+#[derive(Debug)]
+enum Codes {
+    Narrow(Vec<u8>),
+    Wide(Vec<u16>),
+}
+
+impl Codes {
+    fn at(&self, e: usize) -> usize {
+        match self {
+            Codes::Narrow(c) => c[e] as usize,
+            Codes::Wide(c) => c[e] as usize,
+        }
+    }
+
+    fn bytes(&self) -> usize {
+        match self {
+            Codes::Narrow(c) => c.len(),
+            Codes::Wide(c) => 2 * c.len(),
+        }
+    }
+}
+
+impl FarLists {
+    /// The lists of `links` `(a, b, [clear, count])` over `len` nodes, each link in `a`'s list
+    /// and in `b`'s. A pair is linked once, so the order within a list is total and the lists
+    /// are the same whatever the order of `links` and the number of threads.
+    pub(super) fn new<L: Sync>(len: usize, links: &[L], ends: impl Fn(&L) -> (u32, u32, [u16; 2]) + Sync) -> FarLists {
+        let tallies: Vec<[u16; 2]> = links
+            .par_iter()
+            .fold(BTreeSet::new, |mut set, l| {
+                set.insert(ends(l).2);
+                set
+            })
+            .reduce(BTreeSet::new, |mut a, mut b| {
+                a.append(&mut b);
+                a
+            })
+            .into_iter()
+            .collect();
+        // A tally is `[c, c]` for c up to `rays`, or `[c, probe]`, each with or without the
+        // zeroth-order bit: at most 2 · (4096 + 1024) of them.
+        let code = |t: [u16; 2]| {
+            u16::try_from(tallies.binary_search(&t).expect("every tally is in the table"))
+                .expect("at most 65,536 distinct tallies")
+        };
+        let counts: Vec<AtomicU32> = (0..len).map(|_| AtomicU32::new(0)).collect();
+        links.par_iter().for_each(|l| {
+            let (a, b, _) = ends(l);
+            counts[a as usize].fetch_add(1, Ordering::Relaxed);
+            counts[b as usize].fetch_add(1, Ordering::Relaxed);
+        });
+        let start = offsets(counts);
+        let next: Vec<AtomicU32> = start[..len].iter().map(|&s| AtomicU32::new(s as u32)).collect();
+        let entries = start[len];
+        let (other, codes): (Vec<AtomicU32>, Vec<AtomicU16>) =
+            (0..entries).map(|_| (AtomicU32::new(0), AtomicU16::new(0))).unzip();
+        links.par_iter().for_each(|l| {
+            let (a, b, tally) = ends(l);
+            let c = code(tally);
+            for (p, q) in [(a, b), (b, a)] {
+                let slot = next[p as usize].fetch_add(1, Ordering::Relaxed) as usize;
+                other[slot].store(q, Ordering::Relaxed);
+                codes[slot].store(c, Ordering::Relaxed);
+            }
+        });
+        drop(next);
+        let mut other: Vec<u32> = other.into_iter().map(AtomicU32::into_inner).collect();
+        let mut codes: Vec<u16> = codes.into_iter().map(AtomicU16::into_inner).collect();
+        // The slots were claimed in any order: each list sorted by itself.
+        let (mut rest_other, mut rest_codes) = (other.as_mut_slice(), codes.as_mut_slice());
+        let mut lists = Vec::with_capacity(len);
+        for at in start.windows(2) {
+            let (o, tail_o) = rest_other.split_at_mut(at[1] - at[0]);
+            let (c, tail_c) = rest_codes.split_at_mut(at[1] - at[0]);
+            lists.push((o, c));
+            (rest_other, rest_codes) = (tail_o, tail_c);
+        }
+        lists.into_par_iter().for_each_init(Vec::new, |entries, (o, c)| {
+            entries.clear();
+            entries.extend(o.iter().copied().zip(c.iter().copied()));
+            entries.sort_unstable_by_key(|e: &(u32, u16)| e.0);
+            for (k, &(q, x)) in entries.iter().enumerate() {
+                (o[k], c[k]) = (q, x);
+            }
+        });
+        let codes = if tallies.len() <= 256 {
+            Codes::Narrow(codes.par_iter().map(|&c| c as u8).collect())
+        } else {
+            Codes::Wide(codes)
+        };
+        FarLists { start, other, codes, tallies }
+    }
+
+    /// The list of node `k`: the other nodes, in increasing order, and the links' tallies.
+    pub(super) fn of(&self, k: usize) -> impl Iterator<Item = (u32, [u16; 2])> + '_ {
+        (self.start[k]..self.start[k + 1]).map(move |e| (self.other[e], self.tallies[self.codes.at(e)]))
     }
 
     /// The number of links in the list of `k`.
@@ -70,26 +276,45 @@ impl<T: Copy + Default + Send> Adjacency<T> {
         self.start[k + 1] - self.start[k]
     }
 
-    /// Each link once: its ends, the lower first.
-    pub(super) fn ends(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
-        (0..self.start.len() - 1).flat_map(move |k| {
-            self.other[self.start[k]..self.start[k + 1]]
-                .iter()
-                .filter(move |&&o| o as usize > k)
-                .map(move |&o| (k as u32, o))
-        })
+    /// Each link once: its ends, the lower first, and its tally, in increasing order of the
+    /// ends.
+    pub(super) fn links(&self) -> impl Iterator<Item = (u32, u32, [u16; 2])> + '_ {
+        (0..self.start.len() - 1)
+            .flat_map(move |k| self.of(k).filter(move |&(o, _)| o as usize > k).map(move |(o, t)| (k as u32, o, t)))
     }
 
-    /// The bytes the links' entries hold: their other ends and values, not the offsets every
-    /// key has.
+    /// Each link once: its ends, the lower first.
+    pub(super) fn ends(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+        self.links().map(|(a, b, _)| (a, b))
+    }
+
+    /// The number of links.
+    pub(super) fn len(&self) -> usize {
+        self.other.len() / 2
+    }
+
+    /// The bytes the links' entries hold (with the table of tallies), not the offsets every
+    /// node has.
     pub(super) fn entry_bytes(&self) -> usize {
-        self.other.len() * (size_of::<u32>() + size_of::<T>())
+        self.other.len() * size_of::<u32>() + self.codes.bytes() + self.tallies.len() * size_of::<[u16; 2]>()
     }
 
     /// The bytes the lists hold.
     pub(super) fn bytes(&self) -> usize {
-        self.start.len() * size_of::<usize>() + self.other.len() * (size_of::<u32>() + size_of::<T>())
+        self.start.len() * size_of::<usize>() + self.entry_bytes()
     }
+}
+
+/// Where each key's list starts, from the lists' lengths: `counts.len() + 1` offsets.
+fn offsets(counts: Vec<AtomicU32>) -> Vec<usize> {
+    let mut start = Vec::with_capacity(counts.len() + 1);
+    start.push(0);
+    let mut total = 0;
+    for c in counts {
+        total += c.into_inner() as usize;
+        start.push(total);
+    }
+    start
 }
 
 /// A near link's or far pair's `A_i F_ij` as stored: `f32`, half an `f64`'s bytes. One
@@ -99,8 +324,101 @@ pub(crate) type Transfer = f32;
 
 /// The link lists of an operator and its closure weights.
 pub(super) struct Lists {
-    pub(super) far: Adjacency<[u16; 2]>,
+    pub(super) far: FarLists,
     pub(super) near: Adjacency<Transfer>,
     pub(super) pairs: Adjacency<Transfer>,
     pub(super) weights: Vec<Real>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Links `(a, b, value)` between distinct keys below `len`, each pair once, in a scrambled
+    /// order with either end first.
+    fn links(len: u32) -> Vec<(u32, u32, f32)> {
+        let mut links = Vec::new();
+        for a in 0..len {
+            for b in a + 1..len {
+                if (a * 31 + b * 17) % 7 < 3 {
+                    let (x, y) = if (a + b) % 2 == 0 { (a, b) } else { (b, a) };
+                    links.push((x, y, (a * 1000 + b) as f32));
+                }
+            }
+        }
+        links.sort_by_key(|&(a, b, _)| (a * 7919 + b * 104_729) % 65_521);
+        links
+    }
+
+    #[test]
+    fn each_list_holds_every_link_of_its_key_in_order_of_the_other_end_whatever_the_input_order() {
+        let len = 60;
+        let mut scrambled = links(len);
+        let adjacency = Adjacency::new(len as usize, &mut scrambled.clone(), |&l| l);
+        for k in 0..len {
+            let mut expected: Vec<(u32, f32)> = scrambled
+                .iter()
+                .filter_map(|&(a, b, v)| (a == k).then_some((b, v)).or((b == k).then_some((a, v))))
+                .collect();
+            expected.sort_by_key(|e| e.0);
+            let listed: Vec<(u32, f32)> = adjacency.of(k as usize).collect();
+            assert_eq!(listed, expected, "key {k}");
+            assert_eq!(adjacency.degree(k as usize), expected.len());
+        }
+        assert_eq!(adjacency.len(), scrambled.len());
+        assert_eq!(adjacency.ends().count(), scrambled.len());
+        // The same lists from the links in another order.
+        scrambled.reverse();
+        let again = Adjacency::new(len as usize, &mut scrambled, |&l| l);
+        assert_eq!(
+            (again.start, again.other, again.lower_start, again.lower),
+            (adjacency.start.clone(), adjacency.other.clone(), adjacency.lower_start.clone(), adjacency.lower.clone())
+        );
+        assert_eq!(again.value, adjacency.value);
+        // Each link is held once with its value: 12 bytes, not 16.
+        assert_eq!(adjacency.entry_bytes(), 12 * scrambled.len());
+    }
+
+    #[test]
+    fn lists_with_a_lower_end_a_repeat_or_an_end_out_of_range_are_refused() {
+        let adjacency = Adjacency::new(5, &mut [(0, 3, 1.0f32), (1, 2, 2.0), (4, 1, 3.0)], |&l| l);
+        let (start, other) = (adjacency.start.clone(), adjacency.other.clone());
+        assert!(Adjacency::<f32>::is_ordered(5, 3, &start, &other));
+        assert!(!Adjacency::<f32>::is_ordered(4, 3, &start[..4], &other), "an end out of range");
+        // Key 1's list is [2, 4]: a lower end, a repeat, an end beyond the keys.
+        for bad in [[3, 0, 4], [3, 2, 2], [3, 2, 5]] {
+            assert!(!Adjacency::<f32>::is_ordered(5, 3, &start, &bad), "{bad:?}");
+        }
+    }
+
+    #[test]
+    fn far_lists_hold_every_link_at_both_ends_with_its_tally_in_a_byte_or_two() {
+        let len = 60;
+        for distinct in [3, 1000] {
+            // Tallies `[c, c]` for c below `distinct`: one byte a code for 3, two for 1000.
+            let scrambled: Vec<(u32, u32, [u16; 2])> = links(len)
+                .iter()
+                .enumerate()
+                .map(|(e, &(a, b, _))| (a, b, [(e % distinct) as u16, (e % distinct) as u16]))
+                .collect();
+            let lists = FarLists::new(len as usize, &scrambled, |&l| l);
+            for k in 0..len {
+                let mut expected: Vec<(u32, [u16; 2])> = scrambled
+                    .iter()
+                    .filter_map(|&(a, b, t)| (a == k).then_some((b, t)).or((b == k).then_some((a, t))))
+                    .collect();
+                expected.sort_by_key(|e| e.0);
+                assert_eq!(lists.of(k as usize).collect::<Vec<_>>(), expected, "node {k}");
+                assert_eq!(lists.degree(k as usize), expected.len());
+            }
+            let mut once: Vec<(u32, u32, [u16; 2])> =
+                scrambled.iter().map(|&(a, b, t)| (a.min(b), a.max(b), t)).collect();
+            once.sort();
+            assert_eq!(lists.links().collect::<Vec<_>>(), once);
+            assert_eq!(lists.len(), scrambled.len());
+            assert_eq!(lists.tallies.len(), distinct.min(scrambled.len()));
+            let code = if distinct <= 256 { 1 } else { 2 };
+            assert_eq!(lists.entry_bytes(), (8 + 2 * code) * scrambled.len() + 4 * lists.tallies.len());
+        }
+    }
 }

@@ -9,13 +9,13 @@
 //! coarsens.
 
 use super::HierarchicalColumns;
-use super::adjacency::{Adjacency, Lists, Transfer};
+use super::adjacency::{Adjacency, FarLists, Lists, Transfer};
 use super::brightness::Brightness;
 use super::distribution::{Distribution, RankFigures};
 use super::links::{self, BuildProgress, Links, Refiner, Watch};
 use super::params::HierarchicalParams;
 use super::shaft::ShaftTree;
-use super::tree::{self, ClusterTree};
+use super::tree::{self, ClusterTree, HeldTree};
 use crate::analytic::{AnalyticColumns, AnalyticParams};
 use crate::backend::BackendFigures;
 use radiosity_core::{Collective, ColumnSource, Real, Scene, Vec3};
@@ -78,7 +78,7 @@ pub struct BuildStages {
     pub near_field: f64,
     /// The refinement into links, the near pairs' entries and every shadow ray included.
     pub refinement: f64,
-    /// The link lists, each link in both its ends' lists.
+    /// The link lists: far links in both their nodes' lists, near links and far pairs once.
     pub lists: f64,
     /// Closure: the rows' sums and their weights.
     pub closure: f64,
@@ -102,11 +102,13 @@ impl BuildStages {
 pub struct HeldBytes {
     /// The cluster tree's nodes, its patch order, each patch's leaf and each node's parent.
     pub tree: usize,
-    /// The far links' lists (each link in both its nodes' lists) with their offsets.
+    /// The far links' lists (each link in both its nodes' lists, its tally coded) with their
+    /// offsets.
     pub far: usize,
-    /// The near links' lists, the same way.
+    /// The near links' lists (each link once with its value, in its lower patch's list, and
+    /// its lower patch again in its higher patch's) with their offsets.
     pub near: usize,
-    /// The far pairs' lists, the same way.
+    /// The far pairs' lists, as the near links'.
     pub pairs: usize,
     /// The patches' areas, normals, centroids and closure weights.
     pub patches: usize,
@@ -306,13 +308,16 @@ impl HierarchicalColumns {
     /// dropped once its lists are built, so that the build's peak holds the links twice for
     /// one kind at most.
     fn assemble(scene: &Scene, tree: ClusterTree, links: Links, start: Instant) -> HierarchicalColumns {
-        let Links { far: far_links, near: near_links, pairs: pair_links, rays, occluded, clear, zeroth, .. } = links;
+        let tree = tree.held();
+        let Links {
+            far: far_links, near: mut near_links, pairs: mut pair_links, rays, occluded, clear, zeroth, ..
+        } = links;
         let counts = (far_links.len(), near_links.len(), pair_links.len());
-        let far = Adjacency::new(tree.nodes.len(), &far_links, |l| (l.a, l.b, [l.clear, l.count]));
+        let far = FarLists::new(tree.nodes.len(), &far_links, |l| (l.a, l.b, [l.clear, l.count]));
         drop(far_links);
-        let near = Adjacency::new(scene.len(), &near_links, |l| (l.i, l.j, l.transfer as Transfer));
+        let near = Adjacency::new(scene.len(), &mut near_links, |l| (l.i, l.j, l.transfer as Transfer));
         drop(near_links);
-        let pairs = Adjacency::new(scene.len(), &pair_links, |l| (l.i, l.j, l.transfer as Transfer));
+        let pairs = Adjacency::new(scene.len(), &mut pair_links, |l| (l.i, l.j, l.transfer as Transfer));
         drop(pair_links);
         let held = HierarchicalColumns::held_by(&tree, [far.bytes(), near.bytes(), pairs.bytes()], scene.len());
         let figures = HierarchyFigures {
@@ -340,7 +345,7 @@ impl HierarchicalColumns {
     /// The operator of `tree` and its links over `scene`.
     pub(super) fn from_parts(
         scene: &Scene,
-        tree: ClusterTree,
+        tree: HeldTree,
         lists: Lists,
         figures: HierarchyFigures,
     ) -> HierarchicalColumns {
@@ -391,7 +396,7 @@ impl HierarchicalColumns {
     pub(super) fn near_sums(&self) -> Vec<Real> {
         let mut sums: Vec<Real> = (0..self.areas.len())
             .into_par_iter()
-            .map(|i| self.near.of(i).map(|(_, &t)| Real::from(t)).sum::<Real>() / self.areas[i])
+            .map(|i| self.near.of(i).map(|(_, t)| Real::from(t)).sum::<Real>() / self.areas[i])
             .collect();
         self.summed(&mut sums);
         sums
@@ -408,7 +413,8 @@ impl HierarchicalColumns {
         links
     }
 
-    /// The bytes the links hold (each in the lists of both its ends), without the tree, the
+    /// The bytes the links hold (far links at both ends, near links and far pairs once with a
+    /// back reference at their higher end), without the tree, the
     /// patch data and the lists' offsets, which every rank of a split operator holds.
     pub fn link_bytes(&self) -> usize {
         self.far.entry_bytes() + self.near.entry_bytes() + self.pairs.entry_bytes()
@@ -421,9 +427,9 @@ impl HierarchicalColumns {
 
     /// The bytes held by a tree (its nodes, order and parents), its link lists (`[far, near,
     /// pairs]`, their bytes) and the patches' areas, normals, centroids and weights.
-    pub(super) fn held_by(tree: &ClusterTree, [far, near, pairs]: [usize; 3], patches: usize) -> HeldBytes {
+    pub(super) fn held_by(tree: &HeldTree, [far, near, pairs]: [usize; 3], patches: usize) -> HeldBytes {
         HeldBytes {
-            tree: tree.nodes.len() * (size_of::<tree::Node>() + size_of::<u32>())
+            tree: tree.nodes.len() * (size_of::<tree::HeldNode>() + size_of::<u32>())
                 + (tree.order.len() + tree.leaf.len()) * size_of::<u32>(),
             far,
             near,
@@ -445,10 +451,10 @@ pub enum HierarchyLink {
 }
 
 /// The parent of each node of `tree` (`u32::MAX` for the root).
-fn parents(tree: &ClusterTree) -> Vec<u32> {
+fn parents(tree: &HeldTree) -> Vec<u32> {
     let mut parent = vec![u32::MAX; tree.nodes.len()];
-    for (k, node) in tree.nodes.iter().enumerate() {
-        if let Some(children) = node.children {
+    for k in 0..tree.nodes.len() {
+        if let Some(children) = tree.children(k) {
             for c in children {
                 parent[c as usize] = k as u32;
             }

@@ -137,11 +137,11 @@ pub(crate) struct Span {
 }
 
 impl Span {
-    /// The geometry of a far link from node `a` to node `b`, `clear` of its `count` rays clear
-    /// (`count` with its [`ZEROTH`] bit). Seen from `b`, `d` is exactly `−d` and the rest the
-    /// same.
-    pub fn new(tree: &ClusterTree, a: u32, b: u32, clear: u16, count: u16) -> Span {
-        let between = tree.nodes[b as usize].centre - tree.nodes[a as usize].centre;
+    /// The geometry of a far link from a node centred at `a` to one centred at `b`, `clear` of
+    /// its `count` rays clear (`count` with its [`ZEROTH`] bit). Seen from `b`, `d` is exactly
+    /// `−d` and the rest the same.
+    pub fn new(a: Vec3, b: Vec3, clear: u16, count: u16) -> Span {
+        let between = b - a;
         let r = between.length();
         let rays = (count & !ZEROTH) as Real;
         Span { d: between / r, r, g: (clear as Real / rays) / (PI * r * r), first: count & ZEROTH == 0 }
@@ -458,7 +458,7 @@ impl Refiner<'_> {
             if let Some((clear, count)) = visible {
                 let link = FarLink { a, b, clear, count };
                 if leaf_a && leaf_b {
-                    let span = Span::new(self.tree, a, b, clear, count);
+                    let span = Span::new(na.centre, nb.centre, clear, count);
                     // Two patches: the entry the far link gives, stored as one number, so
                     // that products and columns read it like a near link's.
                     let (i, j) = (self.tree.order[na.first as usize], self.tree.order[nb.first as usize]);
@@ -880,11 +880,11 @@ mod tests {
             let x: Vec<Real> = (0..n).map(|i| 0.1 + ((i * 7919) % 101) as Real / 101.0).collect();
             assert!(!links.near.is_empty() && !links.pairs.is_empty());
             for list in [&links.near, &links.pairs] {
-                let wide = Adjacency::new(n, list, |l| (l.i, l.j, l.transfer));
-                let narrow = Adjacency::new(n, list, |l| (l.i, l.j, l.transfer as Transfer));
+                let wide = Adjacency::new(n, &mut list.clone(), |l| (l.i, l.j, l.transfer));
+                let narrow = Adjacency::new(n, &mut list.clone(), |l| (l.i, l.j, l.transfer as Transfer));
                 for i in 0..n {
-                    let exact: Real = wide.of(i).map(|(&j, &t)| t * x[j as usize]).sum();
-                    let rounded: Real = narrow.of(i).map(|(&j, &t)| Real::from(t) * x[j as usize]).sum();
+                    let exact: Real = wide.of(i).map(|(j, t)| t * x[j as usize]).sum();
+                    let rounded: Real = narrow.of(i).map(|(j, t)| Real::from(t) * x[j as usize]).sum();
                     assert!((rounded - exact).abs() <= 1e-6 * exact, "row {i}: {rounded} against {exact}");
                 }
             }

@@ -65,7 +65,7 @@ mod share;
 mod stored;
 mod tree;
 
-use adjacency::{Adjacency, Transfer};
+use adjacency::{Adjacency, FarLists, Transfer};
 pub use brightness::Oracle;
 pub use build::{HierarchyFigures, HierarchyLink};
 pub use distribution::{Distribution, RankFigures};
@@ -73,18 +73,18 @@ pub use links::BuildProgress;
 pub use params::{HIERARCHICAL_PARAMS, HierarchicalParams};
 use radiosity_core::{Real, Vec3};
 pub use share::TASKS_PER_RANK;
-use tree::ClusterTree;
+use tree::HeldTree;
 
 /// The hierarchical operator over a scene.
 #[derive(Debug)]
 pub struct HierarchicalColumns {
-    tree: ClusterTree,
+    tree: HeldTree,
     parent: Vec<u32>,
     /// Far links by node, each in the lists of both its nodes: the other nodes and the rays
     /// found clear of the link's rays.
-    far: Adjacency<[u16; 2]>,
-    /// Near links by patch, each in the lists of both its patches: the other patches and the
-    /// links' `A_p F_pq`, the analytic backend's, rounded to `f32` ([`Transfer`]).
+    far: FarLists,
+    /// Near links by patch, each held once: the other patches and the links' `A_p F_pq`, the
+    /// analytic backend's, rounded to `f32` ([`Transfer`]).
     near: Adjacency<Transfer>,
     /// Far links between two patches, like `near`, with the far kernel's `A_p F_pq`.
     pairs: Adjacency<Transfer>,

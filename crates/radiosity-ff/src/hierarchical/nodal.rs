@@ -80,13 +80,13 @@ impl HierarchicalColumns {
     /// patches at their other ends (`None`: not sent), weights applied.
     fn receive_near(&self, p: usize, value: impl Fn(usize) -> Option<Real>) -> Real {
         let mut s = 0.0;
-        for (&q, &t) in self.near.of(p) {
+        for (q, t) in self.near.of(p) {
             let t = Real::from(t);
             if let Some(x) = value(q as usize) {
                 s += t / self.areas[p] * x;
             }
         }
-        for (&q, &t) in self.pairs.of(p) {
+        for (q, t) in self.pairs.of(p) {
             let t = Real::from(t);
             if let Some(x) = value(q as usize) {
                 s += self.weights[p] * self.weights[q as usize] * (t / self.areas[p]) * x;
@@ -234,12 +234,12 @@ impl LinkSource for HierarchicalColumns {
         for (b, &j) in patches.iter().enumerate() {
             self.ancestors(j, |a| {
                 let ca = self.tree.nodes[a as usize].centre;
-                for (&o, &[clear, count]) in self.far.of(a as usize) {
+                for (o, [clear, count]) in self.far.of(a as usize) {
                     if marked.binary_search(&o).is_err() {
                         continue;
                     }
-                    let span = Span::new(&self.tree, a, o, clear, count);
                     let co = self.tree.nodes[o as usize].centre;
+                    let span = Span::new(ca, co, clear, count);
                     for (r, &i) in patches.iter().enumerate() {
                         if self.holds(o as usize, leaves[r]) {
                             let kappa = kernel_factor(
@@ -253,13 +253,12 @@ impl LinkSource for HierarchicalColumns {
                 }
             });
             for (r, &i) in patches.iter().enumerate() {
-                let near =
-                    self.near.of(j).find(|(q, _)| **q as usize == i).map(|(_, &t)| Real::from(t) / self.areas[i]);
+                let near = self.near.of(j).find(|&(q, _)| q as usize == i).map(|(_, t)| Real::from(t) / self.areas[i]);
                 let pair = self
                     .pairs
                     .of(j)
-                    .find(|(q, _)| **q as usize == i)
-                    .map(|(_, &t)| w[i] * w[j] * (Real::from(t) / self.areas[i]));
+                    .find(|&(q, _)| q as usize == i)
+                    .map(|(_, t)| w[i] * w[j] * (Real::from(t) / self.areas[i]));
                 if let Some(v) = near.or(pair) {
                     block[r * m + b] = v;
                 }

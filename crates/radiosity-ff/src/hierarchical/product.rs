@@ -37,9 +37,9 @@ impl HierarchicalColumns {
         let w = &self.weights;
         self.ancestors(p, |k| {
             let ck = self.tree.nodes[k as usize].centre;
-            for (&other, &[clear, count]) in self.far.of(k as usize) {
-                let span = Span::new(&self.tree, k, other, clear, count);
+            for (other, [clear, count]) in self.far.of(k as usize) {
                 let co = self.tree.nodes[other as usize].centre;
+                let span = Span::new(ck, co, clear, count);
                 let at_p = (self.normals[p], self.centroids[p] - ck);
                 for &q in self.tree.patches_of(other) {
                     let q = q as usize;
@@ -50,12 +50,12 @@ impl HierarchicalColumns {
                 }
             }
         });
-        for (&q, &transfer) in self.near.of(p) {
+        for (q, transfer) in self.near.of(p) {
             let transfer = Real::from(transfer);
             let q = q as usize;
             line[q] = transfer / if row { self.areas[p] } else { self.areas[q] };
         }
-        for (&q, &transfer) in self.pairs.of(p) {
+        for (q, transfer) in self.pairs.of(p) {
             let transfer = Real::from(transfer);
             let q = q as usize;
             line[q] = w[p] * w[q] * (transfer / if row { self.areas[p] } else { self.areas[q] });
@@ -94,7 +94,7 @@ impl ColumnSource for HierarchicalColumns {
         out.par_chunks_mut(channels).enumerate().for_each(|(i, out)| {
             let w = self.weights[i];
             out.iter_mut().for_each(|o| *o *= w);
-            for (&j, &transfer) in self.near.of(i) {
+            for (j, transfer) in self.near.of(i) {
                 let transfer = Real::from(transfer);
                 let f = transfer / self.areas[i];
                 for ch in 0..channels {
@@ -152,7 +152,7 @@ impl HierarchicalColumns {
         forms.par_chunks_mut(k).enumerate().for_each(|(node, forms)| self.receive_far(node, &moments, None, forms));
         self.pushed_down(&mut forms, k, out);
         out.par_chunks_mut(k).enumerate().for_each(|(i, out)| {
-            for (&j, &transfer) in self.pairs.of(i) {
+            for (j, transfer) in self.pairs.of(i) {
                 let transfer = Real::from(transfer);
                 let f = transfer / self.areas[i] * weights[j as usize];
                 for ch in 0..k {
@@ -178,7 +178,7 @@ impl HierarchicalColumns {
     /// subtree after it, then its second's).
     fn gather_up(&self, node: usize, moments: &mut [Moments], x: &[Real], k: usize, weights: &[Real]) {
         let nodes = &self.tree.nodes;
-        match nodes[node].children {
+        match self.tree.children(node) {
             None => {
                 let p = self.tree.order[nodes[node].first as usize] as usize;
                 let offset = self.centroids[p] - nodes[node].centre;
@@ -214,12 +214,12 @@ impl HierarchicalColumns {
     /// them when `None`), in the links' fixed order.
     pub(super) fn receive_far(&self, node: usize, moments: &[Moments], sending: Option<&[bool]>, forms: &mut [Form]) {
         let k = forms.len();
-        for (&other, &[clear, count]) in self.far.of(node) {
+        for (other, [clear, count]) in self.far.of(node) {
             if sending.is_some_and(|s| !s[other as usize]) {
                 continue;
             }
             // From this node to the other end.
-            let span = Span::new(&self.tree, node as u32, other, clear, count);
+            let span = Span::new(self.tree.nodes[node].centre, self.tree.nodes[other as usize].centre, clear, count);
             Form::receive(forms, &moments[other as usize * k..(other as usize + 1) * k], &span);
         }
     }
@@ -245,7 +245,7 @@ impl HierarchicalColumns {
     /// order).
     fn push_down(&self, node: usize, forms: &mut [Form], k: usize, values: &mut [Real]) {
         let nodes = &self.tree.nodes;
-        match nodes[node].children {
+        match self.tree.children(node) {
             None => {
                 let p = self.tree.order[nodes[node].first as usize] as usize;
                 let offset = self.centroids[p] - nodes[node].centre;

@@ -7,12 +7,14 @@
 //! checksum of its patch order, so that links are never read against another tree. The
 //! layout: a postcard header (a magic string, the format version, the caller's key, the
 //! sizes, the build's figures, the body's length and checksum), then the body, the far, near
-//! and pair adjacency lists as raw little-endian arrays (offsets as `u64`, other ends as
-//! `u32`, far values as two `u16`, near and pair values as `f32`) and the closure
-//! weights (`f64`), read back bit for bit.
+//! and pair links as raw little-endian arrays, each link once (far links as their two nodes,
+//! `u32`, and their tallies, two `u16`, in increasing order of their ends; near links and far
+//! pairs in their lower end's lists: offsets as `u64`, higher ends as `u32` and values as
+//! `f32`), and the closure weights (`f64`), read back bit for bit; the lists by either end are
+//! worked out again from them.
 
 use super::HierarchicalColumns;
-use super::adjacency::{Adjacency, Lists, Transfer};
+use super::adjacency::{Adjacency, FarLists, Lists, Transfer};
 use super::build::HierarchyFigures;
 use super::tree::ClusterTree;
 use crate::error::FfError;
@@ -22,8 +24,9 @@ use serde::{Deserialize, Serialize};
 use xxhash_rust::xxh3::xxh3_64;
 
 const MAGIC: &str = "radiosity hierarchical operator";
-/// 5: near and pair values as `f32` (4: as `f64`).
-const FORMAT_VERSION: u32 = 5;
+/// 6: each link once, in its lower end's list (5: in both ends' lists; 4: near and pair
+/// values as `f64`).
+const FORMAT_VERSION: u32 = 6;
 
 /// What the header holds besides the magic string and the version.
 #[derive(Serialize, Deserialize)]
@@ -41,8 +44,8 @@ struct Header {
     body_checksum: [u8; 8],
 }
 
-fn order_checksum(tree: &ClusterTree) -> u64 {
-    let bytes: Vec<u8> = tree.order.iter().flat_map(|p| p.to_le_bytes()).collect();
+fn order_checksum(order: &[u32]) -> u64 {
+    let bytes: Vec<u8> = order.iter().flat_map(|p| p.to_le_bytes()).collect();
     xxh3_64(&bytes)
 }
 
@@ -54,10 +57,10 @@ impl HierarchicalColumns {
             key: key.to_string(),
             patches: self.areas.len() as u64,
             nodes: self.tree.nodes.len() as u64,
-            order: order_checksum(&self.tree),
-            far_entries: self.far.other.len() as u64,
-            near_entries: self.near.other.len() as u64,
-            pair_entries: self.pairs.other.len() as u64,
+            order: order_checksum(&self.tree.order),
+            far_entries: self.far.len() as u64,
+            near_entries: self.near.len() as u64,
+            pair_entries: self.pairs.len() as u64,
             figures: self.figures,
             body_len: [0; 8],
             body_checksum: [0; 8],
@@ -66,9 +69,11 @@ impl HierarchicalColumns {
         frame(MAGIC, FORMAT_VERSION, &header, size, |mut out| {
             let offsets =
                 |out: &mut Vec<u8>, start: &[usize]| start.iter().for_each(|&s| out.extend((s as u64).to_le_bytes()));
-            offsets(&mut out, &self.far.start);
-            self.far.other.iter().for_each(|o| out.extend(o.to_le_bytes()));
-            self.far.value.iter().for_each(|[c, n]| out.extend(c.to_le_bytes().into_iter().chain(n.to_le_bytes())));
+            for (a, b, [c, n]) in self.far.links() {
+                out.extend(
+                    a.to_le_bytes().into_iter().chain(b.to_le_bytes()).chain(c.to_le_bytes()).chain(n.to_le_bytes()),
+                );
+            }
             for list in [&self.near, &self.pairs] {
                 offsets(&mut out, &list.start);
                 list.other.iter().for_each(|o| out.extend(o.to_le_bytes()));
@@ -92,10 +97,10 @@ impl HierarchicalColumns {
         if header.key != key {
             return Err(refuse(format!("it was built for '{}', not for '{key}'", header.key)));
         }
-        let tree = ClusterTree::new(scene);
+        let tree = ClusterTree::new(scene).held();
         if header.patches != scene.len() as u64
             || header.nodes != tree.nodes.len() as u64
-            || header.order != order_checksum(&tree)
+            || header.order != order_checksum(&tree.order)
         {
             return Err(refuse(format!(
                 "it was built over {} patches and a tree of {} nodes, not this scene's {} and {}",
@@ -106,9 +111,7 @@ impl HierarchicalColumns {
             )));
         }
         let mut reader = Body { bytes: body };
-        let far = reader.adjacency(tree.nodes.len(), header.far_entries, 4, |b| {
-            [u16::from_le_bytes([b[0], b[1]]), u16::from_le_bytes([b[2], b[3]])]
-        });
+        let far = reader.far(tree.nodes.len(), header.far_entries);
         let real = |b: &[u8]| Real::from_le_bytes(b.try_into().expect("slices of 8 bytes"));
         let transfer = |b: &[u8]| Transfer::from_le_bytes(b.try_into().expect("slices of 4 bytes"));
         let near = reader.adjacency(scene.len(), header.near_entries, size_of::<Transfer>(), transfer);
@@ -140,9 +143,26 @@ impl Body<'_> {
         })
     }
 
-    /// Lists of `keys` keys and `entries` entries of `width` bytes each, or `None` unless the
-    /// offsets run from 0 to `entries` without decreasing and every other end is below `keys`.
-    fn adjacency<T>(
+    /// The far lists of `entries` links `(a, b, [clear, count])` over `keys` nodes, or `None`
+    /// unless each link's ends are increasing and below `keys` and the links are in
+    /// increasing order of their ends.
+    fn far(&mut self, keys: usize, entries: u64) -> Option<FarLists> {
+        let entries = usize::try_from(entries).ok()?;
+        let u32_at = |b: &[u8]| u32::from_le_bytes(b.try_into().expect("slices of 4 bytes"));
+        let u16_at = |b: &[u8]| u16::from_le_bytes(b.try_into().expect("slices of 2 bytes"));
+        let links: Vec<(u32, u32, [u16; 2])> = self
+            .take(entries.checked_mul(12)?)?
+            .chunks_exact(12)
+            .map(|c| (u32_at(&c[..4]), u32_at(&c[4..8]), [u16_at(&c[8..10]), u16_at(&c[10..])]))
+            .collect();
+        let ordered = links.iter().all(|&(a, b, _)| a < b && (b as usize) < keys)
+            && links.windows(2).all(|w| (w[0].0, w[0].1) < (w[1].0, w[1].1));
+        ordered.then(|| FarLists::new(keys, &links, |&l| l))
+    }
+
+    /// Lists of `keys` keys and `entries` links of `width` bytes each, or `None` unless they
+    /// are lists [`Adjacency::from_higher`] takes ([`Adjacency::is_ordered`]).
+    fn adjacency<T: Copy + Default + Send + Sync>(
         &mut self,
         keys: usize,
         entries: u64,
@@ -155,20 +175,15 @@ impl Body<'_> {
             .chunks_exact(8)
             .map(|c| u64::from_le_bytes(c.try_into().expect("chunks of 8 bytes")) as usize)
             .collect();
-        let ordered =
-            start.first() == Some(&0) && start.last() == Some(&entries) && start.windows(2).all(|w| w[0] <= w[1]);
-        if !ordered {
-            return None;
-        }
         let other: Vec<u32> = self
             .take(entries.checked_mul(4)?)?
             .chunks_exact(4)
             .map(|c| u32::from_le_bytes(c.try_into().expect("chunks of 4 bytes")))
             .collect();
-        if other.iter().any(|&o| o as usize >= keys) {
+        if !Adjacency::<T>::is_ordered(keys, entries, &start, &other) {
             return None;
         }
         let value = self.take(entries.checked_mul(width)?)?.chunks_exact(width).map(value).collect();
-        Some(Adjacency { start, other, value })
+        Some(Adjacency::from_higher(start, other, value))
     }
 }

@@ -66,7 +66,7 @@ impl Node {
     }
 }
 
-/// The tree over a scene's patches.
+/// The tree over a scene's patches, as the refinement reads it.
 #[derive(Clone, Debug)]
 pub(crate) struct ClusterTree {
     /// The nodes, in pre-order; the root is node 0.
@@ -98,6 +98,59 @@ impl ClusterTree {
             }
         }
         ClusterTree { nodes, order, leaf }
+    }
+
+    /// The patches of node `k`, in tree order.
+    #[cfg(test)]
+    pub fn patches_of(&self, k: u32) -> &[u32] {
+        let node = &self.nodes[k as usize];
+        &self.order[node.first as usize..(node.first + node.count) as usize]
+    }
+
+    /// The tree as the operator holds it once its links are made ([`HeldTree`]).
+    pub fn held(self) -> HeldTree {
+        let nodes = self.nodes.iter().map(|n| HeldNode { centre: n.centre, first: n.first, count: n.count }).collect();
+        HeldTree { nodes, order: self.order, leaf: self.leaf }
+    }
+}
+
+/// A node as the operator holds it: its centre, which its far links' geometry is worked out
+/// from, and its patches. 32 bytes, where the refinement's [`Node`] takes 160.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct HeldNode {
+    /// The centre of the bounding sphere of the patches' vertices.
+    pub centre: Vec3,
+    /// The first patch, in tree order.
+    pub first: u32,
+    /// How many patches.
+    pub count: u32,
+}
+
+impl HeldNode {
+    /// True for a leaf: one patch.
+    pub fn is_leaf(&self) -> bool {
+        self.count == 1
+    }
+}
+
+/// The cluster tree as the operator holds it: what a product, a column and a shot read of it
+/// (the nodes' centres and patches, in the same pre-order), without the bounds that only the
+/// refinement asks.
+#[derive(Clone, Debug)]
+pub(crate) struct HeldTree {
+    /// The nodes, in pre-order; the root is node 0.
+    pub nodes: Vec<HeldNode>,
+    /// The patches in tree order.
+    pub order: Vec<u32>,
+    /// The leaf node of every patch.
+    pub leaf: Vec<u32>,
+}
+
+impl HeldTree {
+    /// The two children of node `k`, or none for a leaf. In pre-order, the first follows `k`
+    /// and the second follows the first's subtree of `2m − 1` nodes over its `m` patches.
+    pub fn children(&self, k: usize) -> Option<[u32; 2]> {
+        (!self.nodes[k].is_leaf()).then(|| [k as u32 + 1, k as u32 + 2 * self.nodes[k + 1].count])
     }
 
     /// The patches of node `k`, in tree order.
@@ -287,6 +340,17 @@ mod tests {
             b.polygon(&[at(k, 0.0), at(k + 1, 0.0), at(k + 1, 1.0), at(k, 1.0)], m, o).unwrap();
         }
         b.build().unwrap()
+    }
+
+    #[test]
+    fn the_held_tree_finds_every_node_s_children_and_patches_where_the_tree_has_them() {
+        let tree = ClusterTree::new(&cylinder());
+        let held = tree.clone().held();
+        for (k, node) in tree.nodes.iter().enumerate() {
+            assert_eq!(held.children(k), node.children, "node {k}");
+            assert_eq!(held.patches_of(k as u32), tree.patches_of(k as u32), "node {k}");
+            assert_eq!(held.nodes[k].centre, node.centre);
+        }
     }
 
     #[test]

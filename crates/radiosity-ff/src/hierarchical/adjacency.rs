@@ -55,7 +55,7 @@ impl<T: Copy + Default + Send + Sync> Adjacency<T> {
             let (lo, hi, _) = ordered(l);
             (lo, hi)
         });
-        let counts: Vec<AtomicU32> = (0..len).map(|_| AtomicU32::new(0)).collect();
+        let counts: Vec<AtomicU32> = (0..len).into_par_iter().map(|_| AtomicU32::new(0)).collect();
         links.par_iter().for_each(|l| {
             counts[ordered(l).0 as usize].fetch_add(1, Ordering::Relaxed);
         });
@@ -69,13 +69,13 @@ impl<T: Copy + Default + Send + Sync> Adjacency<T> {
     /// [`Adjacency::is_ordered`] checks); the lower ends' lists are worked out from them.
     pub(super) fn from_higher(start: Vec<usize>, other: Vec<u32>, value: Vec<T>) -> Adjacency<T> {
         let len = start.len() - 1;
-        let counts: Vec<AtomicU32> = (0..len).map(|_| AtomicU32::new(0)).collect();
+        let counts: Vec<AtomicU32> = (0..len).into_par_iter().map(|_| AtomicU32::new(0)).collect();
         other.par_iter().for_each(|&o| {
             counts[o as usize].fetch_add(1, Ordering::Relaxed);
         });
         let lower_start = offsets(counts);
-        let next: Vec<AtomicU32> = lower_start[..len].iter().map(|&s| AtomicU32::new(s as u32)).collect();
-        let slots: Vec<AtomicU32> = (0..other.len()).map(|_| AtomicU32::new(0)).collect();
+        let next: Vec<AtomicU32> = lower_start[..len].par_iter().map(|&s| AtomicU32::new(s as u32)).collect();
+        let slots: Vec<AtomicU32> = (0..other.len()).into_par_iter().map(|_| AtomicU32::new(0)).collect();
         start.par_windows(2).enumerate().for_each(|(k, at)| {
             for &o in &other[at[0]..at[1]] {
                 let slot = next[o as usize].fetch_add(1, Ordering::Relaxed);
@@ -200,10 +200,18 @@ impl FarLists {
     /// and in `b`'s. A pair is linked once, so the order within a list is total and the lists
     /// are the same whatever the order of `links` and the number of threads.
     pub(super) fn new<L: Sync>(len: usize, links: &[L], ends: impl Fn(&L) -> (u32, u32, [u16; 2]) + Sync) -> FarLists {
+        // Neighbouring links mostly share a tally: the set is searched only when it changes.
         let tallies: Vec<[u16; 2]> = links
-            .par_iter()
-            .fold(BTreeSet::new, |mut set, l| {
-                set.insert(ends(l).2);
+            .par_chunks(PARALLEL_LINKS)
+            .map(|chunk| {
+                let (mut set, mut last) = (BTreeSet::new(), None);
+                for l in chunk {
+                    let t = ends(l).2;
+                    if last != Some(t) {
+                        set.insert(t);
+                        last = Some(t);
+                    }
+                }
                 set
             })
             .reduce(BTreeSet::new, |mut a, mut b| {
@@ -218,24 +226,31 @@ impl FarLists {
             u16::try_from(tallies.binary_search(&t).expect("every tally is in the table"))
                 .expect("at most 65,536 distinct tallies")
         };
-        let counts: Vec<AtomicU32> = (0..len).map(|_| AtomicU32::new(0)).collect();
+        let counts: Vec<AtomicU32> = (0..len).into_par_iter().map(|_| AtomicU32::new(0)).collect();
         links.par_iter().for_each(|l| {
             let (a, b, _) = ends(l);
             counts[a as usize].fetch_add(1, Ordering::Relaxed);
             counts[b as usize].fetch_add(1, Ordering::Relaxed);
         });
         let start = offsets(counts);
-        let next: Vec<AtomicU32> = start[..len].iter().map(|&s| AtomicU32::new(s as u32)).collect();
+        let next: Vec<AtomicU32> = start[..len].par_iter().map(|&s| AtomicU32::new(s as u32)).collect();
         let entries = start[len];
-        let (other, codes): (Vec<AtomicU32>, Vec<AtomicU16>) =
-            (0..entries).map(|_| (AtomicU32::new(0), AtomicU16::new(0))).unzip();
-        links.par_iter().for_each(|l| {
-            let (a, b, tally) = ends(l);
-            let c = code(tally);
-            for (p, q) in [(a, b), (b, a)] {
-                let slot = next[p as usize].fetch_add(1, Ordering::Relaxed) as usize;
-                other[slot].store(q, Ordering::Relaxed);
-                codes[slot].store(c, Ordering::Relaxed);
+        let other: Vec<AtomicU32> = (0..entries).into_par_iter().map(|_| AtomicU32::new(0)).collect();
+        let codes: Vec<AtomicU16> = (0..entries).into_par_iter().map(|_| AtomicU16::new(0)).collect();
+        links.par_chunks(PARALLEL_LINKS).for_each(|chunk| {
+            let mut last = None;
+            for l in chunk {
+                let (a, b, tally) = ends(l);
+                let c = match last {
+                    Some((t, c)) if t == tally => c,
+                    _ => code(tally),
+                };
+                last = Some((tally, c));
+                for (p, q) in [(a, b), (b, a)] {
+                    let slot = next[p as usize].fetch_add(1, Ordering::Relaxed) as usize;
+                    other[slot].store(q, Ordering::Relaxed);
+                    codes[slot].store(c, Ordering::Relaxed);
+                }
             }
         });
         drop(next);
@@ -304,6 +319,9 @@ impl FarLists {
         self.start.len() * size_of::<usize>() + self.entry_bytes()
     }
 }
+
+/// Links a thread takes at a time where it keeps what the link before told it.
+const PARALLEL_LINKS: usize = 1 << 16;
 
 /// Where each key's list starts, from the lists' lengths: `counts.len() + 1` offsets.
 fn offsets(counts: Vec<AtomicU32>) -> Vec<usize> {

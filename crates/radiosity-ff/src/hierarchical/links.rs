@@ -93,7 +93,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 /// A far link between nodes `a` and `b`: 12 bytes, its geometry worked out again from the
 /// nodes' centres when it is used ([`Span::new`]).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct FarLink {
     /// The first node.
     pub a: u32,
@@ -149,7 +149,7 @@ impl Span {
 }
 
 /// A near link: two patches and `A_i F_ij`.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct NearLink {
     /// The first patch.
     pub i: u32,
@@ -159,14 +159,77 @@ pub(crate) struct NearLink {
     pub transfer: Real,
 }
 
+/// Links gathered by the refinement's tasks: each task's in a vector of their own, joined
+/// without a copy, so that the build never holds a kind of link twice before its lists are
+/// built ([`Gathered::into_vec`] frees each task's vector as it copies it).
+#[derive(Clone, Debug)]
+pub(crate) struct Gathered<T>(Vec<Vec<T>>);
+
+impl<T> Default for Gathered<T> {
+    fn default() -> Gathered<T> {
+        Gathered(Vec::new())
+    }
+}
+
+impl<T> Gathered<T> {
+    pub fn push(&mut self, link: T) {
+        match self.0.last_mut() {
+            Some(last) => last.push(link),
+            None => self.0.push(vec![link]),
+        }
+    }
+
+    /// Moves `other`'s links after these, without copying them.
+    pub fn append(&mut self, other: &mut Gathered<T>) {
+        self.0.append(&mut other.0);
+    }
+
+    /// Puts `front`'s links before these.
+    pub fn prepend(&mut self, mut front: Gathered<T>) {
+        front.0.append(&mut self.0);
+        self.0 = front.0;
+    }
+
+    pub fn len(&self) -> usize {
+        self.0.iter().map(Vec::len).sum()
+    }
+
+    #[cfg(test)]
+    pub fn is_empty(&self) -> bool {
+        self.0.iter().all(Vec::is_empty)
+    }
+
+    #[cfg(test)]
+    pub fn iter(&self) -> impl Iterator<Item = &T> {
+        self.0.iter().flatten()
+    }
+}
+
+impl<T: Copy + Default + Send + Sync> Gathered<T> {
+    /// The links in one vector of their exact length, copied on every thread, each task's
+    /// vector freed once copied.
+    pub fn into_vec(self) -> Vec<T> {
+        let mut all = vec![T::default(); self.len()];
+        let mut rest = all.as_mut_slice();
+        let mut places = Vec::with_capacity(self.0.len());
+        for part in &self.0 {
+            let (place, tail) = rest.split_at_mut(part.len());
+            places.push(place);
+            rest = tail;
+        }
+        places.into_par_iter().zip(self.0).for_each(|(place, part)| place.copy_from_slice(&part));
+        all
+    }
+}
+
 /// The links of a scene, and what building them cost.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Links {
-    pub far: Vec<FarLink>,
+    pub far: Gathered<FarLink>,
     /// Near links with the analytic backend's entry.
-    pub near: Vec<NearLink>,
+    pub near: Gathered<NearLink>,
     /// Far links between two patches, stored as the entry their kernel gives.
-    pub pairs: Vec<NearLink>,
+    pub pairs: Gathered<NearLink>,
     /// Shadow rays traced for far links.
     pub rays: u64,
     /// Links dropped as fully occluded by their rays.
@@ -839,7 +902,7 @@ mod tests {
                 refined(arg, eps, trust, |r, links| {
                     let (total, probe) = (r.strata.len(), (r.strata.len() / 4).max(1));
                     let (mut small, mut larger, mut short) = (0, 0, 0);
-                    for link in &links.far {
+                    for link in links.far.iter() {
                         let (_, bound) = r.far_order(link.a, link.b).unwrap();
                         let count = usize::from(link.count & !ZEROTH);
                         let clear = usize::from(link.clear);
@@ -880,8 +943,8 @@ mod tests {
             let x: Vec<Real> = (0..n).map(|i| 0.1 + ((i * 7919) % 101) as Real / 101.0).collect();
             assert!(!links.near.is_empty() && !links.pairs.is_empty());
             for list in [&links.near, &links.pairs] {
-                let wide = Adjacency::new(n, &mut list.clone(), |l| (l.i, l.j, l.transfer));
-                let narrow = Adjacency::new(n, &mut list.clone(), |l| (l.i, l.j, l.transfer as Transfer));
+                let wide = Adjacency::new(n, &mut list.clone().into_vec(), |l| (l.i, l.j, l.transfer));
+                let narrow = Adjacency::new(n, &mut list.clone().into_vec(), |l| (l.i, l.j, l.transfer as Transfer));
                 for i in 0..n {
                     let exact: Real = wide.of(i).map(|(j, t)| t * x[j as usize]).sum();
                     let rounded: Real = narrow.of(i).map(|(j, t)| Real::from(t) * x[j as usize]).sum();

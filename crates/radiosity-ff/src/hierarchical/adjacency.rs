@@ -20,54 +20,44 @@
 use radiosity_core::Real;
 use rayon::prelude::*;
 use std::collections::BTreeSet;
-use std::sync::atomic::{AtomicU16, AtomicU32, Ordering};
+use std::sync::atomic::{AtomicU32, Ordering};
 
 /// Links by the node or patch at either end: for each of `len` keys, the other ends and the
 /// links' values, ordered by the other end (so that a product reads its vector in order).
 #[derive(Debug)]
-pub(super) struct Adjacency<T> {
+pub(super) struct Adjacency {
     /// Where each key's list of higher ends starts in `other` and `value` (`len + 1`).
     pub(super) start: Vec<usize>,
     /// Each link once, in its lower end's list: the higher end,
     pub(super) other: Vec<u32>,
     /// and the value.
-    pub(super) value: Vec<T>,
+    pub(super) value: Vec<Transfer>,
     /// Where each key's list of lower ends starts in `lower` (`len + 1`).
     lower_start: Vec<usize>,
     /// Each link again, in its higher end's list: the lower end alone.
     lower: Vec<u32>,
 }
 
-impl<T: Copy + Default + Send + Sync> Adjacency<T> {
+impl Adjacency {
     /// The lists of `links` `(a, b, value)`, each in `a`'s list and in `b`'s. A pair is linked
     /// once, so the order within a list is total and the lists are the same whatever the
-    /// order of `links` and the number of threads. `links` is sorted in place.
-    pub(super) fn new<L: Send + Sync>(
+    /// order of `links` and the number of threads.
+    pub(super) fn new<L: Sync>(
         len: usize,
-        links: &mut [L],
-        ends: impl Fn(&L) -> (u32, u32, T) + Sync,
-    ) -> Adjacency<T> {
-        let ordered = |l: &L| {
+        links: &Gathered<L>,
+        ends: impl Fn(&L) -> (u32, u32, Transfer) + Sync,
+    ) -> Adjacency {
+        let (start, other, value) = scattered(len, links, false, |l| {
             let (a, b, v) = ends(l);
-            (a.min(b), a.max(b), v)
-        };
-        links.par_sort_unstable_by_key(|l| {
-            let (lo, hi, _) = ordered(l);
-            (lo, hi)
+            (a, b, v.to_bits())
         });
-        let counts: Vec<AtomicU32> = (0..len).into_par_iter().map(|_| AtomicU32::new(0)).collect();
-        links.par_iter().for_each(|l| {
-            counts[ordered(l).0 as usize].fetch_add(1, Ordering::Relaxed);
-        });
-        let start = offsets(counts);
-        let (other, value) = links.par_iter().map(|l| (ordered(l).1, ordered(l).2)).unzip();
-        Adjacency::from_higher(start, other, value)
+        Adjacency::from_higher(start, other, value.into_par_iter().map(Transfer::from_bits).collect())
     }
 
     /// The lists whose higher ends and values are `other` and `value`, `start` giving where
     /// each key's list starts, each list ordered and above its key (as
     /// [`Adjacency::is_ordered`] checks); the lower ends' lists are worked out from them.
-    pub(super) fn from_higher(start: Vec<usize>, other: Vec<u32>, value: Vec<T>) -> Adjacency<T> {
+    pub(super) fn from_higher(start: Vec<usize>, other: Vec<u32>, value: Vec<Transfer>) -> Adjacency {
         let len = start.len() - 1;
         let counts: Vec<AtomicU32> = (0..len).into_par_iter().map(|_| AtomicU32::new(0)).collect();
         other.par_iter().for_each(|&o| {
@@ -84,19 +74,12 @@ impl<T: Copy + Default + Send + Sync> Adjacency<T> {
         });
         let mut lower: Vec<u32> = slots.into_iter().map(AtomicU32::into_inner).collect();
         // The slots were claimed in any order: each list sorted by itself.
-        let mut rest = lower.as_mut_slice();
-        let mut lists = Vec::with_capacity(len);
-        for at in lower_start.windows(2) {
-            let (list, tail) = rest.split_at_mut(at[1] - at[0]);
-            lists.push(list);
-            rest = tail;
-        }
-        lists.into_par_iter().for_each(|list| list.sort_unstable());
+        lists_of(&lower_start, &mut lower).into_par_iter().for_each(|list| list.sort_unstable());
         Adjacency { start, other, value, lower_start, lower }
     }
 
     /// The value of the link between `lo` and `hi > lo`, from `lo`'s list.
-    fn between(&self, lo: u32, hi: u32) -> T {
+    fn between(&self, lo: u32, hi: u32) -> Transfer {
         let at = self.start[lo as usize]..self.start[lo as usize + 1];
         let place = self.other[at.clone()].partition_point(|&o| o < hi);
         debug_assert_eq!(self.other[at.start + place], hi);
@@ -104,7 +87,7 @@ impl<T: Copy + Default + Send + Sync> Adjacency<T> {
     }
 
     /// The list of `k`: the other ends, in increasing order, and the values.
-    pub(super) fn of(&self, k: usize) -> impl Iterator<Item = (u32, T)> + '_ {
+    pub(super) fn of(&self, k: usize) -> impl Iterator<Item = (u32, Transfer)> + '_ {
         let lower = &self.lower[self.lower_start[k]..self.lower_start[k + 1]];
         let higher = self.start[k]..self.start[k + 1];
         (lower.iter().map(move |&o| (o, self.between(o, k as u32))))
@@ -149,7 +132,7 @@ impl<T: Copy + Default + Send + Sync> Adjacency<T> {
     /// The bytes the links' entries hold: each link's two ends and its value, not the offsets
     /// every key has.
     pub(super) fn entry_bytes(&self) -> usize {
-        self.other.len() * (size_of::<u32>() + size_of::<T>()) + self.lower.len() * size_of::<u32>()
+        self.other.len() * (size_of::<u32>() + size_of::<Transfer>()) + self.lower.len() * size_of::<u32>()
     }
 
     /// The bytes the lists hold.
@@ -199,13 +182,16 @@ impl FarLists {
     /// The lists of `links` `(a, b, [clear, count])` over `len` nodes, each link in `a`'s list
     /// and in `b`'s. A pair is linked once, so the order within a list is total and the lists
     /// are the same whatever the order of `links` and the number of threads.
-    pub(super) fn new<L: Sync>(len: usize, links: &[L], ends: impl Fn(&L) -> (u32, u32, [u16; 2]) + Sync) -> FarLists {
+    pub(super) fn new<L: Sync>(
+        len: usize,
+        links: &Gathered<L>,
+        ends: impl Fn(&L) -> (u32, u32, [u16; 2]) + Sync,
+    ) -> FarLists {
         // Neighbouring links mostly share a tally: the set is searched only when it changes.
-        let tallies: Vec<[u16; 2]> = links
-            .par_chunks(PARALLEL_LINKS)
-            .map(|chunk| {
+        let tallies: Vec<[u16; 2]> = (links.0.par_iter())
+            .map(|part| {
                 let (mut set, mut last) = (BTreeSet::new(), None);
-                for l in chunk {
+                for l in part {
                     let t = ends(l).2;
                     if last != Some(t) {
                         set.insert(t);
@@ -222,61 +208,17 @@ impl FarLists {
             .collect();
         // A tally is `[c, c]` for c up to `rays`, or `[c, probe]`, each with or without the
         // zeroth-order bit: at most 2 · (4096 + 1024) of them.
-        let code = |t: [u16; 2]| {
-            u16::try_from(tallies.binary_search(&t).expect("every tally is in the table"))
-                .expect("at most 65,536 distinct tallies")
-        };
-        let counts: Vec<AtomicU32> = (0..len).into_par_iter().map(|_| AtomicU32::new(0)).collect();
-        links.par_iter().for_each(|l| {
-            let (a, b, _) = ends(l);
-            counts[a as usize].fetch_add(1, Ordering::Relaxed);
-            counts[b as usize].fetch_add(1, Ordering::Relaxed);
-        });
-        let start = offsets(counts);
-        let next: Vec<AtomicU32> = start[..len].par_iter().map(|&s| AtomicU32::new(s as u32)).collect();
-        let entries = start[len];
-        let other: Vec<AtomicU32> = (0..entries).into_par_iter().map(|_| AtomicU32::new(0)).collect();
-        let codes: Vec<AtomicU16> = (0..entries).into_par_iter().map(|_| AtomicU16::new(0)).collect();
-        links.par_chunks(PARALLEL_LINKS).for_each(|chunk| {
-            let mut last = None;
-            for l in chunk {
-                let (a, b, tally) = ends(l);
-                let c = match last {
-                    Some((t, c)) if t == tally => c,
-                    _ => code(tally),
-                };
-                last = Some((tally, c));
-                for (p, q) in [(a, b), (b, a)] {
-                    let slot = next[p as usize].fetch_add(1, Ordering::Relaxed) as usize;
-                    other[slot].store(q, Ordering::Relaxed);
-                    codes[slot].store(c, Ordering::Relaxed);
-                }
-            }
-        });
-        drop(next);
-        let mut other: Vec<u32> = other.into_iter().map(AtomicU32::into_inner).collect();
-        let mut codes: Vec<u16> = codes.into_iter().map(AtomicU16::into_inner).collect();
-        // The slots were claimed in any order: each list sorted by itself.
-        let (mut rest_other, mut rest_codes) = (other.as_mut_slice(), codes.as_mut_slice());
-        let mut lists = Vec::with_capacity(len);
-        for at in start.windows(2) {
-            let (o, tail_o) = rest_other.split_at_mut(at[1] - at[0]);
-            let (c, tail_c) = rest_codes.split_at_mut(at[1] - at[0]);
-            lists.push((o, c));
-            (rest_other, rest_codes) = (tail_o, tail_c);
-        }
-        lists.into_par_iter().for_each_init(Vec::new, |entries, (o, c)| {
-            entries.clear();
-            entries.extend(o.iter().copied().zip(c.iter().copied()));
-            entries.sort_unstable_by_key(|e: &(u32, u16)| e.0);
-            for (k, &(q, x)) in entries.iter().enumerate() {
-                (o[k], c[k]) = (q, x);
-            }
+        let code = |t: [u16; 2]| tallies.binary_search(&t).expect("every tally is in the table") as u32;
+        let (start, other, codes) = scattered(len, links, true, |l| {
+            let (a, b, t) = ends(l);
+            (a, b, code(t))
         });
         let codes = if tallies.len() <= 256 {
-            Codes::Narrow(codes.par_iter().map(|&c| c as u8).collect())
+            Codes::Narrow(codes.into_par_iter().map(|c| c as u8).collect())
         } else {
-            Codes::Wide(codes)
+            Codes::Wide(
+                codes.into_par_iter().map(|c| u16::try_from(c).expect("at most 65,536 distinct tallies")).collect(),
+            )
         };
         FarLists { start, other, codes, tallies }
     }
@@ -320,8 +262,146 @@ impl FarLists {
     }
 }
 
-/// Links a thread takes at a time where it keeps what the link before told it.
-const PARALLEL_LINKS: usize = 1 << 16;
+/// Lists by key of the links' other ends and payloads, `ends` giving a link's ends and
+/// payload: each link in its lower end's list, and with `mirrored` in its higher end's too.
+/// Each entry's slot is claimed by an atomic count, on every thread, and each list is then
+/// sorted by its other ends: the same lists whatever the order of `links` and the number of
+/// threads (a pair is linked once). Returns where each key's list starts, the other ends and
+/// the payloads.
+fn scattered<L: Sync>(
+    len: usize,
+    links: &Gathered<L>,
+    mirrored: bool,
+    ends: impl Fn(&L) -> (u32, u32, u32) + Sync,
+) -> (Vec<usize>, Vec<u32>, Vec<u32>) {
+    let each = |l: &L, f: &mut dyn FnMut(u32, u32, u32)| {
+        let (a, b, x) = ends(l);
+        if mirrored {
+            f(a, b, x);
+            f(b, a, x);
+        } else {
+            f(a.min(b), a.max(b), x);
+        }
+    };
+    let counts: Vec<AtomicU32> = (0..len).into_par_iter().map(|_| AtomicU32::new(0)).collect();
+    links.par_iter().for_each(|l| {
+        each(l, &mut |key, _, _| {
+            counts[key as usize].fetch_add(1, Ordering::Relaxed);
+        })
+    });
+    let start = offsets(counts);
+    let next: Vec<AtomicU32> = start[..len].par_iter().map(|&s| AtomicU32::new(s as u32)).collect();
+    let entries = start[len];
+    let other: Vec<AtomicU32> = (0..entries).into_par_iter().map(|_| AtomicU32::new(0)).collect();
+    let payload: Vec<AtomicU32> = (0..entries).into_par_iter().map(|_| AtomicU32::new(0)).collect();
+    links.par_iter().for_each(|l| {
+        each(l, &mut |key, o, x| {
+            let slot = next[key as usize].fetch_add(1, Ordering::Relaxed) as usize;
+            other[slot].store(o, Ordering::Relaxed);
+            payload[slot].store(x, Ordering::Relaxed);
+        })
+    });
+    drop(next);
+    let mut other: Vec<u32> = other.into_iter().map(AtomicU32::into_inner).collect();
+    let mut payload: Vec<u32> = payload.into_iter().map(AtomicU32::into_inner).collect();
+    // The slots were claimed in any order: each list sorted by itself.
+    let lists = lists_of(&start, &mut other).into_iter().zip(lists_of(&start, &mut payload));
+    lists.collect::<Vec<_>>().into_par_iter().for_each_init(Vec::new, |entries, (o, x)| {
+        entries.clear();
+        entries.extend(o.iter().copied().zip(x.iter().copied()));
+        entries.sort_unstable_by_key(|e: &(u32, u32)| e.0);
+        for (k, &(q, y)) in entries.iter().enumerate() {
+            (o[k], x[k]) = (q, y);
+        }
+    });
+    (start, other, payload)
+}
+
+/// `all` cut into each key's list, `start` giving where each starts.
+fn lists_of<'a, T>(start: &[usize], all: &'a mut [T]) -> Vec<&'a mut [T]> {
+    let mut rest = all;
+    let mut lists = Vec::with_capacity(start.len().saturating_sub(1));
+    for at in start.windows(2) {
+        let (list, tail) = rest.split_at_mut(at[1] - at[0]);
+        lists.push(list);
+        rest = tail;
+    }
+    lists
+}
+
+/// Links gathered by the refinement's tasks, in parts of [`PART`] links (the last part may
+/// hold fewer): a task's full parts are joined to another's without a copy and read in place
+/// by the lists built from them, so that the build never holds a kind of link twice, and a
+/// part's spare capacity is at most its own size.
+#[derive(Clone, Debug)]
+pub(crate) struct Gathered<T>(Vec<Vec<T>>);
+
+/// The links of a full part of [`Gathered`].
+const PART: usize = 1 << 16;
+
+impl<T> Default for Gathered<T> {
+    fn default() -> Gathered<T> {
+        Gathered(Vec::new())
+    }
+}
+
+impl<T> From<Vec<T>> for Gathered<T> {
+    fn from(links: Vec<T>) -> Gathered<T> {
+        Gathered(vec![links])
+    }
+}
+
+impl<T> Gathered<T> {
+    pub fn push(&mut self, link: T) {
+        match self.0.last_mut() {
+            Some(last) if last.len() < PART => last.push(link),
+            _ => self.0.push(vec![link]),
+        }
+    }
+
+    /// The last part, taken out when it is not full.
+    fn partial(&mut self) -> Option<Vec<T>> {
+        if self.0.last().is_some_and(|last| last.len() < PART) { self.0.pop() } else { None }
+    }
+
+    /// Moves `other`'s full parts after these without copying them, then the links of both
+    /// last parts, when not full.
+    pub fn append(&mut self, other: &mut Gathered<T>) {
+        let (mine, theirs) = (self.partial(), other.partial());
+        self.0.append(&mut other.0);
+        for part in [mine, theirs].into_iter().flatten() {
+            for link in part {
+                self.push(link);
+            }
+        }
+    }
+
+    /// Puts `front`'s links before these.
+    pub fn prepend(&mut self, mut front: Gathered<T>) {
+        front.0.append(&mut self.0);
+        self.0 = front.0;
+    }
+
+    pub fn len(&self) -> usize {
+        self.0.iter().map(Vec::len).sum()
+    }
+
+    pub fn iter(&self) -> impl Iterator<Item = &T> {
+        self.0.iter().flatten()
+    }
+
+    #[cfg(test)]
+    pub fn is_empty(&self) -> bool {
+        self.0.iter().all(Vec::is_empty)
+    }
+}
+
+impl<T: Sync> Gathered<T> {
+    /// The links, on rayon's threads.
+    pub fn par_iter(&self) -> impl ParallelIterator<Item = &T> {
+        self.0.par_iter().flat_map_iter(|part| part.iter())
+    }
+}
 
 /// Where each key's list starts, from the lists' lengths: `counts.len() + 1` offsets.
 fn offsets(counts: Vec<AtomicU32>) -> Vec<usize> {
@@ -343,8 +423,8 @@ pub(crate) type Transfer = f32;
 /// The link lists of an operator and its closure weights.
 pub(super) struct Lists {
     pub(super) far: FarLists,
-    pub(super) near: Adjacency<Transfer>,
-    pub(super) pairs: Adjacency<Transfer>,
+    pub(super) near: Adjacency,
+    pub(super) pairs: Adjacency,
     pub(super) weights: Vec<Real>,
 }
 
@@ -372,7 +452,7 @@ mod tests {
     fn each_list_holds_every_link_of_its_key_in_order_of_the_other_end_whatever_the_input_order() {
         let len = 60;
         let mut scrambled = links(len);
-        let adjacency = Adjacency::new(len as usize, &mut scrambled.clone(), |&l| l);
+        let adjacency = Adjacency::new(len as usize, &scrambled.clone().into(), |&l| l);
         for k in 0..len {
             let mut expected: Vec<(u32, f32)> = scrambled
                 .iter()
@@ -385,27 +465,30 @@ mod tests {
         }
         assert_eq!(adjacency.len(), scrambled.len());
         assert_eq!(adjacency.ends().count(), scrambled.len());
-        // The same lists from the links in another order.
+        // The same lists from the links in another order, gathered in two parts.
         scrambled.reverse();
-        let again = Adjacency::new(len as usize, &mut scrambled, |&l| l);
+        let tail = scrambled.split_off(scrambled.len() / 3);
+        let mut parts = Gathered::from(scrambled);
+        parts.append(&mut Gathered::from(tail));
+        let again = Adjacency::new(len as usize, &parts, |&l| l);
         assert_eq!(
             (again.start, again.other, again.lower_start, again.lower),
             (adjacency.start.clone(), adjacency.other.clone(), adjacency.lower_start.clone(), adjacency.lower.clone())
         );
         assert_eq!(again.value, adjacency.value);
         // Each link is held once with its value: 12 bytes, not 16.
-        assert_eq!(adjacency.entry_bytes(), 12 * scrambled.len());
+        assert_eq!(adjacency.entry_bytes(), 12 * parts.len());
     }
 
     #[test]
     fn lists_with_a_lower_end_a_repeat_or_an_end_out_of_range_are_refused() {
-        let adjacency = Adjacency::new(5, &mut [(0, 3, 1.0f32), (1, 2, 2.0), (4, 1, 3.0)], |&l| l);
+        let adjacency = Adjacency::new(5, &vec![(0, 3, 1.0), (1, 2, 2.0), (4, 1, 3.0)].into(), |&l| l);
         let (start, other) = (adjacency.start.clone(), adjacency.other.clone());
-        assert!(Adjacency::<f32>::is_ordered(5, 3, &start, &other));
-        assert!(!Adjacency::<f32>::is_ordered(4, 3, &start[..4], &other), "an end out of range");
+        assert!(Adjacency::is_ordered(5, 3, &start, &other));
+        assert!(!Adjacency::is_ordered(4, 3, &start[..4], &other), "an end out of range");
         // Key 1's list is [2, 4]: a lower end, a repeat, an end beyond the keys.
         for bad in [[3, 0, 4], [3, 2, 2], [3, 2, 5]] {
-            assert!(!Adjacency::<f32>::is_ordered(5, 3, &start, &bad), "{bad:?}");
+            assert!(!Adjacency::is_ordered(5, 3, &start, &bad), "{bad:?}");
         }
     }
 
@@ -419,7 +502,7 @@ mod tests {
                 .enumerate()
                 .map(|(e, &(a, b, _))| (a, b, [(e % distinct) as u16, (e % distinct) as u16]))
                 .collect();
-            let lists = FarLists::new(len as usize, &scrambled, |&l| l);
+            let lists = FarLists::new(len as usize, &scrambled.clone().into(), |&l| l);
             for k in 0..len {
                 let mut expected: Vec<(u32, [u16; 2])> = scrambled
                     .iter()

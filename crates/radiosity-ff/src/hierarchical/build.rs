@@ -276,7 +276,7 @@ impl HierarchicalColumns {
                 ..refiner
             };
             let Links { far, near, pairs, rays, occluded, clear, .. } = std::mem::take(&mut links);
-            let mut next = again.refine_again(&far.into_vec());
+            let mut next = again.refine_again(&far.iter().copied().collect::<Vec<_>>());
             next.near.prepend(near);
             next.pairs.prepend(pairs);
             (next.rays, next.occluded, next.clear) = (next.rays + rays, next.occluded + occluded, next.clear + clear);
@@ -311,9 +311,12 @@ impl HierarchicalColumns {
         let tree = tree.held();
         let Links { far: far_links, near: near_links, pairs: pair_links, rays, occluded, clear, zeroth, .. } = links;
         let counts = (far_links.len(), near_links.len(), pair_links.len());
-        let far = FarLists::new(tree.nodes.len(), &far_links.into_vec(), |l| (l.a, l.b, [l.clear, l.count]));
-        let near = Adjacency::new(scene.len(), &mut near_links.into_vec(), |l| (l.i, l.j, l.transfer as Transfer));
-        let pairs = Adjacency::new(scene.len(), &mut pair_links.into_vec(), |l| (l.i, l.j, l.transfer as Transfer));
+        let far = FarLists::new(tree.nodes.len(), &far_links, |l| (l.a, l.b, [l.clear, l.count]));
+        drop(far_links);
+        let near = Adjacency::new(scene.len(), &near_links, |l| (l.i, l.j, l.transfer as Transfer));
+        drop(near_links);
+        let pairs = Adjacency::new(scene.len(), &pair_links, |l| (l.i, l.j, l.transfer as Transfer));
+        drop(pair_links);
         let held = HierarchicalColumns::held_by(&tree, [far.bytes(), near.bytes(), pairs.bytes()], scene.len());
         let figures = HierarchyFigures {
             nodes: tree.nodes.len(),

@@ -79,6 +79,7 @@
 //! "A unified hierarchical algorithm for global illumination with scattering volumes and object
 //! clusters", IEEE TVCG 1(3)).
 
+use super::adjacency::Gathered;
 use super::brightness::Brightness;
 use super::shaft::{ROOT, Search, Shaft, ShaftTree, lowest_along};
 use super::tree::ClusterTree;
@@ -157,69 +158,6 @@ pub(crate) struct NearLink {
     pub j: u32,
     /// `A_i F_ij = A_j F_ji`.
     pub transfer: Real,
-}
-
-/// Links gathered by the refinement's tasks: each task's in a vector of their own, joined
-/// without a copy, so that the build never holds a kind of link twice before its lists are
-/// built ([`Gathered::into_vec`] frees each task's vector as it copies it).
-#[derive(Clone, Debug)]
-pub(crate) struct Gathered<T>(Vec<Vec<T>>);
-
-impl<T> Default for Gathered<T> {
-    fn default() -> Gathered<T> {
-        Gathered(Vec::new())
-    }
-}
-
-impl<T> Gathered<T> {
-    pub fn push(&mut self, link: T) {
-        match self.0.last_mut() {
-            Some(last) => last.push(link),
-            None => self.0.push(vec![link]),
-        }
-    }
-
-    /// Moves `other`'s links after these, without copying them.
-    pub fn append(&mut self, other: &mut Gathered<T>) {
-        self.0.append(&mut other.0);
-    }
-
-    /// Puts `front`'s links before these.
-    pub fn prepend(&mut self, mut front: Gathered<T>) {
-        front.0.append(&mut self.0);
-        self.0 = front.0;
-    }
-
-    pub fn len(&self) -> usize {
-        self.0.iter().map(Vec::len).sum()
-    }
-
-    #[cfg(test)]
-    pub fn is_empty(&self) -> bool {
-        self.0.iter().all(Vec::is_empty)
-    }
-
-    #[cfg(test)]
-    pub fn iter(&self) -> impl Iterator<Item = &T> {
-        self.0.iter().flatten()
-    }
-}
-
-impl<T: Copy + Default + Send + Sync> Gathered<T> {
-    /// The links in one vector of their exact length, copied on every thread, each task's
-    /// vector freed once copied.
-    pub fn into_vec(self) -> Vec<T> {
-        let mut all = vec![T::default(); self.len()];
-        let mut rest = all.as_mut_slice();
-        let mut places = Vec::with_capacity(self.0.len());
-        for part in &self.0 {
-            let (place, tail) = rest.split_at_mut(part.len());
-            places.push(place);
-            rest = tail;
-        }
-        places.into_par_iter().zip(self.0).for_each(|(place, part)| place.copy_from_slice(&part));
-        all
-    }
 }
 
 /// The links of a scene, and what building them cost.
@@ -943,10 +881,13 @@ mod tests {
             let x: Vec<Real> = (0..n).map(|i| 0.1 + ((i * 7919) % 101) as Real / 101.0).collect();
             assert!(!links.near.is_empty() && !links.pairs.is_empty());
             for list in [&links.near, &links.pairs] {
-                let wide = Adjacency::new(n, &mut list.clone().into_vec(), |l| (l.i, l.j, l.transfer));
-                let narrow = Adjacency::new(n, &mut list.clone().into_vec(), |l| (l.i, l.j, l.transfer as Transfer));
-                for i in 0..n {
-                    let exact: Real = wide.of(i).map(|(j, t)| t * x[j as usize]).sum();
+                let narrow = Adjacency::new(n, list, |l| (l.i, l.j, l.transfer as Transfer));
+                let mut exact = vec![0.0; n];
+                for l in list.iter() {
+                    exact[l.i as usize] += l.transfer * x[l.j as usize];
+                    exact[l.j as usize] += l.transfer * x[l.i as usize];
+                }
+                for (i, &exact) in exact.iter().enumerate() {
                     let rounded: Real = narrow.of(i).map(|(j, t)| Real::from(t) * x[j as usize]).sum();
                     assert!((rounded - exact).abs() <= 1e-6 * exact, "row {i}: {rounded} against {exact}");
                 }

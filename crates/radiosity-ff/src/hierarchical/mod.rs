@@ -65,7 +65,7 @@ mod share;
 mod stored;
 mod tree;
 
-use adjacency::{Adjacency, FarLists, Transfer};
+use adjacency::{Adjacency, FarLists};
 pub use brightness::Oracle;
 pub use build::{HierarchyFigures, HierarchyLink};
 pub use distribution::{Distribution, RankFigures};
@@ -85,9 +85,9 @@ pub struct HierarchicalColumns {
     far: FarLists,
     /// Near links by patch, each held once: the other patches and the links' `A_p F_pq`, the
     /// analytic backend's, rounded to `f32` ([`Transfer`]).
-    near: Adjacency<Transfer>,
+    near: Adjacency,
     /// Far links between two patches, like `near`, with the far kernel's `A_p F_pq`.
-    pairs: Adjacency<Transfer>,
+    pairs: Adjacency,
     /// Each patch's closure weight: its far links' and far pairs' entries are weighed by the
     /// weights of both their patches (`closure`).
     weights: Vec<Real>,

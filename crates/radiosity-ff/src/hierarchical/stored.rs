@@ -113,9 +113,8 @@ impl HierarchicalColumns {
         let mut reader = Body { bytes: body };
         let far = reader.far(tree.nodes.len(), header.far_entries);
         let real = |b: &[u8]| Real::from_le_bytes(b.try_into().expect("slices of 8 bytes"));
-        let transfer = |b: &[u8]| Transfer::from_le_bytes(b.try_into().expect("slices of 4 bytes"));
-        let near = reader.adjacency(scene.len(), header.near_entries, size_of::<Transfer>(), transfer);
-        let pairs = reader.adjacency(scene.len(), header.pair_entries, size_of::<Transfer>(), transfer);
+        let near = reader.adjacency(scene.len(), header.near_entries);
+        let pairs = reader.adjacency(scene.len(), header.pair_entries);
         let weights: Option<Vec<Real>> = reader.take(scene.len() * 8).map(|b| b.chunks_exact(8).map(real).collect());
         let (Some(far), Some(near), Some(pairs), Some(weights)) = (far, near, pairs, weights) else {
             return Err(refuse("its link lists are inconsistent with their sizes".into()));
@@ -157,18 +156,12 @@ impl Body<'_> {
             .collect();
         let ordered = links.iter().all(|&(a, b, _)| a < b && (b as usize) < keys)
             && links.windows(2).all(|w| (w[0].0, w[0].1) < (w[1].0, w[1].1));
-        ordered.then(|| FarLists::new(keys, &links, |&l| l))
+        ordered.then(|| FarLists::new(keys, &links.into(), |&l| l))
     }
 
-    /// Lists of `keys` keys and `entries` links of `width` bytes each, or `None` unless they
+    /// Lists of `keys` keys and `entries` links, each value a [`Transfer`], or `None` unless they
     /// are lists [`Adjacency::from_higher`] takes ([`Adjacency::is_ordered`]).
-    fn adjacency<T: Copy + Default + Send + Sync>(
-        &mut self,
-        keys: usize,
-        entries: u64,
-        width: usize,
-        value: impl Fn(&[u8]) -> T,
-    ) -> Option<Adjacency<T>> {
+    fn adjacency(&mut self, keys: usize, entries: u64) -> Option<Adjacency> {
         let entries = usize::try_from(entries).ok()?;
         let start: Vec<usize> = self
             .take((keys + 1).checked_mul(8)?)?
@@ -180,10 +173,12 @@ impl Body<'_> {
             .chunks_exact(4)
             .map(|c| u32::from_le_bytes(c.try_into().expect("chunks of 4 bytes")))
             .collect();
-        if !Adjacency::<T>::is_ordered(keys, entries, &start, &other) {
+        if !Adjacency::is_ordered(keys, entries, &start, &other) {
             return None;
         }
-        let value = self.take(entries.checked_mul(width)?)?.chunks_exact(width).map(value).collect();
+        let width = size_of::<Transfer>();
+        let transfer = |b: &[u8]| Transfer::from_le_bytes(b.try_into().expect("slices of 4 bytes"));
+        let value = self.take(entries.checked_mul(width)?)?.chunks_exact(width).map(transfer).collect();
         Some(Adjacency::from_higher(start, other, value))
     }
 }

@@ -300,6 +300,34 @@ fn the_cache_keeps_the_hierarchical_operator() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// Keeps the warnings it is given.
+#[derive(Default)]
+struct Warnings(std::sync::Mutex<Vec<String>>);
+
+impl radiosity_eval::Progress for Warnings {
+    fn warn(&self, message: &str) {
+        self.0.lock().unwrap().push(message.to_string());
+    }
+}
+
+#[test]
+fn a_cache_whose_directory_cannot_be_made_is_said_once_and_the_operator_still_built() {
+    // A file where the cache's directory would be: nothing can be written under it, and the
+    // lab says so in one warning, before turning the operator into bytes.
+    let file = std::env::temp_dir().join(format!("radiosity-lab-not-a-dir-{}", std::process::id()));
+    std::fs::write(&file, b"a file").unwrap();
+    let scene = PreparedScene::load("cornell:res=4").unwrap();
+    let options =
+        LabOptions::default().with_cache(Some(Cache::at(file.join("cache")))).with_reference(ReferenceKind::None);
+    let warnings = Warnings::default();
+    let lab = Lab::new(&scene, &BackendSpec::parse("hierarchical:eps=5e-2").unwrap(), options, &warnings).unwrap();
+    assert!(!lab.backend_figures().unwrap().loaded);
+    let warnings = warnings.0.into_inner().unwrap();
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(warnings[0].starts_with("the hierarchical backend was not cached: cannot create"), "{}", warnings[0]);
+    std::fs::remove_file(&file).unwrap();
+}
+
 #[test]
 fn memory_budgets_and_kinds_parse_or_say_why_not() {
     assert_eq!(parse_bytes("6G").unwrap(), 6 << 30);

@@ -126,10 +126,13 @@ fn obtain_kept<'p>(
         return Ok(built);
     }
     let built = spec.build_observed(prepared.into(), &Observed(progress))?;
-    if let Some(bytes) = built.persist(&key) {
-        if let Err(e) = cache.write(kind, &key, &bytes) {
-            progress.warn(&format!("the {} backend was not cached: {e}", spec.name()));
-        }
+    // Turned into bytes only where they can be written: at a million patches they are 0.7 GB.
+    let written = cache.prepare().and_then(|()| match built.persist(&key) {
+        Some(bytes) => cache.write(kind, &key, &bytes).map(|_| ()),
+        None => Ok(()),
+    });
+    if let Err(e) = written {
+        progress.warn(&format!("the {} backend was not cached: {e}", spec.name()));
     }
     Ok(built)
 }

@@ -67,15 +67,24 @@ impl Cache {
         let path = self.path(kind, key);
         match std::fs::read(&path) {
             Ok(bytes) => Lookup::Hit(bytes),
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Lookup::Miss,
+            // No directory (or a file where it would be) holds no entry: a write says why.
+            Err(e) if matches!(e.kind(), std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory) => {
+                Lookup::Miss
+            }
             Err(e) => Lookup::Unreadable(format!("cannot read cache file {}: {e}", path.display())),
         }
+    }
+
+    /// Creates the directory when it is missing, or says why it cannot: before a caller turns
+    /// what it would keep into bytes, which may be as large as what it holds.
+    pub fn prepare(&self) -> Result<(), String> {
+        std::fs::create_dir_all(&self.dir).map_err(|e| format!("cannot create {}: {e}", self.dir.display()))
     }
 
     /// Writes the entry `kind` with `key` atomically; returns its path, or why it failed.
     pub fn write(&self, kind: &str, key: &str, bytes: &[u8]) -> Result<PathBuf, String> {
         let path = self.path(kind, key);
-        std::fs::create_dir_all(&self.dir).map_err(|e| format!("cannot create {}: {e}", self.dir.display()))?;
+        self.prepare()?;
         let tmp = path.with_extension(format!("tmp{}", std::process::id()));
         std::fs::write(&tmp, bytes).map_err(|e| format!("cannot write {}: {e}", tmp.display()))?;
         std::fs::rename(&tmp, &path)

@@ -20,7 +20,7 @@
 use radiosity_core::Real;
 use rayon::prelude::*;
 use std::collections::BTreeSet;
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::atomic::{AtomicU8, AtomicU16, AtomicU32, Ordering};
 
 /// Links by the node or patch at either end: for each of `len` keys, the other ends and the
 /// links' values, ordered by the other end (so that a product reads its vector in order).
@@ -47,7 +47,7 @@ impl Adjacency {
         links: &Gathered<L>,
         ends: impl Fn(&L) -> (u32, u32, Transfer) + Sync,
     ) -> Adjacency {
-        let (start, other, value) = scattered(len, links, false, |l| {
+        let (start, other, value) = scattered::<_, AtomicU32>(len, links, false, |l| {
             let (a, b, v) = ends(l);
             (a, b, v.to_bits())
         });
@@ -208,17 +208,19 @@ impl FarLists {
             .collect();
         // A tally is `[c, c]` for c up to `rays`, or `[c, probe]`, each with or without the
         // zeroth-order bit: at most 2 · (4096 + 1024) of them.
-        let code = |t: [u16; 2]| tallies.binary_search(&t).expect("every tally is in the table") as u32;
-        let (start, other, codes) = scattered(len, links, true, |l| {
-            let (a, b, t) = ends(l);
-            (a, b, code(t))
-        });
-        let codes = if tallies.len() <= 256 {
-            Codes::Narrow(codes.into_par_iter().map(|c| c as u8).collect())
+        let code = |t: [u16; 2]| tallies.binary_search(&t).expect("every tally is in the table");
+        let (start, other, codes) = if tallies.len() <= 256 {
+            let (start, other, codes) = scattered::<_, AtomicU8>(len, links, true, |l| {
+                let (a, b, t) = ends(l);
+                (a, b, code(t) as u8)
+            });
+            (start, other, Codes::Narrow(codes))
         } else {
-            Codes::Wide(
-                codes.into_par_iter().map(|c| u16::try_from(c).expect("at most 65,536 distinct tallies")).collect(),
-            )
+            let (start, other, codes) = scattered::<_, AtomicU16>(len, links, true, |l| {
+                let (a, b, t) = ends(l);
+                (a, b, u16::try_from(code(t)).expect("at most 65,536 distinct tallies"))
+            });
+            (start, other, Codes::Wide(codes))
         };
         FarLists { start, other, codes, tallies }
     }
@@ -268,13 +270,13 @@ impl FarLists {
 /// sorted by its other ends: the same lists whatever the order of `links` and the number of
 /// threads (a pair is linked once). Returns where each key's list starts, the other ends and
 /// the payloads.
-fn scattered<L: Sync>(
+fn scattered<L: Sync, S: Slot>(
     len: usize,
     links: &Gathered<L>,
     mirrored: bool,
-    ends: impl Fn(&L) -> (u32, u32, u32) + Sync,
-) -> (Vec<usize>, Vec<u32>, Vec<u32>) {
-    let each = |l: &L, f: &mut dyn FnMut(u32, u32, u32)| {
+    ends: impl Fn(&L) -> (u32, u32, S::Value) + Sync,
+) -> (Vec<usize>, Vec<u32>, Vec<S::Value>) {
+    let each = |l: &L, f: &mut dyn FnMut(u32, u32, S::Value)| {
         let (a, b, x) = ends(l);
         if mirrored {
             f(a, b, x);
@@ -293,29 +295,54 @@ fn scattered<L: Sync>(
     let next: Vec<AtomicU32> = start[..len].par_iter().map(|&s| AtomicU32::new(s as u32)).collect();
     let entries = start[len];
     let other: Vec<AtomicU32> = (0..entries).into_par_iter().map(|_| AtomicU32::new(0)).collect();
-    let payload: Vec<AtomicU32> = (0..entries).into_par_iter().map(|_| AtomicU32::new(0)).collect();
+    let payload: Vec<S> = (0..entries).into_par_iter().map(|_| S::default()).collect();
     links.par_iter().for_each(|l| {
         each(l, &mut |key, o, x| {
             let slot = next[key as usize].fetch_add(1, Ordering::Relaxed) as usize;
             other[slot].store(o, Ordering::Relaxed);
-            payload[slot].store(x, Ordering::Relaxed);
+            payload[slot].put(x);
         })
     });
     drop(next);
     let mut other: Vec<u32> = other.into_iter().map(AtomicU32::into_inner).collect();
-    let mut payload: Vec<u32> = payload.into_iter().map(AtomicU32::into_inner).collect();
+    let mut payload: Vec<S::Value> = payload.into_iter().map(S::value).collect();
     // The slots were claimed in any order: each list sorted by itself.
     let lists = lists_of(&start, &mut other).into_iter().zip(lists_of(&start, &mut payload));
     lists.collect::<Vec<_>>().into_par_iter().for_each_init(Vec::new, |entries, (o, x)| {
         entries.clear();
         entries.extend(o.iter().copied().zip(x.iter().copied()));
-        entries.sort_unstable_by_key(|e: &(u32, u32)| e.0);
+        entries.sort_unstable_by_key(|e: &(u32, S::Value)| e.0);
         for (k, &(q, y)) in entries.iter().enumerate() {
             (o[k], x[k]) = (q, y);
         }
     });
     (start, other, payload)
 }
+
+/// An atomic slot of a list's payload, as wide as its value, so that the lists' build holds
+/// no more than the lists.
+trait Slot: Default + Send + Sync {
+    type Value: Copy + Send + Sync;
+    fn put(&self, value: Self::Value);
+    fn value(self) -> Self::Value;
+}
+
+macro_rules! slot {
+    ($atomic:ty, $value:ty) => {
+        impl Slot for $atomic {
+            type Value = $value;
+            fn put(&self, value: $value) {
+                self.store(value, Ordering::Relaxed);
+            }
+            fn value(self) -> $value {
+                self.into_inner()
+            }
+        }
+    };
+}
+slot!(AtomicU8, u8);
+slot!(AtomicU16, u16);
+slot!(AtomicU32, u32);
 
 /// `all` cut into each key's list, `start` giving where each starts.
 fn lists_of<'a, T>(start: &[usize], all: &'a mut [T]) -> Vec<&'a mut [T]> {

@@ -148,9 +148,7 @@ impl HierarchicalColumns {
     pub(super) fn estimated_product(&self, x: &[Real], channels: usize, weights: &[Real], out: &mut [Real]) {
         let k = channels;
         let moments = self.gathered_moments(x, k, weights);
-        let mut forms = vec![Form::default(); self.tree.nodes.len() * k];
-        forms.par_chunks_mut(k).enumerate().for_each(|(node, forms)| self.receive_far(node, &moments, None, forms));
-        self.pushed_down(&mut forms, k, out);
+        self.received_down(&moments, k, out);
         out.par_chunks_mut(k).enumerate().for_each(|(i, out)| {
             for (j, transfer) in self.pairs.of(i) {
                 let transfer = Real::from(transfer);
@@ -221,6 +219,73 @@ impl HierarchicalColumns {
             // From this node to the other end.
             let span = Span::new(self.tree.nodes[node].centre, self.tree.nodes[other as usize].centre, clear, count);
             Form::receive(forms, &moments[other as usize * k..(other as usize + 1) * k], &span);
+        }
+    }
+
+    /// What every patch receives through the far links from the senders' `moments` (nodes ×
+    /// `k` channels), into `out`: each node's forms received and pushed down the tree in one
+    /// pass, subtrees on rayon's threads, so that only the forms of the nodes above the one
+    /// at work are held, not every node's (96 bytes a node and a channel). Each node's form
+    /// is its links' in their fixed order plus its parent's shifted to its centre, as
+    /// [`Self::pushed_down`] adds them: the same bits.
+    fn received_down(&self, moments: &[Moments], k: usize, out: &mut [Real]) {
+        let mut values = vec![0.0; out.len()];
+        if !self.tree.nodes.is_empty() {
+            self.receive_down(0, None, moments, k, &mut values);
+        }
+        let nodes = &self.tree.nodes;
+        out.par_chunks_mut(k).enumerate().for_each(|(p, out)| {
+            let at = nodes[self.tree.leaf[p] as usize].first as usize * k;
+            out.copy_from_slice(&values[at..at + k]);
+        });
+    }
+
+    /// [`Self::received_down`] over `node`'s subtree, given its parent's forms and centre,
+    /// writing its leaves' values into `values` (its patches × `k`, in tree order).
+    fn receive_down(
+        &self,
+        node: usize,
+        parent: Option<(&[Form], Vec3)>,
+        moments: &[Moments],
+        k: usize,
+        values: &mut [Real],
+    ) {
+        let (mut few, mut many) = ([Form::default(); 3], Vec::new());
+        let here: &mut [Form] = if k <= few.len() {
+            &mut few[..k]
+        } else {
+            many.resize(k, Form::default());
+            &mut many
+        };
+        self.receive_far(node, moments, None, here);
+        let centre = self.tree.nodes[node].centre;
+        if let Some((above, at)) = parent {
+            for (form, above) in here.iter_mut().zip(above) {
+                form.add(&above.shifted(centre - at));
+            }
+        }
+        match self.tree.children(node) {
+            None => {
+                let p = self.tree.order[self.tree.nodes[node].first as usize] as usize;
+                let offset = self.centroids[p] - centre;
+                for ch in 0..k {
+                    values[ch] = here[ch].at(self.normals[p], offset);
+                }
+            }
+            Some([a, b]) => {
+                let (a, b) = (a as usize, b as usize);
+                let here = Some((&*here, centre));
+                let (values_a, values_b) = values.split_at_mut(self.tree.nodes[a].count as usize * k);
+                if self.tree.nodes[node].count as usize > PARALLEL_PATCHES {
+                    rayon::join(
+                        || self.receive_down(a, here, moments, k, values_a),
+                        || self.receive_down(b, here, moments, k, values_b),
+                    );
+                } else {
+                    self.receive_down(a, here, moments, k, values_a);
+                    self.receive_down(b, here, moments, k, values_b);
+                }
+            }
         }
     }
 
@@ -364,5 +429,32 @@ impl Form {
 
     pub(super) fn at(&self, n: Vec3, a: Vec3) -> Real {
         n.dot(self.v) + n.x * self.w[0].dot(a) + n.y * self.w[1].dot(a) + n.z * self.w[2].dot(a)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hierarchical::params::HierarchicalParams;
+    use radiosity_geom::PreparedScene;
+
+    #[test]
+    fn forms_received_on_the_way_down_are_those_of_every_node_pushed_down_to_the_bit() {
+        let p = PreparedScene::load("cornell:res=8").unwrap();
+        let params = HierarchicalParams { eps: 0.02, ..HierarchicalParams::default() };
+        let h = HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, params);
+        let n = p.scene().len();
+        for k in [1, 3, 4] {
+            let x: Vec<Real> = (0..n * k).map(|i| 0.1 + ((i * 7919) % 101) as Real / 101.0).collect();
+            let moments = h.gathered_moments(&x, k, &h.weights);
+            let mut forms = vec![Form::default(); h.tree.nodes.len() * k];
+            forms.par_chunks_mut(k).enumerate().for_each(|(node, forms)| h.receive_far(node, &moments, None, forms));
+            let (mut every, mut fused) = (vec![0.0; n * k], vec![0.0; n * k]);
+            h.pushed_down(&mut forms, k, &mut every);
+            h.received_down(&moments, k, &mut fused);
+            assert!(every.iter().any(|&v| v > 0.0));
+            let bits = |v: &[Real]| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&every), bits(&fused), "{k} channels");
+        }
     }
 }

@@ -14,8 +14,9 @@
 //! 256 distinct tallies): 10 bytes a link. Its direction, length and `g` are worked out again
 //! from the nodes' centres wherever it is used, to the same bits.
 //!
-//! Lists are built on every thread: each end's place claimed by an atomic count, each list then
-//! sorted by itself, so the lists are the same whatever the number of threads.
+//! Lists are built on every thread from the refinement's links as they were gathered, in
+//! parts ([`Gathered`]): each end's place claimed by an atomic count, each list then sorted by
+//! itself, so the lists are the same whatever the number of threads.
 
 use radiosity_core::Real;
 use rayon::prelude::*;

@@ -21,7 +21,7 @@
 use radiosity_core::Real;
 use rayon::prelude::*;
 use std::collections::BTreeSet;
-use std::sync::atomic::{AtomicU8, AtomicU16, AtomicU32, Ordering};
+use std::sync::atomic::{AtomicU8, AtomicU16, AtomicU32, AtomicUsize, Ordering};
 
 /// Links by the node or patch at either end: for each of `len` keys, the other ends and the
 /// links' values, ordered by the other end (so that a product reads its vector in order).
@@ -65,12 +65,12 @@ impl Adjacency {
             counts[o as usize].fetch_add(1, Ordering::Relaxed);
         });
         let lower_start = offsets(counts);
-        let next: Vec<AtomicU32> = lower_start[..len].par_iter().map(|&s| AtomicU32::new(s as u32)).collect();
+        let next: Vec<AtomicUsize> = lower_start[..len].par_iter().map(|&s| AtomicUsize::new(s)).collect();
         let slots: Vec<AtomicU32> = (0..other.len()).into_par_iter().map(|_| AtomicU32::new(0)).collect();
         start.par_windows(2).enumerate().for_each(|(k, at)| {
             for &o in &other[at[0]..at[1]] {
                 let slot = next[o as usize].fetch_add(1, Ordering::Relaxed);
-                slots[slot as usize].store(k as u32, Ordering::Relaxed);
+                slots[slot].store(k as u32, Ordering::Relaxed);
             }
         });
         let mut lower: Vec<u32> = slots.into_iter().map(AtomicU32::into_inner).collect();
@@ -293,13 +293,13 @@ fn scattered<L: Sync, S: Slot>(
         })
     });
     let start = offsets(counts);
-    let next: Vec<AtomicU32> = start[..len].par_iter().map(|&s| AtomicU32::new(s as u32)).collect();
+    let next: Vec<AtomicUsize> = start[..len].par_iter().map(|&s| AtomicUsize::new(s)).collect();
     let entries = start[len];
     let other: Vec<AtomicU32> = (0..entries).into_par_iter().map(|_| AtomicU32::new(0)).collect();
     let payload: Vec<S> = (0..entries).into_par_iter().map(|_| S::default()).collect();
     links.par_iter().for_each(|l| {
         each(l, &mut |key, o, x| {
-            let slot = next[key as usize].fetch_add(1, Ordering::Relaxed) as usize;
+            let slot = next[key as usize].fetch_add(1, Ordering::Relaxed);
             other[slot].store(o, Ordering::Relaxed);
             payload[slot].put(x);
         })

@@ -233,11 +233,7 @@ impl HierarchicalColumns {
         if !self.tree.nodes.is_empty() {
             self.receive_down(0, None, moments, k, &mut values);
         }
-        let nodes = &self.tree.nodes;
-        out.par_chunks_mut(k).enumerate().for_each(|(p, out)| {
-            let at = nodes[self.tree.leaf[p] as usize].first as usize * k;
-            out.copy_from_slice(&values[at..at + k]);
-        });
+        self.put_in_patch_order(&values, k, out);
     }
 
     /// [`Self::received_down`] over `node`'s subtree, given its parent's forms and centre,
@@ -289,6 +285,15 @@ impl HierarchicalColumns {
         }
     }
 
+    /// `values` (patches × `k` in tree order) into `out` (in patch order).
+    fn put_in_patch_order(&self, values: &[Real], k: usize, out: &mut [Real]) {
+        let nodes = &self.tree.nodes;
+        out.par_chunks_mut(k).enumerate().for_each(|(p, out)| {
+            let at = nodes[self.tree.leaf[p] as usize].first as usize * k;
+            out.copy_from_slice(&values[at..at + k]);
+        });
+    }
+
     /// Pushes `forms` (nodes × `k` channels) down the tree, a parent's shifted into its
     /// children's, subtrees on rayon's threads, and writes each leaf's form evaluated at its
     /// patch into `out`.
@@ -298,11 +303,7 @@ impl HierarchicalColumns {
         if !forms.is_empty() {
             self.push_down(0, forms, k, &mut values);
         }
-        let nodes = &self.tree.nodes;
-        out.par_chunks_mut(k).enumerate().for_each(|(p, out)| {
-            let at = nodes[self.tree.leaf[p] as usize].first as usize * k;
-            out.copy_from_slice(&values[at..at + k]);
-        });
+        self.put_in_patch_order(&values, k, out);
     }
 
     /// Pushes the forms of `node`'s subtree (`forms`, its nodes × `k` in pre-order from

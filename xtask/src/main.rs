@@ -59,6 +59,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    radiosity_eval::return_freed_blocks();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => return argument_error(e),

@@ -99,6 +99,7 @@ pub use live::feed::{FRAME_INTERVAL, Feed, FeedWatch, Frame, KEPT_FACTOR, KEPT_M
 pub use live::page::write_page;
 pub use live::scene_view::{LiveHeader, LiveScene, PROBE_SIZE};
 pub use live::server::Server;
+pub use memory::return_freed_blocks;
 pub use phases::{Phase, Phases, ReferenceMark};
 pub use progress::{NoProgress, Progress};
 pub use radiosity_core::Clock;

@@ -30,6 +30,7 @@ use pyo3::prelude::*;
 /// The extension module, imported by `radiosity/__init__.py`.
 #[pymodule]
 fn _radiosity(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    radiosity_eval::return_freed_blocks();
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(scene::load, m)?)?;
     m.add_function(wrap_pyfunction!(solve::solve, m)?)?;

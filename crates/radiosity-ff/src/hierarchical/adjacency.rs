@@ -43,9 +43,9 @@ impl Adjacency {
     /// The lists of `links` `(a, b, value)`, each in `a`'s list and in `b`'s. A pair is linked
     /// once, so the order within a list is total and the lists are the same whatever the
     /// order of `links` and the number of threads.
-    pub(super) fn new<L: Sync>(
+    pub(super) fn new<L: Send + Sync>(
         len: usize,
-        links: &Gathered<L>,
+        links: Gathered<L>,
         ends: impl Fn(&L) -> (u32, u32, Transfer) + Sync,
     ) -> Adjacency {
         let (start, other, value) = scattered::<_, AtomicU32>(len, links, false, |l| {
@@ -183,9 +183,9 @@ impl FarLists {
     /// The lists of `links` `(a, b, [clear, count])` over `len` nodes, each link in `a`'s list
     /// and in `b`'s. A pair is linked once, so the order within a list is total and the lists
     /// are the same whatever the order of `links` and the number of threads.
-    pub(super) fn new<L: Sync>(
+    pub(super) fn new<L: Send + Sync>(
         len: usize,
-        links: &Gathered<L>,
+        links: Gathered<L>,
         ends: impl Fn(&L) -> (u32, u32, [u16; 2]) + Sync,
     ) -> FarLists {
         // Neighbouring links mostly share a tally: the set is searched only when it changes.
@@ -271,9 +271,13 @@ impl FarLists {
 /// sorted by its other ends: the same lists whatever the order of `links` and the number of
 /// threads (a pair is linked once). Returns where each key's list starts, the other ends and
 /// the payloads.
-fn scattered<L: Sync, S: Slot>(
+///
+/// The lists' pages are zero until written, so the system gives them as they fill, and each
+/// part of `links` is freed once its links are placed: where the allocator hands freed parts
+/// back, the build holds not much more than the larger of the two, not both.
+fn scattered<L: Send + Sync, S: Slot>(
     len: usize,
-    links: &Gathered<L>,
+    links: Gathered<L>,
     mirrored: bool,
     ends: impl Fn(&L) -> (u32, u32, S::Value) + Sync,
 ) -> (Vec<usize>, Vec<u32>, Vec<S::Value>) {
@@ -286,7 +290,7 @@ fn scattered<L: Sync, S: Slot>(
             f(a.min(b), a.max(b), x);
         }
     };
-    let counts: Vec<AtomicU32> = (0..len).into_par_iter().map(|_| AtomicU32::new(0)).collect();
+    let counts: Vec<AtomicU32> = bytemuck::zeroed_vec(len);
     links.par_iter().for_each(|l| {
         each(l, &mut |key, _, _| {
             counts[key as usize].fetch_add(1, Ordering::Relaxed);
@@ -295,14 +299,16 @@ fn scattered<L: Sync, S: Slot>(
     let start = offsets(counts);
     let next: Vec<AtomicUsize> = start[..len].par_iter().map(|&s| AtomicUsize::new(s)).collect();
     let entries = start[len];
-    let other: Vec<AtomicU32> = (0..entries).into_par_iter().map(|_| AtomicU32::new(0)).collect();
-    let payload: Vec<S> = (0..entries).into_par_iter().map(|_| S::default()).collect();
-    links.par_iter().for_each(|l| {
-        each(l, &mut |key, o, x| {
-            let slot = next[key as usize].fetch_add(1, Ordering::Relaxed);
-            other[slot].store(o, Ordering::Relaxed);
-            payload[slot].put(x);
-        })
+    let other: Vec<AtomicU32> = bytemuck::zeroed_vec(entries);
+    let payload: Vec<S> = bytemuck::zeroed_vec(entries);
+    links.0.into_par_iter().for_each(|part| {
+        for l in &part {
+            each(l, &mut |key, o, x| {
+                let slot = next[key as usize].fetch_add(1, Ordering::Relaxed);
+                other[slot].store(o, Ordering::Relaxed);
+                payload[slot].put(x);
+            })
+        }
     });
     drop(next);
     let mut other: Vec<u32> = other.into_iter().map(AtomicU32::into_inner).collect();
@@ -322,7 +328,7 @@ fn scattered<L: Sync, S: Slot>(
 
 /// An atomic slot of a list's payload, as wide as its value, so that the lists' build holds
 /// no more than the lists.
-trait Slot: Default + Send + Sync {
+trait Slot: bytemuck::Zeroable + Send + Sync {
     type Value: Copy + Send + Sync;
     fn put(&self, value: Self::Value);
     fn value(self) -> Self::Value;
@@ -480,7 +486,7 @@ mod tests {
     fn each_list_holds_every_link_of_its_key_in_order_of_the_other_end_whatever_the_input_order() {
         let len = 60;
         let mut scrambled = links(len);
-        let adjacency = Adjacency::new(len as usize, &scrambled.clone().into(), |&l| l);
+        let adjacency = Adjacency::new(len as usize, scrambled.clone().into(), |&l| l);
         for k in 0..len {
             let mut expected: Vec<(u32, f32)> = scrambled
                 .iter()
@@ -498,19 +504,20 @@ mod tests {
         let tail = scrambled.split_off(scrambled.len() / 3);
         let mut parts = Gathered::from(scrambled);
         parts.append(&mut Gathered::from(tail));
-        let again = Adjacency::new(len as usize, &parts, |&l| l);
+        let scrambled_len = parts.len();
+        let again = Adjacency::new(len as usize, parts, |&l| l);
         assert_eq!(
             (again.start, again.other, again.lower_start, again.lower),
             (adjacency.start.clone(), adjacency.other.clone(), adjacency.lower_start.clone(), adjacency.lower.clone())
         );
         assert_eq!(again.value, adjacency.value);
         // Each link is held once with its value: 12 bytes, not 16.
-        assert_eq!(adjacency.entry_bytes(), 12 * parts.len());
+        assert_eq!(adjacency.entry_bytes(), 12 * scrambled_len);
     }
 
     #[test]
     fn lists_with_a_lower_end_a_repeat_or_an_end_out_of_range_are_refused() {
-        let adjacency = Adjacency::new(5, &vec![(0, 3, 1.0), (1, 2, 2.0), (4, 1, 3.0)].into(), |&l| l);
+        let adjacency = Adjacency::new(5, vec![(0, 3, 1.0), (1, 2, 2.0), (4, 1, 3.0)].into(), |&l| l);
         let (start, other) = (adjacency.start.clone(), adjacency.other.clone());
         assert!(Adjacency::is_ordered(5, 3, &start, &other));
         assert!(!Adjacency::is_ordered(4, 3, &start[..4], &other), "an end out of range");
@@ -530,7 +537,7 @@ mod tests {
                 .enumerate()
                 .map(|(e, &(a, b, _))| (a, b, [(e % distinct) as u16, (e % distinct) as u16]))
                 .collect();
-            let lists = FarLists::new(len as usize, &scrambled.clone().into(), |&l| l);
+            let lists = FarLists::new(len as usize, scrambled.clone().into(), |&l| l);
             for k in 0..len {
                 let mut expected: Vec<(u32, [u16; 2])> = scrambled
                     .iter()

@@ -305,18 +305,15 @@ impl HierarchicalColumns {
     }
 
     /// The operator of `links` over `tree`, its figures timed from `start`. Each kind of link is
-    /// dropped once its lists are built, so that the build's peak holds the links twice for
-    /// one kind at most.
+    /// freed part by part as its lists are filled, so that the build's peak holds one kind
+    /// twice at most, and less where the allocator hands freed parts back.
     fn assemble(scene: &Scene, tree: ClusterTree, links: Links, start: Instant) -> HierarchicalColumns {
         let tree = tree.held();
         let Links { far: far_links, near: near_links, pairs: pair_links, rays, occluded, clear, zeroth, .. } = links;
         let counts = (far_links.len(), near_links.len(), pair_links.len());
-        let far = FarLists::new(tree.nodes.len(), &far_links, |l| (l.a, l.b, [l.clear, l.count]));
-        drop(far_links);
-        let near = Adjacency::new(scene.len(), &near_links, |l| (l.i, l.j, l.transfer as Transfer));
-        drop(near_links);
-        let pairs = Adjacency::new(scene.len(), &pair_links, |l| (l.i, l.j, l.transfer as Transfer));
-        drop(pair_links);
+        let far = FarLists::new(tree.nodes.len(), far_links, |l| (l.a, l.b, [l.clear, l.count]));
+        let near = Adjacency::new(scene.len(), near_links, |l| (l.i, l.j, l.transfer as Transfer));
+        let pairs = Adjacency::new(scene.len(), pair_links, |l| (l.i, l.j, l.transfer as Transfer));
         let held = HierarchicalColumns::held_by(&tree, [far.bytes(), near.bytes(), pairs.bytes()], scene.len());
         let figures = HierarchyFigures {
             nodes: tree.nodes.len(),

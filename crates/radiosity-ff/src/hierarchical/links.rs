@@ -881,7 +881,7 @@ mod tests {
             let x: Vec<Real> = (0..n).map(|i| 0.1 + ((i * 7919) % 101) as Real / 101.0).collect();
             assert!(!links.near.is_empty() && !links.pairs.is_empty());
             for list in [&links.near, &links.pairs] {
-                let narrow = Adjacency::new(n, list, |l| (l.i, l.j, l.transfer as Transfer));
+                let narrow = Adjacency::new(n, list.clone(), |l| (l.i, l.j, l.transfer as Transfer));
                 let mut exact = vec![0.0; n];
                 for l in list.iter() {
                     exact[l.i as usize] += l.transfer * x[l.j as usize];

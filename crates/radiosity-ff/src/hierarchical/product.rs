@@ -145,10 +145,37 @@ impl FormFactorBackend for HierarchicalColumns {
 impl HierarchicalColumns {
     /// `Σ_j E_ij w_j x_j` for every `i`, over the estimated entries `E` alone (far links and
     /// far pairs, before any closure weight), each sender weighed by `weights`.
+    /// The channels go through the tree in groups whose moments take at most
+    /// [`MOMENT_BYTES`] (one channel at a time past it): each channel's arithmetic is its own,
+    /// so the groups give the same bits as one pass.
     pub(super) fn estimated_product(&self, x: &[Real], channels: usize, weights: &[Real], out: &mut [Real]) {
+        self.estimated_product_in(x, channels, weights, out, MOMENT_BYTES);
+    }
+
+    /// [`Self::estimated_product`] with the moments held to `budget` bytes.
+    fn estimated_product_in(&self, x: &[Real], channels: usize, weights: &[Real], out: &mut [Real], budget: usize) {
         let k = channels;
-        let moments = self.gathered_moments(x, k, weights);
-        self.received_down(&moments, k, out);
+        let per_channel = self.tree.nodes.len() * size_of::<Moments>();
+        let group = (budget / per_channel.max(1)).clamp(1, k.max(1));
+        if group >= k {
+            let moments = self.gathered_moments(x, k, weights);
+            self.received_down(&moments, k, out);
+        } else {
+            let n = self.areas.len();
+            for first in (0..k).step_by(group) {
+                let g = group.min(k - first);
+                let picked = |v: &[Real]| -> Vec<Real> {
+                    (0..n).flat_map(|p| v[p * k + first..p * k + first + g].iter().copied()).collect()
+                };
+                let moments = self.gathered_moments(&picked(x), g, weights);
+                let mut part = vec![0.0; n * g];
+                self.received_down(&moments, g, &mut part);
+                drop(moments);
+                for (out, part) in out.chunks_exact_mut(k).zip(part.chunks_exact(g)) {
+                    out[first..first + g].copy_from_slice(part);
+                }
+            }
+        }
         out.par_chunks_mut(k).enumerate().for_each(|(i, out)| {
             for (j, transfer) in self.pairs.of(i) {
                 let transfer = Real::from(transfer);
@@ -344,6 +371,13 @@ impl HierarchicalColumns {
 /// Subtrees over more patches than this have their passes run beside each other.
 const PARALLEL_PATCHES: usize = 4096;
 
+/// The most bytes a product's moments take at once, for all the channels that go through the
+/// tree together. They are 96 bytes a node and a channel, held only during the product: three
+/// channels at ten million patches would take 6 GB on top of the operator, more than its far
+/// links. Below it (a million patches and three channels: 0.55 GB) every channel goes in one
+/// pass, which reads each link once.
+const MOMENT_BYTES: usize = 1 << 30;
+
 /// What a node sends through its far links: `M0 = Σ w m` and `M1 = Σ w m bᵀ` (rows `k` of
 /// `M1` are `Σ w m_k b`) over its patches, `w = A x`, `m` the normal and `b` the offset of the
 /// centroid from the node's centre.
@@ -439,14 +473,27 @@ mod tests {
     use crate::hierarchical::params::HierarchicalParams;
     use radiosity_geom::PreparedScene;
 
-    #[test]
-    fn forms_received_on_the_way_down_are_those_of_every_node_pushed_down_to_the_bit() {
+    /// An operator with links of every kind on the Cornell box, and its number of patches.
+    fn operator() -> (HierarchicalColumns, usize) {
         let p = PreparedScene::load("cornell:res=8").unwrap();
         let params = HierarchicalParams { eps: 0.02, ..HierarchicalParams::default() };
-        let h = HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, params);
-        let n = p.scene().len();
+        (HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, params), p.scene().len())
+    }
+
+    /// A positive vector of `len` values, none alike its neighbours.
+    fn uneven(len: usize) -> Vec<Real> {
+        (0..len).map(|i| 0.1 + ((i * 7919) % 101) as Real / 101.0).collect()
+    }
+
+    fn bits(v: &[Real]) -> Vec<u64> {
+        v.iter().map(|v| v.to_bits()).collect()
+    }
+
+    #[test]
+    fn forms_received_on_the_way_down_are_those_of_every_node_pushed_down_to_the_bit() {
+        let (h, n) = operator();
         for k in [1, 3, 4] {
-            let x: Vec<Real> = (0..n * k).map(|i| 0.1 + ((i * 7919) % 101) as Real / 101.0).collect();
+            let x = uneven(n * k);
             let moments = h.gathered_moments(&x, k, &h.weights);
             let mut forms = vec![Form::default(); h.tree.nodes.len() * k];
             forms.par_chunks_mut(k).enumerate().for_each(|(node, forms)| h.receive_far(node, &moments, None, forms));
@@ -454,8 +501,25 @@ mod tests {
             h.pushed_down(&mut forms, k, &mut every);
             h.received_down(&moments, k, &mut fused);
             assert!(every.iter().any(|&v| v > 0.0));
-            let bits = |v: &[Real]| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&every), bits(&fused), "{k} channels");
+        }
+    }
+
+    #[test]
+    fn channels_in_groups_give_the_bits_of_one_pass() {
+        let (h, n) = operator();
+        let one_channel = h.tree.nodes.len() * size_of::<Moments>();
+        let k = 5;
+        let x = uneven(n * k);
+        let weights: Vec<Real> = (0..n).map(|i| 0.5 + (i % 7) as Real / 14.0).collect();
+        let mut whole = vec![0.0; n * k];
+        h.estimated_product_in(&x, k, &weights, &mut whole, usize::MAX);
+        assert!(whole.iter().all(|&v| v > 0.0));
+        // One channel at a time (a budget below one channel's moments), then two at a time.
+        for budget in [1, 2 * one_channel] {
+            let mut grouped = vec![0.0; n * k];
+            h.estimated_product_in(&x, k, &weights, &mut grouped, budget);
+            assert_eq!(bits(&grouped), bits(&whole), "moments held to {budget} bytes");
         }
     }
 }

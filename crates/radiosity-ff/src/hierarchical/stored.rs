@@ -156,7 +156,7 @@ impl Body<'_> {
             .collect();
         let ordered = links.iter().all(|&(a, b, _)| a < b && (b as usize) < keys)
             && links.windows(2).all(|w| (w[0].0, w[0].1) < (w[1].0, w[1].1));
-        ordered.then(|| FarLists::new(keys, &links.into(), |&l| l))
+        ordered.then(|| FarLists::new(keys, links.into(), |&l| l))
     }
 
     /// Lists of `keys` keys and `entries` links, each value a [`Transfer`], or `None` unless they

@@ -237,11 +237,19 @@ impl<'a> AnalyticColumns<'a> {
 
     /// [`AnalyticColumns::pair`], asking `clear` first, with the shadow rays the pair would
     /// trace, whether the pair is known to see itself whole (nothing lies between the two
-    /// patches): then no ray is traced, and the entry is the one all-clear rays give.
-    pub fn pair_unless_clear(&self, i: usize, j: usize, clear: impl FnOnce(usize) -> bool) -> Real {
-        let Some(vis) = self.visibility else { return self.pair(i, j) };
+    /// patches): then no ray is traced, and the entry is the one all-clear rays give. With the
+    /// entry, the shadow rays it traced.
+    pub fn pair_unless_clear(&self, i: usize, j: usize, clear: impl FnOnce(usize) -> bool) -> (Real, u64) {
+        let Some(vis) = self.visibility else { return (self.pair(i, j), 0) };
         let known = |rays: usize| clear(rays).then_some(1.0);
-        self.pair_traced(i, j, known, &mut |p, from, q, to| vis.unoccluded_between(p, from, q, to)).0
+        let mut rays = 0;
+        let f = self
+            .pair_traced(i, j, known, &mut |p, from, q, to| {
+                rays += 1;
+                vis.unoccluded_between(p, from, q, to)
+            })
+            .0;
+        (f, rays)
     }
 
     /// `F_ij` before clamping, with `V_ij = known` when it is given, and the visible fraction

@@ -42,6 +42,8 @@ pub struct HierarchyFigures {
     pub far_pairs: u64,
     /// Shadow rays traced for far links.
     pub rays: u64,
+    /// Shadow rays traced for near pairs' analytic entries.
+    pub near_rays: u64,
     /// Links dropped because every ray was blocked.
     pub occluded: u64,
     /// Far links and near pairs whose shafts held no patch: seen whole without their rays
@@ -136,7 +138,8 @@ impl From<HierarchyFigures> for BackendFigures {
     fn from(h: HierarchyFigures) -> BackendFigures {
         let summary = format!(
             "{} nodes, {} far links ({} of them to zeroth order), {} near links ({} of them far pairs of patches), {} \
-             shadow rays ({} links occluded, {} seen whole through clear shafts); {} rows capped at 1 by closure \
+             shadow rays for far links ({} links occluded, {} seen whole through clear shafts) and {} for near pairs; {} \
+             rows capped at 1 by closure \
               (lowest weight {:.3}), {} above 1 by their near links alone",
             h.nodes,
             h.far_links,
@@ -146,6 +149,7 @@ impl From<HierarchyFigures> for BackendFigures {
             h.rays,
             h.occluded,
             h.clear_shafts,
+            h.near_rays,
             h.capped,
             h.lowest_weight,
             h.near_above
@@ -157,6 +161,7 @@ impl From<HierarchyFigures> for BackendFigures {
             ("near links", h.near_links as f64),
             ("far pairs", h.far_pairs as f64),
             ("shadow rays", h.rays as f64),
+            ("near shadow rays", h.near_rays as f64),
             ("occluded links", h.occluded as f64),
             ("clear shafts", h.clear_shafts as f64),
             ("capped rows", h.capped as f64),
@@ -275,11 +280,12 @@ impl HierarchicalColumns {
                 strata: refiner.strata.clone(),
                 ..refiner
             };
-            let Links { far, near, pairs, rays, occluded, clear, .. } = std::mem::take(&mut links);
+            let Links { far, near, pairs, rays, near_rays, occluded, clear, .. } = std::mem::take(&mut links);
             let mut next = again.refine_again(&far.iter().copied().collect::<Vec<_>>());
             next.near.prepend(near);
             next.pairs.prepend(pairs);
-            (next.rays, next.occluded, next.clear) = (next.rays + rays, next.occluded + occluded, next.clear + clear);
+            (next.rays, next.near_rays) = (next.rays + rays, next.near_rays + near_rays);
+            (next.occluded, next.clear) = (next.occluded + occluded, next.clear + clear);
             links = next;
         }
         // Later passes count as refinement.
@@ -309,7 +315,9 @@ impl HierarchicalColumns {
     /// twice at most, and less where the allocator hands freed parts back.
     fn assemble(scene: &Scene, tree: ClusterTree, links: Links, start: Instant) -> HierarchicalColumns {
         let tree = tree.held();
-        let Links { far: far_links, near: near_links, pairs: pair_links, rays, occluded, clear, zeroth, .. } = links;
+        let Links {
+            far: far_links, near: near_links, pairs: pair_links, rays, near_rays, occluded, clear, zeroth, ..
+        } = links;
         let counts = (far_links.len(), near_links.len(), pair_links.len());
         let far = FarLists::new(tree.nodes.len(), far_links, |l| (l.a, l.b, [l.clear, l.count]));
         let near = Adjacency::new(scene.len(), near_links, |l| (l.i, l.j, l.transfer as Transfer));
@@ -322,6 +330,7 @@ impl HierarchicalColumns {
             near_links: counts.1 + counts.2,
             far_pairs: counts.2 as u64,
             rays,
+            near_rays,
             occluded,
             clear_shafts: clear,
             seconds: start.elapsed().as_secs_f64(),
@@ -472,6 +481,7 @@ fn totals(ranks: &[RankFigures], closed: &HierarchyFigures) -> HierarchyFigures 
         near_links: sum(|r| r.near_links) as usize,
         far_pairs: sum(|r| r.far_pairs),
         rays: sum(|r| r.rays),
+        near_rays: sum(|r| r.near_rays),
         occluded: sum(|r| r.occluded),
         clear_shafts: sum(|r| r.clear_shafts),
         seconds: ranks.iter().map(|r| r.seconds).fold(0.0, f64::max),

@@ -33,8 +33,10 @@ pub struct RankFigures {
     pub near_links: u64,
     /// Of them, the far pairs.
     pub far_pairs: u64,
-    /// Shadow rays traced for the rank's own links.
+    /// Shadow rays traced for the rank's own far links.
     pub rays: u64,
+    /// Shadow rays traced for the rank's own near pairs.
+    pub near_rays: u64,
     /// Links dropped as occluded.
     pub occluded: u64,
     /// Links seen whole through clear shafts.
@@ -62,6 +64,7 @@ impl RankFigures {
             near_links: figures.near_links as u64,
             far_pairs: figures.far_pairs,
             rays: figures.rays,
+            near_rays: figures.near_rays,
             occluded: figures.occluded,
             clear_shafts: figures.clear_shafts,
             bytes: figures.bytes as u64,
@@ -72,7 +75,7 @@ impl RankFigures {
         }
     }
 
-    fn to_values(self) -> [Real; 12] {
+    fn to_values(self) -> [Real; 13] {
         [
             self.far_links as Real,
             self.zeroth_links as Real,
@@ -86,6 +89,7 @@ impl RankFigures {
             self.seconds,
             self.tasks as Real,
             self.estimated_share,
+            self.near_rays as Real,
         ]
     }
 
@@ -103,6 +107,7 @@ impl RankFigures {
             seconds: v[9],
             tasks: v[10] as u64,
             estimated_share: v[11],
+            near_rays: v[12] as u64,
         }
     }
 }
@@ -113,6 +118,7 @@ impl From<&RankFigures> for BackendFigures {
             ("far links", r.far_links as f64),
             ("near links", r.near_links as f64),
             ("shadow rays", r.rays as f64),
+            ("near shadow rays", r.near_rays as f64),
             ("link bytes", r.link_bytes as f64),
             ("tasks", r.tasks as f64),
             ("estimated share", r.estimated_share),

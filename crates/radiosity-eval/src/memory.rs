@@ -15,7 +15,7 @@ pub fn peak_rss() -> Option<u64> {
 /// 32 MiB, so that the blocks a large build frees afterwards stay in its heap, resident to the
 /// end of the run, where only smaller blocks can reuse them: a hierarchical operator's links
 /// as they were gathered, 0.9 GB at a million patches. Fixing it took that build's peak from
-/// 2.28 GB to 1.89 GB and the solve after it from 2.23 GB to about 1.4 GB (docs/scale.md,
+/// 2.33 GB to 1.94 GB and the solve after it from 2.29 GB to about 1.4 GB (docs/scale.md,
 /// "Issue 63"). The command line and the Python module call it once, at start; a program of
 /// one's own may. It does nothing but on glibc.
 pub fn return_freed_blocks() {

@@ -387,15 +387,8 @@ impl<'a> AnalyticColumns<'a> {
     /// `F_ij` before clamping, computed afresh as [`AnalyticColumns::pair`] does, and the
     /// shadow rays it traced: what a benchmark times pair by pair.
     pub fn pair_counting_rays(&self, i: usize, j: usize) -> (Real, usize) {
-        let Some(vis) = self.visibility else { return (self.pair(i, j), 0) };
-        let mut rays = 0;
-        let value = self
-            .pair_traced(i, j, |_| None, &mut |p, from, q, to| {
-                rays += 1;
-                vis.unoccluded_between(p, from, q, to)
-            })
-            .0;
-        (value, rays)
+        let (value, rays) = self.pair_unless_clear(i, j, |_| false);
+        (value, rays as usize)
     }
 
     /// How the visible fraction of the pair `(i, j)` is sampled

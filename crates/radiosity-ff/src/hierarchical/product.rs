@@ -217,15 +217,11 @@ impl HierarchicalColumns {
                 debug_assert_eq!((a, b), (node + 1, node + 2 * nodes[a].count as usize));
                 let (here, below) = moments.split_at_mut(k);
                 let (under_a, under_b) = below.split_at_mut((b - a) * k);
-                if nodes[node].count as usize > PARALLEL_PATCHES {
-                    rayon::join(
-                        || self.gather_up(a, under_a, x, k, weights),
-                        || self.gather_up(b, under_b, x, k, weights),
-                    );
-                } else {
-                    self.gather_up(a, under_a, x, k, weights);
-                    self.gather_up(b, under_b, x, k, weights);
-                }
+                both(
+                    nodes[node].count,
+                    || self.gather_up(a, under_a, x, k, weights),
+                    || self.gather_up(b, under_b, x, k, weights),
+                );
                 let (da, db) = (nodes[a].centre - nodes[node].centre, nodes[b].centre - nodes[node].centre);
                 for ch in 0..k {
                     here[ch] = under_a[ch].shifted(da).plus(&under_b[ch].shifted(db));
@@ -299,15 +295,11 @@ impl HierarchicalColumns {
                 let (a, b) = (a as usize, b as usize);
                 let here = Some((&*here, centre));
                 let (values_a, values_b) = values.split_at_mut(self.tree.nodes[a].count as usize * k);
-                if self.tree.nodes[node].count as usize > PARALLEL_PATCHES {
-                    rayon::join(
-                        || self.receive_down(a, here, moments, k, values_a),
-                        || self.receive_down(b, here, moments, k, values_b),
-                    );
-                } else {
-                    self.receive_down(a, here, moments, k, values_a);
-                    self.receive_down(b, here, moments, k, values_b);
-                }
+                both(
+                    self.tree.nodes[node].count,
+                    || self.receive_down(a, here, moments, k, values_a),
+                    || self.receive_down(b, here, moments, k, values_b),
+                );
             }
         }
     }
@@ -357,12 +349,11 @@ impl HierarchicalColumns {
                     }
                 }
                 let (values_a, values_b) = values.split_at_mut(nodes[a].count as usize * k);
-                if nodes[node].count as usize > PARALLEL_PATCHES {
-                    rayon::join(|| self.push_down(a, under_a, k, values_a), || self.push_down(b, under_b, k, values_b));
-                } else {
-                    self.push_down(a, under_a, k, values_a);
-                    self.push_down(b, under_b, k, values_b);
-                }
+                both(
+                    nodes[node].count,
+                    || self.push_down(a, under_a, k, values_a),
+                    || self.push_down(b, under_b, k, values_b),
+                );
             }
         }
     }
@@ -370,6 +361,17 @@ impl HierarchicalColumns {
 
 /// Subtrees over more patches than this have their passes run beside each other.
 const PARALLEL_PATCHES: usize = 4096;
+
+/// A pass over a node's two subtrees, beside each other on rayon's threads when the node holds
+/// more than [`PARALLEL_PATCHES`] patches, one after the other otherwise.
+fn both(patches: u32, a: impl FnOnce() + Send, b: impl FnOnce() + Send) {
+    if patches as usize > PARALLEL_PATCHES {
+        rayon::join(a, b);
+    } else {
+        a();
+        b();
+    }
+}
 
 /// The most bytes a product's moments take at once, for all the channels that go through the
 /// tree together. They are 96 bytes a node and a channel, held only during the product: three

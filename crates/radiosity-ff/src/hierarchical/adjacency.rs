@@ -1,42 +1,42 @@
 //! The operator's link lists in compressed sparse row form: for each node or patch, the other
 //! ends of its links and their values, ordered by the other end, so that a product reads its
-//! vector in order.
+//! vector in order. The other ends are packed as differences ([`Packed`]), a byte or so each.
 //!
 //! A near link or far pair ([`Adjacency`]) is held once, with its `A_i F_ij` in `f32`
-//! ([`Transfer`]), in the list of its lower end; its higher end's list holds only the lower
-//! end, and finds the value by a binary search in the lower end's list (a few dozen entries).
-//! So it costs 12 bytes, not the 16 of a link in both its ends' lists with its value twice,
-//! and both ends read the same value, which keeps reciprocity exact.
+//! ([`Transfer`]), in the list of its lower end; its higher end's list holds the lower end and
+//! the link's place in the lower end's list. So it costs 4 bytes for its value and a few for
+//! its two entries, not the 16 of a link in both its ends' lists with its value twice, and
+//! both ends read the same value, which keeps reciprocity exact.
 //!
 //! A far link ([`FarLists`]) is in both its nodes' lists: a product works out its geometry
 //! from both ends, and a search for it at one end would cost more than that arithmetic. It is
-//! the other node and its rays' tally, coded in a byte (two when the operator has more than
-//! 256 distinct tallies): 10 bytes a link. Its direction, length and `g` are worked out again
-//! from the nodes' centres wherever it is used, to the same bits.
+//! the other node and its rays' tally, coded as its place in a table ordered by how often
+//! each tally occurs, so that the common ones take a byte. Its direction, length and `g` are
+//! worked out again from the nodes' centres wherever it is used, to the same bits.
 //!
 //! Lists are built on every thread from the refinement's links as they were gathered, in
 //! parts ([`Gathered`]): each end's place claimed by an atomic count, each list then sorted by
-//! itself, so the lists are the same whatever the number of threads.
+//! itself and packed, so the lists are the same whatever the number of threads.
 
+use super::packed::Packed;
 use radiosity_core::Real;
 use rayon::prelude::*;
-use std::collections::BTreeSet;
+use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicU8, AtomicU16, AtomicU32, AtomicUsize, Ordering};
 
 /// Links by the node or patch at either end: for each of `len` keys, the other ends and the
 /// links' values, ordered by the other end (so that a product reads its vector in order).
 #[derive(Debug)]
 pub(super) struct Adjacency {
-    /// Where each key's list of higher ends starts in `other` and `value` (`len + 1`).
+    /// Where each key's values start in `value` (`len + 1`): the links to its higher ends.
     pub(super) start: Vec<usize>,
-    /// Each link once, in its lower end's list: the higher end,
-    pub(super) other: Vec<u32>,
-    /// and the value.
+    /// Each link once, in its lower end's list: the higher ends,
+    higher: Packed,
+    /// and the values, in the same order.
     pub(super) value: Vec<Transfer>,
-    /// Where each key's list of lower ends starts in `lower` (`len + 1`).
-    lower_start: Vec<usize>,
-    /// Each link again, in its higher end's list: the lower end alone.
-    lower: Vec<u32>,
+    /// Each link again, in its higher end's list: the lower end and the link's place in the
+    /// lower end's list.
+    lower: Packed,
 }
 
 impl Adjacency {
@@ -66,51 +66,44 @@ impl Adjacency {
         });
         let lower_start = offsets(counts);
         let next: Vec<AtomicUsize> = lower_start[..len].par_iter().map(|&s| AtomicUsize::new(s)).collect();
-        let slots: Vec<AtomicU32> = (0..other.len()).into_par_iter().map(|_| AtomicU32::new(0)).collect();
+        let slots: Vec<AtomicU32> = bytemuck::zeroed_vec(other.len());
+        let places: Vec<AtomicU32> = bytemuck::zeroed_vec(other.len());
         start.par_windows(2).enumerate().for_each(|(k, at)| {
-            for &o in &other[at[0]..at[1]] {
+            for (place, &o) in other[at[0]..at[1]].iter().enumerate() {
                 let slot = next[o as usize].fetch_add(1, Ordering::Relaxed);
                 slots[slot].store(k as u32, Ordering::Relaxed);
+                places[slot].store(place as u32, Ordering::Relaxed);
             }
         });
+        drop(next);
         let mut lower: Vec<u32> = slots.into_iter().map(AtomicU32::into_inner).collect();
-        // The slots were claimed in any order: each list sorted by itself.
-        lists_of(&lower_start, &mut lower).into_par_iter().for_each(|list| list.sort_unstable());
-        Adjacency { start, other, value, lower_start, lower }
-    }
-
-    /// The value of the link between `lo` and `hi > lo`, from `lo`'s list.
-    fn between(&self, lo: u32, hi: u32) -> Transfer {
-        let at = self.start[lo as usize]..self.start[lo as usize + 1];
-        let place = self.other[at.clone()].partition_point(|&o| o < hi);
-        debug_assert_eq!(self.other[at.start + place], hi);
-        self.value[at.start + place]
+        let mut places: Vec<u32> = places.into_iter().map(AtomicU32::into_inner).collect();
+        sorted_by_other(&lower_start, &mut lower, &mut places);
+        let lower = Packed::new(&lower_start, &lower, Some(&|e| places[e]));
+        let higher = Packed::new(&start, &other, None);
+        Adjacency { start, higher, value, lower }
     }
 
     /// The list of `k`: the other ends, in increasing order, and the values.
     pub(super) fn of(&self, k: usize) -> impl Iterator<Item = (u32, Transfer)> + '_ {
-        let lower = &self.lower[self.lower_start[k]..self.lower_start[k + 1]];
+        let lower = self.lower.of(k).map(|(o, place)| (o, self.value[self.start[o as usize] + place as usize]));
         let higher = self.start[k]..self.start[k + 1];
-        (lower.iter().map(move |&o| (o, self.between(o, k as u32))))
-            .chain(self.other[higher.clone()].iter().copied().zip(self.value[higher].iter().copied()))
+        lower.chain(self.higher.of(k).map(|(o, _)| o).zip(self.value[higher].iter().copied()))
     }
 
     /// The number of links in the list of `k`.
     pub(super) fn degree(&self, k: usize) -> usize {
-        self.start[k + 1] - self.start[k] + self.lower_start[k + 1] - self.lower_start[k]
+        self.start[k + 1] - self.start[k] + self.lower.degree(k)
     }
 
-    /// Each link once: its ends, the lower first.
+    /// Each link once: its ends, the lower first, in increasing order of the ends.
     pub(super) fn ends(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
-        self.start
-            .windows(2)
-            .enumerate()
-            .flat_map(move |(k, at)| self.other[at[0]..at[1]].iter().map(move |&o| (k as u32, o)))
+        (0..self.higher.keys()).flat_map(move |k| self.higher.of(k).map(move |(o, _)| (k as u32, o)))
     }
 
     /// The number of links.
     pub(super) fn len(&self) -> usize {
-        self.other.len()
+        self.value.len()
     }
 
     /// Whether `start`, over `keys` keys and `entries` links, runs from 0 to `entries` without
@@ -130,53 +123,31 @@ impl Adjacency {
             })
     }
 
-    /// The bytes the links' entries hold: each link's two ends and its value, not the offsets
-    /// every key has.
+    /// The bytes the links' entries hold: each link's value and its two packed entries, not
+    /// the offsets every key has.
     pub(super) fn entry_bytes(&self) -> usize {
-        self.other.len() * (size_of::<u32>() + size_of::<Transfer>()) + self.lower.len() * size_of::<u32>()
+        self.value.len() * size_of::<Transfer>() + self.higher.entry_bytes() + self.lower.entry_bytes()
     }
 
     /// The bytes the lists hold.
     pub(super) fn bytes(&self) -> usize {
-        (self.start.len() + self.lower_start.len()) * size_of::<usize>() + self.entry_bytes()
+        self.start.len() * size_of::<usize>()
+            + self.value.len() * size_of::<Transfer>()
+            + self.higher.bytes()
+            + self.lower.bytes()
     }
 }
 
 /// Far links by node, each in the lists of both its nodes: the other node and the code of the
-/// link's rays' tally (`[clear, count]`) in `tallies` (module doc).
+/// link's rays' tally (`[clear, count]`), its place in `tallies` (module doc).
 #[derive(Debug)]
 pub(super) struct FarLists {
-    /// Where each node's list starts (`len + 1`).
-    start: Vec<usize>,
-    /// The other nodes.
-    other: Vec<u32>,
-    /// The links' tallies, as places in `tallies`.
-    codes: Codes,
-    /// The distinct tallies, in increasing order.
+    /// The other nodes, each with its link's code.
+    lists: Packed,
+    /// The distinct tallies, the most frequent first (ties in increasing order).
     tallies: Vec<[u16; 2]>,
-}
-
-/// Places in a table of at most 256 entries, or of more.
-#[derive(Debug)]
-enum Codes {
-    Narrow(Vec<u8>),
-    Wide(Vec<u16>),
-}
-
-impl Codes {
-    fn at(&self, e: usize) -> usize {
-        match self {
-            Codes::Narrow(c) => c[e] as usize,
-            Codes::Wide(c) => c[e] as usize,
-        }
-    }
-
-    fn bytes(&self) -> usize {
-        match self {
-            Codes::Narrow(c) => c.len(),
-            Codes::Wide(c) => 2 * c.len(),
-        }
-    }
+    /// The number of links.
+    links: usize,
 }
 
 impl FarLists {
@@ -188,58 +159,72 @@ impl FarLists {
         links: Gathered<L>,
         ends: impl Fn(&L) -> (u32, u32, [u16; 2]) + Sync,
     ) -> FarLists {
-        // Neighbouring links mostly share a tally: the set is searched only when it changes.
-        let tallies: Vec<[u16; 2]> = (links.0.par_iter())
+        let count = links.len();
+        // Neighbouring links mostly share a tally: counted in runs.
+        let counted: BTreeMap<[u16; 2], usize> = (links.0.par_iter())
             .map(|part| {
-                let (mut set, mut last) = (BTreeSet::new(), None);
+                let mut counts = BTreeMap::new();
+                let mut run: Option<([u16; 2], usize)> = None;
                 for l in part {
                     let t = ends(l).2;
-                    if last != Some(t) {
-                        set.insert(t);
-                        last = Some(t);
+                    match &mut run {
+                        Some((last, n)) if *last == t => *n += 1,
+                        _ => {
+                            if let Some((last, n)) = run.replace((t, 1)) {
+                                *counts.entry(last).or_insert(0) += n;
+                            }
+                        }
                     }
                 }
-                set
+                if let Some((last, n)) = run {
+                    *counts.entry(last).or_insert(0) += n;
+                }
+                counts
             })
-            .reduce(BTreeSet::new, |mut a, mut b| {
-                a.append(&mut b);
+            .reduce(BTreeMap::new, |mut a, b| {
+                for (t, n) in b {
+                    *a.entry(t).or_insert(0) += n;
+                }
                 a
-            })
-            .into_iter()
-            .collect();
+            });
+        let mut tallies: Vec<([u16; 2], usize)> = counted.into_iter().collect();
+        tallies.sort_by_key(|&(t, n)| (std::cmp::Reverse(n), t));
         // A tally is `[c, c]` for c up to `rays`, or `[c, probe]`, each with or without the
         // zeroth-order bit: at most 2 · (4096 + 1024) of them.
-        let code = |t: [u16; 2]| tallies.binary_search(&t).expect("every tally is in the table");
-        let (start, other, codes) = if tallies.len() <= 256 {
-            let (start, other, codes) = scattered::<_, AtomicU8>(len, links, true, |l| {
+        let mut by_tally: Vec<([u16; 2], u16)> = (tallies.iter().enumerate())
+            .map(|(code, &(t, _))| (t, u16::try_from(code).expect("at most 65,536 distinct tallies")))
+            .collect();
+        by_tally.sort_unstable();
+        let code =
+            |t: [u16; 2]| by_tally[by_tally.binary_search_by_key(&t, |e| e.0).expect("every tally is in the table")].1;
+        let lists = if tallies.len() <= 256 {
+            packed_far::<_, AtomicU8>(len, links, |l| {
                 let (a, b, t) = ends(l);
                 (a, b, code(t) as u8)
-            });
-            (start, other, Codes::Narrow(codes))
+            })
         } else {
-            let (start, other, codes) = scattered::<_, AtomicU16>(len, links, true, |l| {
+            packed_far::<_, AtomicU16>(len, links, |l| {
                 let (a, b, t) = ends(l);
-                (a, b, u16::try_from(code(t)).expect("at most 65,536 distinct tallies"))
-            });
-            (start, other, Codes::Wide(codes))
+                (a, b, code(t))
+            })
         };
-        FarLists { start, other, codes, tallies }
+        FarLists { lists, tallies: tallies.into_iter().map(|(t, _)| t).collect(), links: count }
     }
 
     /// The list of node `k`: the other nodes, in increasing order, and the links' tallies.
     pub(super) fn of(&self, k: usize) -> impl Iterator<Item = (u32, [u16; 2])> + '_ {
-        (self.start[k]..self.start[k + 1]).map(move |e| (self.other[e], self.tallies[self.codes.at(e)]))
+        self.lists.of(k).map(|(o, code)| (o, self.tallies[code as usize]))
     }
 
     /// The number of links in the list of `k`.
     pub(super) fn degree(&self, k: usize) -> usize {
-        self.start[k + 1] - self.start[k]
+        self.lists.degree(k)
     }
 
     /// Each link once: its ends, the lower first, and its tally, in increasing order of the
     /// ends.
     pub(super) fn links(&self) -> impl Iterator<Item = (u32, u32, [u16; 2])> + '_ {
-        (0..self.start.len() - 1)
+        (0..self.lists.keys())
             .flat_map(move |k| self.of(k).filter(move |&(o, _)| o as usize > k).map(move |(o, t)| (k as u32, o, t)))
     }
 
@@ -250,19 +235,32 @@ impl FarLists {
 
     /// The number of links.
     pub(super) fn len(&self) -> usize {
-        self.other.len() / 2
+        self.links
     }
 
     /// The bytes the links' entries hold (with the table of tallies), not the offsets every
     /// node has.
     pub(super) fn entry_bytes(&self) -> usize {
-        self.other.len() * size_of::<u32>() + self.codes.bytes() + self.tallies.len() * size_of::<[u16; 2]>()
+        self.lists.entry_bytes() + self.tallies.len() * size_of::<[u16; 2]>()
     }
 
     /// The bytes the lists hold.
     pub(super) fn bytes(&self) -> usize {
-        self.start.len() * size_of::<usize>() + self.entry_bytes()
+        self.lists.bytes() + self.tallies.len() * size_of::<[u16; 2]>()
     }
+}
+
+/// The far lists of `links`, each link at both ends with its code, packed.
+fn packed_far<L: Send + Sync, S: Slot>(
+    len: usize,
+    links: Gathered<L>,
+    ends: impl Fn(&L) -> (u32, u32, S::Value) + Sync,
+) -> Packed
+where
+    S::Value: Into<u32>,
+{
+    let (start, other, codes) = scattered::<_, S>(len, links, true, ends);
+    Packed::new(&start, &other, Some(&|e| codes[e].into()))
 }
 
 /// Lists by key of the links' other ends and payloads, `ends` giving a link's ends and
@@ -313,17 +311,22 @@ fn scattered<L: Send + Sync, S: Slot>(
     drop(next);
     let mut other: Vec<u32> = other.into_iter().map(AtomicU32::into_inner).collect();
     let mut payload: Vec<S::Value> = payload.into_iter().map(S::value).collect();
-    // The slots were claimed in any order: each list sorted by itself.
-    let lists = lists_of(&start, &mut other).into_iter().zip(lists_of(&start, &mut payload));
+    sorted_by_other(&start, &mut other, &mut payload);
+    (start, other, payload)
+}
+
+/// Each list that `start` cuts `other` and `payload` into, sorted by its other ends: the slots
+/// were claimed in any order.
+fn sorted_by_other<T: Copy + Send + Sync>(start: &[usize], other: &mut [u32], payload: &mut [T]) {
+    let lists = lists_of(start, other).into_iter().zip(lists_of(start, payload));
     lists.collect::<Vec<_>>().into_par_iter().for_each_init(Vec::new, |entries, (o, x)| {
         entries.clear();
         entries.extend(o.iter().copied().zip(x.iter().copied()));
-        entries.sort_unstable_by_key(|e: &(u32, S::Value)| e.0);
+        entries.sort_unstable_by_key(|e: &(u32, T)| e.0);
         for (k, &(q, y)) in entries.iter().enumerate() {
             (o[k], x[k]) = (q, y);
         }
     });
-    (start, other, payload)
 }
 
 /// An atomic slot of a list's payload, as wide as its value, so that the lists' build holds
@@ -507,18 +510,20 @@ mod tests {
         let scrambled_len = parts.len();
         let again = Adjacency::new(len as usize, parts, |&l| l);
         assert_eq!(
-            (again.start, again.other, again.lower_start, again.lower),
-            (adjacency.start.clone(), adjacency.other.clone(), adjacency.lower_start.clone(), adjacency.lower.clone())
+            (again.start, again.higher, again.lower),
+            (adjacency.start.clone(), adjacency.higher.clone(), adjacency.lower.clone())
         );
         assert_eq!(again.value, adjacency.value);
-        // Each link is held once with its value: 12 bytes, not 16.
-        assert_eq!(adjacency.entry_bytes(), 12 * scrambled_len);
+        // Each link is held once with its value, its two ends packed: fewer than the 12 bytes
+        // of a `u32` at each end and the value, and at least the value and a byte an end.
+        let bytes = adjacency.entry_bytes();
+        assert!(bytes < 12 * scrambled_len && bytes >= 6 * scrambled_len, "{bytes} for {scrambled_len}");
     }
 
     #[test]
     fn lists_with_a_lower_end_a_repeat_or_an_end_out_of_range_are_refused() {
         let adjacency = Adjacency::new(5, vec![(0, 3, 1.0), (1, 2, 2.0), (4, 1, 3.0)].into(), |&l| l);
-        let (start, other) = (adjacency.start.clone(), adjacency.other.clone());
+        let (start, other) = (adjacency.start.clone(), adjacency.ends().map(|(_, o)| o).collect::<Vec<u32>>());
         assert!(Adjacency::is_ordered(5, 3, &start, &other));
         assert!(!Adjacency::is_ordered(4, 3, &start[..4], &other), "an end out of range");
         // Key 1's list is [2, 4]: a lower end, a repeat, an end beyond the keys.
@@ -553,8 +558,12 @@ mod tests {
             assert_eq!(lists.links().collect::<Vec<_>>(), once);
             assert_eq!(lists.len(), scrambled.len());
             assert_eq!(lists.tallies.len(), distinct.min(scrambled.len()));
-            let code = if distinct <= 256 { 1 } else { 2 };
-            assert_eq!(lists.entry_bytes(), (8 + 2 * code) * scrambled.len() + 4 * lists.tallies.len());
+            // Each entry is its other end, a byte among 60 nodes, and its code, a byte below
+            // 128 and two above; each list starts with its length, a byte; and the table.
+            let entries = lists.entry_bytes() - 4 * lists.tallies.len();
+            let widest = if distinct <= 128 { 1 } else { 2 };
+            let links = 2 * scrambled.len();
+            assert!(entries >= 2 * links + len as usize && entries <= (1 + widest) * links + len as usize, "{entries}");
         }
     }
 }

@@ -58,6 +58,7 @@ mod closure;
 mod distribution;
 mod links;
 mod nodal;
+mod packed;
 mod params;
 mod product;
 mod shaft;

@@ -76,7 +76,7 @@ impl HierarchicalColumns {
             }
             for list in [&self.near, &self.pairs] {
                 offsets(&mut out, &list.start);
-                list.other.iter().for_each(|o| out.extend(o.to_le_bytes()));
+                list.ends().for_each(|(_, o)| out.extend(o.to_le_bytes()));
                 list.value.iter().for_each(|v| out.extend(v.to_le_bytes()));
             }
             self.weights.iter().for_each(|w| out.extend(w.to_le_bytes()));

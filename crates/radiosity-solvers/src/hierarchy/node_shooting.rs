@@ -371,8 +371,7 @@ impl Solver for NodeShooting {
         let mut pipeline = self.pipeline.take().expect("init starts the pipeline");
         self.choose(&pipeline);
         let shot = self.sending.iter().filter(|s| **s).count() as u64;
-        let touched = pipeline.shoot(problem, &self.sending);
-        pipeline.push(problem, &mut self.brought);
+        let touched = pipeline.shoot_and_push(problem, &self.sending, &mut self.brought);
         state.cost.group_seconds += self.take(problem, &pipeline);
         let pulled = pipeline.pull(problem, state, &self.brought, &self.taken);
         self.pipeline = Some(pipeline);
@@ -398,6 +397,11 @@ impl Solver for NodeShooting {
     fn record(&self) -> Record {
         let mut record = Record::new();
         record.set("rounds", self.rounds).set("nodes_shot", self.nodes_shot).set("holes_released", self.released);
+        if let Some(pipeline) = &self.pipeline {
+            // What the run holds of its own: the pipeline, and a round's flags and vectors.
+            let own = self.sending.capacity() + (self.brought.capacity() + self.taken.capacity()) * size_of::<Real>();
+            record.set("state_bytes", (pipeline.bytes() + own) as u64);
+        }
         if self.params.grouping != Grouping::None {
             record
                 .set("group_solves", self.groups.solves)

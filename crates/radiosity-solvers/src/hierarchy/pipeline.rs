@@ -23,17 +23,18 @@
 //!
 //! Every step ends on a pull, so `P = 0` between steps.
 //!
-//! ## The bound
+//! ## Memory
 //!
-//! Each node keeps `power_kc ≥ ‖u_kc‖_A` (the area-weighted sums of `|s|` pulled under it since
-//! it last shot: equal while everything pulled is non-negative). With the send shares `σ_kc`
-//! of the source ([`radiosity_core::LinkSource::send_shares`], weighed by `ρ`),
-//! `‖r_c‖_A ≤ Σ_k σ_kc power_kc + ‖z_c‖_A`: a bound on the displayed radiosity's residual
-//! that needs no column ([`ResidualBound`], all of it direct). A source without shares (a
-//! stored matrix taken as one level) gives `‖ρ S_k u‖_A ≤ κ ‖u‖_A`, since `S_k ≤ F`: the bound
-//! is then `κ Σ_k power_kc + ‖z_c‖_A`. The residual is non-negative while every `u_k` and `z`
-//! are: from non-negative emissions, as long as nothing is overshot.
-//!
+//! The charges are held in groups of channels, and the source is called for a group at a
+//! time (its arithmetic is each channel's own, so the bits are the same whatever the groups).
+//! A group's scratch takes at most [`GROUP_BYTES`]: all channels in one group up to about a
+//! million patches, one channel at a time at ten million, so that what the source needs
+//! beside the pipeline is one group's worth. A shot is pushed at once, group by group, so the
+//! fields are never held for every channel: one buffer of a group's fields serves the shots'
+//! fields and the pulls' charges in turn. Per node, with `c` channels in groups of `g`, the
+//! pipeline holds `c · charge_len + g · max(charge_len, field_len) + 3 c` numbers, not
+//! `c · (2 charge_len + field_len + 3)`.
+
 //! ## One level
 //!
 //! A source that shows no links is taken as one level: every patch its own node and root, its
@@ -46,6 +47,9 @@ use crate::run::problem::Problem;
 use crate::run::residual_bound::{ResidualBound, area_norms};
 use crate::run::state::State;
 use radiosity_core::{NO_PARENT, Real};
+
+/// The most bytes a group of channels' scratch takes (module doc).
+const GROUP_BYTES: usize = 1 << 30;
 
 /// The unshot radiosity on the nodes (module doc).
 #[derive(Debug, Default)]
@@ -62,27 +66,37 @@ pub(crate) struct Pipeline {
     sizes: Vec<usize>,
     charge_len: usize,
     field_len: usize,
-    /// The charges of the `u_k` (nodes × channels × charge).
+    /// The channels of a group ([`GROUP_BYTES`]; the last group may have fewer).
+    group: usize,
+    /// The charges of the `u_k`, group by group, each group node-major (nodes × the group's
+    /// channels × charge), as the source takes them.
     pending: Vec<Real>,
     /// `power_kc ≥ ‖u_kc‖_A` (nodes × channels).
     power: Vec<Real>,
     /// The send shares `σ_kc` (nodes × channels), when the source has them.
     shares: Option<Vec<Real>>,
-    /// What shots sent and no push brought down (nodes × channels × field).
-    fields: Vec<Real>,
     /// The explicit residual `z` (patch-major).
     explicit: Vec<Real>,
     /// Whether every amount pulled so far was non-negative.
     nonnegative: bool,
-    /// Scratch: the charges of a pull, the powers of a pull, a column.
+    /// Scratch: a group's fields of a shot or charges of a pull (nodes × the group's channels
+    /// × the larger), the powers of a pull, a group's channels of a vector over the patches,
+    /// a column.
     scratch: Vec<Real>,
     scratch_power: Vec<Real>,
+    channels: Vec<Real>,
     column: Vec<Real>,
 }
 
 impl Pipeline {
     /// The pipeline over `problem`'s links (or one level), started from `B = E`.
     pub(crate) fn start(problem: &Problem<'_>, state: &State) -> Pipeline {
+        Pipeline::start_in(problem, state, GROUP_BYTES)
+    }
+
+    /// [`Pipeline::start`], a group of channels' scratch taking at most `budget` bytes (one
+    /// channel at least).
+    fn start_in(problem: &Problem<'_>, state: &State, budget: usize) -> Pipeline {
         let (n, k) = (problem.n(), state.channels);
         let mut p = Pipeline { k, nonnegative: true, ..Pipeline::default() };
         match problem.link_source() {
@@ -92,14 +106,32 @@ impl Pipeline {
                 p.leaves = links.leaves().to_vec();
                 p.link_counts = (0..p.parents.len()).map(|node| links.link_count(node) as u64).collect();
                 (p.charge_len, p.field_len) = (links.charge_len(), links.field_len());
-                let mut shares = vec![0.0; p.parents.len() * k];
+                let nodes = p.parents.len();
+                let widest = p.charge_len.max(p.field_len);
+                p.group = (budget / (nodes.max(1) * widest * size_of::<Real>())).clamp(1, k.max(1));
+                let mut shares = vec![0.0; nodes * k];
                 let rho = problem.system().reflectivities();
-                // The shares read every link once, as a product does: counted so.
+                // The shares read every link once, as a product does: counted so. A group at a
+                // time, so that the source's own buffers are one group's.
                 let every: u64 = p.link_counts.iter().sum();
-                let known = problem.through_links(every, |l| l.send_shares(rho, k, &mut shares));
+                let groups = p.groups();
+                let known = problem.through_links(every, |l| {
+                    for (first, g) in groups {
+                        let rho_g = channels_of(rho, k, first, g);
+                        let mut shares_g = vec![0.0; nodes * g];
+                        if !l.send_shares(&rho_g, g, &mut shares_g) {
+                            return false;
+                        }
+                        for (node, s) in shares_g.chunks_exact(g).enumerate() {
+                            shares[node * k + first..node * k + first + g].copy_from_slice(s);
+                        }
+                    }
+                    true
+                });
                 p.shares = known.unwrap_or(false).then_some(shares);
             }
             None => {
+                p.group = k;
                 p.parents = vec![NO_PARENT; n];
                 p.leaves = (0..n as u32).collect();
                 p.link_counts = vec![n as u64; n];
@@ -118,14 +150,41 @@ impl Pipeline {
         }
         p.pending = vec![0.0; nodes * k * p.charge_len];
         p.power = vec![0.0; nodes * k];
-        p.fields = vec![0.0; nodes * k * p.field_len];
         p.explicit = vec![0.0; n * k];
-        p.scratch = vec![0.0; p.pending.len()];
+        if p.linked {
+            p.scratch = vec![0.0; nodes * p.group * p.charge_len.max(p.field_len)];
+            p.channels = vec![0.0; n * p.group];
+        }
         p.scratch_power = vec![0.0; p.power.len()];
         // B = E: every node holds E under it, unsent.
         p.add_pending(problem, &state.radiosity);
         p.nonnegative = state.radiosity.iter().all(|v| *v >= 0.0);
         p
+    }
+
+    /// The groups of channels: each one's first channel and its number of channels.
+    fn groups(&self) -> Vec<(usize, usize)> {
+        (0..self.k).step_by(self.group.max(1)).map(|first| (first, self.group.min(self.k - first))).collect()
+    }
+
+    /// Where the charges of the group starting at channel `first` lie in `pending`.
+    fn group_range(&self, first: usize, g: usize) -> std::ops::Range<usize> {
+        let per_channel = self.parents.len() * self.charge_len;
+        first * per_channel..(first + g) * per_channel
+    }
+
+    /// The bytes the pipeline holds (its vectors' capacities).
+    pub(crate) fn bytes(&self) -> usize {
+        let reals = [&self.pending, &self.power, &self.explicit, &self.scratch, &self.scratch_power, &self.channels]
+            .iter()
+            .map(|v| v.capacity())
+            .sum::<usize>()
+            + self.shares.as_ref().map_or(0, Vec::capacity)
+            + self.column.capacity();
+        reals * size_of::<Real>()
+            + (self.parents.capacity() + self.leaves.capacity()) * size_of::<u32>()
+            + self.link_counts.capacity() * size_of::<u64>()
+            + self.sizes.capacity() * size_of::<usize>()
     }
 
     /// The number of nodes.
@@ -178,59 +237,75 @@ impl Pipeline {
         }
         self.power.iter_mut().zip(&self.scratch_power).for_each(|(p, d)| *p += d);
         if self.linked {
-            let scratch = &mut self.scratch;
-            problem.through_links(0, |l| l.charges(s, k, scratch));
-            self.pending.iter_mut().zip(&self.scratch).for_each(|(p, d)| *p += d);
+            for (first, g) in self.groups() {
+                let range = self.group_range(first, g);
+                let (channels, scratch) = (&mut self.channels[..s.len() / k * g], &mut self.scratch[..range.len()]);
+                pick_channels(s, k, first, g, channels);
+                problem.through_links(0, |l| l.charges(channels, g, scratch));
+                self.pending[range].iter_mut().zip(scratch.iter()).for_each(|(p, d)| *p += d);
+            }
         } else {
             self.pending.iter_mut().zip(s).for_each(|(p, d)| *p += d);
         }
     }
 
-    /// Shoots the nodes `sending` marks: their charges into the fields, their `u_k` cleared.
-    /// Returns the links touched.
-    pub(crate) fn shoot(&mut self, problem: &Problem<'_>, sending: &[bool]) -> u64 {
-        let k = self.k;
+    /// Shoots the nodes `sending` marks and pushes what they sent down to the patches: their
+    /// charges go through their links into the fields and their `u_k` are cleared, and
+    /// `t = ρ P + z` is written into `t` (patch-major), leaving `P = 0`; the caller pulls an
+    /// amount next ([`Pipeline::pull`]). A channel at a time: its fields are pushed before the
+    /// next channel's are sent. Returns the links touched.
+    pub(crate) fn shoot_and_push(&mut self, problem: &Problem<'_>, sending: &[bool], t: &mut Vec<Real>) -> u64 {
+        let (n, k) = (problem.n(), self.k);
+        t.resize(n * k, 0.0);
         let touched: u64 = (0..sending.len()).filter(|&node| sending[node]).map(|node| self.link_counts[node]).sum();
         if self.linked {
-            let (pending, fields) = (&self.pending, &mut self.fields);
-            problem.through_links(touched, |l| l.shoot(pending, sending, k, fields));
+            let groups = self.groups();
+            let field_len = self.parents.len() * self.field_len;
+            let ranges: Vec<_> = groups.iter().map(|&(first, g)| self.group_range(first, g)).collect();
+            let (pending, scratch, channels) = (&self.pending, &mut self.scratch, &mut self.channels);
+            problem.through_links(touched, |l| {
+                for (&(first, g), range) in groups.iter().zip(ranges) {
+                    let (fields, out) = (&mut scratch[..field_len * g], &mut channels[..n * g]);
+                    fields.fill(0.0);
+                    l.shoot(&pending[range], sending, g, fields);
+                    l.evaluate(fields, g, out);
+                    for (t, out) in t.chunks_exact_mut(k).zip(out.chunks_exact(g)) {
+                        t[first..first + g].copy_from_slice(out);
+                    }
+                }
+            });
+            let charge = self.charge_len;
+            for (first, g) in groups {
+                let range = self.group_range(first, g);
+                let pending = &mut self.pending[range];
+                for node in (0..sending.len()).filter(|&node| sending[node]) {
+                    pending[node * g * charge..(node + 1) * g * charge].fill(0.0);
+                }
+            }
         } else {
-            let n = problem.n();
+            t.fill(0.0);
             self.column.resize(n, 0.0);
             for j in (0..n).filter(|&j| sending[j]) {
                 problem.column(j, &mut self.column);
                 let amount = &self.pending[j * k..(j + 1) * k];
-                for (field, &f) in self.fields.chunks_exact_mut(k).zip(&self.column) {
+                for (field, &f) in t.chunks_exact_mut(k).zip(&self.column) {
                     if f != 0.0 {
                         field.iter_mut().zip(amount).for_each(|(v, a)| *v += f * a);
                     }
                 }
             }
+            for j in (0..n).filter(|&j| sending[j]) {
+                self.pending[j * k..(j + 1) * k].fill(0.0);
+            }
         }
-        let (charge, pending, power) = (k * self.charge_len, &mut self.pending, &mut self.power);
         for node in (0..sending.len()).filter(|&node| sending[node]) {
-            pending[node * charge..(node + 1) * charge].fill(0.0);
-            power[node * k..(node + 1) * k].fill(0.0);
-        }
-        touched
-    }
-
-    /// Pushes what the shots sent down to the patches: writes `t = ρ P + z` into `t`
-    /// (patch-major) and leaves `P = 0`; the caller pulls an amount next ([`Pipeline::pull`]).
-    pub(crate) fn push(&mut self, problem: &Problem<'_>, t: &mut Vec<Real>) {
-        let k = self.k;
-        t.resize(problem.n() * k, 0.0);
-        if self.linked {
-            let fields = &mut self.fields;
-            problem.through_links(0, |l| l.evaluate(fields, k, t));
-        } else {
-            t.copy_from_slice(&self.fields);
-            self.fields.fill(0.0);
+            self.power[node * k..(node + 1) * k].fill(0.0);
         }
         let rho = problem.system().reflectivities();
         for ((t, rho), z) in t.iter_mut().zip(rho).zip(&self.explicit) {
             *t = rho * *t + z;
         }
+        touched
     }
 
     /// Pulls `s` after a push that gave `t`: `B += s`, every `u_k += s` under `k`,
@@ -295,5 +370,169 @@ impl Pipeline {
         let emitted: Real = area_norms(system.areas(), system.emissions(), self.k).iter().sum();
         let r: Real = (0..self.k).map(|c| bound.residual_norm(c, 1.0)).sum();
         if emitted > 0.0 { r / emitted } else { 0.0 }
+    }
+}
+
+/// Channels `first..first + g` of `x` (patch-major, `k` channels) into `out` (patch-major, `g`).
+fn pick_channels(x: &[Real], k: usize, first: usize, g: usize, out: &mut [Real]) {
+    for (out, x) in out.chunks_exact_mut(g).zip(x.chunks_exact(k)) {
+        out.copy_from_slice(&x[first..first + g]);
+    }
+}
+
+/// Channels `first..first + g` of `x` (patch-major, `k` channels).
+fn channels_of(x: &[Real], k: usize, first: usize, g: usize) -> Vec<Real> {
+    let mut out = vec![0.0; x.len() / k * g];
+    pick_channels(x, k, first, g, &mut out);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use radiosity_core::{Channels, ColumnSource, DenseColumns, LinearSystem, LinkSource};
+
+    /// Two levels over a dense matrix: a root over every patch, which sends nothing, and a leaf
+    /// a patch, whose links are its column. A charge is a leaf's value, a field its irradiance.
+    struct TwoLevels {
+        f: DenseColumns,
+        area: Vec<Real>,
+        parents: Vec<u32>,
+        leaves: Vec<u32>,
+    }
+
+    impl TwoLevels {
+        fn new(f: DenseColumns, area: Vec<Real>) -> TwoLevels {
+            let n = area.len();
+            let parents = std::iter::once(NO_PARENT).chain(std::iter::repeat_n(0, n)).collect();
+            TwoLevels { f, area, parents, leaves: (1..=n as u32).collect() }
+        }
+    }
+
+    impl ColumnSource for TwoLevels {
+        fn patch_count(&self) -> usize {
+            self.area.len()
+        }
+
+        fn fill_column(&self, j: usize, column: &mut [Real]) {
+            self.f.fill_column(j, column);
+        }
+
+        fn link_source(&self) -> Option<&dyn LinkSource> {
+            Some(self)
+        }
+    }
+
+    impl LinkSource for TwoLevels {
+        fn parents(&self) -> &[u32] {
+            &self.parents
+        }
+
+        fn leaves(&self) -> &[u32] {
+            &self.leaves
+        }
+
+        fn link_count(&self, node: usize) -> usize {
+            if node == 0 { 0 } else { self.area.len() }
+        }
+
+        fn charge_len(&self) -> usize {
+            1
+        }
+
+        fn field_len(&self) -> usize {
+            1
+        }
+
+        fn charges(&self, x: &[Real], k: usize, charges: &mut [Real]) {
+            charges[..k].fill(0.0);
+            charges[k..].copy_from_slice(x);
+        }
+
+        fn shoot(&self, charges: &[Real], sending: &[bool], k: usize, fields: &mut [Real]) {
+            let n = self.area.len();
+            for j in (0..n).filter(|&j| sending[1 + j]) {
+                for i in 0..n {
+                    for c in 0..k {
+                        fields[(1 + i) * k + c] += self.f.get(i, j) * charges[(1 + j) * k + c];
+                    }
+                }
+            }
+        }
+
+        fn evaluate(&self, fields: &mut [Real], k: usize, out: &mut [Real]) {
+            out.copy_from_slice(&fields[k..]);
+            fields.fill(0.0);
+        }
+
+        fn send_shares(&self, weights: &[Real], k: usize, shares: &mut [Real]) -> bool {
+            let n = self.area.len();
+            shares[..k].fill(0.0);
+            for j in 0..n {
+                for c in 0..k {
+                    let sent: Real = (0..n).map(|i| weights[i * k + c] * self.area[i] * self.f.get(i, j)).sum();
+                    shares[(1 + j) * k + c] = sent / self.area[j];
+                }
+            }
+            true
+        }
+
+        fn block(&self, patches: &[usize], block: &mut [Real]) {
+            let m = patches.len();
+            for (a, &i) in patches.iter().enumerate() {
+                for (b, &j) in patches.iter().enumerate() {
+                    block[a * m + b] = self.f.get(i, j);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn groups_of_one_channel_give_the_bits_of_one_group_a_first_round_gives_rho_f_e_and_the_bytes_are_counted() {
+        let n = 9;
+        let area: Vec<Real> = (0..n).map(|i| 1.0 + (i % 4) as Real * 0.25).collect();
+        let f = DenseColumns::from_fn(n, |i, j| if i == j { 0.0 } else { (1 + (i * 5 + j * 3) % 7) as Real / 60.0 });
+        let rho: Vec<Real> = (0..3 * n).map(|idx| 0.2 + 0.7 * ((idx * 5) % 7) as Real / 7.0).collect();
+        let e: Vec<Real> =
+            (0..3 * n).map(|idx| if (idx / 3) % 3 == 1 { 1.0 + (idx % 3) as Real } else { 0.0 }).collect();
+        let system = LinearSystem::new(Channels::Rgb, area.clone(), rho.clone(), e.clone()).unwrap();
+        let source = TwoLevels::new(f.clone(), area);
+        let problem = Problem::new(&system, &source).unwrap();
+        let run = |budget: usize| {
+            let mut state = State::from_emission(&e, 3);
+            let mut pipeline = Pipeline::start_in(&problem, &state, budget);
+            let group = pipeline.group;
+            let mut brought = Vec::new();
+            for round in 0..5 {
+                // Every leaf in the first round, then every other leaf in turn, and the root.
+                let sending: Vec<bool> =
+                    (0..=n).map(|node| node == 0 || round == 0 || (node + round) % 2 == 0).collect();
+                let mut t = Vec::new();
+                pipeline.shoot_and_push(&problem, &sending, &mut t);
+                pipeline.pull(&problem, &mut state, &t, &t).unwrap();
+                brought.push(t);
+            }
+            (group, brought, state.radiosity, pipeline.bound(&problem))
+        };
+        let (whole, one) = (run(usize::MAX), run(1));
+        // What it counts of itself is what the allocator holds for it, within 10%.
+        let state = State::from_emission(&e, 3);
+        let mut started = None;
+        let info = allocation_counter::measure(|| started = Some(Pipeline::start_in(&problem, &state, usize::MAX)));
+        let (held, counted) = (info.bytes_current as f64, started.unwrap().bytes() as f64);
+        assert!((counted - held).abs() <= 0.1 * held, "counted {counted} bytes, the allocator holds {held}");
+        assert_eq!((whole.0, one.0), (3, 1));
+        // The same bits, round for round.
+        assert_eq!(whole.1, one.1);
+        assert_eq!(whole.2, one.2);
+        assert_eq!(format!("{:?}", whole.3), format!("{:?}", one.3));
+        // The first round sends E from every patch: ρ F E.
+        for i in 0..n {
+            for c in 0..3 {
+                let want = rho[i * 3 + c] * (0..n).map(|j| f.get(i, j) * e[j * 3 + c]).sum::<Real>();
+                let got = whole.1[0][i * 3 + c];
+                assert!((got - want).abs() <= 1e-15 * want.abs().max(1.0), "{i}, {c}: {got} against {want}");
+            }
+        }
     }
 }

@@ -14,8 +14,9 @@
 //! cluster's moments); what a receiver gets is a **field** at a node, a few numbers per channel
 //! that give, pushed down to the patches below, the irradiance `(F u)_i` of every patch `i`
 //! under it. Both are opaque to the solver: it holds them in flat buffers of
-//! [`LinkSource::charge_len`] and [`LinkSource::field_len`] numbers per node and channel, and
-//! only adds them (both are linear in `u`).
+//! [`LinkSource::charge_len`] and [`LinkSource::field_len`] numbers per node and channel, laid
+//! out as the source chooses, only adds them (both are linear in `u`), and has the source
+//! clear the charges of the nodes it shot ([`LinkSource::clear`]).
 //!
 //! - [`LinkSource::charges`] gives every node's charge of a vector (one pass up the tree);
 //! - [`LinkSource::shoot`] sends the charges of some nodes through their links into the fields
@@ -66,13 +67,24 @@ pub trait LinkSource: Sync {
     /// The numbers a node's field holds per channel.
     fn field_len(&self) -> usize;
 
-    /// Writes into `charges` (`nodes × channels × charge_len`, node-major) every node's charge
-    /// of `x` (patch-major, `channels` channels): what the node would send of `x` restricted
-    /// to its patches.
+    /// Writes into `charges` (`nodes × channels × charge_len` numbers, node-major unless the
+    /// source says otherwise) every node's charge of `x` (patch-major, `channels` channels):
+    /// what the node would send of `x` restricted to its patches.
     fn charges(&self, x: &[Real], channels: usize, charges: &mut [Real]);
 
+    /// Zeroes in `charges` the charges of the nodes marked in `sending`, every channel. The
+    /// default takes the charges node-major, as [`LinkSource::charges`] does unless the
+    /// source lays them out otherwise.
+    fn clear(&self, sending: &[bool], channels: usize, charges: &mut [Real]) {
+        let len = channels * self.charge_len();
+        for (charge, _) in charges.chunks_exact_mut(len).zip(sending).filter(|(_, s)| **s) {
+            charge.fill(0.0);
+        }
+    }
+
     /// Sends the charges of the nodes marked in `sending` (one flag per node) through their
-    /// links, adding to `fields` (`nodes × channels × field_len`). `charges` has every node's
+    /// links, adding to `fields` (`nodes × channels × field_len` numbers, laid out as the
+    /// source chooses). `charges` has every node's
     /// slot; only the senders' are read.
     fn shoot(&self, charges: &[Real], sending: &[bool], channels: usize, fields: &mut [Real]);
 

@@ -11,13 +11,18 @@
 //! the fields give `Σ_k S_k x_k`: exactly what a product gives when every node sends the
 //! charge of the same `x` (tested).
 //!
+//! A buffer of charges over `N` nodes and `k` channels holds every node's moments first
+//! (`N k` of them, node-major), then every node's value (`N k` numbers, only the leaves'
+//! used); fields likewise, their forms first. So the moments and forms are read and written in
+//! place, with no copy of their own: at ten million patches a copy is 2 GB a channel.
+//!
 //! An operator split over ranks does not show its links: each rank holds a share of them, and a
 //! shot's fields would need a sum over ranks at every push (not built).
 
 use super::HierarchicalColumns;
 use super::links::{Span, kernel_factor};
 use super::product::{Form, Moments};
-use radiosity_core::{LinkSource, Real, Vec3};
+use radiosity_core::{LinkSource, Real};
 use rayon::prelude::*;
 
 /// The numbers of a charge per channel: `M0` (3), `M1` (9), and a leaf's `x_p`.
@@ -30,50 +35,23 @@ const FIELD: usize = 13;
 /// the product's moments, a few roundings from the entries the columns give.
 const SHARE_MARGIN: Real = 1e-9;
 
-fn moments(c: &[Real]) -> Moments {
-    Moments {
-        m0: Vec3::new(c[0], c[1], c[2]),
-        m1: [Vec3::new(c[3], c[4], c[5]), Vec3::new(c[6], c[7], c[8]), Vec3::new(c[9], c[10], c[11])],
-    }
+/// The moments and the values of a buffer of charges (or the forms and the irradiances of a
+/// buffer of fields) over `nodes` nodes and `k` channels (module doc).
+fn parts<T: bytemuck::Pod>(buffer: &[Real], nodes: usize, k: usize) -> (&[T], &[Real]) {
+    let (head, values) = buffer.split_at(nodes * k * size_of::<T>() / size_of::<Real>());
+    (bytemuck::cast_slice(head), values)
 }
 
-fn put_moments(m: &Moments, c: &mut [Real]) {
-    c[..3].copy_from_slice(&m.m0.to_array());
-    for k in 0..3 {
-        c[3 + 3 * k..6 + 3 * k].copy_from_slice(&m.m1[k].to_array());
-    }
-}
-
-fn form(f: &[Real]) -> Form {
-    Form {
-        v: Vec3::new(f[0], f[1], f[2]),
-        w: [Vec3::new(f[3], f[4], f[5]), Vec3::new(f[6], f[7], f[8]), Vec3::new(f[9], f[10], f[11])],
-    }
-}
-
-fn put_form(form: &Form, f: &mut [Real]) {
-    f[..3].copy_from_slice(&form.v.to_array());
-    for k in 0..3 {
-        f[3 + 3 * k..6 + 3 * k].copy_from_slice(&form.w[k].to_array());
-    }
+/// [`parts`], to write.
+fn parts_mut<T: bytemuck::Pod>(buffer: &mut [Real], nodes: usize, k: usize) -> (&mut [T], &mut [Real]) {
+    let (head, values) = buffer.split_at_mut(nodes * k * size_of::<T>() / size_of::<Real>());
+    (bytemuck::cast_slice_mut(head), values)
 }
 
 impl HierarchicalColumns {
     /// The patch of leaf `node`.
     fn patch_of_leaf(&self, node: usize) -> usize {
         self.tree.order[self.tree.nodes[node].first as usize] as usize
-    }
-
-    /// The moments of `charges` (nodes × channels), those of the nodes `sending` does not mark
-    /// left zero.
-    fn moments_of(&self, charges: &[Real], sending: Option<&[bool]>, k: usize) -> Vec<Moments> {
-        (0..self.tree.nodes.len() * k)
-            .into_par_iter()
-            .map(|idx| match sending {
-                Some(s) if !s[idx / k] => Moments::default(),
-                _ => moments(&charges[idx * CHARGE..]),
-            })
-            .collect()
     }
 
     /// What patch `p`'s near links and far pairs bring it from the values `value(q)` of the
@@ -130,58 +108,56 @@ impl LinkSource for HierarchicalColumns {
         FIELD
     }
 
-    /// The product's moments, gathered up the tree (`product`).
+    /// The product's moments, gathered up the tree (`product`) into the buffer itself.
     fn charges(&self, x: &[Real], k: usize, charges: &mut [Real]) {
-        let moments = self.gathered_moments(x, k, &self.weights);
-        charges.fill(0.0);
-        for (slot, m) in charges.chunks_exact_mut(CHARGE).zip(&moments) {
-            put_moments(m, slot);
-        }
+        let (moments, values) = parts_mut::<Moments>(charges, self.tree.nodes.len(), k);
+        self.gather_into(x, k, &self.weights, moments);
+        values.fill(0.0);
         for (p, &leaf) in self.tree.leaf.iter().enumerate() {
-            for ch in 0..k {
-                charges[(leaf as usize * k + ch) * CHARGE + 12] = x[p * k + ch];
-            }
+            values[leaf as usize * k..(leaf as usize + 1) * k].copy_from_slice(&x[p * k..(p + 1) * k]);
         }
     }
 
     /// In parallel over the receivers, each summing its links in their fixed order.
     fn shoot(&self, charges: &[Real], sending: &[bool], k: usize, fields: &mut [Real]) {
-        let leaves = &self.tree.leaf;
-        let moments = self.moments_of(charges, Some(sending), k);
-        fields.par_chunks_mut(k * FIELD).enumerate().for_each_init(
-            || vec![Form::default(); k],
-            |forms, (node, field)| {
-                if self.far.degree(node) > 0 {
-                    for (ch, f) in forms.iter_mut().enumerate() {
-                        *f = form(&field[ch * FIELD..]);
-                    }
-                    self.receive_far(node, &moments, Some(sending), forms);
-                    for (ch, f) in forms.iter().enumerate() {
-                        put_form(f, &mut field[ch * FIELD..]);
-                    }
+        let (leaves, nodes) = (&self.tree.leaf, self.tree.nodes.len());
+        let (moments, values) = parts::<Moments>(charges, nodes, k);
+        let (forms, near) = parts_mut::<Form>(fields, nodes, k);
+        forms.par_chunks_mut(k).zip(near.par_chunks_mut(k)).enumerate().for_each(|(node, (forms, near))| {
+            if self.far.degree(node) > 0 {
+                self.receive_far(node, moments, Some(sending), forms);
+            }
+            if self.tree.nodes[node].is_leaf() {
+                let p = self.patch_of_leaf(node);
+                for (ch, near) in near.iter_mut().enumerate() {
+                    let value = |q: usize| {
+                        let leaf = leaves[q] as usize;
+                        sending[leaf].then(|| values[leaf * k + ch])
+                    };
+                    *near += self.receive_near(p, value);
                 }
-                if self.tree.nodes[node].is_leaf() {
-                    let p = self.patch_of_leaf(node);
-                    for ch in 0..k {
-                        let value = |q: usize| {
-                            let leaf = leaves[q] as usize;
-                            sending[leaf].then(|| charges[(leaf * k + ch) * CHARGE + 12])
-                        };
-                        field[ch * FIELD + 12] += self.receive_near(p, value);
-                    }
-                }
-            },
-        );
+            }
+        });
     }
 
-    /// Pushed down in pre-order (`product`), then evaluated at the leaves.
+    /// Zeroes the moments and values of the nodes `sending` marks.
+    fn clear(&self, sending: &[bool], k: usize, charges: &mut [Real]) {
+        let (moments, values) = parts_mut::<Moments>(charges, self.tree.nodes.len(), k);
+        (moments.par_chunks_mut(k).zip(values.par_chunks_mut(k)).zip(sending)).for_each(|((m, v), &s)| {
+            if s {
+                m.fill(Moments::default());
+                v.fill(0.0);
+            }
+        });
+    }
+
+    /// Pushed down in pre-order (`product`), in place, then evaluated at the leaves.
     fn evaluate(&self, fields: &mut [Real], k: usize, out: &mut [Real]) {
-        let mut forms: Vec<Form> = fields.chunks_exact(FIELD).map(form).collect();
-        self.pushed_down(&mut forms, k, out);
+        let (forms, near) = parts_mut::<Form>(fields, self.tree.nodes.len(), k);
+        self.pushed_down(forms, k, out);
         for (p, &leaf) in self.tree.leaf.iter().enumerate() {
             for ch in 0..k {
-                let near = fields[(leaf as usize * k + ch) * FIELD + 12];
-                out[p * k + ch] = self.weights[p] * out[p * k + ch] + near;
+                out[p * k + ch] = self.weights[p] * out[p * k + ch] + near[leaf as usize * k + ch];
             }
         }
         fields.fill(0.0);
@@ -198,10 +174,10 @@ impl LinkSource for HierarchicalColumns {
         let nodes = &self.tree.nodes;
         let mut charges = vec![0.0; nodes.len() * k * CHARGE];
         self.charges(weights, k, &mut charges);
-        let moments = self.moments_of(&charges, None, k);
+        let (moments, _) = parts::<Moments>(&charges, nodes.len(), k);
         shares.par_chunks_mut(k).enumerate().for_each(|(node, share)| {
             let mut forms = vec![Form::default(); k];
-            self.receive_far(node, &moments, None, &mut forms);
+            self.receive_far(node, moments, None, &mut forms);
             share.fill(0.0);
             let centre = nodes[node].centre;
             for &j in self.tree.patches_of(node as u32) {

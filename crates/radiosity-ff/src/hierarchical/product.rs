@@ -192,10 +192,15 @@ impl HierarchicalColumns {
     /// the same whatever their number).
     pub(super) fn gathered_moments(&self, x: &[Real], k: usize, weights: &[Real]) -> Vec<Moments> {
         let mut moments = vec![Moments::default(); self.tree.nodes.len() * k];
-        if !moments.is_empty() {
-            self.gather_up(0, &mut moments, x, k, weights);
-        }
+        self.gather_into(x, k, weights, &mut moments);
         moments
+    }
+
+    /// [`Self::gathered_moments`] into `moments` (nodes × `k`), every one written.
+    pub(super) fn gather_into(&self, x: &[Real], k: usize, weights: &[Real], moments: &mut [Moments]) {
+        if !moments.is_empty() {
+            self.gather_up(0, moments, x, k, weights);
+        }
     }
 
     /// The moments of `node`'s subtree into `moments` (its nodes × `k`, in pre-order from
@@ -383,7 +388,8 @@ const MOMENT_BYTES: usize = 1 << 30;
 /// What a node sends through its far links: `M0 = Σ w m` and `M1 = Σ w m bᵀ` (rows `k` of
 /// `M1` are `Σ w m_k b`) over its patches, `w = A x`, `m` the normal and `b` the offset of the
 /// centroid from the node's centre.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
 pub(super) struct Moments {
     pub(super) m0: Vec3,
     pub(super) m1: [Vec3; 3],
@@ -407,7 +413,8 @@ impl Moments {
 
 /// What a node receives through its far links, as a function of a patch's normal `n` and
 /// offset `a` from the node's centre: `n · V + Σ_k n_k (W_k · a)`.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
 pub(super) struct Form {
     pub(super) v: Vec3,
     pub(super) w: [Vec3; 3],

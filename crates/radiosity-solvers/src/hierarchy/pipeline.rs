@@ -28,11 +28,11 @@
 //! The charges are held in groups of channels, and the source is called for a group at a
 //! time (its arithmetic is each channel's own, so the bits are the same whatever the groups).
 //! A group's scratch takes at most [`GROUP_BYTES`]: all channels in one group up to about a
-//! million patches, one channel at a time at ten million, so that what the source needs
-//! beside the pipeline is one group's worth. A shot is pushed at once, group by group, so the
-//! fields are never held for every channel: one buffer of a group's fields serves the shots'
-//! fields and the pulls' charges in turn. Per node, with `c` channels in groups of `g`, the
-//! pipeline holds `c · charge_len + g · max(charge_len, field_len) + 3 c` numbers, not
+//! million patches, one channel at a time at ten million. A shot is pushed at once, group by
+//! group, so the fields are never held for every channel: one buffer of a group's fields
+//! serves the shots' fields and the pulls' charges in turn, and the hierarchical operator
+//! works in these buffers in place. Per node, with `c` channels in groups of `g`, the pipeline
+//! holds `c · charge_len + g · max(charge_len, field_len) + 3 c` numbers, not
 //! `c · (2 charge_len + field_len + 3)`.
 
 //! ## One level
@@ -68,8 +68,8 @@ pub(crate) struct Pipeline {
     field_len: usize,
     /// The channels of a group ([`GROUP_BYTES`]; the last group may have fewer).
     group: usize,
-    /// The charges of the `u_k`, group by group, each group node-major (nodes × the group's
-    /// channels × charge), as the source takes them.
+    /// The charges of the `u_k`, group by group, each group as the source lays out the charges
+    /// of that many channels (nodes × the group's channels × charge).
     pending: Vec<Real>,
     /// `power_kc ≥ ‖u_kc‖_A` (nodes × channels).
     power: Vec<Real>,
@@ -274,13 +274,10 @@ impl Pipeline {
                     }
                 }
             });
-            let charge = self.charge_len;
             for (first, g) in groups {
                 let range = self.group_range(first, g);
                 let pending = &mut self.pending[range];
-                for node in (0..sending.len()).filter(|&node| sending[node]) {
-                    pending[node * g * charge..(node + 1) * g * charge].fill(0.0);
-                }
+                problem.through_links(0, |l| l.clear(sending, g, pending));
             }
         } else {
             t.fill(0.0);

@@ -383,7 +383,8 @@ impl StochasticJacobi {
         }
         streams.iteration = chain.iteration;
         chain.iteration += 1;
-        // A regular iteration from the estimate.
+        // A regular iteration from the estimate, into `fresh`: what the rays bring, then, in
+        // place, the new estimate `E + ρ ·` that (one vector over the patches, not two).
         let mut fresh = vec![0.0; n * k];
         let cast = match (params.form, params.global_lines) {
             (JacobiForm::Gathering, false) => {
@@ -392,40 +393,28 @@ impl StochasticJacobi {
                     (0..k).map(|c| (0..n).map(|i| areas[i] * chain.estimate[i * k + c]).sum::<Real>() / total).collect()
                 });
                 let reflects = |i: usize| (0..k).any(|c| system.rho(i, c) > 0.0);
-                let mut gathered = vec![0.0; n * k];
                 let cast = problem.cast(&name, |rays| {
-                    gather(
-                        rays,
-                        &chain.estimate,
-                        k,
-                        areas,
-                        &reflects,
-                        beta.as_deref(),
-                        batch,
-                        &mut streams,
-                        &mut gathered,
-                    )
+                    gather(rays, &chain.estimate, k, areas, &reflects, beta.as_deref(), batch, &mut streams, &mut fresh)
                 })?;
-                for (idx, g) in gathered.iter().enumerate() {
+                for (idx, g) in fresh.iter_mut().enumerate() {
                     let (i, c) = (idx / k, idx % k);
-                    fresh[idx] = system.e(i, c) + system.rho(i, c) * g;
+                    *g = system.e(i, c) + system.rho(i, c) * *g;
                 }
                 cast
             }
             (_, lines_too) => {
-                let mut incoming = vec![0.0; n * k];
                 let cast = if lines_too {
                     problem
-                        .cast(&name, |rays| lines(rays, &chain.estimate, k, batch, &streams, &mut incoming))?
+                        .cast(&name, |rays| lines(rays, &chain.estimate, k, batch, &streams, &mut fresh))?
                         .ok_or_else(|| no_lines(&name))?
                 } else {
                     let x: Vec<Real> =
                         chain.estimate.par_iter().enumerate().map(|(idx, b)| areas[idx / k] * b).collect();
-                    problem.cast(&name, |rays| shoot(rays, &x, k, batch, &mut streams, &mut incoming))?
+                    problem.cast(&name, |rays| shoot(rays, &x, k, batch, &mut streams, &mut fresh))?
                 };
-                fresh.par_chunks_mut(k).zip(incoming.par_chunks(k)).enumerate().for_each(|(i, (fresh, power))| {
-                    for c in 0..k {
-                        fresh[c] = system.e(i, c) + system.rho(i, c) * power[c] / areas[i];
+                fresh.par_chunks_mut(k).enumerate().for_each(|(i, fresh)| {
+                    for (c, f) in fresh.iter_mut().enumerate() {
+                        *f = system.e(i, c) + system.rho(i, c) * *f / areas[i];
                     }
                 });
                 cast

@@ -252,8 +252,8 @@ impl Pipeline {
     /// Shoots the nodes `sending` marks and pushes what they sent down to the patches: their
     /// charges go through their links into the fields and their `u_k` are cleared, and
     /// `t = ρ P + z` is written into `t` (patch-major), leaving `P = 0`; the caller pulls an
-    /// amount next ([`Pipeline::pull`]). A channel at a time: its fields are pushed before the
-    /// next channel's are sent. Returns the links touched.
+    /// amount next ([`Pipeline::pull`]). A group of channels at a time: its fields are pushed
+    /// before the next group's are sent. Returns the links touched.
     pub(crate) fn shoot_and_push(&mut self, problem: &Problem<'_>, sending: &[bool], t: &mut Vec<Real>) -> u64 {
         let (n, k) = (problem.n(), self.k);
         t.resize(n * k, 0.0);

@@ -31,6 +31,7 @@
 //! assert_eq!(counted.stats().columns, 1);
 //! ```
 
+pub mod channel_groups;
 pub mod clock;
 pub mod collective;
 pub mod column;
@@ -50,6 +51,7 @@ pub mod suggest;
 pub mod system;
 pub mod transport;
 
+pub use channel_groups::{channel_groups, pick_channels, put_channels};
 pub use clock::Clock;
 pub use collective::{Collective, InProcessRanks, Traffic};
 pub use column::{ColumnSource, ColumnStats, CountingColumns, DenseColumns, measured_reciprocity};

@@ -127,12 +127,15 @@ impl Packed {
     /// when `extra` is given. Packed on every thread, the same bytes whatever their number.
     pub(super) fn new(start: &[usize], other: &[u32], extra: Option<&(dyn Fn(usize) -> u32 + Sync)>) -> Packed {
         let keys = start.len() - 1;
+        // Entry `e`'s difference in the list of `k`.
+        let delta = |k: usize, e: usize| {
+            if e == start[k] { zigzag(other[e], k) } else { u64::from(other[e] - other[e - 1]) }
+        };
         let list_width = |k: usize| {
             let list = start[k]..start[k + 1];
             let mut w = width(list.len() as u64);
-            for e in list.clone() {
-                let d = if e == list.start { zigzag(other[e], k) } else { u64::from(other[e] - other[e - 1]) };
-                w += width(d) + extra.map_or(0, |x| width(u64::from(x(e))));
+            for e in list {
+                w += width(delta(k, e)) + extra.map_or(0, |x| width(u64::from(x(e))));
             }
             w
         };
@@ -158,9 +161,8 @@ impl Packed {
             for k in keys {
                 let list = start[k]..start[k + 1];
                 out = put(out, list.len() as u64);
-                for e in list.clone() {
-                    let d = if e == list.start { zigzag(other[e], k) } else { u64::from(other[e] - other[e - 1]) };
-                    out = put(out, d);
+                for e in list {
+                    out = put(out, delta(k, e));
                     if let Some(x) = extra {
                         out = put(out, u64::from(x(e)));
                     }

@@ -14,7 +14,7 @@ use super::HierarchicalColumns;
 use super::distribution::Distribution;
 use super::links::{Span, kernel_factor};
 use crate::backend::{BackendFigures, FormFactorBackend};
-use radiosity_core::{Collective, ColumnSource, LinkSource, Real, Vec3};
+use radiosity_core::{Collective, ColumnSource, LinkSource, Real, Vec3, channel_groups, pick_channels, put_channels};
 use rayon::prelude::*;
 
 impl HierarchicalColumns {
@@ -155,25 +155,20 @@ impl HierarchicalColumns {
     /// [`Self::estimated_product`] with the moments held to `budget` bytes.
     fn estimated_product_in(&self, x: &[Real], channels: usize, weights: &[Real], out: &mut [Real], budget: usize) {
         let k = channels;
-        let per_channel = self.tree.nodes.len() * size_of::<Moments>();
-        let group = (budget / per_channel.max(1)).clamp(1, k.max(1));
-        if group >= k {
+        let groups = channel_groups(k, self.tree.nodes.len() * size_of::<Moments>(), budget);
+        if groups.len() <= 1 {
             let moments = self.gathered_moments(x, k, weights);
             self.received_down(&moments, k, out);
         } else {
             let n = self.areas.len();
-            for first in (0..k).step_by(group) {
-                let g = group.min(k - first);
-                let picked = |v: &[Real]| -> Vec<Real> {
-                    (0..n).flat_map(|p| v[p * k + first..p * k + first + g].iter().copied()).collect()
-                };
-                let moments = self.gathered_moments(&picked(x), g, weights);
+            for group in groups {
+                let g = group.len();
                 let mut part = vec![0.0; n * g];
+                pick_channels(x, k, group.clone(), &mut part);
+                let moments = self.gathered_moments(&part, g, weights);
                 self.received_down(&moments, g, &mut part);
                 drop(moments);
-                for (out, part) in out.chunks_exact_mut(k).zip(part.chunks_exact(g)) {
-                    out[first..first + g].copy_from_slice(part);
-                }
+                put_channels(&part, k, group, out);
             }
         }
         out.par_chunks_mut(k).enumerate().for_each(|(i, out)| {

@@ -46,7 +46,8 @@ use crate::error::SolverError;
 use crate::run::problem::Problem;
 use crate::run::residual_bound::{ResidualBound, area_norms};
 use crate::run::state::State;
-use radiosity_core::{NO_PARENT, Real};
+use radiosity_core::{NO_PARENT, Real, channel_groups, pick_channels, put_channels};
+use std::ops::Range;
 
 /// The most bytes a group of channels' scratch takes (module doc).
 const GROUP_BYTES: usize = 1 << 30;
@@ -66,8 +67,8 @@ pub(crate) struct Pipeline {
     sizes: Vec<usize>,
     charge_len: usize,
     field_len: usize,
-    /// The channels of a group ([`GROUP_BYTES`]; the last group may have fewer).
-    group: usize,
+    /// The groups of channels the source is called with ([`GROUP_BYTES`]; linked sources).
+    groups: Vec<Range<usize>>,
     /// The charges of the `u_k`, group by group, each group as the source lays out the charges
     /// of that many channels (nodes × the group's channels × charge).
     pending: Vec<Real>,
@@ -108,30 +109,28 @@ impl Pipeline {
                 (p.charge_len, p.field_len) = (links.charge_len(), links.field_len());
                 let nodes = p.parents.len();
                 let widest = p.charge_len.max(p.field_len);
-                p.group = (budget / (nodes.max(1) * widest * size_of::<Real>())).clamp(1, k.max(1));
+                p.groups = channel_groups(k, nodes * widest * size_of::<Real>(), budget);
                 let mut shares = vec![0.0; nodes * k];
                 let rho = problem.system().reflectivities();
                 // The shares read every link once, as a product does: counted so. A group at a
                 // time, so that the source's own buffers are one group's.
                 let every: u64 = p.link_counts.iter().sum();
-                let groups = p.groups();
                 let known = problem.through_links(every, |l| {
-                    for (first, g) in groups {
-                        let rho_g = channels_of(rho, k, first, g);
+                    for group in &p.groups {
+                        let g = group.len();
+                        let mut rho_g = vec![0.0; n * g];
+                        pick_channels(rho, k, group.clone(), &mut rho_g);
                         let mut shares_g = vec![0.0; nodes * g];
                         if !l.send_shares(&rho_g, g, &mut shares_g) {
                             return false;
                         }
-                        for (node, s) in shares_g.chunks_exact(g).enumerate() {
-                            shares[node * k + first..node * k + first + g].copy_from_slice(s);
-                        }
+                        put_channels(&shares_g, k, group.clone(), &mut shares);
                     }
                     true
                 });
                 p.shares = known.unwrap_or(false).then_some(shares);
             }
             None => {
-                p.group = k;
                 p.parents = vec![NO_PARENT; n];
                 p.leaves = (0..n as u32).collect();
                 p.link_counts = vec![n as u64; n];
@@ -151,9 +150,9 @@ impl Pipeline {
         p.pending = vec![0.0; nodes * k * p.charge_len];
         p.power = vec![0.0; nodes * k];
         p.explicit = vec![0.0; n * k];
-        if p.linked {
-            p.scratch = vec![0.0; nodes * p.group * p.charge_len.max(p.field_len)];
-            p.channels = vec![0.0; n * p.group];
+        if let Some(widest_group) = p.groups.first().map(Range::len) {
+            p.scratch = vec![0.0; nodes * widest_group * p.charge_len.max(p.field_len)];
+            p.channels = vec![0.0; n * widest_group];
         }
         p.scratch_power = vec![0.0; p.power.len()];
         // B = E: every node holds E under it, unsent.
@@ -162,15 +161,10 @@ impl Pipeline {
         p
     }
 
-    /// The groups of channels: each one's first channel and its number of channels.
-    fn groups(&self) -> Vec<(usize, usize)> {
-        (0..self.k).step_by(self.group.max(1)).map(|first| (first, self.group.min(self.k - first))).collect()
-    }
-
-    /// Where the charges of the group starting at channel `first` lie in `pending`.
-    fn group_range(&self, first: usize, g: usize) -> std::ops::Range<usize> {
+    /// Where the charges of the channels `group` lie in `pending`.
+    fn charges_of(&self, group: &Range<usize>) -> Range<usize> {
         let per_channel = self.parents.len() * self.charge_len;
-        first * per_channel..(first + g) * per_channel
+        group.start * per_channel..group.end * per_channel
     }
 
     /// The bytes the pipeline holds (its vectors' capacities).
@@ -237,10 +231,10 @@ impl Pipeline {
         }
         self.power.iter_mut().zip(&self.scratch_power).for_each(|(p, d)| *p += d);
         if self.linked {
-            for (first, g) in self.groups() {
-                let range = self.group_range(first, g);
+            for group in &self.groups {
+                let (g, range) = (group.len(), self.charges_of(group));
                 let (channels, scratch) = (&mut self.channels[..s.len() / k * g], &mut self.scratch[..range.len()]);
-                pick_channels(s, k, first, g, channels);
+                pick_channels(s, k, group.clone(), channels);
                 problem.through_links(0, |l| l.charges(channels, g, scratch));
                 self.pending[range].iter_mut().zip(scratch.iter()).for_each(|(p, d)| *p += d);
             }
@@ -259,26 +253,20 @@ impl Pipeline {
         t.resize(n * k, 0.0);
         let touched: u64 = (0..sending.len()).filter(|&node| sending[node]).map(|node| self.link_counts[node]).sum();
         if self.linked {
-            let groups = self.groups();
             let field_len = self.parents.len() * self.field_len;
-            let ranges: Vec<_> = groups.iter().map(|&(first, g)| self.group_range(first, g)).collect();
-            let (pending, scratch, channels) = (&self.pending, &mut self.scratch, &mut self.channels);
+            let ranges: Vec<_> = self.groups.iter().map(|group| self.charges_of(group)).collect();
+            let (pending, scratch, channels) = (&mut self.pending, &mut self.scratch, &mut self.channels);
             problem.through_links(touched, |l| {
-                for (&(first, g), range) in groups.iter().zip(ranges) {
+                for (group, range) in self.groups.iter().zip(ranges) {
+                    let g = group.len();
                     let (fields, out) = (&mut scratch[..field_len * g], &mut channels[..n * g]);
                     fields.fill(0.0);
-                    l.shoot(&pending[range], sending, g, fields);
+                    l.shoot(&pending[range.clone()], sending, g, fields);
                     l.evaluate(fields, g, out);
-                    for (t, out) in t.chunks_exact_mut(k).zip(out.chunks_exact(g)) {
-                        t[first..first + g].copy_from_slice(out);
-                    }
+                    put_channels(out, k, group.clone(), t);
+                    l.clear(sending, g, &mut pending[range]);
                 }
             });
-            for (first, g) in groups {
-                let range = self.group_range(first, g);
-                let pending = &mut self.pending[range];
-                problem.through_links(0, |l| l.clear(sending, g, pending));
-            }
         } else {
             t.fill(0.0);
             self.column.resize(n, 0.0);
@@ -368,20 +356,6 @@ impl Pipeline {
         let r: Real = (0..self.k).map(|c| bound.residual_norm(c, 1.0)).sum();
         if emitted > 0.0 { r / emitted } else { 0.0 }
     }
-}
-
-/// Channels `first..first + g` of `x` (patch-major, `k` channels) into `out` (patch-major, `g`).
-fn pick_channels(x: &[Real], k: usize, first: usize, g: usize, out: &mut [Real]) {
-    for (out, x) in out.chunks_exact_mut(g).zip(x.chunks_exact(k)) {
-        out.copy_from_slice(&x[first..first + g]);
-    }
-}
-
-/// Channels `first..first + g` of `x` (patch-major, `k` channels).
-fn channels_of(x: &[Real], k: usize, first: usize, g: usize) -> Vec<Real> {
-    let mut out = vec![0.0; x.len() / k * g];
-    pick_channels(x, k, first, g, &mut out);
-    out
 }
 
 #[cfg(test)]
@@ -498,7 +472,7 @@ mod tests {
         let run = |budget: usize| {
             let mut state = State::from_emission(&e, 3);
             let mut pipeline = Pipeline::start_in(&problem, &state, budget);
-            let group = pipeline.group;
+            let group = pipeline.groups[0].len();
             let mut brought = Vec::new();
             for round in 0..5 {
                 // Every leaf in the first round, then every other leaf in turn, and the root.

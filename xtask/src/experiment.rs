@@ -329,7 +329,12 @@ pub fn start_camera(
     Ok(match given {
         Some(camera) => (camera.with_up(up), "as given", why.to_string()),
         None => {
-            let framing = radiosity_eval::default_view(&spec, &prepared.loaded.scene, &prepared.visibility, aspect);
+            let framing = radiosity_eval::default_view(
+                &spec,
+                &prepared.loaded.scene,
+                &prepared.visibility_for("framing the view")?,
+                aspect,
+            );
             let how = if framing.inside { "the default, inside the enclosure" } else { "the default, from outside" };
             (framing.camera, how, why.to_string())
         }

@@ -80,7 +80,7 @@ pub fn run(args: &Args) -> Result<()> {
 
     let render_start = Instant::now();
     let params = RenderParams { camera, width: args.width, height: args.height };
-    let image = render(scene, &prepared.visibility, &rgb, &params)?;
+    let image = render(scene, &prepared.visibility_for("a render")?, &rgb, &params)?;
     let render_seconds = render_start.elapsed().as_secs_f64();
     image.save(&args.out)?;
     println!(

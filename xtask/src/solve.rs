@@ -84,6 +84,8 @@ pub fn run(args: &Args, ranks: &crate::ranks::Ranks) -> Result<()> {
         lab = lab.over_ranks(world);
     }
     let traffic = lab.traffic();
+    // Built and referenced: a run that casts no ray through the scene frees its BVH.
+    let released = lab.release_rays(solver.as_deref());
     phases.borrow_mut().begin("solving");
     let (summary, state) = match solver {
         // `reference` is the exact solution itself: its cost is assembling F and solving it.
@@ -109,7 +111,19 @@ pub fn run(args: &Args, ranks: &crate::ranks::Ranks) -> Result<()> {
             eprint!("{}", phases.borrow().text());
             let held = prepared.memory();
             let per = |bytes: usize| bytes as f64 / prepared.scene().len().max(1) as f64;
-            eprintln!("held         the scene {:.0} and its BVH {:.0} bytes a patch", per(held.scene), per(held.bvh));
+            match released {
+                0 => eprintln!(
+                    "held         the scene {:.0} and its BVH {:.0} bytes a patch",
+                    per(held.scene),
+                    per(held.bvh)
+                ),
+                freed => eprintln!(
+                    "held         the scene {:.0} bytes a patch; its BVH ({:.0}) released before the solve, which casts \
+                     no ray through it",
+                    per(held.scene),
+                    per(freed)
+                ),
+            }
         }
     };
     if !args.json && args.out.is_none() {

@@ -98,7 +98,7 @@ fn main() -> Result<(), Box<dyn Error + Send + Sync>> {
         println!("{scene}: {n} patches, {threads} threads, {solver_name}, rays={rays:e}");
 
         let system = LinearSystem::from_scene(prepared.scene());
-        let transport = SceneTransport::from_prepared(&prepared);
+        let transport = SceneTransport::from_prepared(&prepared)?;
         // One timed run of the solver; the same seed gives the same rays every time.
         let solve = |sampler: &dyn TransportSampler| -> Result<(u64, f64), Box<dyn Error + Send + Sync>> {
             let problem = Problem::sampled(&system, sampler)?;
@@ -112,7 +112,8 @@ fn main() -> Result<(), Box<dyn Error + Send + Sync>> {
         let (cast, _) = solve(&recording)?;
         let recorded = recording.rays.into_inner().map_err(|_| "a recording thread panicked")?;
         assert_eq!(recorded.len() as u64, cast, "the recorded run cast other rays");
-        let raw = prepared.visibility.raw_tracer();
+        let visibility = prepared.visibility()?;
+        let raw = visibility.raw_tracer();
         let lists: Vec<Vec<_>> = recorded
             .chunks(CHUNK)
             .map(|chunk| {

@@ -38,7 +38,7 @@ fn an_analytic_matrix_is_assembled_each_pair_once_reciprocal_and_thread_independ
 
     let area: Vec<Real> = prepared.scene().patches().iter().map(|p| p.area()).collect();
     let stored = columns(&one);
-    let direct = columns(&spec.columns().build((&prepared).into()).unwrap());
+    let direct = columns(&spec.columns().build((&prepared).try_into().unwrap()).unwrap());
     let n = area.len();
     let mut nonzero = 0;
     for j in 0..n {
@@ -65,7 +65,7 @@ fn a_hemicube_matrix_is_assembled_column_by_column() {
     let spec = BackendSpec::parse("matrix:of=hemicube:res=32").unwrap();
     assert_eq!(assembly_of(&spec), "column by column");
     let stored = columns(&assembled(&prepared, &spec, 2));
-    let direct = columns(&spec.columns().build((&prepared).into()).unwrap());
+    let direct = columns(&spec.columns().build((&prepared).try_into().unwrap()).unwrap());
     for (j, (s, d)) in stored.iter().zip(&direct).enumerate() {
         for (i, (a, b)) in s.iter().zip(d).enumerate() {
             assert_eq!(*a, *b as f32 as Real, "({i}, {j})");

@@ -28,7 +28,8 @@ fn solved(arg: &str) -> (Scene, Vec<[Real; 3]>) {
     let visibility = Visibility::new(&scene);
     let analysis = SceneAnalysis::new(&scene, &visibility);
     let spec = BackendSpec::parse("analytic").unwrap();
-    let backend = spec.build(FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis }).unwrap();
+    let backend =
+        spec.build(FormFactorInput { scene: &scene, visibility: visibility.clone(), analysis: &analysis }).unwrap();
     let system = LinearSystem::from_scene(&scene);
     let reference = ReferenceSolution::solve(&system, &backend, ReferenceParams::default()).unwrap();
     let channel = |c: usize| if system.channels() == Channels::Grey { 0 } else { c };
@@ -192,8 +193,11 @@ fn a_stiff_closed_box_with_a_block_read_from_gltf_gives_its_exact_answer() {
     let prepared = load_back(&glb, "stiff-furnace").prepare();
     assert_eq!(prepared.scene().len(), scene.len());
     assert!(prepared.analysis.occlusion.value && prepared.analysis.closure.value.is_closed());
-    let input =
-        FormFactorInput { scene: prepared.scene(), visibility: &prepared.visibility, analysis: &prepared.analysis };
+    let input = FormFactorInput {
+        scene: prepared.scene(),
+        visibility: prepared.visibility().unwrap(),
+        analysis: &prepared.analysis,
+    };
     let backend = BackendSpec::parse("analytic").unwrap().build(input).unwrap();
     let system = LinearSystem::from_scene(prepared.scene());
     let reference = ReferenceSolution::solve(&system, &backend, ReferenceParams::default()).unwrap();

@@ -4,7 +4,7 @@
 //! dense LU within their certificates, the cache tells reference kinds apart and keeps the
 //! hierarchical operator; charged columns give the computed runs' numbers, and the clock a
 //! `time=` rule and `:f=timed` read is the one the report prints; plot titles name the scene
-//! by its short name.
+//! by its short name; a run that casts no ray frees the scene's BVH.
 
 use radiosity_core::{Clock, ColumnSource};
 use radiosity_eval::ShootingParams;
@@ -610,4 +610,44 @@ fn plot_titles_name_the_scene_by_its_short_name() {
     }
     assert!(title("e_rms-seconds").starts_with("classroom.mgf:size=0.1: e_rms against measured seconds"));
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_run_that_casts_no_ray_frees_the_bvh_and_a_later_request_for_rays_is_refused() {
+    let registry = SolverRegistry::builtin();
+    let rules = StopRules::parse("residual=1e-6").unwrap();
+    let hierarchical = BackendSpec::parse("hierarchical:eps=5e-2").unwrap();
+    let options = || LabOptions::default().with_reference(ReferenceKind::None);
+    let scene = PreparedScene::load("cornell:res=4").unwrap();
+    let mut gmres = registry.build("gmres-30").unwrap();
+    let kept = Lab::new(&scene, &hierarchical, options(), &NoProgress).unwrap();
+    let before = kept.run(gmres.as_mut(), &rules, &RecordPlan::errors_only(), &NoProgress).unwrap();
+
+    // A solver that samples transport through the scene keeps it.
+    let stochastic = registry.build("stochastic-jacobi").unwrap();
+    assert_eq!(kept.release_rays(Some(stochastic.as_ref())), 0);
+    assert!(scene.has_visibility());
+    // The operator holds no handle on the tree once built: it is freed, all of it.
+    let bvh = scene.memory().bvh;
+    assert!(bvh > 0);
+    assert_eq!(kept.release_rays(Some(gmres.as_ref())), bvh);
+    assert!(!scene.has_visibility());
+    assert_eq!(scene.memory().bvh, 0);
+    assert_eq!(kept.release_rays(None), 0, "freed once");
+    // The run needs no ray: the same bits without the tree.
+    let after = kept.run(gmres.as_mut(), &rules, &RecordPlan::errors_only(), &NoProgress).unwrap();
+    let bits = |s: &State| s.radiosity.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&before.state), bits(&after.state));
+    // Whatever asks for rays now is refused in one sentence, not given a tree that misses.
+    let e = kept.transport_sampler().err().unwrap().to_string();
+    assert!(e.contains("the scene's BVH was released") && e.contains("sampling transport by rays"), "{e}");
+    let e = Lab::new(&scene, &analytic(), options(), &NoProgress).err().unwrap().to_string();
+    assert!(e.contains("the scene's BVH was released") && e.contains("building a form-factor backend"), "{e}");
+
+    // A backend that computes its entries by rays shares the tree, which is then kept.
+    let scene = PreparedScene::load("cornell:res=4").unwrap();
+    let analytic_lab = Lab::new(&scene, &analytic(), options(), &NoProgress).unwrap();
+    assert_eq!(analytic_lab.release_rays(Some(gmres.as_ref())), 0);
+    assert!(scene.has_visibility());
+    assert!(analytic_lab.transport_sampler().is_ok());
 }

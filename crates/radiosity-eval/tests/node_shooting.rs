@@ -19,7 +19,7 @@ use radiosity_solvers::{
 fn operator(scene: &str) -> (PreparedScene, LinearSystem, HierarchicalColumns) {
     let p = PreparedScene::load(scene).unwrap();
     let params = HierarchicalParams { eps: 0.05, ..HierarchicalParams::default() };
-    let f = HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, params);
+    let f = HierarchicalColumns::new(p.scene(), &p.visibility().unwrap(), &p.analysis, params);
     let system = LinearSystem::from_scene(p.scene());
     (p, system, f)
 }

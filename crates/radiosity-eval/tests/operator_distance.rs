@@ -26,7 +26,7 @@ fn the_distance_of_a_scaled_matrix_is_what_its_solutions_and_rows_say() {
     let p = PreparedScene::load("furnace:res=3:rho=0.7:block=true").unwrap();
     let system = LinearSystem::from_scene(p.scene());
     let n = system.len();
-    let analytic = AnalyticColumns::new(p.scene(), &p.visibility, &p.analysis, AnalyticParams::default());
+    let analytic = AnalyticColumns::new(p.scene(), &p.visibility().unwrap(), &p.analysis, AnalyticParams::default());
     let f = DenseColumns::from_fn(n, |i, j| {
         let mut c = vec![0.0; n];
         analytic.fill_column(j, &mut c);
@@ -69,9 +69,9 @@ fn the_hierarchical_operator_keeps_the_furnace_identity_with_an_occluder() {
     // deciding the links the block crosses.
     let p = PreparedScene::load("furnace:res=6:block=true").unwrap();
     let system = LinearSystem::from_scene(p.scene());
-    let f = HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, HierarchicalParams::default());
+    let f = HierarchicalColumns::new(p.scene(), &p.visibility().unwrap(), &p.analysis, HierarchicalParams::default());
     assert!(f.figures().rays > 0 && f.figures().far_pairs > 0, "{:?}", f.figures());
-    let truth = AnalyticColumns::new(p.scene(), &p.visibility, &p.analysis, AnalyticParams::default());
+    let truth = AnalyticColumns::new(p.scene(), &p.visibility().unwrap(), &p.analysis, AnalyticParams::default());
     let star: Vec<Real> = (0..system.len()).map(|i| system.e(i, 0) / (1.0 - system.rho(i, 0))).collect();
     let params = OperatorDistanceParams { rows: 10, ..OperatorDistanceParams::default() };
     let d = operator_distance(&system, &f, &truth, Some(&star), params).unwrap();
@@ -89,7 +89,7 @@ fn the_contraction_from_products_bounds_the_one_of_the_assembled_matrix() {
     let p = PreparedScene::load("cornell:res=6").unwrap();
     let system = LinearSystem::from_scene(p.scene());
     let params = HierarchicalParams { eps: 5e-2, ..HierarchicalParams::default() };
-    let f = HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, params);
+    let f = HierarchicalColumns::new(p.scene(), &p.visibility().unwrap(), &p.analysis, params);
     let m = FormFactors::assemble(&f, 1 << 30).unwrap();
     let measured = Contraction::from_matrix(&system, &m).unwrap();
     let bounded = Contraction::from_products(&system, &f).unwrap().expect("the operator multiplies natively");

@@ -221,6 +221,7 @@ fn a_validation_serialises_to_the_promised_shape_and_stops_refining_at_the_patch
 
     // The tracer ran on the finest scene, which a prepared scene gives as well.
     let prepared = PreparedScene::load("furnace:res=2").unwrap();
-    let traced = path_trace(prepared.scene(), &prepared.visibility, &params.path_trace, &NoProgress).unwrap();
+    let traced =
+        path_trace(prepared.scene(), &prepared.visibility().unwrap(), &params.path_trace, &NoProgress).unwrap();
     assert_eq!(traced.objects[0].mean, v.objects[0].path_traced);
 }

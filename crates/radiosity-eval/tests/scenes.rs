@@ -59,7 +59,7 @@ impl Fixture {
         let visibility = Visibility::new(&scene);
         let analysis = SceneAnalysis::new(&scene, &visibility);
         let spec = BackendSpec::parse("analytic").unwrap();
-        let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
+        let input = FormFactorInput { scene: &scene, visibility: visibility.clone(), analysis: &analysis };
         let backend = spec.build(input).unwrap();
         let params = ReferenceParams::default();
         let matrix = FormFactors::assemble(&backend, params.max_matrix_bytes).unwrap_or_else(|e| panic!("{arg}: {e}"));

@@ -20,7 +20,7 @@ fn columns(c: &mut Criterion) {
     let scene = load_scene("office").expect("office builds").scene;
     let visibility = Visibility::new(&scene);
     let analysis = SceneAnalysis::new(&scene, &visibility);
-    let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
+    let input = FormFactorInput { scene: &scene, visibility: visibility.clone(), analysis: &analysis };
     let n = scene.len();
     let shooters: Vec<usize> = (0..BATCH).map(|k| k * n / BATCH).collect();
     let mut group = c.benchmark_group("office columns");
@@ -34,7 +34,7 @@ fn columns(c: &mut Criterion) {
             Some(p) => BackendSpec::new(AnalyticParams { cache_mib: 0, ..*p }),
             None => spec,
         };
-        let backend = spec.build(input).expect("the backend builds");
+        let backend = spec.build(input.clone()).expect("the backend builds");
         group.bench_function(BenchmarkId::from_parameter(arg), |b| {
             b.iter(|| {
                 shooters.par_iter().for_each_init(

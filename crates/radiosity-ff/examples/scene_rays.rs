@@ -84,7 +84,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let n = prepared.scene().len();
     println!(
         "{scene_arg}: {n} patches, {} BVH triangles, closed: {}",
-        prepared.visibility.triangle_count(),
+        prepared.visibility().unwrap().triangle_count(),
         prepared.analysis.closure.value.is_closed()
     );
     println!(
@@ -96,7 +96,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         s.analysis
     );
 
-    let sampler = SceneTransport::from_prepared(&prepared);
+    let sampler = SceneTransport::from_prepared(&prepared)?;
     println!("{}", sampler.cost().ray);
     let mut rng = ChaCha8Rng::seed_from_u64(0);
     let u: Vec<[Real; 4]> = (0..rays).map(|_| [rng.random(), rng.random(), rng.random(), rng.random()]).collect();
@@ -134,7 +134,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     });
     println!("origin and direction alone: {:.1} ns a ray on the CPU", drawing.best() / rays as f64 * 1e9);
     let ray_list: Vec<_> = u.iter().enumerate().map(|(k, &u)| (k % n, sampler.ray(k % n, u))).collect();
-    let vis = &prepared.visibility;
+    let vis = &prepared.visibility().unwrap();
     let (exact_landed, exact) = timed(|| {
         ray_list.iter().filter(|(from, (o, d))| vis.first_hit(*o, *d, Some(*from)).is_some_and(|h| h.front)).count()
     });

@@ -149,7 +149,7 @@ const PANEL_BUDGET: usize = 256;
 #[derive(Debug)]
 pub struct AnalyticColumns<'a> {
     scene: &'a Scene,
-    visibility: Option<&'a Visibility>,
+    visibility: Option<Visibility>,
     /// Gauss–Legendre nodes for orders 1 to `order` (index `q − 1`).
     nodes: Vec<Vec<(Real, Real)>>,
     /// The longest edge of each patch, the scale of its quadrature error.
@@ -176,13 +176,13 @@ impl<'a> AnalyticColumns<'a> {
     /// analysis says something can occlude.
     pub fn new(
         scene: &'a Scene,
-        visibility: &'a Visibility,
+        visibility: &Visibility,
         analysis: &SceneAnalysis,
         params: AnalyticParams,
     ) -> AnalyticColumns<'a> {
         AnalyticColumns {
             scene,
-            visibility: analysis.occlusion.value.then_some(visibility),
+            visibility: analysis.occlusion.value.then(|| visibility.clone()),
             nodes: (1..=params.order.max(1)).map(gauss_legendre).collect(),
             longest_edge: scene.patches().iter().map(longest_edge).collect(),
             reach: scene.patches().iter().map(reach).collect(),
@@ -240,7 +240,7 @@ impl<'a> AnalyticColumns<'a> {
     /// patches): then no ray is traced, and the entry is the one all-clear rays give. With the
     /// entry, the shadow rays it traced.
     pub fn pair_unless_clear(&self, i: usize, j: usize, clear: impl FnOnce(usize) -> bool) -> (Real, u64) {
-        let Some(vis) = self.visibility else { return (self.pair(i, j), 0) };
+        let Some(vis) = &self.visibility else { return (self.pair(i, j), 0) };
         let known = |rays: usize| clear(rays).then_some(1.0);
         let mut rays = 0;
         let f = self
@@ -255,7 +255,7 @@ impl<'a> AnalyticColumns<'a> {
     /// `F_ij` before clamping, with `V_ij = known` when it is given, and the visible fraction
     /// the entry used (`None` when the pair needed none).
     fn pair_known(&self, i: usize, j: usize, known: Option<Real>) -> (Real, Option<Real>) {
-        match self.visibility {
+        match &self.visibility {
             Some(vis) => {
                 self.pair_traced(i, j, |_| known, &mut |p, from, q, to| vis.unoccluded_between(p, from, q, to))
             }
@@ -347,7 +347,7 @@ impl<'a> AnalyticColumns<'a> {
         trace: &mut impl FnMut(Vec3, usize, Vec3, usize) -> bool,
     ) -> (Real, Option<Real>) {
         let Some(Roles { s, l, larger, unoccluded }) = self.roles(i, j) else { return (0.0, None) };
-        match self.visibility {
+        match &self.visibility {
             Some(_) => {
                 let v = known(self.ray_budget_of_pairs().rays(larger))
                     .unwrap_or_else(|| self.visible_fraction(s, l, larger, trace));
@@ -395,7 +395,7 @@ impl<'a> AnalyticColumns<'a> {
     /// ([`pair_visibility::sampling_path`]), found without sampling; `None` when it traces no
     /// ray (no visibility needed, or `F_ij` zero before visibility).
     pub fn sampling_path(&self, i: usize, j: usize) -> Option<SamplingPath> {
-        self.visibility?;
+        self.visibility.as_ref()?;
         let Roles { s, l, larger, .. } = self.roles(i, j)?;
         let patches = self.scene.patches();
         pair_visibility::sampling_path(&patches[s], &patches[l], larger, self.ray_budget_of_pairs(), self.tolerance)

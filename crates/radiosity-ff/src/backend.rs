@@ -18,23 +18,26 @@ use radiosity_geom::{SceneAnalysis, Visibility};
 use std::fmt;
 
 /// What column backends are built from.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct FormFactorInput<'a> {
     /// The scene.
     pub scene: &'a Scene,
-    /// Its BVH.
-    pub visibility: &'a Visibility,
+    /// Its BVH: a handle a backend that traces rays keeps a clone of.
+    pub visibility: Visibility,
     /// Its analysis (whether shadow rays are needed, whether rows should sum to 1).
     pub analysis: &'a SceneAnalysis,
 }
 
-impl<'a> From<&'a radiosity_geom::PreparedScene> for FormFactorInput<'a> {
-    fn from(prepared: &'a radiosity_geom::PreparedScene) -> Self {
-        FormFactorInput {
+impl<'a> TryFrom<&'a radiosity_geom::PreparedScene> for FormFactorInput<'a> {
+    type Error = radiosity_geom::GeomError;
+
+    /// The prepared scene's parts; an error once its BVH is released.
+    fn try_from(prepared: &'a radiosity_geom::PreparedScene) -> Result<Self, Self::Error> {
+        Ok(FormFactorInput {
             scene: &prepared.loaded.scene,
-            visibility: &prepared.visibility,
+            visibility: prepared.visibility_for("building a form-factor backend")?,
             analysis: &prepared.analysis,
-        }
+        })
     }
 }
 

@@ -127,7 +127,7 @@ impl BackendArgument for SplitHierarchical {
         };
         let built = HierarchicalColumns::new_distributed(
             input.scene,
-            input.visibility,
+            &input.visibility,
             input.analysis,
             self.params,
             &observe,
@@ -158,7 +158,7 @@ impl BackendArgument for AnalyticParams {
         input: FormFactorInput<'a>,
         _: &dyn BuildObserver,
     ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
-        Ok(Box::new(AnalyticColumns::new(input.scene, input.visibility, input.analysis, *self)))
+        Ok(Box::new(AnalyticColumns::new(input.scene, &input.visibility, input.analysis, *self)))
     }
 
     fn pairs_once(&self) -> bool {
@@ -166,7 +166,7 @@ impl BackendArgument for AnalyticParams {
     }
 
     fn column_rays<'a>(&self, input: FormFactorInput<'a>) -> Option<ColumnRays<'a>> {
-        Some(ColumnRays::analytic(AnalyticColumns::new(input.scene, input.visibility, input.analysis, *self)))
+        Some(ColumnRays::analytic(AnalyticColumns::new(input.scene, &input.visibility, input.analysis, *self)))
     }
 }
 
@@ -199,11 +199,11 @@ impl BackendArgument for HemicubeParams {
         input: FormFactorInput<'a>,
         _: &dyn BuildObserver,
     ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
-        Ok(Box::new(HemicubeColumns::new(input.scene, input.visibility, *self)))
+        Ok(Box::new(HemicubeColumns::new(input.scene, &input.visibility, *self)))
     }
 
     fn column_rays<'a>(&self, input: FormFactorInput<'a>) -> Option<ColumnRays<'a>> {
-        Some(ColumnRays::hemicube(HemicubeColumns::new(input.scene, input.visibility, *self)))
+        Some(ColumnRays::hemicube(HemicubeColumns::new(input.scene, &input.visibility, *self)))
     }
 }
 
@@ -232,7 +232,7 @@ impl BackendArgument for MonteCarloParams {
         input: FormFactorInput<'a>,
         _: &dyn BuildObserver,
     ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
-        Ok(Box::new(MonteCarloColumns::new(input.scene, input.visibility, *self)))
+        Ok(Box::new(MonteCarloColumns::new(input.scene, &input.visibility, *self)))
     }
 
     fn column_rays<'a>(&self, input: FormFactorInput<'a>) -> Option<ColumnRays<'a>> {
@@ -283,7 +283,7 @@ impl BackendArgument for HierarchicalParams {
         let observe = |p: BuildProgress| {
             observer.advance((p.settled * 1000.0) as u64, &format!("{} links", p.links));
         };
-        let built = HierarchicalColumns::new_observed(input.scene, input.visibility, input.analysis, *self, &observe);
+        let built = HierarchicalColumns::new_observed(input.scene, &input.visibility, input.analysis, *self, &observe);
         observer.end();
         Ok(Box::new(built))
     }
@@ -389,7 +389,7 @@ impl BackendArgument for MatrixParams {
         input: FormFactorInput<'a>,
         observer: &dyn BuildObserver,
     ) -> Result<Box<dyn FormFactorBackend + 'a>, FfError> {
-        let source = self.of.build_observed(input, observer)?;
+        let source = self.of.build_observed(input.clone(), observer)?;
         let area: Vec<Real> = input.scene.patches().iter().map(|p| p.area()).collect();
         let (mut matrix, _) = StoredMatrix::assemble_backend(&area, source.as_ref(), observer)?;
         if self.rebalance {

@@ -115,7 +115,7 @@ const MIN_TASK: usize = 512;
 #[derive(Debug)]
 pub struct HemicubeColumns<'a> {
     scene: &'a Scene,
-    visibility: &'a Visibility,
+    visibility: Visibility,
     params: HemicubeParams,
     table: Table,
     clamped: ClampCounter,
@@ -231,10 +231,10 @@ impl<'a> HemicubeColumns<'a> {
     /// Prepares the backend: tabulates the pixel directions and delta form factors of the
     /// resolution once. An odd resolution is rounded up to the next even one, and the
     /// resolution is kept within `2..=`[`MAX_RESOLUTION`].
-    pub fn new(scene: &'a Scene, visibility: &'a Visibility, params: HemicubeParams) -> HemicubeColumns<'a> {
+    pub fn new(scene: &'a Scene, visibility: &Visibility, params: HemicubeParams) -> HemicubeColumns<'a> {
         HemicubeColumns {
             scene,
-            visibility,
+            visibility: visibility.clone(),
             params,
             table: Table::new(params.resolution),
             clamped: ClampCounter::default(),

@@ -29,7 +29,7 @@
 //! let scene = load_scene("furnace:res=2").unwrap().scene;
 //! let visibility = Visibility::new(&scene);
 //! let analysis = SceneAnalysis::new(&scene, &visibility);
-//! let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
+//! let input = FormFactorInput { scene: &scene, visibility: visibility.clone(), analysis: &analysis };
 //! let backend = BackendSpec::parse("analytic").unwrap().build(input).unwrap();
 //! let mut column = vec![0.0; backend.patch_count()];
 //! backend.fill_column(0, &mut column);

@@ -104,7 +104,7 @@ const BATCHES_PER_ROUND: usize = 64;
 #[derive(Debug)]
 pub struct MonteCarloColumns<'a> {
     scene: &'a Scene,
-    visibility: &'a Visibility,
+    visibility: Visibility,
     params: MonteCarloParams,
     clamped: ClampCounter,
 }
@@ -204,8 +204,8 @@ pub(crate) fn batch_rays(
 
 impl<'a> MonteCarloColumns<'a> {
     /// Prepares the backend.
-    pub fn new(scene: &'a Scene, visibility: &'a Visibility, params: MonteCarloParams) -> MonteCarloColumns<'a> {
-        MonteCarloColumns { scene, visibility, params, clamped: ClampCounter::default() }
+    pub fn new(scene: &'a Scene, visibility: &Visibility, params: MonteCarloParams) -> MonteCarloColumns<'a> {
+        MonteCarloColumns { scene, visibility: visibility.clone(), params, clamped: ClampCounter::default() }
     }
 
     /// Entries clamped into `[0, 1]` so far.

@@ -240,7 +240,7 @@ mod tests {
         let scene = load_scene("furnace:res=2").unwrap().scene;
         let visibility = Visibility::new(&scene);
         let analysis = SceneAnalysis::new(&scene, &visibility);
-        let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
+        let input = FormFactorInput { scene: &scene, visibility: visibility.clone(), analysis: &analysis };
         let stored = registry.parse("matrix:of=uniform:c=0.25").unwrap();
         assert_eq!(stored.canonical(), "matrix:of=uniform:rebalance=false:c=0.25");
         assert!(!stored.pairs_once(), "a column backend is assembled column by column");

@@ -98,7 +98,7 @@ pub struct SceneTransport<'s> {
     patches: &'s [Patch],
     /// Each patch's origins, uniform by area.
     origins: Vec<AreaSampler>,
-    visibility: &'s Visibility,
+    visibility: Visibility,
     closed: bool,
     /// The centre of the bounding sphere of global lines: the centre of the scene's box.
     centre: Vec3,
@@ -110,22 +110,24 @@ impl<'s> SceneTransport<'s> {
     /// Rays in `scene`, traced through `visibility` (built over the same scene). `closed`
     /// declares that no ray escapes or meets a back face, so that every row of `F` sums to 1
     /// ([`TransportSampler::row_sum`]); pass `false` when that is not known.
-    pub fn new(scene: &'s Scene, visibility: &'s Visibility, closed: bool) -> SceneTransport<'s> {
+    pub fn new(scene: &'s Scene, visibility: &Visibility, closed: bool) -> SceneTransport<'s> {
         let (lo, hi) = scene.bounds();
         SceneTransport {
             patches: scene.patches(),
             origins: scene.patches().iter().map(AreaSampler::new).collect(),
-            visibility,
+            visibility: visibility.clone(),
             closed,
             centre: (lo + hi) * 0.5,
             radius: 0.5 * (hi - lo).length(),
         }
     }
 
-    /// Rays in a prepared scene, closed when its analysis found it closed.
-    pub fn from_prepared(prepared: &'s PreparedScene) -> SceneTransport<'s> {
+    /// Rays in a prepared scene, closed when its analysis found it closed; an error once its
+    /// BVH is released.
+    pub fn from_prepared(prepared: &'s PreparedScene) -> Result<SceneTransport<'s>, radiosity_geom::GeomError> {
         let closed = prepared.analysis.closure.value.is_closed();
-        SceneTransport::new(prepared.scene(), &prepared.visibility, closed)
+        let visibility = prepared.visibility_for("sampling transport by rays")?;
+        Ok(SceneTransport::new(prepared.scene(), &visibility, closed))
     }
 
     /// Whether the scene was declared closed.

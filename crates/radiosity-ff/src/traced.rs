@@ -109,7 +109,7 @@ mod tests {
         // segment is clear, and every such pair has exactly one segment.
         let (scene, visibility) = setup("multi-cubes");
         let analysis = SceneAnalysis::new(&scene, &visibility);
-        let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
+        let input = FormFactorInput { scene: &scene, visibility: visibility.clone(), analysis: &analysis };
         let spec = BackendSpec::parse("analytic:rays=1:budget=0").unwrap();
         let rays = ColumnRays::new(&spec, input).unwrap();
         let backend = AnalyticColumns::new(
@@ -144,7 +144,7 @@ mod tests {
     fn hemicube_rays_give_the_backend_row() {
         let (scene, visibility) = setup("cornell:res=2");
         let analysis = SceneAnalysis::new(&scene, &visibility);
-        let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
+        let input = FormFactorInput { scene: &scene, visibility: visibility.clone(), analysis: &analysis };
         let spec = BackendSpec::parse("hemicube:res=16:seed=3").unwrap();
         let params = *spec.params::<HemicubeParams>().expect("hemicube parameters");
         let backend = HemicubeColumns::new(&scene, &visibility, params);
@@ -175,7 +175,7 @@ mod tests {
     fn montecarlo_rays_give_the_backend_tally() {
         let (scene, visibility) = setup("cornell:res=2");
         let analysis = SceneAnalysis::new(&scene, &visibility);
-        let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
+        let input = FormFactorInput { scene: &scene, visibility: visibility.clone(), analysis: &analysis };
         // More than one batch, of unequal sizes.
         let spec = BackendSpec::parse("montecarlo:rays=9001:seed=5").unwrap();
         let params = *spec.params::<MonteCarloParams>().expect("Monte Carlo parameters");
@@ -200,8 +200,8 @@ mod tests {
     fn a_stored_matrix_traces_nothing() {
         let (scene, visibility) = setup("furnace:res=2");
         let analysis = SceneAnalysis::new(&scene, &visibility);
-        let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
-        assert!(ColumnRays::new(&BackendSpec::parse("matrix").unwrap(), input).is_none());
+        let input = FormFactorInput { scene: &scene, visibility: visibility.clone(), analysis: &analysis };
+        assert!(ColumnRays::new(&BackendSpec::parse("matrix").unwrap(), input.clone()).is_none());
         // Nothing can occlude in the furnace: the analytic backend traces no segment.
         let rays = ColumnRays::new(&BackendSpec::parse("analytic").unwrap(), input).unwrap();
         let mut out = rays.empty();

@@ -89,7 +89,8 @@ fn the_hierarchical_operator_counts_the_bytes_it_holds() {
     let mut built = None;
     let info = pool.install(|| {
         allocation_counter::measure(|| {
-            built = Some(radiosity_ff::HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, params));
+            built =
+                Some(radiosity_ff::HierarchicalColumns::new(p.scene(), &p.visibility().unwrap(), &p.analysis, params));
         })
     });
     let operator = built.unwrap();
@@ -113,7 +114,8 @@ fn shooting_from_the_hierarchys_nodes_reads_and_writes_its_buffers_in_place() {
     // patches).
     use radiosity_core::LinkSource;
     let p = radiosity_geom::PreparedScene::load("office:size=0.5").unwrap();
-    let operator = radiosity_ff::HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, Default::default());
+    let operator =
+        radiosity_ff::HierarchicalColumns::new(p.scene(), &p.visibility().unwrap(), &p.analysis, Default::default());
     let (n, nodes) = (p.scene().len(), operator.parents().len());
     let x: Vec<Real> = (0..n).map(|i| 1.0 + (i % 7) as Real).collect();
     let mut charges = vec![0.0; nodes * operator.charge_len()];

@@ -228,7 +228,7 @@ fn overlapping_coplanar_quads_leave_no_row_above_one() {
     let worst = raw.iter().copied().fold(0.0, Real::max);
     assert!(worst > 1.15, "as loaded, the worst row sums to {worst}");
     let prepared = radiosity_geom::PreparedScene::load(&arg).unwrap();
-    let f = AnalyticColumns::new(prepared.scene(), &prepared.visibility, &prepared.analysis, p);
+    let f = AnalyticColumns::new(prepared.scene(), &prepared.visibility().unwrap(), &prepared.analysis, p);
     assert!(!f.traces_shadow_rays());
     for (i, s) in shared_checks::row_sums(&f).iter().enumerate() {
         assert!((s - 1.0).abs() < 1e-3, "row {i} sums to {s}");

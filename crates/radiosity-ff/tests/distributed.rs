@@ -35,7 +35,7 @@ fn line(f: &impl ColumnSource, j: usize, row: bool) -> Vec<Real> {
 }
 
 fn single(p: &PreparedScene, params: HierarchicalParams) -> RankResult {
-    let f = HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, params);
+    let f = HierarchicalColumns::new(p.scene(), &p.visibility().unwrap(), &p.analysis, params);
     run(&f)
 }
 
@@ -48,7 +48,7 @@ fn split(p: &PreparedScene, params: HierarchicalParams, ranks: usize) -> Vec<Ran
         let collective: Arc<dyn Collective> = rank;
         let f = HierarchicalColumns::new_distributed(
             p.scene(),
-            &p.visibility,
+            &p.visibility().unwrap(),
             &p.analysis,
             params,
             &|_| {},

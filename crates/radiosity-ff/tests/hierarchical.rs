@@ -18,7 +18,7 @@ fn prepared(arg: &str) -> PreparedScene {
 fn hierarchical(p: &PreparedScene, eps: Real) -> HierarchicalColumns {
     HierarchicalColumns::new(
         p.scene(),
-        &p.visibility,
+        &p.visibility().unwrap(),
         &p.analysis,
         HierarchicalParams { eps, ..HierarchicalParams::default() },
     )
@@ -96,12 +96,13 @@ fn a_falling_threshold_converges_to_the_analytic_backend() {
     // L1). Without closure, which would cap the analytic rows that its quadrature puts a few
     // 1e-5 above 1.
     let p = prepared("furnace:res=12");
-    let analytic = columns(&AnalyticColumns::new(p.scene(), &p.visibility, &p.analysis, AnalyticParams::default()));
+    let analytic =
+        columns(&AnalyticColumns::new(p.scene(), &p.visibility().unwrap(), &p.analysis, AnalyticParams::default()));
     let n = analytic.len();
     let mut last = Real::INFINITY;
     for eps in [0.1, 0.01, 1e-3, 1e-4, 1e-5] {
         let params = HierarchicalParams { eps, closure: false, ..HierarchicalParams::default() };
-        let f = HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, params);
+        let f = HierarchicalColumns::new(p.scene(), &p.visibility().unwrap(), &p.analysis, params);
         let far = f.figures().far_links + f.figures().far_pairs as usize;
         assert!((far > 0) == (eps > 1e-5), "eps {eps}: {:?}", f.figures());
         let h = columns(&f);
@@ -115,7 +116,7 @@ fn a_falling_threshold_converges_to_the_analytic_backend() {
 #[test]
 fn rows_compared_against_the_analytic_backend() {
     let p = prepared("furnace:res=12");
-    let analytic = AnalyticColumns::new(p.scene(), &p.visibility, &p.analysis, AnalyticParams::default());
+    let analytic = AnalyticColumns::new(p.scene(), &p.visibility().unwrap(), &p.analysis, AnalyticParams::default());
     let rows = sampled_rows(p.scene().len(), 10, 0);
     assert_eq!(rows.len(), 10);
     assert!(rows.windows(2).all(|w| w[0] < w[1]));
@@ -140,11 +141,11 @@ fn closure_holds_every_row_to_one_by_lowering_entries() {
         let params = HierarchicalParams { eps, ..HierarchicalParams::default() };
         let raw = HierarchicalColumns::new(
             p.scene(),
-            &p.visibility,
+            &p.visibility().unwrap(),
             &p.analysis,
             HierarchicalParams { closure: false, ..params },
         );
-        let closed = HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, params);
+        let closed = HierarchicalColumns::new(p.scene(), &p.visibility().unwrap(), &p.analysis, params);
         let (raw_cols, closed_cols) = (columns(&raw), columns(&closed));
         let (raw_sums, sums) = (row_sums(&raw_cols), row_sums(&closed_cols));
         let most = |s: &[Real]| s.iter().copied().fold(0.0, Real::max);
@@ -185,7 +186,7 @@ fn closed_scenes_close_at_the_default_threshold() {
         let p = prepared(arg);
         for oracle in [Oracle::Flux, Oracle::Area] {
             let params = HierarchicalParams { oracle, ..HierarchicalParams::default() };
-            let f = HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, params);
+            let f = HierarchicalColumns::new(p.scene(), &p.visibility().unwrap(), &p.analysis, params);
             assert!(f.figures().far_links > 0, "{arg}, {oracle:?}: {:?}", f.figures());
             let sums = row_sums(&columns(&f));
             let worst = sums.iter().fold(0.0, |m: Real, s| m.max((s - 1.0).abs()));
@@ -296,7 +297,9 @@ fn a_build_settles_every_pair_of_patches_once_and_says_so() {
     let observe = |b: radiosity_ff::BuildProgress| reports.lock().unwrap().push(b);
     let params = HierarchicalParams { eps: 0.05, ..HierarchicalParams::default() };
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-    let f = pool.install(|| HierarchicalColumns::new_observed(p.scene(), &p.visibility, &p.analysis, params, &observe));
+    let f = pool.install(|| {
+        HierarchicalColumns::new_observed(p.scene(), &p.visibility().unwrap(), &p.analysis, params, &observe)
+    });
     let reports = reports.into_inner().unwrap();
     assert!(reports.len() >= 100, "{} reports", reports.len());
     assert!(reports.windows(2).all(|w| w[0].settled < w[1].settled && w[0].links <= w[1].links));
@@ -313,9 +316,13 @@ fn a_pass_driven_by_the_solution_refines_and_keeps_every_guarantee() {
     // non-negative, its rows the columns, its product the column loop.
     let p = prepared("cornell:res=6");
     let params = HierarchicalParams { eps: 0.05, ..HierarchicalParams::default() };
-    let one = HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, params);
-    let two =
-        HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, HierarchicalParams { passes: 2, ..params });
+    let one = HierarchicalColumns::new(p.scene(), &p.visibility().unwrap(), &p.analysis, params);
+    let two = HierarchicalColumns::new(
+        p.scene(),
+        &p.visibility().unwrap(),
+        &p.analysis,
+        HierarchicalParams { passes: 2, ..params },
+    );
     let (f1, f2) = (one.figures(), two.figures());
     assert!(f2.far_links + f2.near_links > f1.far_links + f1.near_links, "{f1:?} then {f2:?}");
     assert!(f2.rays > f1.rays, "the refined links traced rays of their own");
@@ -395,7 +402,8 @@ fn a_link_whose_pairs_are_all_blocked_is_dropped_whatever_its_ancestors_saw() {
     let patch = |i: usize| &p.scene().patches()[i];
     let (emitter, receiver): (Vec<usize>, Vec<usize>) =
         ((0..n).filter(|&i| patch(i).object.0 == 0).collect(), (0..n).filter(|&i| patch(i).object.0 == 1).collect());
-    let analytic = columns(&AnalyticColumns::new(p.scene(), &p.visibility, &p.analysis, AnalyticParams::default()));
+    let analytic =
+        columns(&AnalyticColumns::new(p.scene(), &p.visibility().unwrap(), &p.analysis, AnalyticParams::default()));
     let transfer = |f: &[Vec<Real>], left: bool| -> Real {
         let mut sum = 0.0;
         for &j in &emitter {
@@ -412,7 +420,7 @@ fn a_link_whose_pairs_are_all_blocked_is_dropped_whatever_its_ancestors_saw() {
     for eps in [1e-2, 3e-2] {
         for seed in 0..2 {
             let params = HierarchicalParams { eps, seed, ..HierarchicalParams::default() };
-            let h = columns(&HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, params));
+            let h = columns(&HierarchicalColumns::new(p.scene(), &p.visibility().unwrap(), &p.analysis, params));
             assert_eq!(transfer(&h, true), 0.0, "eps {eps}, seed {seed}: light through the screen");
             let whole = transfer(&h, false) / exact;
             assert!((whole - 1.0).abs() < 0.02, "eps {eps}, seed {seed}: {whole} of the analytic transfer");

@@ -12,7 +12,7 @@ use radiosity_geom::PreparedScene;
 fn operator() -> (PreparedScene, HierarchicalColumns) {
     let p = PreparedScene::load("cornell:res=6").unwrap();
     let params = HierarchicalParams { eps: 0.05, ..HierarchicalParams::default() };
-    let f = HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, params);
+    let f = HierarchicalColumns::new(p.scene(), &p.visibility().unwrap(), &p.analysis, params);
     (p, f)
 }
 

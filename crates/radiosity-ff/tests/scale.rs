@@ -55,7 +55,7 @@ fn compute(scene_arg: &str, ff_arg: &str) -> Computed {
     let visibility = Visibility::new(&scene);
     let analysis = SceneAnalysis::new(&scene, &visibility);
     assert!(analysis.occlusion.value, "{scene_arg}: the inner box should occlude");
-    let input = FormFactorInput { scene: &scene, visibility: &visibility, analysis: &analysis };
+    let input = FormFactorInput { scene: &scene, visibility: visibility.clone(), analysis: &analysis };
     let spec = BackendSpec::parse(ff_arg).unwrap();
     if let Some(&params) = spec.params::<AnalyticParams>() {
         assert!(AnalyticColumns::new(&scene, &visibility, &analysis, params).traces_shadow_rays(), "{scene_arg}");

@@ -196,7 +196,7 @@ fn a_prepared_scene_is_closed_when_its_analysis_says_so() {
     for (arg, closed) in [("furnace:res=2", true), ("cornell:res=2", false)] {
         let prepared = PreparedScene::load(arg).unwrap();
         assert_eq!(prepared.analysis.closure.value.is_closed(), closed, "{arg}");
-        let sampler = SceneTransport::from_prepared(&prepared);
+        let sampler = SceneTransport::from_prepared(&prepared).unwrap();
         assert_eq!(sampler.is_closed(), closed);
         assert_eq!(sampler.patch_count(), prepared.scene().len());
         assert_eq!(sampler.row_sum(0), closed.then_some(1.0), "{arg}");

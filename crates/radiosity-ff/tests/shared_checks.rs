@@ -27,7 +27,7 @@ pub fn row_sums(f: &impl ColumnSource) -> Vec<Real> {
 pub fn clear_shafts_give_the_same_operator(p: &PreparedScene, arg: &str, eps: Real) {
     let build = |shafts: bool| {
         let params = HierarchicalParams { eps, shafts, ..HierarchicalParams::default() };
-        HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, params)
+        HierarchicalColumns::new(p.scene(), &p.visibility().unwrap(), &p.analysis, params)
     };
     let (with, without) = (build(true), build(false));
     let (a, b) = (with.figures(), without.figures());

@@ -34,8 +34,12 @@ fn renderpark_mgf_scenes_have_no_row_above_one(scenes: &Scenes) {
     for name in ["mgf/cube.mgf", "mgf/examp1.mgf"] {
         let prepared = PreparedScene::load(&scenes.path(name)).unwrap();
         assert!(!prepared.analysis.closure.value.is_closed(), "{name} is open");
-        let f =
-            AnalyticColumns::new(prepared.scene(), &prepared.visibility, &prepared.analysis, AnalyticParams::default());
+        let f = AnalyticColumns::new(
+            prepared.scene(),
+            &prepared.visibility().unwrap(),
+            &prepared.analysis,
+            AnalyticParams::default(),
+        );
         for (i, s) in shared_checks::row_sums(&f).iter().enumerate() {
             assert!(*s <= 1.01, "{name}: row {i} sums to {s}");
         }

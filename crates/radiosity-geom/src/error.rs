@@ -172,6 +172,16 @@ pub enum GeomError {
         /// The format's name.
         format: &'static str,
     },
+    /// Rays asked of a prepared scene whose BVH was released
+    /// ([`crate::PreparedScene::release_visibility`]).
+    #[error(
+        "the scene's BVH was released once nothing in the run traced rays, so {wanted} cannot be done in this run; \
+         ask for it in a run of its own"
+    )]
+    VisibilityReleased {
+        /// What needed the rays: `a render`.
+        wanted: String,
+    },
 }
 
 /// `path:line`, or the path alone.

@@ -39,6 +39,7 @@ use obvhs::ray::Ray;
 use obvhs::triangle::Triangle;
 use radiosity_core::{Real, Scene, Vec3};
 use rayon::prelude::*;
+use std::sync::Arc;
 use std::time::Duration;
 
 /// Parametric margin at both ends of a segment (relative, so scale-free).
@@ -87,8 +88,15 @@ pub struct RayHit {
 }
 
 /// A BVH over the scene's patches answering occlusion and ray queries.
+///
+/// A handle: a clone shares the tree, so that whatever traces rays holds its own and the tree
+/// is freed when the last handle goes ([`crate::PreparedScene::release_visibility`]).
 #[derive(Clone, PartialEq)]
-pub struct Visibility {
+pub struct Visibility(Arc<Tree>);
+
+/// What a [`Visibility`] shares between its handles.
+#[derive(PartialEq)]
+struct Tree {
     bvh: CwBvh,
     triangles: Vec<[Vec3; 3]>,
     triangle_patch: Vec<u32>,
@@ -99,7 +107,7 @@ pub struct Visibility {
 
 impl std::fmt::Debug for Visibility {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Visibility").field("triangles", &self.triangles.len()).finish_non_exhaustive()
+        f.debug_struct("Visibility").field("triangles", &self.0.triangles.len()).finish_non_exhaustive()
     }
 }
 
@@ -185,22 +193,27 @@ impl Visibility {
             })
             .collect();
         let bvh = build_cwbvh_from_tris(&bvh_tris, build.params(), &mut Duration::default());
-        Visibility { bvh, triangles, triangle_patch, centre, inv_scale, diagonal: scene.diagonal() }
+        Visibility(Arc::new(Tree { bvh, triangles, triangle_patch, centre, inv_scale, diagonal: scene.diagonal() }))
+    }
+
+    /// Whether another handle shares this one's tree.
+    pub fn is_shared(&self) -> bool {
+        Arc::strong_count(&self.0) > 1
     }
 
     /// The bytes the structure holds on the heap: the exact `f64` triangles, the patch of each,
     /// and obvhs's tree (its nodes and primitive indices).
     pub fn heap_bytes(&self) -> usize {
-        self.triangles.capacity() * size_of::<[Vec3; 3]>()
-            + self.triangle_patch.capacity() * size_of::<u32>()
-            + self.bvh.nodes.capacity() * size_of::<obvhs::cwbvh::node::CwBvhNode>()
-            + self.bvh.primitive_indices.capacity() * size_of::<u32>()
-            + self.bvh.exact_node_aabbs.as_ref().map_or(0, |a| a.capacity() * size_of::<obvhs::aabb::Aabb>())
+        self.0.triangles.capacity() * size_of::<[Vec3; 3]>()
+            + self.0.triangle_patch.capacity() * size_of::<u32>()
+            + self.0.bvh.nodes.capacity() * size_of::<obvhs::cwbvh::node::CwBvhNode>()
+            + self.0.bvh.primitive_indices.capacity() * size_of::<u32>()
+            + self.0.bvh.exact_node_aabbs.as_ref().map_or(0, |a| a.capacity() * size_of::<obvhs::aabb::Aabb>())
     }
 
     /// The number of triangles in the BVH (one per triangle patch, two per quad).
     pub fn triangle_count(&self) -> usize {
-        self.triangles.len()
+        self.0.triangles.len()
     }
 
     /// The BVH-space ray for `origin + t · direction`, `t ∈ [0, tmax]`, and the map from `t`
@@ -211,10 +224,10 @@ impl Visibility {
     /// therefore has a unit direction and starts [`BVH_BACKOFF`] units behind the true origin;
     /// our exact `f64` tests still use the true ray and reject what lies behind it.
     fn bvh_ray(&self, origin: Vec3, direction: Vec3, tmax: Real) -> (Ray, BvhParam) {
-        let d = direction * self.inv_scale;
+        let d = direction * self.0.inv_scale;
         let len = d.length();
         let unit = d / len;
-        let o = (origin - self.centre) * self.inv_scale - unit * BVH_BACKOFF;
+        let o = (origin - self.0.centre) * self.0.inv_scale - unit * BVH_BACKOFF;
         let map = BvhParam { scale: len };
         // Adding +0 turns a −0 component into +0: obvhs takes the octant of a ray from the sign
         // bits of its direction, and a −0 component (as in `-Vec3::Y`) put the ray in an octant
@@ -227,7 +240,7 @@ impl Visibility {
     /// Exact ray-triangle test in `f64`: the parameter `t` and whether the front side was hit.
     #[inline(always)]
     fn intersect(&self, tri: usize, origin: Vec3, direction: Vec3) -> Option<(Real, bool)> {
-        let [a, b, c] = self.triangles[tri];
+        let [a, b, c] = self.0.triangles[tri];
         let e1 = b - a;
         let e2 = c - a;
         let pvec = direction.cross(e2);
@@ -268,9 +281,9 @@ impl Visibility {
             return true;
         }
         let (ray, _) = self.bvh_ray(p, d, 1.0);
-        self.bvh.ray_traverse_miss(ray, |_, id| {
-            let tri = self.bvh.primitive_indices[id] as usize;
-            let patch = self.triangle_patch[tri];
+        self.0.bvh.ray_traverse_miss(ray, |_, id| {
+            let tri = self.0.bvh.primitive_indices[id] as usize;
+            let patch = self.0.triangle_patch[tri];
             if patch == skip_a || patch == skip_b {
                 return f32::INFINITY;
             }
@@ -284,7 +297,7 @@ impl Visibility {
     /// The smallest ray parameter that counts as a hit in [`Visibility::first_hit`] and
     /// [`Visibility::escapes`]: `1e-9` scene diagonals along `direction`.
     pub fn ray_margin(&self, direction: Vec3) -> Real {
-        T_MARGIN * self.diagonal / direction.length()
+        T_MARGIN * self.0.diagonal / direction.length()
     }
 
     /// The closest patch hit by the ray `origin + t · direction`, ignoring patch `skip` (the
@@ -298,9 +311,9 @@ impl Visibility {
         let (ray, map) = self.bvh_ray(origin, direction, Real::INFINITY);
         let mut best: Option<RayHit> = None;
         let mut closest = obvhs::ray::RayHit::none();
-        self.bvh.ray_traverse(ray, &mut closest, |_, id| {
-            let tri = self.bvh.primitive_indices[id] as usize;
-            let patch = self.triangle_patch[tri];
+        self.0.bvh.ray_traverse(ray, &mut closest, |_, id| {
+            let tri = self.0.bvh.primitive_indices[id] as usize;
+            let patch = self.0.triangle_patch[tri];
             if patch == skip {
                 return f32::INFINITY;
             }
@@ -324,9 +337,9 @@ impl Visibility {
         }
         let margin = self.ray_margin(direction);
         let (ray, _) = self.bvh_ray(origin, direction, Real::INFINITY);
-        self.bvh.ray_traverse_miss(ray, |_, id| {
-            let tri = self.bvh.primitive_indices[id] as usize;
-            if self.triangle_patch[tri] == skip {
+        self.0.bvh.ray_traverse_miss(ray, |_, id| {
+            let tri = self.0.bvh.primitive_indices[id] as usize;
+            if self.0.triangle_patch[tri] == skip {
                 return f32::INFINITY;
             }
             match self.intersect(tri, origin, direction) {
@@ -340,11 +353,11 @@ impl Visibility {
     /// and diagnostics.
     pub fn first_hit_brute_force(&self, origin: Vec3, direction: Vec3, skip: Option<usize>) -> Option<RayHit> {
         let margin = self.ray_margin(direction);
-        (0..self.triangles.len())
-            .filter(|&k| Some(self.triangle_patch[k] as usize) != skip)
+        (0..self.0.triangles.len())
+            .filter(|&k| Some(self.0.triangle_patch[k] as usize) != skip)
             .filter_map(|k| {
                 let (t, front) = self.intersect(k, origin, direction)?;
-                (t > margin).then_some(RayHit { patch: self.triangle_patch[k] as usize, t, front })
+                (t > margin).then_some(RayHit { patch: self.0.triangle_patch[k] as usize, t, front })
             })
             .min_by(|a, b| a.t.total_cmp(&b.t))
     }
@@ -375,10 +388,11 @@ impl Visibility {
     /// The same BVH with obvhs's `f32` triangle test, for measuring ([`RawTracer`]).
     pub fn raw_tracer(&self) -> RawTracer<'_> {
         let triangles = self
+            .0
             .triangles
             .iter()
             .map(|t| {
-                let v = t.map(|v| Vec3A::from(((v - self.centre) * self.inv_scale).as_vec3()));
+                let v = t.map(|v| Vec3A::from(((v - self.0.centre) * self.0.inv_scale).as_vec3()));
                 Triangle { v0: v[0], v1: v[1], v2: v[2] }
             })
             .collect();
@@ -399,9 +413,9 @@ impl RawTracer<'_> {
         ray.tmin = map.to_bvh(T_MARGIN);
         ray.tmax = map.to_bvh(1.0 - T_MARGIN);
         let (from, to) = (from as u32, to as u32);
-        vis.bvh.ray_traverse_miss(ray, |ray, id| {
-            let tri = vis.bvh.primitive_indices[id] as usize;
-            let patch = vis.triangle_patch[tri];
+        vis.0.bvh.ray_traverse_miss(ray, |ray, id| {
+            let tri = vis.0.bvh.primitive_indices[id] as usize;
+            let patch = vis.0.triangle_patch[tri];
             if patch == from || patch == to { f32::INFINITY } else { self.triangles[tri].intersect(ray) }
         })
     }
@@ -417,12 +431,13 @@ impl RawTracer<'_> {
         let (mut ray, map) = vis.bvh_ray(origin, direction, Real::INFINITY);
         ray.tmin = map.to_bvh(vis.ray_margin(direction));
         let mut hit = obvhs::ray::RayHit::none();
-        vis.bvh
+        vis.0
+            .bvh
             .ray_traverse(ray, &mut hit, |ray, id| {
-                let tri = vis.bvh.primitive_indices[id] as usize;
-                if vis.triangle_patch[tri] == skip { f32::INFINITY } else { self.triangles[tri].intersect(ray) }
+                let tri = vis.0.bvh.primitive_indices[id] as usize;
+                if vis.0.triangle_patch[tri] == skip { f32::INFINITY } else { self.triangles[tri].intersect(ray) }
             })
-            .then(|| vis.triangle_patch[vis.bvh.primitive_indices[hit.primitive_id as usize] as usize] as usize)
+            .then(|| vis.0.triangle_patch[vis.0.bvh.primitive_indices[hit.primitive_id as usize] as usize] as usize)
     }
 }
 

@@ -22,7 +22,7 @@ use crate::reference::cache::{Cache, Lookup, scene_key};
 use radiosity_core::{ColumnSource, Real};
 use radiosity_ff::guard::MatrixFigures;
 use radiosity_ff::matrix::RebalanceReport;
-use radiosity_ff::{BackendSpec, BuildObserver, FormFactorBackend, StoredMatrix};
+use radiosity_ff::{BackendSpec, BuildObserver, FormFactorBackend, FormFactorInput, StoredMatrix};
 use radiosity_geom::PreparedScene;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -91,7 +91,7 @@ pub fn backend<'p>(
     }
     match (spec.argument().cache_kind(), cache) {
         (Some(kind), Some(cache)) => obtain_kept(prepared, spec, kind, cache, progress),
-        _ => Ok(spec.build_observed(prepared.into(), &Observed(progress))?),
+        _ => Ok(spec.build_observed(FormFactorInput::try_from(prepared)?, &Observed(progress))?),
     }
 }
 
@@ -108,7 +108,7 @@ fn obtain_kept<'p>(
     let key = format!("{}; backend {}", scene_key(prepared.scene()), spec.canonical());
     progress.begin(&format!("reading the {} backend", spec.name()), 0, "");
     let read = match cache.read(kind, &key) {
-        Lookup::Hit(bytes) => match spec.argument().load(&bytes, &key, prepared.into()) {
+        Lookup::Hit(bytes) => match spec.argument().load(&bytes, &key, FormFactorInput::try_from(prepared)?) {
             Ok(built) => Some(built),
             Err(e) => {
                 progress.warn(&format!("replacing cache file {}: {e}", cache.path(kind, &key).display()));
@@ -125,7 +125,7 @@ fn obtain_kept<'p>(
     if let Some(built) = read {
         return Ok(built);
     }
-    let built = spec.build_observed(prepared.into(), &Observed(progress))?;
+    let built = spec.build_observed(FormFactorInput::try_from(prepared)?, &Observed(progress))?;
     // Turned into bytes only where they can be written: at a million patches they are 0.7 GB.
     let written = cache.prepare().and_then(|()| match built.persist(&key) {
         Some(bytes) => cache.write(kind, &key, &bytes).map(|_| ()),
@@ -191,7 +191,7 @@ pub fn assemble_stored(
     rebalance: bool,
     progress: &dyn Progress,
 ) -> Result<Assembled, LabError> {
-    let backend = spec.columns().build_observed(prepared.into(), &Observed(progress))?;
+    let backend = spec.columns().build_observed(FormFactorInput::try_from(prepared)?, &Observed(progress))?;
     let area: Vec<Real> = prepared.scene().patches().iter().map(|p| p.area()).collect();
     let (mut matrix, clamped) = StoredMatrix::assemble_backend(&area, backend.as_ref(), &Observed(progress))?;
     let rebalanced = if rebalance {

@@ -14,6 +14,7 @@ use crate::lab::options::Transport;
 use crate::lab::setup::Lab;
 use radiosity_core::{ColumnTransport, SampleCost, TransportSampler};
 use radiosity_ff::SceneTransport;
+use radiosity_solvers::{Solver, StepKind};
 use std::time::Instant;
 
 /// A lab's transport sampler, built ([`Lab::transport_sampler`]).
@@ -52,7 +53,7 @@ impl<'p> Lab<'p> {
         let sampler: Box<dyn TransportSampler + Send + 'p> = match self.transport {
             // Declared closed (rows of F summing to 1) only where the scene analysis finds the
             // scene closed.
-            Transport::Scene => Box::new(SceneTransport::from_prepared(self.prepared)),
+            Transport::Scene => Box::new(SceneTransport::from_prepared(self.prepared)?),
             Transport::Matrix => {
                 let matrix = self.matrix.as_deref().ok_or_else(|| {
                     LabError::Invalid(format!(
@@ -67,5 +68,19 @@ impl<'p> Lab<'p> {
             }
         };
         Ok(TransportBuilt { sampler, transport: self.transport, seconds: start.elapsed().as_secs_f64() })
+    }
+}
+
+impl Lab<'_> {
+    /// Frees the scene's BVH when `solver` (the reference itself when `None`) casts no ray
+    /// through the scene: the lab's backend is built and its reference solved by now, so a run
+    /// that does not sample transport by rays never traces another. Returns the bytes freed:
+    /// 0 when the run needs the rays, or when the backend shares the tree (one that computes
+    /// its entries by rays, as the analytic one does), which then keeps it. Once it is freed,
+    /// whatever asks the scene for rays is refused in one sentence
+    /// ([`radiosity_geom::GeomError::VisibilityReleased`]).
+    pub fn release_rays(&self, solver: Option<&dyn Solver>) -> usize {
+        let casts = solver.is_some_and(|s| s.step_kind() == StepKind::Sampled) && self.transport == Transport::Scene;
+        if casts { 0 } else { self.prepared.release_visibility() }
     }
 }

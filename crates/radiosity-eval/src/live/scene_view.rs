@@ -143,7 +143,14 @@ impl LiveScene {
         let prepared = lab.prepared();
         let channels = lab.system().channels().count();
         let star = lab.reference().map(|r| r.values());
-        Ok(LiveScene::new(&prepared.loaded.scene, &prepared.visibility, camera, channels, star, &header)?)
+        Ok(LiveScene::new(
+            &prepared.loaded.scene,
+            &prepared.visibility_for("a live view")?,
+            camera,
+            channels,
+            star,
+            &header,
+        )?)
     }
 
     /// The runs this scene's header names, in order.

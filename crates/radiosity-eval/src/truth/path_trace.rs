@@ -235,7 +235,7 @@ pub struct PathTraced {
 /// Estimates the area-mean radiosity of every object of `scene` by path tracing over
 /// `visibility` (its BVH), reporting progress over batches.
 ///
-/// For a prepared scene, pass `prepared.scene()` and `&prepared.visibility`; a scene of one's
+/// For a prepared scene, pass `prepared.scene()` and `&prepared.visibility()?`; a scene of one's
 /// own needs a [`Visibility::new`] of it.
 pub fn path_trace(
     scene: &Scene,

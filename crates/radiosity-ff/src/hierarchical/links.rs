@@ -811,7 +811,8 @@ mod tests {
         let scene = p.scene();
         let tree = ClusterTree::new(scene);
         let near = AnalyticParams { budget: params.budget, ..AnalyticParams::default() };
-        let analytic = AnalyticColumns::new(scene, &p.visibility, &p.analysis, near);
+        let visibility = p.visibility().unwrap();
+        let analytic = AnalyticColumns::new(scene, &visibility, &p.analysis, near);
         let mut cumulative = vec![0.0];
         for &k in &tree.order {
             cumulative.push(cumulative.last().unwrap() + scene.patches()[k as usize].area());
@@ -819,7 +820,7 @@ mod tests {
         let refiner = Refiner {
             scene,
             tree: &tree,
-            visibility: p.analysis.occlusion.value.then_some(&p.visibility),
+            visibility: p.analysis.occlusion.value.then_some(&visibility),
             analytic: &analytic,
             brightness: Brightness::estimate(scene, &tree, params.oracle, params.floor),
             eps: params.eps,

@@ -481,7 +481,7 @@ mod tests {
     fn operator() -> (HierarchicalColumns, usize) {
         let p = PreparedScene::load("cornell:res=8").unwrap();
         let params = HierarchicalParams { eps: 0.02, ..HierarchicalParams::default() };
-        (HierarchicalColumns::new(p.scene(), &p.visibility, &p.analysis, params), p.scene().len())
+        (HierarchicalColumns::new(p.scene(), &p.visibility().unwrap(), &p.analysis, params), p.scene().len())
     }
 
     /// A positive vector of `len` values, none alike its neighbours.

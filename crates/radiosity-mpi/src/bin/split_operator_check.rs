@@ -36,7 +36,7 @@ fn run() -> Result<(), String> {
     let params = HierarchicalParams { eps, ..HierarchicalParams::default() };
     let f = HierarchicalColumns::new_distributed(
         prepared.scene(),
-        &prepared.visibility,
+        &prepared.visibility().map_err(|e| e.to_string())?,
         &prepared.analysis,
         params,
         &|_| {},

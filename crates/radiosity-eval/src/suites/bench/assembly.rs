@@ -70,7 +70,7 @@ pub fn measure(
     cases.push(("column by column".to_string(), 1, false));
     for (label, rays, reciprocal) in cases {
         let analytic = AnalyticParams { rays, ..AnalyticParams::default() };
-        let analytic = AnalyticColumns::new(scene, &prepared.visibility, &prepared.analysis, analytic);
+        let analytic = AnalyticColumns::new(scene, &prepared.visibility()?, &prepared.analysis, analytic);
         let mut seconds = Vec::new();
         let mut last = None;
         for r in 0..params.runs {

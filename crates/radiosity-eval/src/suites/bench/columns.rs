@@ -197,7 +197,7 @@ pub fn measure(
         Some(p) => BackendSpec::new(AnalyticParams { cache_mib: 0, ..*p }),
         None => spec.clone(),
     };
-    let backend = first_time.build(input)?;
+    let backend = first_time.build(input.clone())?;
     // One column untimed first: the BVH and the backend's tables paged in and cached.
     if let Some(&j) = sample.first() {
         pools[1].install(|| time_sequential(&backend, &[j], 0.0));
@@ -207,20 +207,20 @@ pub fn measure(
     run.columns[1] = pools[1].install(|| time_parallel(&backend, sample, min_seconds));
     run.columns[2] = pools[1].install(|| time_sequential(&backend, sample, min_seconds));
     if let Some(p) = analytic {
-        let analytic = AnalyticColumns::new(input.scene, input.visibility, input.analysis, *p);
+        let analytic = AnalyticColumns::new(input.scene, &input.visibility, input.analysis, *p);
         run.paths = time_by_sampling_path(&analytic, sample);
-        let recorded = spec.build(input)?;
+        let recorded = spec.build(input.clone())?;
         pools[1].install(|| time_sequential(&recorded, sample, 0.0));
         run.recorded = pools[1].install(|| time_sequential(&recorded, sample, min_seconds));
     }
-    let rays = ColumnRays::new(spec, input)
+    let rays = ColumnRays::new(spec, input.clone())
         .ok_or_else(|| LabError::Invalid(format!("{} traces no rays to measure", spec.canonical())))?;
     let mut chunk = rays.empty();
     let flush = |chunk: &mut TracedRays, run: &mut ColumnRun| {
         run.rays += chunk.len();
-        let (t, clear_exact) = pools[0].install(|| trace_exact(input.visibility, chunk, min_seconds));
+        let (t, clear_exact) = pools[0].install(|| trace_exact(&input.visibility, chunk, min_seconds));
         run.raw[0] += t;
-        run.raw[1] += pools[1].install(|| trace_exact(input.visibility, chunk, min_seconds)).0;
+        run.raw[1] += pools[1].install(|| trace_exact(&input.visibility, chunk, min_seconds)).0;
         let (t, clear_raw) = pools[0].install(|| trace_raw(raw, chunk, min_seconds));
         run.raw[2] += t;
         run.raw[3] += pools[1].install(|| trace_raw(raw, chunk, min_seconds)).0;
@@ -284,8 +284,9 @@ pub fn run(
     progress: &dyn Progress,
 ) -> Result<ColumnsSection, LabError> {
     let n = prepared.loaded.scene.len();
-    let input = prepared.into();
-    let raw = prepared.visibility.raw_tracer();
+    let input = FormFactorInput::try_from(prepared)?;
+    let visibility = prepared.visibility()?;
+    let raw = visibility.raw_tracer();
     let columns = sample(n, params.columns, SAMPLE_SEED);
     let pools = [pool(1)?, pool(2)?];
     let specs = &params.backends;
@@ -297,7 +298,7 @@ pub fn run(
                 (r * specs.len() + b) as u64,
                 &format!("{} (run {}/{})", spec.canonical(), r + 1, params.runs),
             );
-            runs[b].push(measure(spec, input, &raw, &columns, &pools, params.min_seconds)?);
+            runs[b].push(measure(spec, input.clone(), &raw, &columns, &pools, params.min_seconds)?);
         }
     }
     progress.end();

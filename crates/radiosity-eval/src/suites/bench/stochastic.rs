@@ -114,7 +114,7 @@ pub struct SampledReport {
 /// that is not closed): its own refusal, asked before any ray ([`Solver::applicable`]).
 pub fn refusal(prepared: &PreparedScene, solver: &dyn Solver) -> Result<Option<String>, LabError> {
     let system = LinearSystem::from_scene(&prepared.loaded.scene);
-    let transport = SceneTransport::from_prepared(prepared);
+    let transport = SceneTransport::from_prepared(prepared)?;
     let problem = Problem::sampled(&system, &transport)?;
     Ok(match solver.applicable(&problem) {
         Ok(()) => None,
@@ -137,7 +137,7 @@ pub fn sampled_run(
 ) -> Result<SampledReport, LabError> {
     let system = LinearSystem::from_scene(&prepared.loaded.scene);
     check_reference(&system, star)?;
-    let transport = SceneTransport::from_prepared(prepared);
+    let transport = SceneTransport::from_prepared(prepared)?;
     let backend = match case {
         Case::Rays => None,
         Case::Backend(spec) => Some(fresh_backend(prepared, spec, &NoProgress)?),

@@ -237,8 +237,6 @@ impl SolverParams for StochasticJacobiParams {
 struct Chain {
     /// The combined estimate `B̄`, patch-major.
     estimate: Vec<Real>,
-    /// The unshot radiosity `ΔB` of the incremental phase.
-    unshot: Vec<Real>,
     /// Rays behind `estimate` (its weight in the combination).
     weight: Real,
     /// Whether the incremental phase is over.
@@ -253,31 +251,22 @@ struct Chain {
 
 impl Chain {
     /// The chain as one vector, to be shared between ranks ([`Deal::share`]): its estimate,
-    /// its unshot radiosity when `incremental` (the chain was in its incremental series before
-    /// the step, which every rank knows alike; the unshot radiosity is zero for good after), its
-    /// streams' positions, then its weight, phase, unshot power and iteration (counts are exact
-    /// as reals below 2^53).
-    fn pack(&self, incremental: bool) -> Vec<Real> {
-        let mut v = Vec::with_capacity(2 * self.estimate.len() + self.drawn.len() + 4);
+    /// its streams' positions, then its weight, phase, unshot power and iteration (counts are
+    /// exact as reals below 2^53). No unshot radiosity: a chain holds none between steps (its
+    /// incremental series is shot whole within one).
+    fn pack(&self) -> Vec<Real> {
+        let mut v = Vec::with_capacity(self.estimate.len() + self.drawn.len() + 4);
         v.extend_from_slice(&self.estimate);
-        if incremental {
-            v.extend_from_slice(&self.unshot);
-        }
         v.extend(self.drawn.iter().map(|&d| d as Real));
         v.extend([self.weight, Real::from(u8::from(self.regular)), self.left, self.iteration as Real]);
         v
     }
 
     /// The chain as [`Chain::pack`] wrote it.
-    fn unpack(&mut self, v: &[Real], incremental: bool) {
+    fn unpack(&mut self, v: &[Real]) {
         let (m, n) = (self.estimate.len(), self.drawn.len());
         self.estimate.copy_from_slice(&v[..m]);
-        let at = if incremental {
-            self.unshot.copy_from_slice(&v[m..2 * m]);
-            2 * m
-        } else {
-            m
-        };
+        let at = m;
         for (d, x) in self.drawn.iter_mut().zip(&v[at..at + n]) {
             *d = *x as u64;
         }
@@ -343,32 +332,33 @@ impl StochasticJacobi {
         if !chain.regular {
             // The whole incremental series in one step: a run stopped between two of its
             // iterations would show an estimate short of the power still unshot, a bias that
-            // every replicate shares and no spread between them can see.
+            // every replicate shares and no spread between them can see. Its unshot radiosity
+            // lives only while it is shot: one vector over the patches, not one a replicate.
+            let mut unshot = problem.system().emissions().to_vec();
             let mut x = vec![0.0; n * k];
             let mut incoming = vec![0.0; n * k];
             loop {
-                let unshot = Self::power(problem, &chain.unshot);
-                if unshot <= params.spent * emitted {
+                let power = Self::power(problem, &unshot);
+                if power <= params.spent * emitted {
                     chain.regular = true;
-                    chain.left = unshot / emitted;
-                    chain.unshot.fill(0.0);
+                    chain.left = power / emitted;
                     return Ok(());
                 }
                 streams.iteration = chain.iteration;
                 chain.iteration += 1;
-                let n_rays = ((batch as Real * unshot / emitted).ceil() as u64).max(1);
+                let n_rays = ((batch as Real * power / emitted).ceil() as u64).max(1);
                 // Power shot: A_j ΔB_j (each entry on its own, so on every thread).
-                x.par_chunks_mut(k).zip(chain.unshot.par_chunks(k)).zip(areas.par_iter()).for_each(|((p, b), a)| {
+                x.par_chunks_mut(k).zip(unshot.par_chunks(k)).zip(areas.par_iter()).for_each(|((p, b), a)| {
                     p.iter_mut().zip(b).for_each(|(p, b)| *p = a * b);
                 });
                 let cast = if params.global_lines {
                     problem
-                        .cast(&name, |rays| lines(rays, &chain.unshot, k, n_rays, &streams, &mut incoming))?
+                        .cast(&name, |rays| lines(rays, &unshot, k, n_rays, &streams, &mut incoming))?
                         .ok_or_else(|| no_lines(&name))?
                 } else {
                     problem.cast(&name, |rays| shoot(rays, &x, k, n_rays, &mut streams, &mut incoming))?
                 };
-                (chain.unshot.par_chunks_mut(k), chain.estimate.par_chunks_mut(k), incoming.par_chunks(k))
+                (unshot.par_chunks_mut(k), chain.estimate.par_chunks_mut(k), incoming.par_chunks(k))
                     .into_par_iter()
                     .enumerate()
                     .for_each(|(i, (unshot, estimate, power))| {
@@ -490,15 +480,8 @@ impl Solver for StochasticJacobi {
         let emission = problem.system().emissions().to_vec();
         self.emitted = Self::power(problem, &emission);
         let n = problem.n();
-        let chain = Chain {
-            estimate: emission.clone(),
-            unshot: emission,
-            weight: 0.0,
-            regular: false,
-            left: 1.0,
-            iteration: 0,
-            drawn: vec![0; n],
-        };
+        let chain =
+            Chain { estimate: emission, weight: 0.0, regular: false, left: 1.0, iteration: 0, drawn: vec![0; n] };
         self.chains = vec![chain; self.params.replicates];
         Ok(())
     }
@@ -509,24 +492,25 @@ impl Solver for StochasticJacobi {
         }
         let deal = Deal::of(problem);
         let before = problem.spent(Unit::Rays);
-        let incremental: Vec<bool> = self.chains.iter().map(|c| !c.regular).collect();
         for r in 0..self.chains.len() {
             if deal.mine(r) {
                 self.advance(problem, r)?;
             }
         }
         if deal.split() {
-            let mut parts: Vec<Vec<Real>> =
-                self.chains.iter().zip(&incremental).map(|(chain, &inc)| chain.pack(inc)).collect();
+            let mut parts: Vec<Vec<Real>> = self.chains.iter().map(Chain::pack).collect();
             deal.share(problem, &mut parts, problem.spent(Unit::Rays) - before);
-            for ((chain, part), &inc) in self.chains.iter_mut().zip(&parts).zip(&incremental) {
-                chain.unpack(part, inc);
+            for (chain, part) in self.chains.iter_mut().zip(&parts) {
+                chain.unpack(part);
             }
         }
         let r = self.chains.len() as Real;
+        // A chain not yet in its series holds `E` unshot; one past it, nothing.
+        let waiting = self.chains.iter().filter(|c| !c.regular).count() as Real / r;
+        let emissions = problem.system().emissions();
         for (idx, b) in state.radiosity.iter_mut().enumerate() {
             let mean = self.chains.iter().map(|c| c.estimate[idx]).sum::<Real>() / r;
-            let unshot = self.chains.iter().map(|c| c.unshot[idx]).sum::<Real>() / r;
+            let unshot = waiting * emissions[idx];
             if !mean.is_finite() {
                 let k = state.channels;
                 return Err(SolverError::NonFinite { step: state.step + 1, patch: idx / k, value: mean });

@@ -100,7 +100,8 @@ impl Lab<'_> {
         let sampled = solver.step_kind() == StepKind::Sampled;
         let sampler = if sampled { sampler } else { None };
         let evaluator = self.evaluator()?;
-        let (target, unit) = progress_target(rules, self.n(), sampled);
+        let counts_columns = !matches!(solver.step_kind(), StepKind::Product | StepKind::Round);
+        let (target, unit) = progress_target(rules, self.n(), sampled, counts_columns);
         let n = self.n() as u64;
         let mut recorder = Recorder {
             system: &self.system,
@@ -316,9 +317,10 @@ pub fn check_rules(solver: &dyn Solver, rules: &StopRules) -> Result<(), LabErro
 /// The count a run's progress is measured against, and its unit: for a solver that samples
 /// transport (`sampled`), its first `rays=` or `steps=` rule (rays, with no target,
 /// otherwise); for the others, their first `steps=` rule or rule on another unit of cost
-/// (`2n` columns otherwise). A rule that counts what the run does not spend never holds for it: in a
-/// comparison that mixes both, each solver stops on its own.
-fn progress_target(rules: &StopRules, n: usize, sampled: bool) -> (u64, ProgressUnit) {
+/// (`2n` columns otherwise, or steps with no target for a solver whose steps are products or
+/// rounds, which may compute no column at all). A rule that counts what the run does not
+/// spend never holds for it: in a comparison that mixes both, each solver stops on its own.
+fn progress_target(rules: &StopRules, n: usize, sampled: bool, counts_columns: bool) -> (u64, ProgressUnit) {
     rules
         .rules
         .iter()
@@ -329,9 +331,9 @@ fn progress_target(rules: &StopRules, n: usize, sampled: bool) -> (u64, Progress
             StopRule::Steps(c) => Some((c.resolve(n), ProgressUnit::Steps)),
             _ => None,
         })
-        .unwrap_or(if sampled {
-            (0, ProgressUnit::Spent(Unit::Rays))
-        } else {
-            (2 * n as u64, ProgressUnit::Spent(Unit::Columns))
+        .unwrap_or(match (sampled, counts_columns) {
+            (true, _) => (0, ProgressUnit::Spent(Unit::Rays)),
+            (false, true) => (2 * n as u64, ProgressUnit::Spent(Unit::Columns)),
+            (false, false) => (0, ProgressUnit::Steps),
         })
 }

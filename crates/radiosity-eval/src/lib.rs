@@ -101,7 +101,7 @@ pub use live::scene_view::{LiveHeader, LiveScene, PROBE_SIZE};
 pub use live::server::Server;
 pub use memory::return_freed_blocks;
 pub use phases::{Phase, Phases, ReferenceMark};
-pub use progress::{NoProgress, Progress};
+pub use progress::{EVERY_SECONDS, Lines, NoProgress, Progress, QUIET_SECONDS};
 pub use radiosity_core::Clock;
 pub use reference::cache::{CACHE_DIR_VAR, Cache, Lookup, scene_key};
 pub use reference::certificate::{Contraction, ErrorBound, Residual, SolverBound};

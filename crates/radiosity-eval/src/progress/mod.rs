@@ -1,8 +1,13 @@
 //! How long-running library calls report progress: a trait the command line implements with
-//! progress bars, and [`NoProgress`] for callers that want silence.
+//! progress bars, [`Lines`] for a log or a pipe (a line every 30 s), and [`NoProgress`] for
+//! callers that want silence.
 //!
 //! Calls report through `&dyn Progress` from any thread, so implementations use interior
 //! mutability (progress bars do). Messages are for people, not for parsing.
+
+mod lines;
+
+pub use lines::{EVERY_SECONDS, Lines, QUIET_SECONDS};
 
 /// Receives progress reports of one task at a time.
 pub trait Progress: Sync {

@@ -266,11 +266,10 @@ impl Chain {
     fn unpack(&mut self, v: &[Real]) {
         let (m, n) = (self.estimate.len(), self.drawn.len());
         self.estimate.copy_from_slice(&v[..m]);
-        let at = m;
-        for (d, x) in self.drawn.iter_mut().zip(&v[at..at + n]) {
+        for (d, x) in self.drawn.iter_mut().zip(&v[m..m + n]) {
             *d = *x as u64;
         }
-        let tail = &v[at + n..];
+        let tail = &v[m + n..];
         (self.weight, self.regular, self.left, self.iteration) = (tail[0], tail[1] > 0.0, tail[2], tail[3] as u64);
     }
 }

@@ -364,7 +364,11 @@ fn a_column_served_from_memory_costs_no_column_and_is_counted_apart() {
 /// A 12-patch enclosure-like system with exact reciprocity and unequal areas: `F_ij = G_ij /
 /// A_i` for a symmetric `G` scaled so rows sum to at most 0.95, RGB, three emitters.
 fn twelve() -> (LinearSystem, DenseColumns) {
-    let n = 12;
+    enclosure(12)
+}
+
+/// [`twelve`]'s system on `n` patches, one in four emitting.
+fn enclosure(n: usize) -> (LinearSystem, DenseColumns) {
     let area: Vec<Real> = (0..n).map(|i| 1.0 + (i % 5) as Real * 0.3).collect();
     let g = |i: usize, j: usize| if i == j { 0.0 } else { 1.0 + ((i * 7 + j * 7 + i * j) % 11) as Real };
     let max_row = (0..n).map(|i| (0..n).map(|j| g(i, j)).sum::<Real>() / area[i]).fold(0.0, Real::max);

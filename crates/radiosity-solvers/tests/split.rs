@@ -3,7 +3,7 @@
 //! same step with the same answer, the single process's to the order of summation, even when
 //! the ranks' clocks disagree (a `time=` rule is rank 0's decision).
 
-use super::{solvers, twelve};
+use super::{enclosure, solvers, twelve};
 use radiosity_core::{Collective, ColumnSource, DenseColumns, InProcessRanks, Real};
 use radiosity_solvers::*;
 use std::sync::Arc;
@@ -155,6 +155,12 @@ impl radiosity_core::TransportSampler for Counted {
         self.inner.ray_weight(from)
     }
 
+    fn global_line(&self, u: [Real; 4], line: &mut radiosity_core::LineTransfers) -> bool {
+        let has = self.inner.global_line(u, line);
+        self.cast.fetch_add(if has { line.rays } else { 0 }, std::sync::atomic::Ordering::Relaxed);
+        has
+    }
+
     fn row_sum(&self, i: usize) -> Option<Real> {
         self.inner.row_sum(i)
     }
@@ -165,18 +171,23 @@ impl radiosity_core::TransportSampler for Counted {
 }
 
 #[test]
-fn the_solvers_that_sample_deal_their_replicates_to_the_ranks() {
-    // Over 2 and 3 ranks (threads standing in for MPI ranks), every rank ends with the single
-    // process's bits, steps and rays: each replicate is walked on one rank with its own
-    // streams, then shared. Each rank casts only its replicates' rays, and together the
-    // world's.
-    let (system, f) = twelve();
-    let run = |name: &str, collective: Option<&dyn Collective>| {
+fn the_solvers_that_sample_divide_their_rays_between_the_ranks() {
+    // Over 2, 3 and 8 ranks (threads standing in for MPI ranks), every rank ends with the
+    // single process's bits, steps and rays, and together the ranks cast the world's rays,
+    // each once. Stochastic Jacobi divides every iteration's rays: each rank casts those of
+    // its blocks of patches (of lines) for every replicate, and one sum an iteration shares
+    // the deposits, so its 4 replicates keep 8 ranks busy, each with about its share where
+    // the power is spread (600 patches; on 12 the emitters' ranks cast most). Random walks
+    // deal whole replicates: a rank beyond them casts none (as a rank may that is dealt none of
+    // the 12 patches' blocks).
+    let run = |(system, f): &(radiosity_core::LinearSystem, DenseColumns),
+               name: &str,
+               collective: Option<&dyn Collective>| {
         let sampler = Counted {
-            inner: radiosity_core::ColumnTransport::new(&f, system.areas()).unwrap(),
+            inner: radiosity_core::ColumnTransport::new(f, system.areas()).unwrap(),
             cast: Default::default(),
         };
-        let mut problem = Problem::new(&system, &f).unwrap().with_transport(&sampler).unwrap();
+        let mut problem = Problem::new(system, f).unwrap().with_transport(&sampler).unwrap();
         if let Some(c) = collective {
             problem = problem.with_collective(c);
         }
@@ -185,19 +196,36 @@ fn the_solvers_that_sample_deal_their_replicates_to_the_ranks() {
         let run = Executor::new(solver.as_mut(), rules).run(&problem).unwrap();
         (run, sampler.cast.into_inner())
     };
-    for name in
-        ["stochastic-jacobi:seq=sobol", "stochastic-jacobi:form=gathering", "random-walk", "random-walk:form=gathering"]
-    {
-        let (one, cast) = run(name, None);
-        assert_eq!(one.state.cost[Unit::Rays], cast, "{name}");
-        for ranks in [2, 3] {
-            let runs = InProcessRanks::run(ranks, |c| run(name, Some(&*c)));
-            for (rank, (r, here)) in runs.iter().enumerate() {
-                assert_eq!(r.state.radiosity, one.state.radiosity, "{name}, rank {rank} of {ranks}");
-                assert_eq!((r.state.step, r.state.cost[Unit::Rays]), (one.state.step, cast), "{name}, rank {rank}");
-                assert!(*here > 0 && *here < cast, "{name}: rank {rank} of {ranks} cast {here} of {cast}");
+    // 600 patches, one in four emitting, so that power and rays are spread over the blocks.
+    let (small, large) = (twelve(), enclosure(600));
+    for name in [
+        "stochastic-jacobi:seq=sobol",
+        "stochastic-jacobi:form=gathering",
+        "stochastic-jacobi:lines=global",
+        "random-walk",
+        "random-walk:form=gathering",
+    ] {
+        let divided = name.starts_with("stochastic-jacobi");
+        for (system, even) in [(&small, false), (&large, divided)] {
+            let (one, cast) = run(system, name, None);
+            assert_eq!(one.state.cost[Unit::Rays], cast, "{name}");
+            for ranks in [2, 3, 8] {
+                let runs = InProcessRanks::run(ranks, |c| run(system, name, Some(&*c)));
+                for (rank, (r, here)) in runs.iter().enumerate() {
+                    let at =
+                        format!("{name}, {} patches, rank {rank} of {ranks}: {here} of {cast} rays", system.0.len());
+                    assert_eq!(r.state.radiosity, one.state.radiosity, "{at}");
+                    assert_eq!((r.state.step, r.state.cost[Unit::Rays]), (one.state.step, cast), "{at}");
+                    let fair = cast as Real / ranks as Real;
+                    if even {
+                        assert!((*here as Real) > 0.7 * fair && (*here as Real) < 1.3 * fair, "{at}");
+                    } else if ranks <= 3 {
+                        // 12 blocks, or 4 replicates: every rank has some.
+                        assert!(*here > 0 && *here < cast, "{at}");
+                    }
+                }
+                assert_eq!(runs.iter().map(|(_, here)| here).sum::<u64>(), cast, "{name}, {ranks} ranks");
             }
-            assert_eq!(runs.iter().map(|(_, here)| here).sum::<u64>(), cast, "{name}, {ranks} ranks");
         }
     }
 }

@@ -23,14 +23,18 @@
 //!   adds `b_a W / N` to `in_b`, `W` the area a transfer stands for.
 //!
 //! Rays are cast in parallel over fixed blocks of patches, each patch's rays from its own
-//! stream, and landings are summed in patch order afterwards: the same seed gives the same
-//! numbers whatever the thread count. A patch's stream is keyed by the seed, the replicate and
+//! stream, and the deposits are summed exactly ([`ExactSum`]): the same seed gives the same
+//! numbers whatever the thread count and the ranks. Over ranks ([`Share`]), each rank casts
+//! the rays of its share of the blocks (of lines, for global lines), every replicate's, and
+//! one sum over the ranks gives every rank the iteration's deposits and the world's rays. A
+//! patch's stream is keyed by the seed, the replicate and
 //! the patch, and continues from one iteration to the next ([`Streams::drawn`] counts the
 //! points each patch used): with a quasi-random sequence, the rays a patch casts over a whole
 //! run are one low-discrepancy sequence, not a short one each iteration (where a patch casts
 //! a few rays an iteration, as most do, there would be nothing to stratify). The landing of
 //! the `k`-th ray is the same function of its point in every iteration; only the power it
-//! carries changes (Keller 1996). A pseudo-random stream is keyed by the iteration too.
+//! carries changes (Keller 1996). A pseudo-random stream is keyed by the iteration too. A
+//! patch's blocks are always the same rank's, so the points it drew are counted on that rank.
 //!
 //! ## References
 //!
@@ -40,21 +44,31 @@
 //!   Computer Graphics Forum 12(3) (global lines).
 
 use crate::run::problem::Rays;
+use crate::stochastic::exact_sum::ExactSum;
+use crate::stochastic::ranks::Share;
 use crate::stochastic::sequence::Sequence;
 use radiosity_core::{LineTransfers, Real};
 use rayon::prelude::*;
 
-/// Patches per parallel block: fixed, so that no result depends on the thread count.
+/// Patches per parallel block at most. No result depends on the blocks (each patch draws from
+/// its own stream, and deposits are summed exactly), only how the work is divided.
 const BLOCK: usize = 64;
 
-/// The blocks cast in parallel before their landings are summed ([`cast_per_patch`]).
-const WINDOW: usize = 1024;
+/// Patches per block for `n` patches: smaller in small scenes, so that their blocks still
+/// go to every thread and rank.
+fn block_of(n: usize) -> usize {
+    (n / 256).clamp(1, BLOCK)
+}
 
 /// A block of global lines: every transfer `(from, to, area it stands for)` in line order,
 /// and the rays they cost.
 type LineBlock = (Vec<(usize, usize, Real)>, u64);
 
-/// Lines per parallel block.
+/// What takes a patch's landings: the patch, its rays' landings in ray order, and its `k`
+/// entries of the output ([`cast_per_patch`]).
+type Land<'a> = &'a (dyn Fn(usize, &[Option<usize>], &mut [Real]) + Sync);
+
+/// Lines per parallel block at most (each block's lines from a stream of its own).
 const LINE_BLOCK: usize = 1024;
 
 /// How a chain's streams are keyed (module doc): the run's seed and sequence, the replicate,
@@ -71,10 +85,10 @@ pub(crate) struct Streams<'c> {
 }
 
 impl Streams<'_> {
-    /// Patch `patch`'s stream from its next point on.
-    fn of(&self, patch: usize) -> crate::stochastic::sequence::PointStream {
+    /// Patch `patch`'s stream from its point `drawn` on.
+    fn of(&self, patch: usize, drawn: u64) -> crate::stochastic::sequence::PointStream {
         let stream = self.sequence.stream(self.seed, [self.replicate, 0, patch as u64]);
-        stream.from_index(self.drawn[patch]).rekeyed(self.iteration)
+        stream.from_index(drawn).rekeyed(self.iteration)
     }
 
     /// Global lines' stream for block `block` of this iteration.
@@ -86,66 +100,71 @@ impl Streams<'_> {
 /// What an estimate cost and found.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Cast {
-    /// Rays cast (a global line counts its segments).
+    /// Rays cast by every rank (a global line counts its segments).
     pub rays: u64,
+    /// Of them, this rank's.
+    pub here: u64,
 }
 
-/// The rays from each patch in `0..n`, cast in parallel blocks: `count(j, stream)` says how
-/// many rays patch `j` casts (drawing any rounding from its stream), and the landings are
-/// handed to `land(j, landing)` in patch order, then ray order.
+/// The rays from each patch of this rank's blocks, cast in parallel blocks: `count(j,
+/// stream)` says how many rays patch `j` casts (drawing any rounding from its stream), and
+/// `land(j, landings, out_j)` takes each patch's landings in ray order, with `out_j`, patch
+/// `j`'s `k` entries of `out`, on whatever thread cast them. Returns this rank's rays.
 fn cast_per_patch(
     rays: &Rays<'_>,
-    n: usize,
+    share: &Share<'_>,
     streams: &mut Streams<'_>,
+    (out, k): (&mut [Real], usize),
     count: &(dyn Fn(usize, &mut dyn FnMut() -> Real) -> usize + Sync),
-    mut land: impl FnMut(usize, Option<usize>),
-) -> Cast {
-    // A block's patches with their numbers of rays, and all their landings in one list. The
-    // blocks go in windows of `WINDOW`, each cast in parallel and then landed, so that the
-    // landings held are a window's (a few megabytes), not an iteration's (16 bytes a ray:
-    // 1.8 GB for the 114 M rays of an iteration at ten million patches). Landed in the same
-    // order, the results do not depend on the windows.
-    type Landed = (Vec<(usize, usize)>, Vec<Option<usize>>);
-    let mut cast = Cast::default();
-    let blocks = n.div_ceil(BLOCK);
-    for window in (0..blocks).step_by(WINDOW) {
-        let landed: Vec<Landed> = (window..(window + WINDOW).min(blocks))
-            .into_par_iter()
-            .map(|b| {
-                let (mut patches, mut landings) = (Vec::new(), Vec::new());
-                let mut points = Vec::new();
-                for j in b * BLOCK..((b + 1) * BLOCK).min(n) {
-                    // A patch's stream is keyed only when it is drawn from: most patches cast
-                    // no ray in most iterations of the incremental series.
-                    let mut stream = None;
-                    let k = count(j, &mut || stream.get_or_insert_with(|| streams.of(j)).uniform());
-                    if k == 0 {
-                        continue;
-                    }
-                    let stream = stream.get_or_insert_with(|| streams.of(j));
-                    points.clear();
-                    points.extend((0..k).map(|_| stream.next_point()));
-                    let at = landings.len();
-                    landings.resize(at + k, None);
-                    rays.cast_batch(j, &points, &mut landings[at..]);
-                    patches.push((j, k));
+    land: Land<'_>,
+) -> u64 {
+    let keys = Streams { drawn: &mut [], ..*streams };
+    let keys = &keys;
+    let block = block_of(streams.drawn.len());
+    streams
+        .drawn
+        .par_chunks_mut(block)
+        .zip(out.par_chunks_mut(block * k))
+        .enumerate()
+        .filter(|(b, _)| share.mine(*b))
+        .map(|(b, (drawn, out))| {
+            let (mut points, mut landings, mut cast) = (Vec::new(), Vec::new(), 0);
+            for (at, (drawn, out)) in drawn.iter_mut().zip(out.chunks_mut(k)).enumerate() {
+                let j = b * block + at;
+                // A patch's stream is keyed only when it is drawn from: most patches cast
+                // no ray in most iterations of the incremental series.
+                let mut stream = None;
+                let m = count(j, &mut || stream.get_or_insert_with(|| keys.of(j, *drawn)).uniform());
+                if m == 0 {
+                    continue;
                 }
-                (patches, landings)
-            })
-            .collect();
-        for (patches, landings) in landed {
-            let mut landings = landings.into_iter();
-            for (j, k) in patches {
-                cast.rays += k as u64;
+                let stream = stream.get_or_insert_with(|| keys.of(j, *drawn));
+                points.clear();
+                points.extend((0..m).map(|_| stream.next_point()));
+                landings.clear();
+                landings.resize(m, None);
+                rays.cast_batch(j, &points, &mut landings);
+                land(j, &landings, out);
                 // The next iteration's rays go on from the next point.
-                streams.drawn[j] += k as u64;
-                for landing in landings.by_ref().take(k) {
-                    land(j, landing);
-                }
+                *drawn += m as u64;
+                cast += m as u64;
             }
-        }
+            cast
+        })
+        .sum()
+}
+
+/// `cast` with the world's rays from this rank's `here` (one sum over the ranks with `more`,
+/// whose sums replace them); `cast` alone in one process.
+fn world(share: &Share<'_>, here: u64, more: &mut [Real]) -> Cast {
+    if share.collective().is_none() {
+        return Cast { rays: here, here };
     }
-    cast
+    let mut v = more.to_vec();
+    v.push(here as Real);
+    share.sum(&mut v);
+    more.copy_from_slice(&v[..more.len()]);
+    Cast { rays: v[more.len()] as u64, here }
 }
 
 /// `⌊m⌋` or `⌈m⌉`, with expectation `m`, from `u` uniform in `[0, 1)`.
@@ -154,10 +173,11 @@ fn round_at_random(m: Real, u: Real) -> usize {
     floor as usize + usize::from(u < m - floor)
 }
 
-/// `in_i = Σ_j T_ij x_j` by about `n_rays` rays (module doc); `x` and `incoming` patch-major
-/// with `k` channels; `incoming` is overwritten.
+/// `in_i = Σ_j T_ij x_j` by about `n_rays` rays (module doc), this rank's share cast here;
+/// `x` and `incoming` patch-major with `k` channels; `incoming` is overwritten on every rank.
 pub(crate) fn shoot(
     rays: &Rays<'_>,
+    share: &Share<'_>,
     x: &[Real],
     k: usize,
     n_rays: u64,
@@ -191,21 +211,31 @@ pub(crate) fn shoot(
             if m > 0.0 { rays.ray_weight(j) / cast_count(m) } else { 0.0 }
         })
         .collect();
-    cast_per_patch(rays, n, streams, &count, |j, landing| {
-        if let Some(i) = landing {
+    // No ray carries more than `most`, and there are at most `n_rays + n` of them: a bound on
+    // every deposit's sum from what every rank holds.
+    let most = (0..n).map(|j| scale[j] * norm(j)).fold(0.0, Real::max);
+    let sums = ExactSum::new(n * k, most * (n_rays + n as u64) as Real);
+    let here = cast_per_patch(rays, share, streams, (incoming, k), &count, &|j, landings, _| {
+        for &i in landings.iter().flatten() {
             for c in 0..k {
-                incoming[i * k + c] += x[j * k + c] * scale[j];
+                sums.add(i * k + c, x[j * k + c] * scale[j]);
             }
         }
-    })
+    });
+    let mut sums = sums;
+    sums.sum_over(share.collective());
+    sums.write(incoming);
+    world(share, here, &mut [])
 }
 
 /// `g_i = Σ_j F_ij b_j` for every patch where `reflects(i)`, by about `n_rays` rays in
 /// proportion to area (module doc), with the constant control variate `beta` (per channel)
-/// when given; `gathered` is overwritten (0 where a patch does not reflect).
+/// when given; `gathered` is overwritten (0 where a patch does not reflect) on every rank, each
+/// patch's from the rank whose share it is in.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn gather(
     rays: &Rays<'_>,
+    share: &Share<'_>,
     b: &[Real],
     k: usize,
     areas: &[Real],
@@ -224,31 +254,27 @@ pub(crate) fn gather(
     let count = |i: usize, _: &mut dyn FnMut() -> Real| {
         if reflects(i) { ((n_rays as Real * areas[i] / area).ceil() as usize).max(1) } else { 0 }
     };
-    let mut cast_from = vec![0usize; n];
-    let cast = cast_per_patch(rays, n, streams, &count, |i, landing| {
-        cast_from[i] += 1;
-        // A ray that escapes gathers nothing, also against the control variate.
-        if let Some(j) = landing {
-            for c in 0..k {
-                gathered[i * k + c] += b[j * k + c] - beta.map_or(0.0, |beta| beta[c]);
-            }
-        }
-    });
-    for i in (0..n).filter(|&i| cast_from[i] > 0) {
+    // A patch gathers its own rays alone, in their order: its sum is the same on any thread,
+    // and over the ranks only its own rank's is not zero.
+    let here = cast_per_patch(rays, share, streams, (gathered, k), &count, &|i, landings, out| {
         let weight = rays.ray_weight(i);
         let row = beta.map_or(0.0, |_| rays.row_sum(i).unwrap_or(0.0));
-        for c in 0..k {
-            let base = beta.map_or(0.0, |beta| beta[c] * row);
-            gathered[i * k + c] = base + weight * gathered[i * k + c] / cast_from[i] as Real;
+        for (c, out) in out.iter_mut().enumerate() {
+            let shift = beta.map_or(0.0, |beta| beta[c]);
+            // A ray that escapes gathers nothing, also against the control variate.
+            let sum: Real = landings.iter().flatten().map(|&j| b[j * k + c] - shift).sum();
+            *out = shift * row + weight * sum / landings.len() as Real;
         }
-    }
-    cast
+    });
+    world(share, here, gathered)
 }
 
-/// `in_b = Σ_a A_a F_ab b_a` by `n_lines` global lines (module doc); `false` (and nothing
-/// cast) when the sampler has no lines; `incoming` is overwritten.
+/// `in_b = Σ_a A_a F_ab b_a` by `n_lines` global lines (module doc), this rank's blocks of
+/// them cast here; `None` (and nothing cast) when the sampler has no lines; `incoming` is
+/// overwritten on every rank.
 pub(crate) fn lines(
     rays: &Rays<'_>,
+    share: &Share<'_>,
     b: &[Real],
     k: usize,
     n_lines: u64,
@@ -256,15 +282,18 @@ pub(crate) fn lines(
     incoming: &mut [Real],
 ) -> Option<Cast> {
     incoming.fill(0.0);
-    let blocks = n_lines.div_ceil(LINE_BLOCK as u64);
+    // Blocks of lines smaller in small batches, so that they still go to every thread and rank.
+    let size = (n_lines / 256).clamp(1, LINE_BLOCK as u64);
+    let blocks = n_lines.div_ceil(size);
     let found: Vec<Option<LineBlock>> = (0..blocks)
         .into_par_iter()
+        .filter(|&block| share.mine(block as usize))
         .map(|block| {
             let mut stream = streams.lines(block);
             let mut line = LineTransfers::default();
             let (mut transfers, mut block_rays) = (Vec::new(), 0);
-            let first = block * LINE_BLOCK as u64;
-            for _ in first..(first + LINE_BLOCK as u64).min(n_lines) {
+            let first = block * size;
+            for _ in first..(first + size).min(n_lines) {
                 if !rays.global_line(stream.next_point(), &mut line) {
                     return None;
                 }
@@ -274,15 +303,32 @@ pub(crate) fn lines(
             Some((transfers, block_rays))
         })
         .collect();
-    let mut cast = Cast::default();
-    for block in found {
-        let (transfers, block_rays) = block?;
-        cast.rays += block_rays;
-        for (from, to, area) in transfers {
+    // Whether every rank's sampler has lines, and a bound on every deposit's sum: the largest
+    // transfer's area (a largest is the same over any ranks) times the transfers.
+    let found: Option<Vec<LineBlock>> = found.into_iter().collect();
+    let has = found.is_some();
+    let found = found.unwrap_or_default();
+    let widest = found.iter().flat_map(|(t, _)| t.iter().map(|t| t.2.abs())).fold(0.0, Real::max);
+    let count = found.iter().map(|(t, _)| t.len()).sum::<usize>();
+    let here: u64 = found.iter().map(|(_, r)| r).sum();
+    let largest = b.iter().map(|x| x.abs()).fold(0.0, Real::max);
+    let mut figures = share.gathered(&[Real::from(u8::from(!has)), widest, count as Real]);
+    let lacking = figures.iter().any(|f| f[0] > 0.0);
+    let widest = figures.iter().map(|f| f[1]).fold(0.0, Real::max);
+    let count: Real = figures.iter_mut().map(|f| f[2]).sum();
+    if lacking {
+        return None;
+    }
+    let sums = ExactSum::new(b.len(), largest * widest / n_lines as Real * count);
+    found.par_iter().for_each(|(transfers, _)| {
+        for &(from, to, area) in transfers {
             for c in 0..k {
-                incoming[to * k + c] += b[from * k + c] * area / n_lines as Real;
+                sums.add(to * k + c, b[from * k + c] * area / n_lines as Real);
             }
         }
-    }
-    Some(cast)
+    });
+    let mut sums = sums;
+    sums.sum_over(share.collective());
+    sums.write(incoming);
+    Some(world(share, here, &mut []))
 }

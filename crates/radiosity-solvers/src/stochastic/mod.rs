@@ -3,6 +3,7 @@
 //! they share.
 
 pub(crate) mod estimate;
+pub(crate) mod exact_sum;
 pub(crate) mod random_walk;
 pub(crate) mod ranks;
 pub(crate) mod sequence;

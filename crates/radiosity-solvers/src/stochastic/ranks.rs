@@ -1,21 +1,75 @@
-//! Replicates dealt to ranks: how the solvers that sample transport run over a problem solved
-//! over several ranks ([`crate::Problem::collective`]).
+//! How the solvers that sample transport divide their work between the ranks of a problem
+//! solved over several ([`crate::Problem::collective`]).
 //!
-//! Replicate `r` is advanced on rank `r mod K` alone, with its own random streams (keyed by
-//! the replicate, never by the rank), so its rays are exactly those it casts in one process.
-//! After every step each rank hands in the state of its own replicates, zeros for the others',
-//! and one sum over the ranks gives every rank every replicate ([`Deal::share`]): the sum of a
-//! value and zeros is the value, so every rank holds the same bits, and those of one process,
-//! whatever `K`. The rays each rank cast travel in the same sum, so every rank counts the
-//! world's ([`crate::Problem::spent_elsewhere`]) and stops at the same step. With `R`
-//! replicates, `K ≤ R` ranks share the rays; a rank beyond `R` casts none. What a step sends
-//! is the replicates' state: for stochastic Jacobi `R (n k + n)` values a step once its
-//! incremental series is shot (its unshot radiosity, zero for good, is left out), `R (2 n k +
-//! n)` before; for random walks their `R n k` sums.
+//! **Rays shared** ([`Share`], stochastic Jacobi). Every rank advances every replicate, and
+//! casts in each of its iterations the rays of its share of the blocks of patches (of lines,
+//! for global lines): block `b` on rank `h(b) mod K` for a fixed hash `h`, the streams keyed
+//! by the replicate and the patch, never by the rank, so the rays of all ranks are exactly
+//! those one process casts. One sum over the ranks an iteration gives every rank the deposits
+//! (`n k` values, summed exactly, [`super::exact_sum`]) and the world's rays, so every rank
+//! holds the same state, one process's bits, whatever `K`: the state once, not once a rank,
+//! and any number of replicates keeps any number of ranks busy.
+//!
+//! **Replicates dealt** ([`Deal`], random walks). Replicate `r` is advanced on rank `r mod K`
+//! alone, with its own random streams (keyed by the replicate, never by the rank), so its
+//! rays are exactly those it casts in one process. After every step each rank hands in the
+//! state of its own replicates, zeros for the others', and one sum over the ranks gives every
+//! rank every replicate ([`Deal::share`]): the sum of a value and zeros is the value, so
+//! every rank holds the same bits, and those of one process, whatever `K`. The rays each rank
+//! cast travel in the same sum, so every rank counts the world's
+//! ([`crate::Problem::spent_elsewhere`]) and stops at the same step. With `R` replicates,
+//! `K ≤ R` ranks share the rays; a rank beyond `R` casts none. A step sends the walks' `R n k`
+//! sums.
 
 use crate::run::cost::Unit;
 use crate::run::problem::Problem;
 use radiosity_core::{Collective, Real};
+
+/// Which blocks of rays this rank casts, and the sums that share what they found (module doc).
+pub(crate) struct Share<'p> {
+    collective: Option<&'p dyn Collective>,
+}
+
+impl<'p> Share<'p> {
+    /// The share of `problem`'s ranks: every block on this rank in one process.
+    pub(crate) fn of(problem: &'p Problem<'_>) -> Share<'p> {
+        Share { collective: problem.collective() }
+    }
+
+    /// The ranks, when there are several.
+    pub(crate) fn collective(&self) -> Option<&'p dyn Collective> {
+        self.collective
+    }
+
+    /// Whether this rank casts the rays of block `b`: blocks are dealt by a hash of their
+    /// index, so that a scene whose bright patches recur with a period (every other block)
+    /// does not give them all to one rank.
+    pub(crate) fn mine(&self, b: usize) -> bool {
+        self.collective.is_none_or(|c| c.deals(scatter(b as u64) as usize))
+    }
+
+    /// `values` summed over the ranks, in rank order; themselves in one process.
+    pub(crate) fn sum(&self, values: &mut [Real]) {
+        if let Some(c) = self.collective {
+            c.sum(values);
+        }
+    }
+
+    /// Every rank's `values`, in rank order; this rank's alone in one process.
+    pub(crate) fn gathered(&self, values: &[Real]) -> Vec<Vec<Real>> {
+        match self.collective {
+            Some(c) => c.gather(values),
+            None => vec![values.to_vec()],
+        }
+    }
+}
+
+/// A bijective mix of 64 bits (SplitMix64's finaliser).
+fn scatter(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
 
 /// Which replicates this rank advances, and the sum that shares them (module doc).
 pub(crate) struct Deal<'p> {

@@ -69,8 +69,8 @@ use crate::run::record::Record;
 use crate::run::standard_error::StandardError;
 use crate::run::state::State;
 use crate::run::stop::Count;
-use crate::stochastic::estimate::{Streams, gather, lines, shoot};
-use crate::stochastic::ranks::Deal;
+use crate::stochastic::estimate::{Cast, Streams, gather, lines, shoot};
+use crate::stochastic::ranks::Share;
 use crate::stochastic::sequence::Sequence;
 use radiosity_core::Real;
 use rayon::prelude::*;
@@ -249,31 +249,6 @@ struct Chain {
     drawn: Vec<u64>,
 }
 
-impl Chain {
-    /// The chain as one vector, to be shared between ranks ([`Deal::share`]): its estimate,
-    /// its streams' positions, then its weight, phase, unshot power and iteration (counts are
-    /// exact as reals below 2^53). No unshot radiosity: a chain holds none between steps (its
-    /// incremental series is shot whole within one).
-    fn pack(&self) -> Vec<Real> {
-        let mut v = Vec::with_capacity(self.estimate.len() + self.drawn.len() + 4);
-        v.extend_from_slice(&self.estimate);
-        v.extend(self.drawn.iter().map(|&d| d as Real));
-        v.extend([self.weight, Real::from(u8::from(self.regular)), self.left, self.iteration as Real]);
-        v
-    }
-
-    /// The chain as [`Chain::pack`] wrote it.
-    fn unpack(&mut self, v: &[Real]) {
-        let (m, n) = (self.estimate.len(), self.drawn.len());
-        self.estimate.copy_from_slice(&v[..m]);
-        for (d, x) in self.drawn.iter_mut().zip(&v[m..m + n]) {
-            *d = *x as u64;
-        }
-        let tail = &v[m + n..];
-        (self.weight, self.regular, self.left, self.iteration) = (tail[0], tail[1] > 0.0, tail[2], tail[3] as u64);
-    }
-}
-
 /// Stochastic Jacobi (module doc).
 #[derive(Debug)]
 pub struct StochasticJacobi {
@@ -320,6 +295,10 @@ impl StochasticJacobi {
         let name = self.name();
         let params = self.params.clone();
         let emitted = self.emitted;
+        let share = Share::of(problem);
+        let share = &share;
+        // This rank's rays are counted as it casts them; the other ranks', once summed.
+        let elsewhere = |cast: Cast| problem.spent_elsewhere(Unit::Rays, cast.rays - cast.here);
         let chain = &mut self.chains[r];
         let mut streams = Streams {
             sequence: params.sequence,
@@ -352,11 +331,12 @@ impl StochasticJacobi {
                 });
                 let cast = if params.global_lines {
                     problem
-                        .cast(&name, |rays| lines(rays, &unshot, k, n_rays, &streams, &mut incoming))?
+                        .cast(&name, |rays| lines(rays, share, &unshot, k, n_rays, &streams, &mut incoming))?
                         .ok_or_else(|| no_lines(&name))?
                 } else {
-                    problem.cast(&name, |rays| shoot(rays, &x, k, n_rays, &mut streams, &mut incoming))?
+                    problem.cast(&name, |rays| shoot(rays, share, &x, k, n_rays, &mut streams, &mut incoming))?
                 };
+                elsewhere(cast);
                 (unshot.par_chunks_mut(k), chain.estimate.par_chunks_mut(k), incoming.par_chunks(k))
                     .into_par_iter()
                     .enumerate()
@@ -383,8 +363,10 @@ impl StochasticJacobi {
                 });
                 let reflects = |i: usize| (0..k).any(|c| system.rho(i, c) > 0.0);
                 let cast = problem.cast(&name, |rays| {
-                    gather(rays, &chain.estimate, k, areas, &reflects, beta.as_deref(), batch, &mut streams, &mut fresh)
+                    let (b, beta) = (&chain.estimate, beta.as_deref());
+                    gather(rays, share, b, k, areas, &reflects, beta, batch, &mut streams, &mut fresh)
                 })?;
+                elsewhere(cast);
                 for (idx, g) in fresh.iter_mut().enumerate() {
                     let (i, c) = (idx / k, idx % k);
                     *g = system.e(i, c) + system.rho(i, c) * *g;
@@ -394,13 +376,14 @@ impl StochasticJacobi {
             (_, lines_too) => {
                 let cast = if lines_too {
                     problem
-                        .cast(&name, |rays| lines(rays, &chain.estimate, k, batch, &streams, &mut fresh))?
+                        .cast(&name, |rays| lines(rays, share, &chain.estimate, k, batch, &streams, &mut fresh))?
                         .ok_or_else(|| no_lines(&name))?
                 } else {
                     let x: Vec<Real> =
                         chain.estimate.par_iter().enumerate().map(|(idx, b)| areas[idx / k] * b).collect();
-                    problem.cast(&name, |rays| shoot(rays, &x, k, batch, &mut streams, &mut fresh))?
+                    problem.cast(&name, |rays| shoot(rays, share, &x, k, batch, &mut streams, &mut fresh))?
                 };
+                elsewhere(cast);
                 fresh.par_chunks_mut(k).enumerate().for_each(|(i, fresh)| {
                     for (c, f) in fresh.iter_mut().enumerate() {
                         *f = system.e(i, c) + system.rho(i, c) * *f / areas[i];
@@ -489,19 +472,9 @@ impl Solver for StochasticJacobi {
         if self.emitted == 0.0 {
             return Ok(Record::new());
         }
-        let deal = Deal::of(problem);
-        let before = problem.spent(Unit::Rays);
+        // Every rank advances every replicate, casting its share of each iteration's rays.
         for r in 0..self.chains.len() {
-            if deal.mine(r) {
-                self.advance(problem, r)?;
-            }
-        }
-        if deal.split() {
-            let mut parts: Vec<Vec<Real>> = self.chains.iter().map(Chain::pack).collect();
-            deal.share(problem, &mut parts, problem.spent(Unit::Rays) - before);
-            for (chain, part) in self.chains.iter_mut().zip(&parts) {
-                chain.unpack(part);
-            }
+            self.advance(problem, r)?;
         }
         let r = self.chains.len() as Real;
         // A chain not yet in its series holds `E` unshot; one past it, nothing.

@@ -1,0 +1,177 @@
+//! Sums whose bits do not depend on the order of their terms: the deposits of an iteration's
+//! rays, added on every thread and then over the ranks.
+//!
+//! A floating-point sum depends on the order of its terms, so deposits summed by several
+//! threads, or by several ranks each over its share of the rays, would differ in their last
+//! bits from one process's, and a run's rays would depend on them (a patch's number of rays
+//! is rounded from its power). Here every term is rounded once to a multiple of `2^(e − 124)`,
+//! `e` the exponent of a bound on every sum, and the integers are added: integer addition is
+//! associative, so the sum is the same whatever the threads, the ranks or the order. A term is
+//! rounded (towards zero) by at most `2^(e − 124)`, 2^-71 of the bound below `f64`'s own
+//! rounding of it, which is what the sum loses against an exact one.
+//!
+//! On a thread, an entry is an `i128` held as two atomic words, added without a lock: the low
+//! word's carry goes to the high word, so the sum is exact modulo `2^128`, and the bound keeps
+//! it below `2^124`. Over the ranks, each entry travels as three limbs of at most 43 bits in
+//! the [`Collective`]'s `f64` sum, exact for up to 1024 ranks.
+
+use radiosity_core::{Collective, Real};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+
+/// The bits below the bound's exponent that a term keeps.
+const FRACTION: i32 = 124;
+
+/// The bits of the two lower limbs of an entry sent over the ranks.
+const LIMB: u32 = 42;
+
+/// Entries summed over the ranks in one call: a chunk's limbs take 24 MiB.
+const CHUNK: usize = 1 << 20;
+
+/// Sums of terms added in any order, the same bits for any order (module doc).
+pub(crate) struct ExactSum {
+    low: Vec<AtomicU64>,
+    high: Vec<AtomicU64>,
+    /// `2^(FRACTION − e)`: a term to its multiple of the quantum.
+    to_fixed: Real,
+    /// `2^(e − FRACTION)`.
+    to_real: Real,
+}
+
+/// `2^p`, exactly, for `p` within the normal range.
+fn power_of_two(p: i32) -> Real {
+    Real::from_bits(((p + 1023).clamp(1, 2046) as u64) << 52)
+}
+
+impl ExactSum {
+    /// `len` sums, each of whose terms' absolute values add to at most `bound` (over every
+    /// rank). The bound must be the same on every rank and for every number of ranks.
+    pub fn new(len: usize, bound: Real) -> ExactSum {
+        // 2^e > bound; a zero or non-finite bound gives e = 0 (nothing to add, or a term that
+        // is not finite, found by the caller's check on the result).
+        let e = if bound > 0.0 && bound.is_finite() { ((bound.to_bits() >> 52) as i32 - 1023) + 1 } else { 0 };
+        let e = e.clamp(-890, 890);
+        ExactSum {
+            low: (0..len).map(|_| AtomicU64::new(0)).collect(),
+            high: (0..len).map(|_| AtomicU64::new(0)).collect(),
+            to_fixed: power_of_two(FRACTION - e),
+            to_real: power_of_two(e - FRACTION),
+        }
+    }
+
+    /// Adds `x` to sum `at`, from any thread.
+    pub fn add(&self, at: usize, x: Real) {
+        // Scaling by a power of two is exact; `as` rounds towards zero.
+        let v = (x * self.to_fixed) as i128;
+        self.add_fixed(at, v);
+    }
+
+    fn add_fixed(&self, at: usize, v: i128) {
+        let (low, high) = (v as u64, (v >> 64) as u64);
+        let before = self.low[at].fetch_add(low, Relaxed);
+        let carry = u64::from(before.overflowing_add(low).1);
+        self.high[at].fetch_add(high.wrapping_add(carry), Relaxed);
+    }
+
+    fn fixed(&self, at: usize) -> i128 {
+        (((self.high[at].load(Relaxed) as u128) << 64) | self.low[at].load(Relaxed) as u128) as i128
+    }
+
+    /// Replaces every sum by its sum over the ranks of `collective` (each rank calls it, in
+    /// the same order); nothing in one process.
+    pub fn sum_over(&mut self, collective: Option<&dyn Collective>) {
+        let Some(c) = collective else { return };
+        let mask = (1i128 << LIMB) - 1;
+        let len = self.low.len();
+        for start in (0..len).step_by(CHUNK) {
+            let end = (start + CHUNK).min(len);
+            let mut limbs: Vec<Real> = (start..end)
+                .flat_map(|at| {
+                    let v = self.fixed(at);
+                    [(v & mask) as Real, ((v >> LIMB) & mask) as Real, (v >> (2 * LIMB)) as Real]
+                })
+                .collect();
+            c.sum(&mut limbs);
+            for (at, l) in (start..end).zip(limbs.chunks(3)) {
+                let v = (l[0] as i128) + ((l[1] as i128) << LIMB) + ((l[2] as i128) << (2 * LIMB));
+                self.low[at].store(v as u64, Relaxed);
+                self.high[at].store((v >> 64) as u64, Relaxed);
+            }
+        }
+    }
+
+    /// The sums, rounded to the nearest `f64`, into `out`.
+    pub fn write(&self, out: &mut [Real]) {
+        out.par_iter_mut().enumerate().for_each(|(at, o)| *o = self.fixed(at) as Real * self.to_real);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use radiosity_core::InProcessRanks;
+
+    /// Terms of every size and sign, in a fixed order.
+    fn terms(count: usize) -> Vec<Real> {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        (0..count)
+            .map(|_| {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                let unit = (state >> 11) as Real / (1u64 << 53) as Real;
+                (unit - 0.3) * power_of_two((state % 40) as i32 - 30)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_sum_is_the_same_bits_in_any_order_on_any_threads_and_ranks_and_within_its_quantum_of_the_exact() {
+        let t = terms(20_000);
+        let bound: Real = t.iter().map(|x| x.abs()).sum();
+        let one = |order: &mut dyn Iterator<Item = usize>| {
+            let s = ExactSum::new(1, bound);
+            order.for_each(|i| s.add(0, t[i]));
+            let mut out = [0.0];
+            s.write(&mut out);
+            out[0]
+        };
+        let forwards = one(&mut (0..t.len()));
+        assert_eq!(forwards, one(&mut (0..t.len()).rev()));
+        assert_eq!(forwards, one(&mut (0..t.len()).map(|i| (i * 7919) % t.len())));
+        // On every thread, in whatever order they take.
+        let s = ExactSum::new(1, bound);
+        t.par_iter().for_each(|&x| s.add(0, x));
+        let mut out = [0.0];
+        s.write(&mut out);
+        assert_eq!(out[0], forwards);
+        // Over 3 ranks, each with a third of the terms: every rank ends with the same bits.
+        let ranks = InProcessRanks::run(3, |c| {
+            let mut s = ExactSum::new(1, bound);
+            t.iter().enumerate().filter(|(i, _)| c.deals(*i)).for_each(|(_, &x)| s.add(0, x));
+            s.sum_over(Some(&*c));
+            let mut out = [0.0];
+            s.write(&mut out);
+            out[0]
+        });
+        assert!(ranks.iter().all(|&r| r == forwards), "{ranks:?} against {forwards}");
+        // Against the exact sum (the terms in 128-bit fixed point at a finer quantum): within
+        // a quantum a term, and f64's rounding of the result.
+        let exact: i128 = t.iter().map(|&x| (x * power_of_two(100)) as i128).sum();
+        let exact = exact as Real / power_of_two(100);
+        let quantum = power_of_two(((bound.to_bits() >> 52) as i32 - 1023) + 1 - FRACTION);
+        assert!((forwards - exact).abs() <= t.len() as Real * quantum + exact.abs() * Real::EPSILON);
+    }
+
+    #[test]
+    fn a_sum_that_cancels_keeps_the_small_terms_a_float_sum_would_lose() {
+        // 1e16 + 1 − 1e16: f64 gives 0 in that order and 1 in another; the fixed point, 1.
+        let s = ExactSum::new(1, 2.0e16 + 1.0);
+        for x in [1e16, 1.0, -1e16] {
+            s.add(0, x);
+        }
+        let mut out = [0.0];
+        s.write(&mut out);
+        assert_eq!(out[0], 1.0);
+    }
+}

@@ -52,7 +52,7 @@ use rayon::prelude::*;
 
 /// Patches per parallel block at most. No result depends on the blocks (each patch draws from
 /// its own stream, and deposits are summed exactly), only how the work is divided.
-const BLOCK: usize = 64;
+const BLOCK: usize = 16;
 
 /// Patches per block for `n` patches: smaller in small scenes, so that their blocks still
 /// go to every thread and rank.

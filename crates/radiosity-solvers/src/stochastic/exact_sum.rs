@@ -13,7 +13,9 @@
 //! On a thread, an entry is an `i128` held as two atomic words, added without a lock: the low
 //! word's carry goes to the high word, so the sum is exact modulo `2^128`, and the bound keeps
 //! it below `2^124`. Over the ranks, each entry travels as three limbs of at most 43 bits in
-//! the [`Collective`]'s `f64` sum, exact for up to 1024 ranks.
+//! the [`Collective`]'s `f64` sum, exact for up to 1024 ranks; when every rank has few entries
+//! that are not zero (an iteration with fewer rays than patches), only those travel, each with
+//! its place, and each rank adds the others' to its own.
 
 use radiosity_core::{Collective, Real};
 use rayon::prelude::*;
@@ -25,8 +27,8 @@ const FRACTION: i32 = 124;
 /// The bits of the two lower limbs of an entry sent over the ranks.
 const LIMB: u32 = 42;
 
-/// Entries summed over the ranks in one call: a chunk's limbs take 24 MiB.
-const CHUNK: usize = 1 << 20;
+/// Entries summed over the ranks in one call: a chunk's limbs take 6 MiB.
+const CHUNK: usize = 1 << 18;
 
 /// Sums of terms added in any order, the same bits for any order (module doc).
 pub(crate) struct ExactSum {
@@ -52,8 +54,8 @@ impl ExactSum {
         let e = if bound > 0.0 && bound.is_finite() { ((bound.to_bits() >> 52) as i32 - 1023) + 1 } else { 0 };
         let e = e.clamp(-890, 890);
         ExactSum {
-            low: (0..len).map(|_| AtomicU64::new(0)).collect(),
-            high: (0..len).map(|_| AtomicU64::new(0)).collect(),
+            low: (0..len).into_par_iter().map(|_| AtomicU64::new(0)).collect(),
+            high: (0..len).into_par_iter().map(|_| AtomicU64::new(0)).collect(),
             to_fixed: power_of_two(FRACTION - e),
             to_real: power_of_two(e - FRACTION),
         }
@@ -78,25 +80,77 @@ impl ExactSum {
     }
 
     /// Replaces every sum by its sum over the ranks of `collective` (each rank calls it, in
-    /// the same order); nothing in one process.
+    /// the same order); nothing in one process. Where every rank's sums that are not zero
+    /// are few (an iteration with fewer rays than patches), only those travel, each with its
+    /// place; otherwise every sum does.
     pub fn sum_over(&mut self, collective: Option<&dyn Collective>) {
         let Some(c) = collective else { return };
-        let mask = (1i128 << LIMB) - 1;
+        let len = self.low.len();
+        let used = |at: &usize| self.low[*at].load(Relaxed) != 0 || self.high[*at].load(Relaxed) != 0;
+        let count = (0..len).into_par_iter().filter(used).count();
+        let counts = c.gather(&[count as Real]);
+        let most = counts.iter().map(|v| v[0] as usize).max().unwrap_or(0);
+        // An entry sent sparse takes its place and three limbs, a dense one three limbs; sent
+        // sparse, every rank's entries travel at once, so no more than a chunk's worth.
+        let sparse = c.ranks() * most * 4;
+        if sparse < 3 * len && sparse <= 3 * CHUNK {
+            let nonzero: Vec<usize> = (0..len).into_par_iter().filter(used).collect();
+            self.sum_sparse(c, &nonzero, most);
+        } else {
+            self.sum_dense(c);
+        }
+    }
+
+    /// The three limbs of sum `at` (module doc), each below `2^43` in magnitude, so converted
+    /// through `i64` (one instruction, where `i128` takes a routine).
+    fn limbs(&self, at: usize) -> [Real; 3] {
+        let (v, mask) = (self.fixed(at), (1i128 << LIMB) - 1);
+        [(v & mask) as i64 as Real, ((v >> LIMB) & mask) as i64 as Real, (v >> (2 * LIMB)) as i64 as Real]
+    }
+
+    /// The value of three limbs.
+    fn of_limbs(l: &[Real]) -> i128 {
+        i128::from(l[0] as i64) + (i128::from(l[1] as i64) << LIMB) + (i128::from(l[2] as i64) << (2 * LIMB))
+    }
+
+    /// Every rank's sums that are not zero (`nonzero` here, at most `most` on any rank), each
+    /// with its place, added to this rank's: integer sums, so the order does not matter.
+    fn sum_sparse(&mut self, c: &dyn Collective, nonzero: &[usize], most: usize) {
+        // Rank r's entries in its own slot, zeros in the others' (`Collective::gather`, without
+        // a copy a rank): the sum hands every rank every slot. A place is stored plus one, so
+        // that an unused entry reads 0.
+        let (me, slot) = (c.rank(), 4 * most);
+        let mut all = vec![0.0; c.ranks() * slot];
+        for (entry, &at) in all[me * slot..(me + 1) * slot].chunks_mut(4).zip(nonzero) {
+            entry[0] = (at + 1) as Real;
+            entry[1..].copy_from_slice(&self.limbs(at));
+        }
+        c.sum(&mut all);
+        for (rank, part) in all.chunks(slot.max(1)).enumerate().filter(|(rank, _)| *rank != me) {
+            debug_assert!(rank < c.ranks());
+            for entry in part.chunks(4).take_while(|e| e[0] > 0.0) {
+                self.add_fixed(entry[0] as usize - 1, Self::of_limbs(&entry[1..]));
+            }
+        }
+    }
+
+    /// Every sum through the ranks' `f64` sum, as three limbs, in chunks.
+    fn sum_dense(&mut self, c: &dyn Collective) {
         let len = self.low.len();
         for start in (0..len).step_by(CHUNK) {
             let end = (start + CHUNK).min(len);
-            let mut limbs: Vec<Real> = (start..end)
-                .flat_map(|at| {
-                    let v = self.fixed(at);
-                    [(v & mask) as Real, ((v >> LIMB) & mask) as Real, (v >> (2 * LIMB)) as Real]
-                })
-                .collect();
+            let mut limbs = vec![0.0; 3 * (end - start)];
+            limbs.par_chunks_mut(3 * 4096).enumerate().for_each(|(b, out)| {
+                for (i, l) in out.chunks_mut(3).enumerate() {
+                    l.copy_from_slice(&self.limbs(start + b * 4096 + i));
+                }
+            });
             c.sum(&mut limbs);
-            for (at, l) in (start..end).zip(limbs.chunks(3)) {
-                let v = (l[0] as i128) + ((l[1] as i128) << LIMB) + ((l[2] as i128) << (2 * LIMB));
+            (start..end).into_par_iter().zip(limbs.par_chunks(3)).for_each(|(at, l)| {
+                let v = Self::of_limbs(l);
                 self.low[at].store(v as u64, Relaxed);
                 self.high[at].store((v >> 64) as u64, Relaxed);
-            }
+            });
         }
     }
 
@@ -161,6 +215,36 @@ mod tests {
         let exact = exact as Real / power_of_two(100);
         let quantum = power_of_two(((bound.to_bits() >> 52) as i32 - 1023) + 1 - FRACTION);
         assert!((forwards - exact).abs() <= t.len() as Real * quantum + exact.abs() * Real::EPSILON);
+    }
+
+    #[test]
+    fn sums_over_ranks_are_one_process_bits_whether_few_or_many_are_not_zero() {
+        // 3 ranks, 3000 sums: 20 terms (few sums not zero: sent with their places) or 20,000
+        // (most not zero: every sum sent), each term on the rank of its index.
+        let t = terms(20_000);
+        let bound: Real = t.iter().map(|x| x.abs()).sum();
+        let len = 3000;
+        for count in [20, 20_000] {
+            let place = |i: usize| (i * 7919) % len;
+            let one = ExactSum::new(len, bound);
+            (0..count).for_each(|i| one.add(place(i), t[i]));
+            let mut expected = vec![0.0; len];
+            one.write(&mut expected);
+            let ranks = InProcessRanks::run(3, |c| {
+                let mut s = ExactSum::new(len, bound);
+                (0..count).filter(|i| c.deals(*i)).for_each(|i| s.add(place(i), t[i]));
+                s.sum_over(Some(&*c));
+                let mut out = vec![0.0; len];
+                s.write(&mut out);
+                (out, c.traffic().values)
+            });
+            for (out, values) in &ranks {
+                assert_eq!(out, &expected, "{count} terms");
+                // Sparse: a count, then 4 values a sum not zero of each rank; dense: 3 a sum.
+                let dense = count > len;
+                assert_eq!(*values > 3 * len as u64, dense, "{count} terms: {values} values sent");
+            }
+        }
     }
 
     #[test]

@@ -67,8 +67,10 @@ fn solve_over_two_and_three_ranks_gives_the_single_process_answer_once() {
     ignore = "needs MPI: run with --features mpi, Open MPI and libclang installed (as .ci/run does)"
 )]
 fn the_solvers_that_sample_give_the_single_process_answer_over_two_and_three_ranks() {
-    // Each rank walks its share of the replicates with their own streams, and one sum a step
-    // shares them: the same bits, rays and standard error as one process, whatever the ranks.
+    // Stochastic Jacobi's ranks cast their shares of every iteration's rays, random walks'
+    // their replicates, and sums share what they found: the same bits, rays and standard
+    // error as one process, whatever the ranks. Each rank reports the rays it cast: part of
+    // them, and together all.
     use serde_json::Value;
     for solver in ["stochastic-jacobi:seq=sobol", "random-walk"] {
         let json = |extra: &[&str]| -> Value {
@@ -94,6 +96,12 @@ fn the_solvers_that_sample_give_the_single_process_answer_over_two_and_three_ran
             for key in ["rays", "steps", "standard_error"] {
                 assert_eq!(split["stats"][key], one["stats"][key], "{solver}, {k} ranks: {key}");
             }
+            let total = one["stats"]["rays"].as_u64().unwrap();
+            let ranks = split["stats"]["ranks"].as_array().unwrap_or_else(|| panic!("{solver}: no ranks"));
+            assert_eq!(ranks.len(), k.parse::<usize>().unwrap(), "{solver}, {k} ranks");
+            let shares: Vec<u64> = ranks.iter().map(|r| r["run_rays"].as_u64().unwrap()).collect();
+            assert!(shares.iter().all(|&s| s > 0 && s < total), "{solver}, {k} ranks: {shares:?} of {total}");
+            assert_eq!(shares.iter().sum::<u64>(), total, "{solver}, {k} ranks: {shares:?}");
         }
     }
 }

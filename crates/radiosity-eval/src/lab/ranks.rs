@@ -37,11 +37,13 @@ pub struct RankReport {
     pub run_sum_seconds: Real,
     /// Bytes this rank sent in those sums.
     pub run_bytes_sent: u64,
+    /// Rays it cast in the run (a solver that samples transport; 0 for the others).
+    pub run_rays: u64,
 }
 
 impl Lab<'_> {
     /// The lab with its runs solved over `ranks` where its source is not split itself: the
-    /// solvers that sample transport then deal their replicates to the ranks
+    /// solvers that sample transport then divide their rays between the ranks
     /// ([`radiosity_solvers::Problem::with_collective`]), and every solver's decisions that
     /// read a clock are rank 0's. Every rank builds the same lab and makes the same runs.
     pub fn over_ranks(mut self, ranks: Arc<dyn Collective>) -> Self {
@@ -49,17 +51,24 @@ impl Lab<'_> {
         self
     }
 
-    /// What this rank's sums have cost so far, when the lab's source is split over ranks: take
-    /// it before a run, for [`Lab::rank_reports`].
-    pub fn traffic(&self) -> Option<Traffic> {
-        self.source.collective().map(|c| c.traffic())
+    /// The ranks the lab's runs are solved over: its source's, or those of
+    /// [`Lab::over_ranks`].
+    fn collective(&self) -> Option<&dyn Collective> {
+        self.source.collective().or(self.ranks.as_deref())
     }
 
-    /// Every rank's report, in rank order, on every rank, when the lab's source is split over
+    /// What this rank's sums have cost so far, when the lab's runs are solved over ranks:
+    /// take it before a run, for [`Lab::rank_reports`].
+    pub fn traffic(&self) -> Option<Traffic> {
+        self.collective().map(|c| c.traffic())
+    }
+
+    /// Every rank's report, in rank order, on every rank, when the lab's runs are solved over
     /// ranks: a collective call, which every rank makes after the same run, with the traffic
-    /// taken before it (`before`) and the run's operator seconds on this rank.
-    pub fn rank_reports(&self, before: Traffic, run_operator_seconds: Real) -> Option<Vec<RankReport>> {
-        let ranks = self.source.collective()?;
+    /// taken before it (`before`), the run's operator seconds on this rank, and the rays this
+    /// rank cast in it (`rays_here` of the solver's record, for the solvers that sample).
+    pub fn rank_reports(&self, before: Traffic, run_operator_seconds: Real, run_rays: u64) -> Option<Vec<RankReport>> {
+        let ranks = self.collective()?;
         let now = ranks.traffic();
         let own = [
             peak_rss().map_or(-1.0, |b| b as Real),
@@ -67,6 +76,7 @@ impl Lab<'_> {
             (now.sums - before.sums) as Real,
             now.seconds - before.seconds,
             (now.bytes_sent - before.bytes_sent) as Real,
+            run_rays as Real,
         ];
         let runs = ranks.gather(&own);
         let parts = self.figures.as_ref().map(|f| f.ranks.as_slice()).unwrap_or_default();
@@ -88,6 +98,7 @@ impl Lab<'_> {
                     run_sums: run[2] as u64,
                     run_sum_seconds: run[3],
                     run_bytes_sent: run[4] as u64,
+                    run_rays: run[5] as u64,
                 })
                 .collect(),
         )

@@ -78,17 +78,24 @@ impl RunSummary {
             line("recorded", items.join(", "));
         }
         for r in self.ranks.iter().flatten() {
-            line(
-                &format!("rank {}", r.rank),
+            // A rank's part of the operator, where the operator is split between the ranks.
+            let built = (r.tasks > 0 || r.links > 0).then(|| {
                 format!(
-                    "{} links ({} tasks, {:.1}% of the estimated cost), {} operator ({} of links) built in {:.2} s; \
-                     peak memory {}; the run: {:.3} s in the operator, {:.3} s in {} sums, {} sent",
+                    "{} links ({} tasks, {:.1}% of the estimated cost), {} operator ({} of links) built in {:.2} s; ",
                     r.links,
                     r.tasks,
                     100.0 * r.estimated_share,
                     human_bytes(r.operator_bytes),
                     human_bytes(r.link_bytes),
                     r.build_seconds,
+                )
+            });
+            let rays = if r.run_rays > 0 { format!("{} rays cast, ", r.run_rays) } else { String::new() };
+            line(
+                &format!("rank {}", r.rank),
+                format!(
+                    "{}peak memory {}; the run: {rays}{:.3} s in the operator, {:.3} s in {} sums, {} sent",
+                    built.unwrap_or_default(),
                     r.peak_rss.map_or("n/a".into(), human_bytes),
                     r.run_operator_seconds,
                     r.run_sum_seconds,

@@ -472,6 +472,8 @@ pub struct RandomWalk {
     walks: u64,
     /// Rays the walks cast so far.
     rays: u64,
+    /// Of them, those this rank cast (all of them in one process).
+    rays_here: u64,
     /// Whether the system emits nothing (its answer is `B = 0`).
     dark: bool,
 }
@@ -491,6 +493,7 @@ impl RandomWalk {
             steps: 0,
             walks: 0,
             rays: 0,
+            rays_here: 0,
             dark: false,
         }
     }
@@ -576,6 +579,7 @@ impl Solver for RandomWalk {
         self.steps = 0;
         self.walks = 0;
         self.rays = 0;
+        self.rays_here = 0;
         self.dark = self.emitters.patches.is_empty();
         state.radiosity.copy_from_slice(system.emissions());
         Ok(())
@@ -600,6 +604,7 @@ impl Solver for RandomWalk {
         // Over ranks, every replicate's sums from the rank that walked it (module doc of
         // `stochastic::ranks`), and the walks' rays of every rank.
         let deal = Deal::of(problem);
+        self.rays_here += problem.spent(Unit::Rays) - before;
         if deal.split() {
             let mut parts: Vec<Vec<Real>> = self.sums.chunks_exact(n * k).map(<[Real]>::to_vec).collect();
             let world = deal.share(problem, &mut parts, problem.spent(Unit::Rays) - before);
@@ -657,7 +662,9 @@ impl Solver for RandomWalk {
     /// `walks` (every replicate's, so far), `mean_walk_length` (rays a walk) and
     /// `unshot_power`, 0: every walk is followed until it ends, so no power is left out.
     fn record(&self) -> Record {
-        let mut record = Record::new().with("walks", self.walks).with("unshot_power", 0.0);
+        // Over ranks, `rays_here` is the rays this rank cast; in one process, all of them.
+        let mut record =
+            Record::new().with("walks", self.walks).with("unshot_power", 0.0).with("rays_here", self.rays_here);
         if self.walks > 0 {
             record.set("mean_walk_length", self.rays as Real / self.walks as Real);
         }

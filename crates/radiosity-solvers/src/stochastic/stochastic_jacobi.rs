@@ -228,7 +228,7 @@ impl SolverParams for StochasticJacobiParams {
                 "the constant control variate (cv=true) gathers along rays from patches, not global lines".into(),
             ));
         }
-        Ok(Box::new(StochasticJacobi { params: self.clone(), chains: Vec::new(), emitted: 0.0 }))
+        Ok(Box::new(StochasticJacobi { params: self.clone(), chains: Vec::new(), emitted: 0.0, rays_here: 0 }))
     }
 }
 
@@ -256,6 +256,8 @@ pub struct StochasticJacobi {
     chains: Vec<Chain>,
     /// `|Φ| = Σ_ic A_i |E_ic|`.
     emitted: Real,
+    /// The rays this rank cast (all of them in one process).
+    rays_here: u64,
 }
 
 impl StochasticJacobi {
@@ -298,7 +300,11 @@ impl StochasticJacobi {
         let share = Share::of(problem);
         let share = &share;
         // This rank's rays are counted as it casts them; the other ranks', once summed.
-        let elsewhere = |cast: Cast| problem.spent_elsewhere(Unit::Rays, cast.rays - cast.here);
+        let rays_here = &mut self.rays_here;
+        let mut elsewhere = |cast: Cast| {
+            problem.spent_elsewhere(Unit::Rays, cast.rays - cast.here);
+            *rays_here += cast.here;
+        };
         let chain = &mut self.chains[r];
         let mut streams = Streams {
             sequence: params.sequence,
@@ -461,6 +467,7 @@ impl Solver for StochasticJacobi {
     fn init(&mut self, problem: &Problem<'_>, _state: &mut State) -> Result<(), SolverError> {
         let emission = problem.system().emissions().to_vec();
         self.emitted = Self::power(problem, &emission);
+        self.rays_here = 0;
         let n = problem.n();
         let chain =
             Chain { estimate: emission, weight: 0.0, regular: false, left: 1.0, iteration: 0, drawn: vec![0; n] };
@@ -520,6 +527,8 @@ impl Solver for StochasticJacobi {
         // How many replicates have shot their incremental series and iterate regularly.
         record.set("replicates_regular", self.chains.iter().filter(|c| c.regular).count());
         record.set("unshot_power", self.unshot_power());
+        // Over ranks, the rays this rank cast; in one process, all of them.
+        record.set("rays_here", self.rays_here);
         record
     }
 }

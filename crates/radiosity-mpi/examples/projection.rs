@@ -8,8 +8,12 @@
 //! network (2 µs, 12.5 GB/s) and 10 Gb Ethernet (20 µs, 1.25 GB/s).
 //!
 //! The solve's sums come from the runs: a hierarchical operator's products each sum `3n`
-//! values; stochastic Jacobi's steps each sum its replicates' state, `R (3n + n)` values, with
-//! a replicate a node (at least the runs' `R`). docs/distributed.md gives the commands.
+//! values; a solver that samples transport, where the two ranks report their rays (stochastic
+//! Jacobi dividing every iteration's rays), makes the sums its two-rank run made, each of the
+//! bytes a patch it sent, whatever the nodes (its sparse sums, which grow with the nodes, taken
+//! as they were on two); in older runs, stochastic Jacobi's steps each sum its replicates'
+//! state, `R (3n + n)` values, with a replicate a node (at least the runs' `R`).
+//! docs/distributed.md gives the commands.
 
 use radiosity_mpi::projection::{Measured, Model, Network, PhaseRuns, Sums};
 use serde_json::Value;
@@ -84,7 +88,19 @@ fn run() -> Result<(), String> {
         None => None,
     };
     let stats = &runs[1]["stats"];
-    let sums = if stats["rays"].as_f64().unwrap_or(0.0) > 0.0 {
+    // The two ranks' own account of their sums, where the run reports each rank's rays (since
+    // stochastic Jacobi divides every iteration's rays, 66c51ee): how many, and the bytes a
+    // rank sent, which on two ranks are the values each sum carried.
+    let rank0 = &runs[2]["stats"]["ranks"][0];
+    let measured_sums = match (rank0["run_rays"].as_f64(), rank0["run_sums"].as_f64()) {
+        (Some(_), Some(count)) if count > 0.0 => {
+            Some(Sums::Fixed { count, bytes: rank0["run_bytes_sent"].as_f64().unwrap_or(0.0) / count / patches })
+        }
+        _ => None,
+    };
+    let sums = if let Some(sums) = measured_sums.filter(|_| stats["rays"].as_f64().unwrap_or(0.0) > 0.0) {
+        sums
+    } else if stats["rays"].as_f64().unwrap_or(0.0) > 0.0 {
         let replicates = stats["replicates"].as_f64().unwrap_or(4.0).max(1.0);
         Sums::Replicates { count: stats["steps"].as_f64().unwrap_or(0.0), bytes: 8.0 * 4.0, least: replicates }
     } else {

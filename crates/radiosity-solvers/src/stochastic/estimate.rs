@@ -213,7 +213,8 @@ pub(crate) fn shoot(
         .collect();
     // No ray carries more than `most`, and there are at most `n_rays + n` of them: a bound on
     // every deposit's sum from what every rank holds.
-    let most = (0..n).map(|j| scale[j] * norm(j)).fold(0.0, Real::max);
+    // A largest does not depend on the order: taken on every thread.
+    let most = (0..n).into_par_iter().map(|j| scale[j] * norm(j)).reduce(|| 0.0, Real::max);
     let sums = ExactSum::new(n * k, most * (n_rays + n as u64) as Real);
     let here = cast_per_patch(rays, share, streams, (incoming, k), &count, &|j, landings, _| {
         for &i in landings.iter().flatten() {

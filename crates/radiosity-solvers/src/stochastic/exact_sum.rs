@@ -10,6 +10,9 @@
 //! rounded (towards zero) by at most `2^(e − 124)`, 2^-71 of the bound below `f64`'s own
 //! rounding of it, which is what the sum loses against an exact one.
 //!
+//! A term that is not finite is not rounded: it makes every sum NaN (on every rank), so that
+//! the caller's check of its result finds it.
+//!
 //! On a thread, an entry is an `i128` held as two atomic words, added without a lock: the low
 //! word's carry goes to the high word, so the sum is exact modulo `2^128`, and the bound keeps
 //! it below `2^124`. Over the ranks, each entry travels as three limbs of at most 43 bits in
@@ -19,7 +22,7 @@
 
 use radiosity_core::{Collective, Real};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
 
 /// The bits below the bound's exponent that a term keeps.
 const FRACTION: i32 = 124;
@@ -34,6 +37,9 @@ const CHUNK: usize = 1 << 18;
 pub(crate) struct ExactSum {
     low: Vec<AtomicU64>,
     high: Vec<AtomicU64>,
+    /// Whether a term was not finite (on any rank, once summed over them): every sum is then
+    /// written as NaN, so that the caller's check finds it rather than a term silently lost.
+    broken: AtomicBool,
     /// `2^(FRACTION − e)`: a term to its multiple of the quantum.
     to_fixed: Real,
     /// `2^(e − FRACTION)`.
@@ -56,6 +62,7 @@ impl ExactSum {
         ExactSum {
             low: (0..len).into_par_iter().map(|_| AtomicU64::new(0)).collect(),
             high: (0..len).into_par_iter().map(|_| AtomicU64::new(0)).collect(),
+            broken: AtomicBool::new(false),
             to_fixed: power_of_two(FRACTION - e),
             to_real: power_of_two(e - FRACTION),
         }
@@ -63,6 +70,10 @@ impl ExactSum {
 
     /// Adds `x` to sum `at`, from any thread.
     pub fn add(&self, at: usize, x: Real) {
+        if !x.is_finite() {
+            self.broken.store(true, Relaxed);
+            return;
+        }
         // Scaling by a power of two is exact; `as` rounds towards zero.
         let v = (x * self.to_fixed) as i128;
         self.add_fixed(at, v);
@@ -88,8 +99,12 @@ impl ExactSum {
         let len = self.low.len();
         let used = |at: &usize| self.low[*at].load(Relaxed) != 0 || self.high[*at].load(Relaxed) != 0;
         let count = (0..len).into_par_iter().filter(used).count();
-        let counts = c.gather(&[count as Real]);
+        let counts = c.gather(&[count as Real, Real::from(u8::from(self.broken.load(Relaxed)))]);
         let most = counts.iter().map(|v| v[0] as usize).max().unwrap_or(0);
+        if counts.iter().any(|v| v[1] > 0.0) {
+            self.broken.store(true, Relaxed);
+            return;
+        }
         // An entry sent sparse takes its place and three limbs, a dense one three limbs; sent
         // sparse, every rank's entries travel at once, so no more than a chunk's worth.
         let sparse = c.ranks() * most * 4;
@@ -156,6 +171,10 @@ impl ExactSum {
 
     /// The sums, rounded to the nearest `f64`, into `out`.
     pub fn write(&self, out: &mut [Real]) {
+        if self.broken.load(Relaxed) {
+            out.fill(Real::NAN);
+            return;
+        }
         out.par_iter_mut().enumerate().for_each(|(at, o)| *o = self.fixed(at) as Real * self.to_real);
     }
 }
@@ -245,6 +264,26 @@ mod tests {
                 assert_eq!(*values > 3 * len as u64, dense, "{count} terms: {values} values sent");
             }
         }
+    }
+
+    #[test]
+    fn a_term_that_is_not_finite_makes_every_sum_nan_on_every_rank() {
+        let one = ExactSum::new(3, 10.0);
+        one.add(0, 1.0);
+        one.add(2, Real::INFINITY);
+        let mut out = [0.0; 3];
+        one.write(&mut out);
+        assert!(out.iter().all(|x| x.is_nan()), "{out:?}");
+        // Over two ranks, rank 1's NaN reaches rank 0.
+        let ranks = InProcessRanks::run(2, |c| {
+            let mut s = ExactSum::new(3, 10.0);
+            s.add(c.rank(), if c.rank() == 1 { Real::NAN } else { 1.0 });
+            s.sum_over(Some(&*c));
+            let mut out = [0.0; 3];
+            s.write(&mut out);
+            out
+        });
+        assert!(ranks.iter().flatten().all(|x| x.is_nan()), "{ranks:?}");
     }
 
     #[test]

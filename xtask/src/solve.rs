@@ -101,10 +101,7 @@ pub fn run(args: &Args, ranks: &crate::ranks::Ranks) -> Result<()> {
             (lab.summary(&o, rules.needs_error()), o.state)
         }
     };
-    // Over ranks, each rank's share: its rays, for the solvers that sample.
-    let rays_here = summary.record.get("rays_here").and_then(|v| v.as_u64()).unwrap_or(0);
-    let reports = traffic.and_then(|before| lab.rank_reports(before, state.cost.ff_seconds, rays_here));
-    let summary = RunSummary { ranks: reports, ..summary };
+    let summary = RunSummary { ranks: traffic.and_then(|before| lab.rank_reports(before, &summary)), ..summary };
     let scene = prepared.scene();
     phases.borrow_mut().begin("writing the output");
     let verbose = || {

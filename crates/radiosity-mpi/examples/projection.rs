@@ -98,9 +98,10 @@ fn run() -> Result<(), String> {
         }
         _ => None,
     };
-    let sums = if let Some(sums) = measured_sums.filter(|_| stats["rays"].as_f64().unwrap_or(0.0) > 0.0) {
+    let sampled = stats["rays"].as_f64().unwrap_or(0.0) > 0.0;
+    let sums = if let Some(sums) = measured_sums.filter(|_| sampled) {
         sums
-    } else if stats["rays"].as_f64().unwrap_or(0.0) > 0.0 {
+    } else if sampled {
         let replicates = stats["replicates"].as_f64().unwrap_or(4.0).max(1.0);
         Sums::Replicates { count: stats["steps"].as_f64().unwrap_or(0.0), bytes: 8.0 * 4.0, least: replicates }
     } else {

@@ -2,6 +2,7 @@
 //! its part of the operator, its peak memory, and the time and bytes of its collective sums.
 
 use super::setup::Lab;
+use super::summary::RunSummary;
 use crate::memory::peak_rss;
 use radiosity_core::{Collective, Real, Traffic};
 use serde::Serialize;
@@ -65,14 +66,15 @@ impl Lab<'_> {
 
     /// Every rank's report, in rank order, on every rank, when the lab's runs are solved over
     /// ranks: a collective call, which every rank makes after the same run, with the traffic
-    /// taken before it (`before`), the run's operator seconds on this rank, and the rays this
-    /// rank cast in it (`rays_here` of the solver's record, for the solvers that sample).
-    pub fn rank_reports(&self, before: Traffic, run_operator_seconds: Real, run_rays: u64) -> Option<Vec<RankReport>> {
+    /// taken before it (`before`) and this rank's summary of the run (`run`: its operator
+    /// seconds, and the rays it cast, `rays_here` of the record of a solver that samples).
+    pub fn rank_reports(&self, before: Traffic, run: &RunSummary) -> Option<Vec<RankReport>> {
         let ranks = self.collective()?;
         let now = ranks.traffic();
+        let run_rays = run.record.get("rays_here").and_then(|v| v.as_u64()).unwrap_or(0);
         let own = [
             peak_rss().map_or(-1.0, |b| b as Real),
-            run_operator_seconds,
+            run.cost.ff_seconds,
             (now.sums - before.sums) as Real,
             now.seconds - before.seconds,
             (now.bytes_sent - before.bytes_sent) as Real,

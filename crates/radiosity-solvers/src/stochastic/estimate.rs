@@ -167,6 +167,14 @@ fn world(share: &Share<'_>, here: u64, more: &mut [Real]) -> Cast {
     Cast { rays: v[more.len()] as u64, here }
 }
 
+/// The deposits `sums` of this rank's `here` rays, summed over the ranks into `out`, and the
+/// world's rays.
+fn deposited(mut sums: ExactSum, share: &Share<'_>, here: u64, out: &mut [Real]) -> Cast {
+    sums.sum_over(share.collective());
+    sums.write(out);
+    world(share, here, &mut [])
+}
+
 /// `⌊m⌋` or `⌈m⌉`, with expectation `m`, from `u` uniform in `[0, 1)`.
 fn round_at_random(m: Real, u: Real) -> usize {
     let floor = m.floor();
@@ -211,9 +219,10 @@ pub(crate) fn shoot(
             if m > 0.0 { rays.ray_weight(j) / cast_count(m) } else { 0.0 }
         })
         .collect();
-    // No ray carries more than `most`, and there are at most `n_rays + n` of them: a bound on
-    // every deposit's sum from what every rank holds.
-    // A largest does not depend on the order: taken on every thread.
+    // No ray carries more than `most` (a largest, the same in any order, so taken on every
+    // thread), and there are at most `n_rays + n` of them: a bound on every deposit's sum from
+    // what every rank holds. The sums are made afresh for each estimate, so that a solver
+    // holds none between its steps.
     let most = (0..n).into_par_iter().map(|j| scale[j] * norm(j)).reduce(|| 0.0, Real::max);
     let sums = ExactSum::new(n * k, most * (n_rays + n as u64) as Real);
     let here = cast_per_patch(rays, share, streams, (incoming, k), &count, &|j, landings, _| {
@@ -223,10 +232,7 @@ pub(crate) fn shoot(
             }
         }
     });
-    let mut sums = sums;
-    sums.sum_over(share.collective());
-    sums.write(incoming);
-    world(share, here, &mut [])
+    deposited(sums, share, here, incoming)
 }
 
 /// `g_i = Σ_j F_ij b_j` for every patch where `reflects(i)`, by about `n_rays` rays in
@@ -313,10 +319,10 @@ pub(crate) fn lines(
     let count = found.iter().map(|(t, _)| t.len()).sum::<usize>();
     let here: u64 = found.iter().map(|(_, r)| r).sum();
     let largest = b.iter().map(|x| x.abs()).fold(0.0, Real::max);
-    let mut figures = share.gathered(&[Real::from(u8::from(!has)), widest, count as Real]);
+    let figures = share.gathered(&[Real::from(u8::from(!has)), widest, count as Real]);
     let lacking = figures.iter().any(|f| f[0] > 0.0);
     let widest = figures.iter().map(|f| f[1]).fold(0.0, Real::max);
-    let count: Real = figures.iter_mut().map(|f| f[2]).sum();
+    let count: Real = figures.iter().map(|f| f[2]).sum();
     if lacking {
         return None;
     }
@@ -328,8 +334,5 @@ pub(crate) fn lines(
             }
         }
     });
-    let mut sums = sums;
-    sums.sum_over(share.collective());
-    sums.write(incoming);
-    Some(world(share, here, &mut []))
+    Some(deposited(sums, share, here, incoming))
 }

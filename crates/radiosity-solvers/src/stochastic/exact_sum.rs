@@ -141,8 +141,7 @@ impl ExactSum {
             entry[1..].copy_from_slice(&self.limbs(at));
         }
         c.sum(&mut all);
-        for (rank, part) in all.chunks(slot.max(1)).enumerate().filter(|(rank, _)| *rank != me) {
-            debug_assert!(rank < c.ranks());
+        for (_, part) in all.chunks(slot.max(1)).enumerate().filter(|(rank, _)| *rank != me) {
             for entry in part.chunks(4).take_while(|e| e[0] > 0.0) {
                 self.add_fixed(entry[0] as usize - 1, Self::of_limbs(&entry[1..]));
             }

@@ -604,10 +604,11 @@ impl Solver for RandomWalk {
         // Over ranks, every replicate's sums from the rank that walked it (module doc of
         // `stochastic::ranks`), and the walks' rays of every rank.
         let deal = Deal::of(problem);
-        self.rays_here += problem.spent(Unit::Rays) - before;
+        let here = problem.spent(Unit::Rays) - before;
+        self.rays_here += here;
         if deal.split() {
             let mut parts: Vec<Vec<Real>> = self.sums.chunks_exact(n * k).map(<[Real]>::to_vec).collect();
-            let world = deal.share(problem, &mut parts, problem.spent(Unit::Rays) - before);
+            let world = deal.share(problem, &mut parts, here);
             self.sums = parts.concat();
             self.rays = rays_before + world;
         }

@@ -23,6 +23,7 @@
 
 use crate::run::cost::Unit;
 use crate::run::problem::Problem;
+use crate::stochastic::sequence::mix;
 use radiosity_core::{Collective, Real};
 
 /// Which blocks of rays this rank casts, and the sums that share what they found (module doc).
@@ -45,7 +46,7 @@ impl<'p> Share<'p> {
     /// index, so that a scene whose bright patches recur with a period (every other block)
     /// does not give them all to one rank.
     pub(crate) fn mine(&self, b: usize) -> bool {
-        self.collective.is_none_or(|c| c.deals(scatter(b as u64) as usize))
+        self.collective.is_none_or(|c| c.deals(mix(b as u64) as usize))
     }
 
     /// `values` summed over the ranks, in rank order; themselves in one process.
@@ -62,13 +63,6 @@ impl<'p> Share<'p> {
             None => vec![values.to_vec()],
         }
     }
-}
-
-/// A bijective mix of 64 bits (SplitMix64's finaliser).
-fn scatter(mut z: u64) -> u64 {
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
 }
 
 /// Which replicates this rank advances, and the sum that shares them (module doc).

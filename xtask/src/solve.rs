@@ -54,6 +54,9 @@ struct SolveJson<'a> {
     scene: &'a str,
     solver: &'a str,
     ff: String,
+    /// Each rank's threads and the ranks: the run's configuration, for the projection.
+    threads: usize,
+    ranks: usize,
     patches: Vec<PatchJson>,
     stats: &'a RunSummary,
     /// Every phase before the output: its seconds and the peak memory when it ended.
@@ -79,7 +82,7 @@ pub fn run(args: &Args, ranks: &crate::ranks::Ranks) -> Result<()> {
     if let Some((at, peak)) = mark.began() {
         phases.borrow_mut().begin_at("setting up the reference", at, peak);
     }
-    if let Some(world) = world {
+    if let Some(world) = world.clone() {
         // The solvers that sample transport divide their rays between the ranks.
         lab = lab.over_ranks(world);
     }
@@ -150,6 +153,8 @@ pub fn run(args: &Args, ranks: &crate::ranks::Ranks) -> Result<()> {
         scene: &args.run.scene,
         solver: &summary.solver,
         ff: lab.backend().to_string(),
+        threads: rayon::current_num_threads(),
+        ranks: world.as_ref().map_or(1, |w| w.ranks()),
         patches,
         stats: &summary,
         phases: &done,

@@ -15,6 +15,8 @@ pub struct RankReport {
     pub rank: usize,
     /// Seconds it took to build its part of the operator.
     pub build_seconds: Real,
+    /// Those seconds, stage by stage (empty where the operator is not split).
+    pub build_stages: Vec<(String, Real)>,
     /// Bytes its part of the operator holds (its links, and what every rank holds).
     pub operator_bytes: u64,
     /// Of them, its links' bytes.
@@ -89,6 +91,7 @@ impl Lab<'_> {
                 .map(|(k, run)| RankReport {
                     rank: k,
                     build_seconds: parts.get(k).map_or(0.0, |p| p.seconds),
+                    build_stages: parts.get(k).map(|p| p.stages.clone()).unwrap_or_default(),
                     operator_bytes: parts.get(k).map_or(0, |p| p.bytes as u64),
                     link_bytes: count(k, "link bytes") as u64,
                     links: (count(k, "far links") + count(k, "near links")) as u64,

@@ -80,8 +80,10 @@ impl RunSummary {
         for r in self.ranks.iter().flatten() {
             // A rank's part of the operator, where the operator is split between the ranks.
             let built = (r.tasks > 0 || r.links > 0).then(|| {
+                let stages: Vec<String> = r.build_stages.iter().map(|(stage, t)| format!("{stage} {t:.2} s")).collect();
+                let stages = if stages.is_empty() { String::new() } else { format!(" ({})", stages.join(", ")) };
                 format!(
-                    "{} links ({} tasks, {:.1}% of the estimated cost), {} operator ({} of links) built in {:.2} s; ",
+                    "{} links ({} tasks, {:.1}% of the estimated cost), {} operator ({} of links) built in {:.2} s{stages}; ",
                     r.links,
                     r.tasks,
                     100.0 * r.estimated_share,

@@ -78,6 +78,9 @@ pub struct BuildStages {
     pub tree: f64,
     /// The near field's set-up (the analytic backend the near pairs call) and the oracle.
     pub near_field: f64,
+    /// Split over ranks, the top of the refinement expanded into the tasks dealt to the ranks
+    /// (0 in one process).
+    pub frontier: f64,
     /// The refinement into links, the near pairs' entries and every shadow ray included.
     pub refinement: f64,
     /// The link lists: far links in both their nodes' lists, near links and far pairs once.
@@ -88,10 +91,11 @@ pub struct BuildStages {
 
 impl BuildStages {
     /// Each stage with its name, in order.
-    pub fn named(&self) -> [(&'static str, f64); 5] {
+    pub fn named(&self) -> [(&'static str, f64); 6] {
         [
             ("tree", self.tree),
             ("near field set-up", self.near_field),
+            ("frontier", self.frontier),
             ("refinement", self.refinement),
             ("link lists", self.lists),
             ("closure", self.closure),
@@ -261,10 +265,12 @@ impl HierarchicalColumns {
             None => (refiner.refine_all(), 1, 1.0),
             Some((c, tasks_per_rank)) => {
                 let share = refiner.refine_share((c.rank(), c.ranks()), *tasks_per_rank, observe);
+                stages.frontier = share.frontier;
                 (share.links, share.tasks, share.estimated)
             }
         };
         stage(&mut stages.refinement);
+        stages.refinement -= stages.frontier;
         let assemble = |tree: ClusterTree, links: Links| {
             let mut operator = HierarchicalColumns::assemble(scene, tree, links, start);
             operator.distribution = collective.clone().map(Distribution::new);

@@ -14,6 +14,7 @@
 //! next product, and the solvers' `O(n)` work is small beside the links' (docs/distributed.md).
 
 use super::HierarchicalColumns;
+use super::build::BuildStages;
 use super::links::BuildProgress;
 use super::params::HierarchicalParams;
 use crate::backend::BackendFigures;
@@ -52,6 +53,8 @@ pub struct RankFigures {
     pub tasks: u64,
     /// The rank's share of the estimated cost of the refinement.
     pub estimated_share: f64,
+    /// The rank's build, stage by stage.
+    pub stages: BuildStages,
 }
 
 impl RankFigures {
@@ -72,10 +75,12 @@ impl RankFigures {
             seconds: figures.seconds,
             tasks: tasks as u64,
             estimated_share,
+            stages: figures.stages,
         }
     }
 
-    fn to_values(self) -> [Real; 13] {
+    fn to_values(self) -> [Real; 19] {
+        let s = self.stages;
         [
             self.far_links as Real,
             self.zeroth_links as Real,
@@ -90,6 +95,12 @@ impl RankFigures {
             self.tasks as Real,
             self.estimated_share,
             self.near_rays as Real,
+            s.tree,
+            s.near_field,
+            s.frontier,
+            s.refinement,
+            s.lists,
+            s.closure,
         ]
     }
 
@@ -108,6 +119,14 @@ impl RankFigures {
             tasks: v[10] as u64,
             estimated_share: v[11],
             near_rays: v[12] as u64,
+            stages: BuildStages {
+                tree: v[13],
+                near_field: v[14],
+                frontier: v[15],
+                refinement: v[16],
+                lists: v[17],
+                closure: v[18],
+            },
         }
     }
 }
@@ -124,7 +143,7 @@ impl From<&RankFigures> for BackendFigures {
             ("estimated share", r.estimated_share),
         ];
         BackendFigures {
-            stages: Vec::new(),
+            stages: r.stages.named().iter().map(|&(l, v)| (l.to_string(), v)).collect(),
             parts: Vec::new(),
             seconds: r.seconds,
             bytes: r.bytes as usize,

@@ -74,6 +74,8 @@ pub(super) struct Share {
     pub tasks: usize,
     /// This rank's estimated cost, as a share of the whole (`1 / ranks` when balanced).
     pub estimated: f64,
+    /// Seconds spent expanding the frontier.
+    pub frontier: f64,
 }
 
 impl Refiner<'_> {
@@ -85,11 +87,13 @@ impl Refiner<'_> {
         tasks_per_rank: usize,
         observe: &(dyn Fn(BuildProgress) + Sync),
     ) -> Share {
+        let start = std::time::Instant::now();
         let n = self.tree.nodes[ROOT as usize].count as usize;
         let limit = ((n / (ranks * tasks_per_rank.max(1))) as u32).max(1);
         let mut settled = Links::default();
         let tasks = self.watched(Watch::new(n, &|_| {})).frontier(limit, &mut settled);
         let (owner, load) = deal(&tasks, self.tree, ranks);
+        let frontier = start.elapsed().as_secs_f64();
         let total: u64 = load.iter().sum();
         let estimated = if total > 0 { load[rank] as f64 / total as f64 } else { 0.0 };
         let mine: Vec<Task> = tasks.into_iter().zip(&owner).filter(|(_, o)| **o == rank).map(|(t, _)| t).collect();
@@ -116,7 +120,7 @@ impl Refiner<'_> {
         if rank == 0 {
             links.append(settled);
         }
-        Share { links, tasks: count, estimated }
+        Share { links, tasks: count, estimated, frontier }
     }
 
     /// The tasks of the refinement from the root's link with itself, each task with more than

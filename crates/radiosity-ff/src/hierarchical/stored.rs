@@ -26,7 +26,7 @@ use xxhash_rust::xxh3::xxh3_64;
 const MAGIC: &str = "radiosity hierarchical operator";
 /// 6: each link once, in its lower end's list (5: in both ends' lists; 4: near and pair
 /// values as `f64`).
-const FORMAT_VERSION: u32 = 6;
+const FORMAT_VERSION: u32 = 7;
 
 /// What the header holds besides the magic string and the version.
 #[derive(Serialize, Deserialize)]

@@ -1,5 +1,6 @@
-//! This process's memory: its peak resident size, which the bench sections and each rank of a
-//! distributed run report, and how the blocks it frees go back to the system.
+//! This process's memory and CPU time: its peak resident size, which the bench sections and
+//! each rank of a distributed run report, the CPU seconds its threads have used, which the
+//! phase table reports, and how the blocks it frees go back to the system.
 
 /// The high-water mark of this process's resident memory (`VmHWM` of `/proc/self/status`), in
 /// bytes; `None` where there is no `/proc`.
@@ -8,6 +9,29 @@ pub fn peak_rss() -> Option<u64> {
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kb: u64 = line.trim_start_matches("VmHWM:").trim().trim_end_matches("kB").trim().parse().ok()?;
     Some(kb * 1024)
+}
+
+/// The CPU seconds, user and system, that all of this process's threads have used so far
+/// (`getrusage`); `None` where the system does not say. Against a phase's wall seconds it
+/// tells a part that ran on one thread (CPU ≈ wall) from threads that contend (CPU grows).
+pub fn cpu_seconds() -> Option<f64> {
+    #[cfg(unix)]
+    {
+        let mut usage = std::mem::MaybeUninit::<libc::rusage>::zeroed();
+        // SAFETY: `getrusage` fills the `rusage` it is given, which is valid for writes; it
+        // is read only when the call succeeded.
+        #[allow(unsafe_code)]
+        let usage = unsafe {
+            if libc::getrusage(libc::RUSAGE_SELF, usage.as_mut_ptr()) != 0 {
+                return None;
+            }
+            usage.assume_init()
+        };
+        let seconds = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+        Some(seconds(usage.ru_utime) + seconds(usage.ru_stime))
+    }
+    #[cfg(not(unix))]
+    None
 }
 
 /// Makes every block of 128 KiB or more a mapping of its own, handed back to the system when

@@ -3,11 +3,13 @@
 //! reference, solving, writing the output. `cargo xtask solve --verbose` prints the table and
 //! `solve --json` stores it (docs/cli.md); docs/scale.md reads it at a million patches.
 //!
-//! A phase's seconds are wall seconds; its peak bytes are the process's peak resident memory
+//! A phase's seconds are wall seconds, with the CPU seconds of all the process's threads beside
+//! them (one thread busy: about the wall seconds; two: up to twice, more than the wall seconds
+//! only where both worked); its peak bytes are the process's peak resident memory
 //! when the phase ended (`VmHWM` of `/proc/self/status`), so they only grow: the phase that raised the
 //! peak is the one whose figure rose.
 
-use crate::memory::peak_rss;
+use crate::memory::{cpu_seconds, peak_rss};
 use crate::progress::Progress;
 use crate::reports::report_text::human_bytes;
 use serde::Serialize;
@@ -22,6 +24,9 @@ pub struct Phase {
     pub name: String,
     /// Wall seconds.
     pub seconds: f64,
+    /// CPU seconds of all the process's threads; `None` where the system does not say, or for
+    /// a phase split after the fact ([`Phases::begin_at`]).
+    pub cpu_seconds: Option<f64>,
     /// The process's peak resident memory when the phase ended, in bytes; `None` where the
     /// system does not say.
     pub peak_bytes: Option<u64>,
@@ -31,7 +36,7 @@ pub struct Phase {
 #[derive(Clone, Debug, Default)]
 pub struct Phases {
     done: Vec<Phase>,
-    open: Option<(String, Instant)>,
+    open: Option<(String, Instant, Option<f64>)>,
 }
 
 impl Phases {
@@ -43,24 +48,26 @@ impl Phases {
     /// Ends the phase under way, if any, and begins `name`.
     pub fn begin(&mut self, name: &str) {
         self.end();
-        self.open = Some((name.to_string(), Instant::now()));
+        self.open = Some((name.to_string(), Instant::now(), cpu_seconds()));
     }
 
     /// Ends the phase under way at `at`, the peak memory then `peak`, and begins `name` from
     /// `at`: a phase split after the fact, where a task under way said when its second part
     /// began ([`ReferenceMark`]).
     pub fn begin_at(&mut self, name: &str, at: Instant, peak: Option<u64>) {
-        if let Some((open, start)) = self.open.take() {
+        if let Some((open, start, _)) = self.open.take() {
             let seconds = at.saturating_duration_since(start).as_secs_f64();
-            self.done.push(Phase { name: open, seconds, peak_bytes: peak });
+            self.done.push(Phase { name: open, seconds, cpu_seconds: None, peak_bytes: peak });
         }
-        self.open = Some((name.to_string(), at));
+        self.open = Some((name.to_string(), at, None));
     }
 
     /// Ends the phase under way, if any.
     pub fn end(&mut self) {
-        if let Some((name, start)) = self.open.take() {
-            self.done.push(Phase { name, seconds: start.elapsed().as_secs_f64(), peak_bytes: peak_rss() });
+        if let Some((name, start, cpu)) = self.open.take() {
+            let seconds = start.elapsed().as_secs_f64();
+            let cpu_seconds = cpu.zip(cpu_seconds()).map(|(before, now)| now - before);
+            self.done.push(Phase { name, seconds, cpu_seconds, peak_bytes: peak_rss() });
         }
     }
 
@@ -71,14 +78,23 @@ impl Phases {
 
     /// The phases ended so far as a table: a line each, then their total.
     pub fn text(&self) -> String {
-        let mut out = format!("{:<38} {:>8} {:>12}\n", "phase", "seconds", "peak memory");
+        let mut out = format!("{:<38} {:>8} {:>8} {:>12}\n", "phase", "seconds", "cpu", "peak memory");
         let bytes = |b: Option<u64>| b.map_or("n/a".into(), human_bytes);
+        let cpu = |c: Option<f64>| c.map_or("n/a".into(), |c| format!("{c:.2}"));
         for p in &self.done {
-            let _ = writeln!(out, "{:<38} {:>8.3} {:>12}", p.name, p.seconds, bytes(p.peak_bytes));
+            let _ = writeln!(
+                out,
+                "{:<38} {:>8.3} {:>8} {:>12}",
+                p.name,
+                p.seconds,
+                cpu(p.cpu_seconds),
+                bytes(p.peak_bytes)
+            );
         }
         let total: f64 = self.done.iter().map(|p| p.seconds).sum();
-        let _ =
-            writeln!(out, "{:<38} {:>8.3} {:>12}", "total", total, bytes(self.done.last().and_then(|p| p.peak_bytes)));
+        let cpu_total = self.done.iter().map(|p| p.cpu_seconds).sum::<Option<f64>>();
+        let peak = bytes(self.done.last().and_then(|p| p.peak_bytes));
+        let _ = writeln!(out, "{:<38} {:>8.3} {:>8} {:>12}", "total", total, cpu(cpu_total), peak);
         out
     }
 }

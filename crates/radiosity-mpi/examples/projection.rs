@@ -1,21 +1,25 @@
-//! `cargo run -p radiosity-mpi --example projection -- ONE.json TWO.json RANKS.json
-//! [LARGER_TWO.json [LARGER_RANKS.json]] [cores=C]`: fits the model of
-//! `radiosity_mpi::projection` to the phase tables of three `solve --json` runs of one command
-//! at one size (one process on one thread, on two threads, and two ranks of one thread each
-//! under `mpirun -np 2`), its times rescaled to a larger run on two threads and its memory taken
-//! from that run and the same on two ranks, where they are given, and prints its projection, phase by phase, for 10 and 100
-//! million patches on 1, 8 and 64 nodes of 32 cores (or `cores=C`), over an InfiniBand-class
-//! network (2 µs, 12.5 GB/s) and 10 Gb Ethernet (20 µs, 1.25 GB/s).
+//! `cargo run -p radiosity-mpi --example projection -- FIT.json… [check CHECK.json…]
+//! [cores=C]`: fits the model of `radiosity_mpi::projection` to the `solve --out` runs of one
+//! command given first, checks it against the runs given after `check`, which the fit does not
+//! see, and prints its projection, phase by phase, for 10 and 100 million patches on 1, 8 and
+//! 64 nodes of 32 cores (or `cores=C`), over an InfiniBand-class network (2 µs, 12.5 GB/s) and
+//! 10 Gb Ethernet (20 µs, 1.25 GB/s).
 //!
-//! The solve's sums come from the runs: a hierarchical operator's products each sum `3n`
-//! values; a solver that samples transport, where the two ranks report their rays (stochastic
-//! Jacobi dividing every iteration's rays), makes the sums its two-rank run made, each of the
-//! bytes a patch it sent, whatever the nodes (its sparse sums, which grow with the nodes, taken
-//! as they were on two); in older runs, stochastic Jacobi's steps each sum its replicates'
-//! state, `R (3n + n)` values, with a replicate a node (at least the runs' `R`).
+//! Each run says its patches, threads and ranks (`solve`'s JSON since 0533c1b), and each phase
+//! its CPU seconds, which tell serial code from threads that contend (the module's doc). The fit needs,
+//! at its smallest size, runs of one process on one thread, of one process on two threads and
+//! of two ranks of one thread each under `mpirun -np 2`, repeated as often as wished (each
+//! kind's median is fitted), and may add runs on two threads at a larger size, which fit each
+//! phase's growth.
+//!
+//! The solve's sums come from the fit's two-rank runs: a hierarchical operator's products each
+//! sum `3n` values; a solver that samples transport, where the ranks report their rays
+//! (stochastic Jacobi dividing every iteration's rays), makes the sums its two-rank run made,
+//! each of the bytes a patch it sent, whatever the nodes; random walks' steps each sum their
+//! replicates' state, `R (3n + n)` values, with a replicate a node (at least the runs' `R`).
 //! docs/distributed.md gives the commands.
 
-use radiosity_mpi::projection::{Measured, Model, Network, PhaseRuns, Sums};
+use radiosity_mpi::projection::{Model, Network, Run, RunPhase, Sums};
 use serde_json::Value;
 
 fn main() {
@@ -31,18 +35,40 @@ fn read(path: &str) -> Result<Value, String> {
     serde_json::from_str(&text).map_err(|e| format!("{path} is not a solve's JSON: {e}"))
 }
 
-/// The phases of a run: names and seconds, and its peak resident bytes.
-fn phases(run: &Value, path: &str) -> Result<(Vec<(String, f64)>, f64), String> {
-    let list = run["phases"].as_array().ok_or(format!("{path} has no phase table: run solve with --json"))?;
-    let mut out = Vec::new();
+/// A run's size, configuration, phases and peak (its largest rank's).
+fn measured(json: &Value, path: &str) -> Result<Run, String> {
+    let list = json["phases"].as_array().ok_or(format!("{path} has no phase table: run solve with --out"))?;
+    let mut phases = Vec::new();
     let mut peak: f64 = 0.0;
     for phase in list {
         let name = phase["name"].as_str().ok_or(format!("{path}: a phase without a name"))?;
         let seconds = phase["seconds"].as_f64().ok_or(format!("{path}: phase '{name}' without seconds"))?;
         peak = peak.max(phase["peak_bytes"].as_f64().unwrap_or(0.0));
-        out.push((name.to_string(), seconds));
+        phases.push(RunPhase { name: name.to_string(), seconds, cpu: phase["cpu_seconds"].as_f64() });
     }
-    Ok((out, peak))
+    for rank in json["stats"]["ranks"].as_array().into_iter().flatten() {
+        peak = peak.max(rank["peak_rss"].as_f64().unwrap_or(0.0));
+    }
+    let number =
+        |key: &str| json[key].as_f64().ok_or(format!("{path} does not say its {key}: run solve at 0533c1b or later"));
+    let patches = json["patches"].as_array().ok_or(format!("{path} has no patches"))?.len() as f64;
+    Ok(Run { patches, threads: number("threads")?, ranks: number("ranks")?, phases, peak })
+}
+
+/// The solve's sums, from a two-rank run's JSON (module doc).
+fn sums(two_ranks: &Value, patches: f64) -> Sums {
+    let stats = &two_ranks["stats"];
+    let rank0 = &stats["ranks"][0];
+    let number = |v: &Value| v.as_f64().unwrap_or(0.0);
+    if two_ranks["solver"].as_str().is_some_and(|s| s.starts_with("random-walk")) {
+        let least = stats["replicates"].as_f64().unwrap_or(4.0).max(1.0);
+        Sums::Replicates { count: number(&stats["steps"]), bytes: 8.0 * 4.0, least }
+    } else if number(&rank0["run_rays"]) > 0.0 && number(&rank0["run_sums"]) > 0.0 {
+        let count = number(&rank0["run_sums"]);
+        Sums::Fixed { count, bytes: number(&rank0["run_bytes_sent"]) / count / patches }
+    } else {
+        Sums::Fixed { count: number(&stats["products"]), bytes: 24.0 }
+    }
 }
 
 fn run() -> Result<(), String> {
@@ -52,77 +78,84 @@ fn run() -> Result<(), String> {
         None => 32.0,
     };
     let files: Vec<&String> = args.iter().filter(|a| !a.starts_with("cores=")).collect();
-    if !(3..=5).contains(&files.len()) {
-        return Err("give three runs' JSON (one thread, two threads, two ranks), then a larger run's on two threads and on two ranks".into());
+    let split = files.iter().position(|f| *f == "check").unwrap_or(files.len());
+    let (fit_files, check_files) = (&files[..split], files.get(split + 1..).unwrap_or_default());
+    if fit_files.is_empty() {
+        return Err(
+            "give the fit's runs (one thread, two threads, two ranks at one size), then `check` and the runs to check"
+                .into(),
+        );
     }
-    let runs: Vec<Value> = files.iter().map(|f| read(f)).collect::<Result<_, _>>()?;
-    // A run's patches: the length of its list of patches.
-    let count = |run: &Value| run["patches"].as_array().map(|p| p.len() as f64);
-    let patches = count(&runs[0]).ok_or("the first run has no patches")?;
-    for (run, file) in runs.iter().zip(&files).take(3) {
-        if count(run) != Some(patches) || run["solver"] != runs[0]["solver"] {
-            return Err(format!("{file} is not a run of the first one's scene and solver"));
+    let read_all = |list: &[&String]| -> Result<Vec<(Value, Run)>, String> {
+        list.iter()
+            .map(|f| {
+                let json = read(f)?;
+                let run = measured(&json, f)?;
+                Ok((json, run))
+            })
+            .collect()
+    };
+    let (fit, check) = (read_all(fit_files)?, read_all(check_files)?);
+    let solver = fit[0].0["solver"].as_str().unwrap_or("?").to_string();
+    for ((json, _), file) in fit.iter().chain(&check).zip(fit_files.iter().chain(check_files)) {
+        if json["solver"].as_str() != Some(&solver) {
+            return Err(format!("{file} is not a run of {solver}, the first run's solver"));
         }
     }
-    let tables: Vec<(Vec<(String, f64)>, f64)> =
-        runs.iter().zip(&files).map(|(r, f)| phases(r, f)).collect::<Result<_, _>>()?;
-    let names: Vec<&String> = tables[0].0.iter().map(|(name, _)| name).collect();
-    let seconds_of = |table: &[(String, f64)], name: &str| table.iter().find(|(n, _)| n == name).map(|(_, s)| *s);
-    let mut fitted = Vec::new();
-    for name in &names {
-        let mut seconds = [0.0; 3];
-        for (k, (table, _)) in tables.iter().take(3).enumerate() {
-            seconds[k] = seconds_of(table, name).ok_or(format!("{} has no phase '{name}'", files[k]))?;
-        }
-        fitted.push(PhaseRuns { name: name.to_string(), seconds });
-    }
-    let larger = match tables.get(3) {
-        Some((table, _)) => {
-            let n = count(&runs[3]).ok_or("the larger run has no patches")?;
-            let seconds: Vec<f64> = names
-                .iter()
-                .map(|name| seconds_of(table, name).ok_or(format!("{} has no phase '{name}'", files[3])))
-                .collect::<Result<_, _>>()?;
-            Some((n, seconds))
-        }
-        None => None,
-    };
-    let stats = &runs[1]["stats"];
-    // The two ranks' own account of their sums, where the run reports each rank's rays (since
-    // stochastic Jacobi divides every iteration's rays, 66c51ee): how many, and the bytes a
-    // rank sent, which on two ranks are the values each sum carried.
-    let rank0 = &runs[2]["stats"]["ranks"][0];
-    let measured_sums = match (rank0["run_rays"].as_f64(), rank0["run_sums"].as_f64()) {
-        (Some(_), Some(count)) if count > 0.0 => {
-            Some(Sums::Fixed { count, bytes: rank0["run_bytes_sent"].as_f64().unwrap_or(0.0) / count / patches })
-        }
-        _ => None,
-    };
-    let sampled = stats["rays"].as_f64().unwrap_or(0.0) > 0.0;
-    let sums = if let Some(sums) = measured_sums.filter(|_| sampled) {
-        sums
-    } else if sampled {
-        let replicates = stats["replicates"].as_f64().unwrap_or(4.0).max(1.0);
-        Sums::Replicates { count: stats["steps"].as_f64().unwrap_or(0.0), bytes: 8.0 * 4.0, least: replicates }
-    } else {
-        Sums::Fixed { count: stats["products"].as_f64().unwrap_or(0.0), bytes: 24.0 }
-    };
-    let peaks = match (tables.get(3), tables.get(4)) {
-        (Some((_, two)), Some((_, ranks))) => ([*two, *ranks], count(&runs[3]).unwrap_or(patches)),
-        _ => ([tables[1].1, tables[2].1], patches),
-    };
-    let measured = Measured { patches, phases: fitted, peaks, sums, larger };
-    let model = Model::fit(&measured);
-    println!("{}, {} patches; sums: {sums:?}", runs[0]["solver"].as_str().unwrap_or("?"), patches);
-    println!("| phase | serial µs a patch | repeated core-µs a patch | divided core-µs a patch |");
-    println!("|---|--:|--:|--:|");
+    let runs: Vec<Run> = fit.iter().map(|(_, r)| r.clone()).collect();
+    let smallest = runs.iter().map(|r| r.patches).fold(f64::INFINITY, f64::min);
+    let two_ranks = fit
+        .iter()
+        .find(|(_, r)| r.ranks == 2.0 && r.patches == smallest)
+        .ok_or(format!("no run of two ranks at {smallest} patches among the fit's runs"))?;
+    let sums = sums(&two_ranks.0, smallest);
+    let model = Model::fit(&runs, sums).map_err(|e| e.to_string())?;
+    println!("{solver}, fitted on {} runs; sums: {sums:?}", runs.len());
+    println!("| phase | serial µs a patch | repeated core-µs a patch | divided core-µs a patch | growth exponent |");
+    println!("|---|--:|--:|--:|--:|");
     for p in &model.phases {
-        println!("| {} | {:.3} | {:.3} | {:.3} |", p.name, p.serial * 1e6, p.repeated * 1e6, p.divided * 1e6);
+        let us = |v: f64| v * 1e6;
+        println!(
+            "| {} | {:.3} | {:.3} | {:.3} | {:.3} |",
+            p.name,
+            us(p.serial),
+            us(p.repeated),
+            us(p.divided),
+            p.growth
+        );
     }
     println!(
-        "memory: {:.0} bytes a patch on every rank, {:.0} divided between them, {:.0} more a rank for the sums on 2 nodes",
-        model.memory_repeated, model.memory_divided, model.memory_sums
+        "memory: {:.0} MB a process, {:.0} bytes a patch on every rank, {:.0} divided between them, {:.0} more a rank \
+         for the sums on 2 nodes",
+        model.memory_fixed / 1e6,
+        model.memory_repeated,
+        model.memory_divided,
+        model.memory_sums
     );
+    if !check.is_empty() {
+        println!("\nchecks (runs the fit did not see)");
+        println!(
+            "| patches | threads | ranks | measured | modelled | error | largest phase: measured, modelled | peak | modelled | error |"
+        );
+        println!("|--:|--:|--:|--:|--:|--:|---|--:|--:|--:|");
+        for (_, run) in &check {
+            let c = model.check(run);
+            let largest = c.phases.iter().max_by(|a, b| a.1.total_cmp(&b.1));
+            let largest = largest.map_or(String::new(), |(n, m, p)| format!("{n}: {m:.1} s, {p:.1} s"));
+            println!(
+                "| {} | {} | {} | {:.1} s | {:.1} s | {:+.1}% | {largest} | {:.2} GB | {:.2} GB | {:+.1}% |",
+                run.patches,
+                run.threads,
+                run.ranks,
+                c.total.0,
+                c.total.1,
+                100.0 * c.error(),
+                c.peak.0 / 1e9,
+                c.peak.1 / 1e9,
+                100.0 * c.memory_error()
+            );
+        }
+    }
     let networks = [
         ("InfiniBand", Network { latency: 2e-6, bandwidth: 12.5e9 }),
         ("10 GbE", Network { latency: 2e-5, bandwidth: 1.25e9 }),

@@ -75,8 +75,8 @@ pub use builtins::MatrixParams;
 pub use error::FfError;
 pub use hemicube::{HemicubeColumns, HemicubeParams};
 pub use hierarchical::{
-    BuildProgress, Distribution, HierarchicalColumns, HierarchicalParams, HierarchyFigures, HierarchyLink, Oracle,
-    RankFigures, TASKS_PER_RANK,
+    BuildProgress, BuildStages, Distribution, HeldBytes, HierarchicalColumns, HierarchicalParams, HierarchyFigures,
+    HierarchyLink, Oracle, RankFigures, TASKS_PER_RANK,
 };
 pub use matrix::StoredMatrix;
 pub use montecarlo::{MonteCarloColumns, MonteCarloParams, RayTally};

@@ -1,9 +1,10 @@
 //! Tests of the hierarchical operator split over ranks (threads standing in for MPI ranks):
 //! the ranks' links are disjoint and together the single process's, and products, columns and
-//! rows are the single process's to 1e-12, the same bits on every rank and on every run.
+//! rows are the single process's to 1e-12, the same bits on every rank and on every run; each
+//! rank traces only its links' rays and holds only their bytes, which fall as the ranks grow.
 
 use radiosity_core::{Collective, ColumnSource, InProcessRanks, Real};
-use radiosity_ff::{HierarchicalColumns, HierarchicalParams, HierarchyLink};
+use radiosity_ff::{HierarchicalColumns, HierarchicalParams, HierarchyLink, RankFigures};
 use radiosity_geom::PreparedScene;
 use std::collections::HashSet;
 use std::sync::Arc;
@@ -16,7 +17,10 @@ struct RankResult {
     column: Vec<Real>,
     row: Vec<Real>,
     figures: radiosity_ff::HierarchyFigures,
-    far_links_of_ranks: Vec<u64>,
+    /// Every rank's figures (none in one process).
+    ranks: Vec<RankFigures>,
+    /// The bytes of this rank's links.
+    link_bytes: usize,
 }
 
 /// A vector of `3n` values, varied enough that no product is special.
@@ -69,10 +73,8 @@ fn run(f: &HierarchicalColumns) -> RankResult {
         column: line(f, n / 3, false),
         row: line(f, 2 * n / 3, true),
         figures: f.figures(),
-        far_links_of_ranks: f
-            .distribution()
-            .map(|d| d.ranks().iter().map(|r| r.far_links).collect())
-            .unwrap_or_default(),
+        ranks: f.distribution().map(|d| d.ranks().to_vec()).unwrap_or_default(),
+        link_bytes: f.link_bytes(),
     }
 }
 
@@ -85,6 +87,8 @@ fn check(arg: &str, params: HierarchicalParams) {
     let p = PreparedScene::load(arg).unwrap();
     let one = single(&p, params);
     assert!(one.links.len() > 100, "{arg}: too few links ({}) to split", one.links.len());
+    // The largest rank's link bytes on one, two and three ranks.
+    let mut largest_share = vec![one.link_bytes as u64];
     for ranks in [2, 3] {
         let parts = split(&p, params, ranks);
         // Disjoint, and together the single process's links.
@@ -109,9 +113,24 @@ fn check(arg: &str, params: HierarchicalParams) {
             assert_eq!(part.figures.far_links, one.figures.far_links, "{arg}, {ranks} ranks");
             assert_eq!(part.figures.near_links, one.figures.near_links, "{arg}, {ranks} ranks");
             assert_eq!(part.figures.rays, one.figures.rays, "{arg}, {ranks} ranks: rays counted twice or lost");
-            assert_eq!(part.far_links_of_ranks.len(), ranks);
-            assert_eq!(part.far_links_of_ranks.iter().sum::<u64>(), one.figures.far_links as u64);
+            assert_eq!(part.ranks, parts[0].ranks, "{arg}, {ranks} ranks: rank {r} sees other figures");
         }
+        // What each rank did: its share of the links and the rays, fewer than the whole and
+        // together the whole, and of the links' bytes (coded by their gaps, so a rank's few
+        // links cost a little more each); the top of the refinement is a stage of its own.
+        let each = &parts[0].ranks;
+        assert_eq!(each.len(), ranks);
+        let sum = |f: fn(&RankFigures) -> u64| each.iter().map(f).sum::<u64>();
+        assert_eq!(sum(|r| r.far_links), one.figures.far_links as u64, "{arg}, {ranks} ranks");
+        assert_eq!(sum(|r| r.rays), one.figures.rays, "{arg}, {ranks} ranks: the ranks' rays are not the whole");
+        assert_eq!(sum(|r| r.near_links), one.figures.near_links as u64, "{arg}, {ranks} ranks");
+        for (r, (rank, part)) in each.iter().zip(&parts).enumerate() {
+            assert_eq!(rank.link_bytes, part.link_bytes as u64, "{arg}, {ranks} ranks: rank {r}'s own bytes");
+            assert!(rank.rays < one.figures.rays, "{arg}, {ranks} ranks: rank {r} traced every ray");
+            assert!(rank.link_bytes < one.link_bytes as u64, "{arg}, {ranks} ranks: rank {r} holds every link");
+            assert!(rank.stages.frontier > 0.0 && rank.stages.refinement > 0.0, "{arg}: {:?}", rank.stages);
+        }
+        largest_share.push(each.iter().map(|r| r.link_bytes).max().unwrap_or(0));
         // The single process's to the order of summation (and the closure weights' rounding).
         for (what, a, b) in [
             ("product", &parts[0].product, &one.product),
@@ -125,6 +144,7 @@ fn check(arg: &str, params: HierarchicalParams) {
         let again = split(&p, params, ranks);
         assert_eq!(again[0].product, parts[0].product, "{arg}, {ranks} ranks: two runs differ");
     }
+    assert!(largest_share.windows(2).all(|w| w[1] < w[0]), "{arg}: the largest rank's link bytes {largest_share:?}");
 }
 
 #[test]

@@ -52,7 +52,10 @@ fn measured(json: &Value, path: &str) -> Result<Run, String> {
     let number =
         |key: &str| json[key].as_f64().ok_or(format!("{path} does not say its {key}: run solve at 0533c1b or later"));
     let patches = json["patches"].as_array().ok_or(format!("{path} has no patches"))?.len() as f64;
-    Ok(Run { patches, threads: number("threads")?, ranks: number("ranks")?, phases, peak })
+    let ranks = number("ranks")?;
+    // What ranks divide, as the program counts it: the hierarchical operator's links.
+    let divided_bytes = json["stats"]["operator"]["link_bytes"].as_f64().filter(|_| ranks == 1.0);
+    Ok(Run { patches, threads: number("threads")?, ranks, phases, peak, divided_bytes })
 }
 
 /// The solve's sums, from a two-rank run's JSON (module doc).
@@ -125,12 +128,12 @@ fn run() -> Result<(), String> {
         );
     }
     println!(
-        "memory: {:.0} MB a process, {:.0} bytes a patch on every rank, {:.0} divided between them, {:.0} more a rank \
-         for the sums on 2 nodes",
+        "memory: {:.0} MB a process, {:.0} bytes a patch on every rank, {:.0} divided between them, {:.0} MB more a \
+         rank on 2 nodes",
         model.memory_fixed / 1e6,
         model.memory_repeated,
         model.memory_divided,
-        model.memory_sums
+        model.memory_sums / 1e6
     );
     if !check.is_empty() {
         println!("\nchecks (runs the fit did not see)");
@@ -189,5 +192,29 @@ fn run() -> Result<(), String> {
             }
         }
     }
+    // The same runs fitted by their wall seconds alone: threads that contend then count as
+    // serial code. The two fits bracket what two cores can tell of the serial part.
+    let walls: Vec<Run> = runs
+        .iter()
+        .map(|r| Run { phases: r.phases.iter().map(|p| RunPhase { cpu: None, ..p.clone() }).collect(), ..r.clone() })
+        .collect();
+    let wall = Model::fit(&walls, sums).map_err(|e| e.to_string())?;
+    let serial = |m: &Model| m.phases.iter().map(|p| p.serial).sum::<f64>() * 1e6;
+    let (ib, network) = &networks[0];
+    let efficiency = |m: &Model, nodes: f64| 100.0 * m.project(1e7, nodes, cores, network).efficiency;
+    let overhead = model.excess_as_overhead();
+    println!(
+        "\non {ib}, 1e7 patches, efficiency on 8 and 64 nodes: {:.0}% and {:.0}% as fitted (serial {:.2} µs a patch); \
+         {:.0}% and {:.0}% with the ranks' excess an overhead on divided work; {:.0}% and {:.0}% fitted by wall seconds \
+         alone (serial {:.2} µs a patch)",
+        efficiency(&model, 8.0),
+        efficiency(&model, 64.0),
+        serial(&model),
+        efficiency(&overhead, 8.0),
+        efficiency(&overhead, 64.0),
+        efficiency(&wall, 8.0),
+        efficiency(&wall, 64.0),
+        serial(&wall),
+    );
     Ok(())
 }

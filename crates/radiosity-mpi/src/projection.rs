@@ -59,6 +59,9 @@ pub struct Run {
     pub phases: Vec<RunPhase>,
     /// The peak resident bytes of its largest process.
     pub peak: f64,
+    /// The bytes of what ranks divide, as the program counts them (a hierarchical operator's
+    /// links), where it does; the whole process's in a run of one.
+    pub divided_bytes: Option<f64>,
 }
 
 /// One phase of a run.
@@ -173,6 +176,9 @@ pub struct PhaseModel {
     /// The parallel parts' work on one thread over their work on two or more (below 1 where
     /// threads contend for memory; 1 where the runs gave no CPU seconds).
     pub alone: f64,
+    /// What the divided part costs on more than one rank over its cost on one node: 1, but in
+    /// [`Model::excess_as_overhead`].
+    pub overhead: f64,
     /// The exponent `g`: a patch costs `(n / at)^g` times as much at `n` patches.
     pub growth: f64,
     /// The patches the parts were fitted at, `n₀`.
@@ -224,6 +230,7 @@ impl PhaseModel {
             repeated: parts[1],
             divided: parts[2],
             alone: 1.0,
+            overhead: 1.0,
             growth: 0.0,
             at: n,
         }
@@ -248,6 +255,7 @@ impl PhaseModel {
             repeated: (work - divided) / n,
             divided: divided / n,
             alone,
+            overhead: 1.0,
             growth: 0.0,
             at: n,
         }
@@ -262,7 +270,8 @@ impl PhaseModel {
     /// done at its pace alone on one, at its pace beside another on more.
     fn seconds_busy(&self, n: f64, nodes: f64, cores: f64, busy: f64) -> f64 {
         let work = if busy > 1.0 { 1.0 } else { self.alone };
-        let per_patch = self.serial + work * (self.repeated / cores + self.divided / (nodes * cores));
+        let overhead = if nodes > 1.0 { self.overhead } else { 1.0 };
+        let per_patch = self.serial + work * (self.repeated / cores + overhead * self.divided / (nodes * cores));
         n * (n / self.at).powf(self.growth) * per_patch
     }
 
@@ -316,8 +325,9 @@ pub struct Model {
     pub memory_repeated: f64,
     /// Bytes per patch divided between the ranks.
     pub memory_divided: f64,
-    /// Bytes per patch a rank holds beyond one process for the solve's sums (where a rank of
-    /// two peaked above one process), at two nodes; it grows with a sum's volume.
+    /// Bytes a rank holds beyond one process (where a rank of two peaked above one process:
+    /// MPI's buffers and the sums'), at two nodes: fixed for [`Sums::Fixed`], whose sums go in
+    /// chunks of a fixed size; growing with the replicates for [`Sums::Replicates`].
     pub memory_sums: f64,
     /// The solve's collective sums.
     pub sums: Sums,
@@ -437,15 +447,42 @@ impl Model {
             }
             None => (0.0, one / n),
         };
-        let memory_divided = (2.0 * (one - rank) / n).clamp(0.0, per_patch.max(0.0));
+        // What ranks divide: the program's own count at the largest size on two threads where
+        // it gives one, else what a rank of two holds less than one process.
+        let largest = larger.unwrap_or(n);
+        let counted = of(largest, (2.0, 1.0)).map(|r| r.divided_bytes).collect::<Option<Vec<f64>>>();
+        let memory_divided = match counted {
+            Some(bytes) => median(&bytes) / largest,
+            None => 2.0 * (one - rank) / n,
+        }
+        .clamp(0.0, per_patch.max(0.0));
         Ok(Model {
             phases,
             memory_fixed,
             memory_repeated: (per_patch - memory_divided).max(0.0),
             memory_divided,
-            memory_sums: ((rank - one) / n).max(0.0),
+            memory_sums: (rank - one).max(0.0),
             sums,
         })
+    }
+
+    /// The same fit read the other way: what two ranks cost beyond one process, which the fit
+    /// calls repeated, taken instead as an overhead on the divided work of every rank count
+    /// above one (its imbalance between the ranks, and two processes contending on one
+    /// machine, which nodes of their own would not), `κ = (2r + d) / (r + d)`. Both readings fit
+    /// the same runs; they part at more nodes, where the repeated part stays and an overhead
+    /// divides.
+    pub fn excess_as_overhead(&self) -> Model {
+        let phases = self
+            .phases
+            .iter()
+            .map(|p| {
+                let work = p.repeated + p.divided;
+                let overhead = if work > 0.0 { (2.0 * p.repeated + p.divided) / work } else { 1.0 };
+                PhaseModel { repeated: 0.0, divided: work, overhead, ..p.clone() }
+            })
+            .collect();
+        Model { phases, ..self.clone() }
     }
 
     /// `run` against the model: its phases on its ranks and threads, all on one machine.
@@ -489,13 +526,13 @@ impl Model {
             .chain([("sums", communication)])
             .max_by(|a, b| a.1.total_cmp(&b.1))
             .map_or_else(String::new, |(name, _)| name.to_string());
-        let sums = if nodes > 1.0 && self.memory_sums > 0.0 {
-            self.memory_sums * self.sums.on(nodes).1 / self.sums.on(2.0).1
-        } else {
-            0.0
+        let sums = match self.sums {
+            _ if nodes <= 1.0 || self.memory_sums <= 0.0 => 0.0,
+            Sums::Fixed { .. } => self.memory_sums,
+            Sums::Replicates { .. } => self.memory_sums * self.sums.on(nodes).1 / self.sums.on(2.0).1,
         };
         Projection {
-            memory_per_node: self.memory_fixed + patches * (self.memory_repeated + self.memory_divided / nodes + sums),
+            memory_per_node: self.memory_fixed + sums + patches * (self.memory_repeated + self.memory_divided / nodes),
             phases,
             communication,
             total,
@@ -516,6 +553,7 @@ mod tests {
             repeated,
             divided,
             alone: 1.0,
+            overhead: 1.0,
             growth: 0.0,
             at: 1e6,
         };
@@ -539,7 +577,7 @@ mod tests {
     fn made_by(truth: &Model, n: f64, threads: f64, ranks: f64) -> Run {
         let p = truth.project(n, ranks, threads, &Network::SHARED);
         let phases = p.phases.into_iter().map(|(name, seconds)| RunPhase { name, seconds, cpu: None }).collect();
-        Run { patches: n, threads, ranks, phases, peak: p.memory_per_node }
+        Run { patches: n, threads, ranks, phases, peak: p.memory_per_node, divided_bytes: None }
     }
 
     /// The three kinds of fitting run, made up from a known model.
@@ -549,7 +587,8 @@ mod tests {
 
     /// A run written by hand.
     fn by_hand(patches: f64, threads: f64, ranks: f64, seconds: f64, peak: f64) -> Run {
-        Run { patches, threads, ranks, phases: vec![RunPhase { name: "work".into(), seconds, cpu: None }], peak }
+        let phases = vec![RunPhase { name: "work".into(), seconds, cpu: None }];
+        Run { patches, threads, ranks, phases, peak, divided_bytes: None }
     }
 
     fn close(got: f64, want: f64, tolerance: f64) -> bool {
@@ -570,6 +609,14 @@ mod tests {
         }
         assert!(close(fitted.memory_repeated, truth.memory_repeated, 1e-9));
         assert!(close(fitted.memory_divided, truth.memory_divided, 1e-9));
+        // Read with the ranks' excess as an overhead on the divided work, the same runs are
+        // fitted as well, and more nodes divide what the other reading repeats.
+        let overhead = fitted.excess_as_overhead();
+        for run in fitting_runs(&truth, 1e6) {
+            assert!(close(overhead.check(&run).total.1, run.total(), 1e-9), "{run:?}");
+        }
+        let net = Network { latency: 2e-6, bandwidth: 12.5e9 };
+        assert!(overhead.project(1e7, 8.0, 32.0, &net).total < fitted.project(1e7, 8.0, 32.0, &net).total);
     }
 
     #[test]
@@ -662,9 +709,39 @@ mod tests {
         // walls fit 20 s of serial code, the contention taken for it.
         let net = Network { latency: 2e-6, bandwidth: 12.5e9 };
         assert!(close(model.project(1e5, 8.0, 32.0, &net).total, 10.390625, 1e-12));
+        // Read with the ranks' excess as an overhead, the same runs are fitted as well.
+        let overhead = model.excess_as_overhead();
+        for run in &runs {
+            assert!(close(overhead.check(run).total.1, run.total(), 1e-12), "{run:?}");
+        }
         let walls: Vec<Run> = runs.iter().map(|r| with_cpu(r.threads, r.ranks, r.total(), None)).collect();
         let wall_only = Model::fit(&walls, Sums::Fixed { count: 0.0, bytes: 0.0 }).unwrap();
         assert!(close(wall_only.phases[0].serial * 1e5, 20.0, 1e-12), "{:?}", wall_only.phases[0]);
+    }
+
+    #[test]
+    fn the_program_s_count_of_what_ranks_divide_splits_the_memory_where_it_is_given() {
+        let sums = Sums::Fixed { count: 0.0, bytes: 0.0 };
+        let mut runs = vec![
+            by_hand(1e5, 1.0, 1.0, 100.0, 3.3e8),
+            by_hand(1e5, 2.0, 1.0, 55.0, 3.3e8),
+            by_hand(1e5, 1.0, 2.0, 55.0, 3.0e8),
+            by_hand(1e6, 2.0, 1.0, 715.0, 3.03e9),
+        ];
+        // 2,000 bytes a patch of links at 1e6 patches, of the 3,000 a patch above 30 MB.
+        runs[3].divided_bytes = Some(2e9);
+        let m = Model::fit(&runs, sums).unwrap();
+        assert!(close(m.memory_divided, 2000.0, 1e-12) && close(m.memory_repeated, 1000.0, 1e-12), "{m:?}");
+        assert!(close(m.memory_fixed, 3e7, 1e-12) && m.memory_sums == 0.0, "{m:?}");
+        // Without it, what a rank of two holds less: 2 (3.3e8 − 3.0e8) / 1e5 bytes a patch.
+        runs[3].divided_bytes = None;
+        assert!(close(Model::fit(&runs, sums).unwrap().memory_divided, 600.0, 1e-12));
+        // A rank that holds more than one process holds it beside what it divides, in bytes.
+        runs[2].peak = 3.5e8;
+        let m = Model::fit(&runs, sums).unwrap();
+        assert!(close(m.memory_sums, 2e7, 1e-12) && m.memory_divided == 0.0, "{m:?}");
+        let net = Network { latency: 2e-6, bandwidth: 12.5e9 };
+        assert!(close(m.project(1e7, 8.0, 32.0, &net).memory_per_node, 3e7 + 2e7 + 1e7 * 3000.0, 1e-12));
     }
 
     #[test]
@@ -715,7 +792,7 @@ mod tests {
         assert!(sixty_four(&replicated) > 10.0 * sixty_four(&truth));
         // What a rank holds for those sums grows with them: 16 times the replicates at 64
         // nodes as at 2 (at least 4), none on one node.
-        let holding = Model { memory_sums: 100.0, ..replicated };
+        let holding = Model { memory_sums: 1e9, ..replicated };
         let extra = |nodes: f64| {
             holding.project(1e7, nodes, 32.0, &net).memory_per_node - {
                 let plain = Model { memory_sums: 0.0, ..holding.clone() };

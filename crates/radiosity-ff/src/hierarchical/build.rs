@@ -78,8 +78,8 @@ pub struct BuildStages {
     pub tree: f64,
     /// The near field's set-up (the analytic backend the near pairs call) and the oracle.
     pub near_field: f64,
-    /// Split over ranks, the top of the refinement expanded into the tasks dealt to the ranks
-    /// (0 in one process).
+    /// The top of the refinement expanded into its tasks: the ranks' tasks, or one process's,
+    /// which its threads share.
     pub frontier: f64,
     /// The refinement into links, the near pairs' entries and every shadow ray included.
     pub refinement: f64,
@@ -260,15 +260,16 @@ impl HierarchicalColumns {
             watch: Watch::new(scene.len(), observe),
         };
         stage(&mut stages.near_field);
-        // Split over ranks, each rank refines its share of the tasks; one rank refines all.
-        let (mut links, tasks, estimated) = match split.as_ref().filter(|(c, _)| c.ranks() > 1) {
-            None => (refiner.refine_all(), 1, 1.0),
-            Some((c, tasks_per_rank)) => {
-                let share = refiner.refine_share((c.rank(), c.ranks()), *tasks_per_rank, observe);
-                stages.frontier = share.frontier;
-                (share.links, share.tasks, share.estimated)
-            }
+        // Split over ranks, each rank refines its share of the tasks; one process refines all of
+        // a fixed number of tasks on its threads (the links do not depend on the tasks, their
+        // order does, so the number is not the threads').
+        let (ranks, tasks_per_rank) = match split.as_ref().filter(|(c, _)| c.ranks() > 1) {
+            None => ((0, 1), TASKS_ONE_PROCESS),
+            Some((c, tasks_per_rank)) => ((c.rank(), c.ranks()), *tasks_per_rank),
         };
+        let share = refiner.refine_share(ranks, tasks_per_rank, observe);
+        stages.frontier = share.frontier;
+        let (mut links, tasks, estimated) = (share.links, share.tasks, share.estimated);
         stage(&mut stages.refinement);
         stages.refinement -= stages.frontier;
         let assemble = |tree: ClusterTree, links: Links| {
@@ -472,6 +473,12 @@ fn parents(tree: &HeldTree) -> Vec<u32> {
     }
     parent
 }
+
+/// The tasks one process cuts its refinement into: enough for its threads to share them evenly
+/// (the recursion of the root's link alone, split two ways at each node, left one of two
+/// threads idle for 27% of the refinement at 956,319 patches, docs/distributed.md), the same
+/// number whatever the threads, so that the links come in one order.
+const TASKS_ONE_PROCESS: usize = 64;
 
 /// The Jacobi sweeps of the radiosity a later refinement pass is weighed by: light bounced
 /// this many times, enough for an oracle that only needs each patch's brightness to a factor.

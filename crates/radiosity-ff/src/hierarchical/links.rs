@@ -323,6 +323,7 @@ const PARALLEL_COUNT: u32 = 256;
 impl Refiner<'_> {
     /// Every link, refined from the root's link with itself. The order of the links is fixed
     /// by the tree, not by the threads.
+    #[cfg(test)]
     pub fn refine_all(&self) -> Links {
         let mut links = Links::default();
         self.refine_self(0, &mut links);
@@ -834,6 +835,26 @@ mod tests {
             watch: Watch::new(scene.len(), &|_| {}),
         };
         let links = refiner.refine_all();
+        // Cut into tasks at the top, as a process and its ranks refine, the same links.
+        let tasks = refiner.refine_share((0, 1), 16, &|_| {}).links;
+        let far = |l: &Links| {
+            let mut f: Vec<_> = l.far.iter().map(|f| (f.a, f.b, f.clear, f.count)).collect();
+            f.sort_unstable();
+            f
+        };
+        let near = |l: &Gathered<NearLink>| {
+            let mut n: Vec<_> = l.iter().map(|n| (n.i, n.j, n.transfer.to_bits())).collect();
+            n.sort_unstable();
+            n
+        };
+        assert_eq!(far(&tasks), far(&links), "{arg}: far links");
+        assert_eq!(near(&tasks.near), near(&links.near), "{arg}: near links");
+        assert_eq!(near(&tasks.pairs), near(&links.pairs), "{arg}: far pairs");
+        assert_eq!(
+            (tasks.rays, tasks.near_rays, tasks.occluded),
+            (links.rays, links.near_rays, links.occluded),
+            "{arg}"
+        );
         check(&refiner, &links);
     }
 

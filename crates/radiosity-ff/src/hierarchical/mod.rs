@@ -68,7 +68,7 @@ mod tree;
 
 use adjacency::{Adjacency, FarLists};
 pub use brightness::Oracle;
-pub use build::{HierarchyFigures, HierarchyLink};
+pub use build::{BuildStages, HeldBytes, HierarchyFigures, HierarchyLink};
 pub use distribution::{Distribution, RankFigures};
 pub use links::BuildProgress;
 pub use params::{HIERARCHICAL_PARAMS, HierarchicalParams};

@@ -1,5 +1,6 @@
-//! The refinement split between ranks: tasks cut from the top of the refinement, dealt to the
-//! ranks by their estimated cost, each refined by the one rank it is dealt to.
+//! The refinement cut into tasks from its top: dealt to the ranks by their estimated cost, each
+//! refined by the one rank it is dealt to, and within a rank (or one process, rank 0 of 1)
+//! shared by its threads.
 //!
 //! The refinement is a tree of tasks: the links within a node (its children's, and those
 //! between its two children) and the links between two nodes (settled, or split into two such
@@ -100,16 +101,21 @@ impl Refiner<'_> {
         let own_pairs: u64 = mine.iter().map(|t| t.pairs(self.tree)).sum();
         let count = mine.len();
         let watched = self.watched(Watch::over(own_pairs, observe));
+        // Each thread refines task after task into links of its own (the lists built from
+        // them are sorted, so which thread gathered a link changes nothing), then they are
+        // joined: a few joins, not one a task.
         let mut links = mine
             .into_par_iter()
-            .map(|task| {
-                let mut out = Links::default();
+            .fold(Links::default, |mut out, task| {
                 match task {
                     Task::Within(k) => watched.refine_self(k, &mut out),
                     Task::Between { a, b, traced, candidates } => {
                         watched.refine_pair(a, b, traced, &candidates, &mut out)
                     }
                 }
+                // A task settles fewer pairs than a thousandth of the rank's: reported as it ends,
+                // or the rank's progress would stay at nothing until its last task.
+                watched.watch.flush(&mut out);
                 out
             })
             .reduce(Links::default, |mut x, y| {

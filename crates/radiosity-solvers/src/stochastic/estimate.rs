@@ -46,7 +46,7 @@
 use crate::run::problem::Rays;
 use crate::stochastic::exact_sum::ExactSum;
 use crate::stochastic::ranks::Share;
-use crate::stochastic::sequence::Sequence;
+use crate::stochastic::sequence::{PointStream, Sequence};
 use radiosity_core::{LineTransfers, Real};
 use rayon::prelude::*;
 
@@ -68,6 +68,9 @@ type LineBlock = (Vec<(usize, usize, Real)>, u64);
 /// entries of the output ([`cast_per_patch`]).
 type Land<'a> = &'a (dyn Fn(usize, &[Option<usize>], &mut [Real]) + Sync);
 
+/// A patch whose rays are cast in parts: the patch, its stream, its rays.
+type Many = (usize, PointStream, usize);
+
 /// Lines per parallel block at most (each block's lines from a stream of its own).
 const LINE_BLOCK: usize = 1024;
 
@@ -86,13 +89,13 @@ pub(crate) struct Streams<'c> {
 
 impl Streams<'_> {
     /// Patch `patch`'s stream from its point `drawn` on.
-    fn of(&self, patch: usize, drawn: u64) -> crate::stochastic::sequence::PointStream {
+    fn of(&self, patch: usize, drawn: u64) -> PointStream {
         let stream = self.sequence.stream(self.seed, [self.replicate, 0, patch as u64]);
         stream.from_index(drawn).rekeyed(self.iteration)
     }
 
     /// Global lines' stream for block `block` of this iteration.
-    fn lines(&self, block: u64) -> crate::stochastic::sequence::PointStream {
+    fn lines(&self, block: u64) -> PointStream {
         self.sequence.stream(self.seed, [self.replicate, 1 + self.iteration, u64::MAX - block])
     }
 }
@@ -106,10 +109,19 @@ pub(crate) struct Cast {
     pub here: u64,
 }
 
+/// A patch's rays cast as one task at most where its landings may be taken in parts
+/// (shooting): the many rays of a light, which the first iterations of the incremental series
+/// give to a few patches, are shared by the threads instead of cast by the one that holds its
+/// block.
+const RAYS_A_TASK: usize = 2048;
+
 /// The rays from each patch of this rank's blocks, cast in parallel blocks: `count(j,
 /// stream)` says how many rays patch `j` casts (drawing any rounding from its stream), and
 /// `land(j, landings, out_j)` takes each patch's landings in ray order, with `out_j`, patch
-/// `j`'s `k` entries of `out`, on whatever thread cast them. Returns this rank's rays.
+/// `j`'s `k` entries of `out`, on whatever thread cast them. With `in_parts`, `land` adds up
+/// what each ray brings and never writes `out_j`: a patch's rays beyond [`RAYS_A_TASK`] are
+/// then cast in tasks of their own, each from its place in the patch's stream, and landed in
+/// parts (an empty `out_j`). Returns this rank's rays.
 fn cast_per_patch(
     rays: &Rays<'_>,
     share: &Share<'_>,
@@ -117,18 +129,33 @@ fn cast_per_patch(
     (out, k): (&mut [Real], usize),
     count: &(dyn Fn(usize, &mut dyn FnMut() -> Real) -> usize + Sync),
     land: Land<'_>,
+    in_parts: bool,
 ) -> u64 {
     let keys = Streams { drawn: &mut [], ..*streams };
     let keys = &keys;
     let block = block_of(streams.drawn.len());
-    streams
+    let cast_one = |j: usize,
+                    mut stream: PointStream,
+                    m: usize,
+                    points: &mut Vec<[Real; 4]>,
+                    landings: &mut Vec<Option<usize>>,
+                    out: &mut [Real]| {
+        points.clear();
+        points.extend((0..m).map(|_| stream.next_point()));
+        landings.clear();
+        landings.resize(m, None);
+        rays.cast_batch(j, points, landings);
+        land(j, landings, out);
+    };
+    // Each block's patches with few rays cast at once; the patches with many, to be cast in parts.
+    let blocks: Vec<(u64, Vec<Many>)> = streams
         .drawn
         .par_chunks_mut(block)
         .zip(out.par_chunks_mut(block * k))
         .enumerate()
         .filter(|(b, _)| share.mine(*b))
         .map(|(b, (drawn, out))| {
-            let (mut points, mut landings, mut cast) = (Vec::new(), Vec::new(), 0);
+            let (mut points, mut landings, mut cast, mut many) = (Vec::new(), Vec::new(), 0, Vec::new());
             for (at, (drawn, out)) in drawn.iter_mut().zip(out.chunks_mut(k)).enumerate() {
                 let j = b * block + at;
                 // A patch's stream is keyed only when it is drawn from: most patches cast
@@ -138,20 +165,34 @@ fn cast_per_patch(
                 if m == 0 {
                     continue;
                 }
-                let stream = stream.get_or_insert_with(|| keys.of(j, *drawn));
-                points.clear();
-                points.extend((0..m).map(|_| stream.next_point()));
-                landings.clear();
-                landings.resize(m, None);
-                rays.cast_batch(j, &points, &mut landings);
-                land(j, &landings, out);
+                let stream = stream.unwrap_or_else(|| keys.of(j, *drawn));
+                if in_parts && m > RAYS_A_TASK {
+                    many.push((j, stream, m));
+                } else {
+                    cast_one(j, stream, m, &mut points, &mut landings, out);
+                }
                 // The next iteration's rays go on from the next point.
                 *drawn += m as u64;
                 cast += m as u64;
             }
-            cast
+            (cast, many)
         })
-        .sum()
+        .collect();
+    let parts: Vec<(usize, &PointStream, usize, usize)> = blocks
+        .iter()
+        .flat_map(|(_, many)| many)
+        .flat_map(|(j, stream, m)| {
+            (0..m.div_ceil(RAYS_A_TASK))
+                .map(move |p| (*j, stream, p * RAYS_A_TASK, (m - p * RAYS_A_TASK).min(RAYS_A_TASK)))
+        })
+        .collect();
+    parts.par_iter().for_each_init(
+        || (Vec::new(), Vec::new()),
+        |(points, landings), &(j, stream, first, m)| {
+            cast_one(j, stream.clone().skipped(first as u64), m, points, landings, &mut []);
+        },
+    );
+    blocks.iter().map(|(cast, _)| cast).sum()
 }
 
 /// `cast` with the world's rays from this rank's `here` (one sum over the ranks with `more`,
@@ -225,13 +266,15 @@ pub(crate) fn shoot(
     // holds none between its steps.
     let most = (0..n).into_par_iter().map(|j| scale[j] * norm(j)).reduce(|| 0.0, Real::max);
     let sums = ExactSum::new(n * k, most * (n_rays + n as u64) as Real);
-    let here = cast_per_patch(rays, share, streams, (incoming, k), &count, &|j, landings, _| {
+    // What each ray brings is added on its own, so a patch's rays may be cast in parts.
+    let land = |j: usize, landings: &[Option<usize>], _: &mut [Real]| {
         for &i in landings.iter().flatten() {
             for c in 0..k {
                 sums.add(i * k + c, x[j * k + c] * scale[j]);
             }
         }
-    });
+    };
+    let here = cast_per_patch(rays, share, streams, (incoming, k), &count, &land, true);
     deposited(sums, share, here, incoming)
 }
 
@@ -263,16 +306,24 @@ pub(crate) fn gather(
     };
     // A patch gathers its own rays alone, in their order: its sum is the same on any thread,
     // and over the ranks only its own rank's is not zero.
-    let here = cast_per_patch(rays, share, streams, (gathered, k), &count, &|i, landings, out| {
-        let weight = rays.ray_weight(i);
-        let row = beta.map_or(0.0, |_| rays.row_sum(i).unwrap_or(0.0));
-        for (c, out) in out.iter_mut().enumerate() {
-            let shift = beta.map_or(0.0, |beta| beta[c]);
-            // A ray that escapes gathers nothing, also against the control variate.
-            let sum: Real = landings.iter().flatten().map(|&j| b[j * k + c] - shift).sum();
-            *out = shift * row + weight * sum / landings.len() as Real;
-        }
-    });
+    let here = cast_per_patch(
+        rays,
+        share,
+        streams,
+        (gathered, k),
+        &count,
+        &|i, landings, out| {
+            let weight = rays.ray_weight(i);
+            let row = beta.map_or(0.0, |_| rays.row_sum(i).unwrap_or(0.0));
+            for (c, out) in out.iter_mut().enumerate() {
+                let shift = beta.map_or(0.0, |beta| beta[c]);
+                // A ray that escapes gathers nothing, also against the control variate.
+                let sum: Real = landings.iter().flatten().map(|&j| b[j * k + c] - shift).sum();
+                *out = shift * row + weight * sum / landings.len() as Real;
+            }
+        },
+        false,
+    );
     world(share, here, gathered)
 }
 

@@ -112,6 +112,17 @@ impl PointStream {
         self
     }
 
+    /// The stream `count` points further on: the points it would give after drawing `count`
+    /// more, without drawing them (a patch's rays cast in parts, each part from its own place).
+    pub fn skipped(mut self, count: u64) -> PointStream {
+        match self.scramble {
+            // A random point takes a number of each coordinate.
+            Scramble::None => self.random.0 = self.random.0.wrapping_add(GAMMA.wrapping_mul(4 * count)),
+            _ => self.index += count,
+        }
+        self
+    }
+
     /// The stream with its pseudo-random part ([`PointStream::uniform`], and the points of
     /// `random`) keyed by `key` too, its quasi-random points unchanged.
     pub fn rekeyed(mut self, key: u64) -> PointStream {
@@ -154,9 +165,12 @@ pub(crate) fn mix(mut z: u64) -> u64 {
 #[derive(Clone, Debug)]
 struct SplitMix(u64);
 
+/// SplitMix64's step: its state advances by this at each number.
+const GAMMA: u64 = 0x9e37_79b9_7f4a_7c15;
+
 impl SplitMix {
     fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        self.0 = self.0.wrapping_add(GAMMA);
         mix(self.0)
     }
 
@@ -221,6 +235,13 @@ mod tests {
             assert_eq!(a, b);
             assert_ne!(a, c);
             assert!(a.iter().flatten().all(|&x| (0.0..1.0).contains(&x)));
+            // Skipping points gives the points drawing them would have left next.
+            let mut drawn = sequence.stream(1, [2, 3, 4]);
+            drawn.uniform();
+            let mut skipped = drawn.clone().skipped(2);
+            drawn.next_point();
+            drawn.next_point();
+            assert_eq!(skipped.next_point(), drawn.next_point(), "{sequence:?}");
         }
     }
 }

@@ -58,9 +58,8 @@ fn every_form_is_unbiased_on_a_stored_system() {
     }
 }
 
-#[test]
-fn a_closed_furnace_at_rho_099_gives_e_over_one_minus_rho() {
-    // Howell's cube, every face emitting 1, ρ = 0.99: B = 1 / (1 − ρ) = 100 on every face.
+/// Howell's closed cube, every face emitting 1 and reflecting `rho`: `B = 1 / (1 − ρ)`.
+fn furnace(rho: Real) -> (LinearSystem, DenseColumns) {
     let (opposite, adjacent) = cube_form_factors();
     let f = DenseColumns::from_fn(6, |i, j| {
         if i == j {
@@ -71,7 +70,13 @@ fn a_closed_furnace_at_rho_099_gives_e_over_one_minus_rho() {
             adjacent
         }
     });
-    let system = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.99; 6], vec![1.0; 6]).unwrap();
+    (LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![rho; 6], vec![1.0; 6]).unwrap(), f)
+}
+
+#[test]
+fn a_closed_furnace_at_rho_099_gives_e_over_one_minus_rho() {
+    // Howell's cube, every face emitting 1, ρ = 0.99: B = 1 / (1 − ρ) = 100 on every face.
+    let (system, f) = furnace(0.99);
     assert_unbiased("stochastic-jacobi:batch=600", &system, &f, "steps=1200", 40, &[100.0; 6]);
 }
 
@@ -139,17 +144,7 @@ fn the_same_seed_gives_the_same_numbers_whatever_the_thread_count() {
 fn a_patch_s_many_rays_cast_in_parts_land_once_each_and_give_the_same_numbers_on_any_threads() {
     // Howell's cube, ρ = 0.5, every face emitting 1: B = 2 on every face. 20,000 rays a step
     // and replicate, over 6 faces, so that every face casts its rays in parts of 2,048.
-    let (opposite, adjacent) = cube_form_factors();
-    let f = DenseColumns::from_fn(6, |i, j| {
-        if i == j {
-            0.0
-        } else if j == i ^ 1 {
-            opposite
-        } else {
-            adjacent
-        }
-    });
-    let system = LinearSystem::new(Channels::Grey, vec![1.0; 6], vec![0.5; 6], vec![1.0; 6]).unwrap();
+    let (system, f) = furnace(0.5);
     let name = "stochastic-jacobi:batch=80000:seq=sobol";
     let run_on = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();

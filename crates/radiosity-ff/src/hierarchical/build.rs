@@ -261,8 +261,8 @@ impl HierarchicalColumns {
         };
         stage(&mut stages.near_field);
         // Split over ranks, each rank refines its share of the tasks; one process refines all of
-        // a fixed number of tasks on its threads (the links do not depend on the tasks, their
-        // order does, so the number is not the threads').
+        // its tasks on its threads. The links and their rays do not depend on the tasks, nor
+        // does the operator (its lists are sorted).
         let (ranks, tasks_per_rank) = match split.as_ref().filter(|(c, _)| c.ranks() > 1) {
             None => ((0, 1), TASKS_ONE_PROCESS),
             Some((c, tasks_per_rank)) => ((c.rank(), c.ranks()), *tasks_per_rank),
@@ -474,10 +474,11 @@ fn parents(tree: &HeldTree) -> Vec<u32> {
     parent
 }
 
-/// The tasks one process cuts its refinement into: enough for its threads to share them evenly
-/// (the recursion of the root's link alone, split two ways at each node, left one of two
-/// threads idle for 27% of the refinement at 956,319 patches, docs/distributed.md), the same
-/// number whatever the threads, so that the links come in one order.
+/// The tasks one process cuts its refinement into, as many as two ranks': its threads take them
+/// one after another, and a task's own links still split between threads where its nodes are
+/// large. The recursion of the root's link alone, split two ways at each node, left one of two
+/// threads idle for 27% of the build at 956,319 patches (docs/distributed.md); more tasks make
+/// a deeper frontier, which is expanded on one thread (1,024 took 2.8 s at 95,832 patches).
 const TASKS_ONE_PROCESS: usize = 64;
 
 /// The Jacobi sweeps of the radiosity a later refinement pass is weighed by: light bounced

@@ -97,7 +97,9 @@ impl Refiner<'_> {
         let frontier = start.elapsed().as_secs_f64();
         let total: u64 = load.iter().sum();
         let estimated = if total > 0 { load[rank] as f64 / total as f64 } else { 0.0 };
-        let mine: Vec<Task> = tasks.into_iter().zip(&owner).filter(|(_, o)| **o == rank).map(|(t, _)| t).collect();
+        let mut mine: Vec<Task> = tasks.into_iter().zip(&owner).filter(|(_, o)| **o == rank).map(|(t, _)| t).collect();
+        // The largest first, so that the threads do not end waiting on one large task.
+        mine.sort_by_key(|t| std::cmp::Reverse(t.patches(self.tree)));
         let own_pairs: u64 = mine.iter().map(|t| t.pairs(self.tree)).sum();
         let count = mine.len();
         let watched = self.watched(Watch::over(own_pairs, observe));

@@ -581,6 +581,16 @@ fn solve_tells_where_the_time_and_memory_went() {
     assert!(seconds.iter().all(|&s| s >= 0.0) && seconds.iter().sum::<f64>() <= wall, "{seconds:?} in {wall} s");
     let peaks: Vec<u64> = phases.iter().filter_map(|p| p["peak_bytes"].as_u64()).collect();
     assert!(peaks.windows(2).all(|w| w[0] <= w[1]), "a peak only grows: {peaks:?}");
+    // CPU seconds where the phase was timed as it ran (not for the set-ups split after the
+    // fact), never more than the machine's threads could spend in its wall seconds.
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
+    for (p, wall) in phases.iter().zip(&seconds) {
+        let name = p["name"].as_str().unwrap();
+        match p["cpu_seconds"].as_f64() {
+            Some(cpu) => assert!(cpu >= 0.0 && cpu <= threads * wall + 0.05, "{name}: {cpu} CPU s in {wall} s"),
+            None => assert!(name.starts_with("setting up"), "{name} has no CPU seconds"),
+        }
+    }
     let out = xtask(&[&args[..], &["--verbose"]].concat()).success().get_output().clone();
     let err = String::from_utf8_lossy(&out.stderr);
     for name in names.iter().chain(&["writing the output", "total"]) {

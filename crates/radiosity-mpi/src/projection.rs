@@ -18,18 +18,24 @@
 //! the median of its repeats, since single runs on one machine differ by up to 15%. A part that
 //! comes out negative (noise in a part too small to measure, or two threads slower than one) is
 //! taken as zero and the others refitted without it ([`PhaseModel::fit`]). A run on two threads
-//! at a larger size fits each phase's growth `g`; without one, `g = 0`. Work that merely scales
-//! badly on two threads (memory bandwidth) counts as serial: the model cannot tell it from
-//! code that runs on one thread, and carries it to many cores by Amdahl's law.
+//! at a larger size fits each phase's growth `g`; without one, `g = 0`. Where the runs on two
+//! threads give each phase's CPU seconds, the serial part is instead the time one thread worked
+//! alone, `2 t₁₂ − cpu` ([`PhaseModel::fit_with_cpu`]), and threads that contend for memory,
+//! which spend more CPU seconds rather than leave one idle, no longer count as serial code;
+//! from wall seconds alone they do, and are carried to many cores by Amdahl's law.
+//! [`Model::excess_as_overhead`] reads what two ranks cost beyond one process as an overhead on
+//! the divided work rather than as work every rank repeats: the same runs, another projection.
 //!
 //! **Checking** ([`Model::check`]). A run the fit did not see (another size, another
 //! configuration) is modelled phase by phase and compared with what it measured. The checks,
 //! not the fit's residuals, say how far a projection can be trusted.
 //!
-//! Memory per node is `m₀ + n (m_rep + m_div / P)`: `m₀` and the bytes a patch from one
-//! process's peaks at two sizes (at one size, `m₀ = 0`), `m_div` from the peaks of one process
-//! and of a rank of two at `n₀`. Where a rank of two peaks above one process, the excess is what
-//! the solve's sums hold, and grows with their volume. The solve's collective sums (a product's
+//! Memory per node is `m₀ + m_r + n (m_rep + m_div / P)`: `m₀` and the bytes a patch from one
+//! process's peaks at two sizes (at one size, `m₀ = 0`); `m_div` from the program's own count
+//! of what ranks divide (a hierarchical operator's link bytes) where the runs give it, else from
+//! the peaks of one process and of a rank of two at `n₀`; `m_r` a rank's bytes beyond one
+//! process where a rank of two peaks above it (MPI's and the sums' buffers), fixed, or growing
+//! with the replicates where every rank holds every replicate's sums. The solve's collective sums (a product's
 //! for the hierarchical operator, an iteration's for stochastic Jacobi, [`Sums`]) are
 //! reduce-scatter then all-gather over a network of latency `α` and bandwidth `β` per node
 //! (Hockney's model): `2 (P − 1) α + 2 (P − 1) / P · m / β` for a sum of `m` bytes, zero on one
@@ -60,7 +66,7 @@ pub struct Run {
     /// The peak resident bytes of its largest process.
     pub peak: f64,
     /// The bytes of what ranks divide, as the program counts them (a hierarchical operator's
-    /// links), where it does; the whole process's in a run of one.
+    /// links), where it does: all of them in a run of one process.
     pub divided_bytes: Option<f64>,
 }
 

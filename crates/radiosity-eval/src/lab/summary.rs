@@ -11,7 +11,6 @@
 
 use crate::error::LabError;
 use crate::lab::outcome::Outcome;
-use crate::lab::ranks::RankReport;
 use crate::lab::setup::Lab;
 use radiosity_core::Real;
 use radiosity_solvers::{Cost, Record, State, Unit, Value};
@@ -196,4 +195,40 @@ impl Lab<'_> {
             ranks: None,
         }
     }
+}
+
+/// One rank's part of a distributed run.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RankReport {
+    /// The rank.
+    pub rank: usize,
+    /// Seconds it took to build its part of the operator.
+    pub build_seconds: Real,
+    /// Those seconds, stage by stage (empty where the operator is not split).
+    pub build_stages: Vec<(String, Real)>,
+    /// Bytes its part of the operator holds (its links, and what every rank holds).
+    pub operator_bytes: u64,
+    /// Of them, its links' bytes.
+    pub link_bytes: u64,
+    /// Its links: far links, near links and far pairs.
+    pub links: u64,
+    /// Shadow rays it traced for its links.
+    pub rays: u64,
+    /// Refinement tasks dealt to it.
+    pub tasks: u64,
+    /// Its share of the refinement's estimated cost.
+    pub estimated_share: Real,
+    /// The high-water mark of its resident memory, in bytes (`None` without `/proc`).
+    pub peak_rss: Option<u64>,
+    /// Seconds the run spent in the operator on this rank (products, columns, rows), its sums
+    /// included.
+    pub run_operator_seconds: Real,
+    /// Collective sums during the run.
+    pub run_sums: u64,
+    /// Seconds in those sums, waiting for the other ranks included.
+    pub run_sum_seconds: Real,
+    /// Bytes this rank sent in those sums.
+    pub run_bytes_sent: u64,
+    /// Rays it cast in the run (a solver that samples transport; 0 for the others).
+    pub run_rays: u64,
 }

@@ -14,7 +14,7 @@
 //! next product, and the solvers' `O(n)` work is small beside the links' (docs/distributed.md).
 
 use super::HierarchicalColumns;
-use super::build::BuildStages;
+use super::figures::BuildStages;
 use super::links::BuildProgress;
 use super::params::HierarchicalParams;
 use crate::backend::BackendFigures;

@@ -56,6 +56,7 @@ mod brightness;
 mod build;
 mod closure;
 mod distribution;
+mod figures;
 mod links;
 mod nodal;
 mod packed;
@@ -68,8 +69,9 @@ mod tree;
 
 use adjacency::{Adjacency, FarLists};
 pub use brightness::Oracle;
-pub use build::{BuildStages, HeldBytes, HierarchyFigures, HierarchyLink};
+pub use build::HierarchyLink;
 pub use distribution::{Distribution, RankFigures};
+pub use figures::{BuildStages, HeldBytes, HierarchyFigures};
 pub use links::BuildProgress;
 pub use params::{HIERARCHICAL_PARAMS, HierarchicalParams};
 use radiosity_core::{Real, Vec3};

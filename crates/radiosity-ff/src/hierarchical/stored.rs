@@ -15,7 +15,7 @@
 
 use super::HierarchicalColumns;
 use super::adjacency::{Adjacency, FarLists, Lists, Transfer};
-use super::build::HierarchyFigures;
+use super::figures::HierarchyFigures;
 use super::tree::ClusterTree;
 use crate::error::FfError;
 use crate::framing::{frame, unframe};
